@@ -1,0 +1,80 @@
+//! The scene a bake reads: models, instances and the ground (DESIGN.md "Data flow").
+//!
+//! A `Scene` is what the validated manifest resolves to once every model is loaded
+//! and normalised; the worker and the player both see the world through it.
+
+use crate::mesh::Mesh;
+use glam::{Mat4, Vec3};
+use serde::{Deserialize, Serialize};
+
+/// A loaded, normalised model.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Model {
+    /// Short name (file stem or procedural name), unique within the scene.
+    pub name: String,
+    /// Where it came from (a path, or `procedural:<name>`), for messages and reports.
+    pub source: String,
+    pub mesh: Mesh,
+    /// blake3 of the loaded mesh's bytes (positions, normals, albedo, triangles).
+    pub content_hash: [u8; 32],
+}
+
+/// One placed copy of a model.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Instance {
+    /// Index into `Scene::models`.
+    pub model: u32,
+    /// Object → world transform (column-major, glam's layout).
+    pub transform: Mat4,
+    /// Linear RGB multiplier applied to the model's albedo.
+    pub tint: Vec3,
+}
+
+/// The ground rectangle on y = 0, `min` and `max` in (x, z).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Ground {
+    pub min: [f32; 2],
+    pub max: [f32; 2],
+}
+
+impl Ground {
+    pub fn size(&self) -> [f32; 2] {
+        [self.max[0] - self.min[0], self.max[1] - self.min[1]]
+    }
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Scene {
+    pub models: Vec<Model>,
+    pub instances: Vec<Instance>,
+    pub ground: Ground,
+}
+
+impl Scene {
+    pub fn triangle_count(&self) -> u64 {
+        self.instances
+            .iter()
+            .map(|i| self.models[i.model as usize].mesh.triangle_count() as u64)
+            .sum()
+    }
+
+    /// World-space axis-aligned bounds of one instance.
+    pub fn instance_bounds(&self, instance: usize) -> (Vec3, Vec3) {
+        let inst = &self.instances[instance];
+        let mesh = &self.models[inst.model as usize].mesh;
+        let (lo, hi) = mesh.bounds().unwrap_or(([0.0; 3], [0.0; 3]));
+        let mut wlo = Vec3::splat(f32::INFINITY);
+        let mut whi = Vec3::splat(f32::NEG_INFINITY);
+        for k in 0..8 {
+            let c = Vec3::new(
+                if k & 1 == 0 { lo[0] } else { hi[0] },
+                if k & 2 == 0 { lo[1] } else { hi[1] },
+                if k & 4 == 0 { lo[2] } else { hi[2] },
+            );
+            let w = inst.transform.transform_point3(c);
+            wlo = wlo.min(w);
+            whi = whi.max(w);
+        }
+        (wlo, whi)
+    }
+}

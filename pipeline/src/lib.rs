@@ -1,0 +1,1 @@
+//! hexbake's coordinator: plan, executors (local rayon, Slurm), resume, reports.
