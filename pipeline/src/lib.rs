@@ -1,1 +1,3 @@
 //! hexbake's coordinator: plan, executors (local rayon, Slurm), resume, reports.
+
+pub mod scene_cmd;

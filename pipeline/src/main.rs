@@ -1,5 +1,67 @@
-//! `pipeline`: the command a user runs (`pipeline scene|run|status|report|inspect`).
+//! `pipeline`: the command a user runs. Exit codes: 0 success, 1 a failure while
+//! working, 2 bad input (manifest, model, arguments).
 
-fn main() {
-    println!("pipeline {}", env!("CARGO_PKG_VERSION"));
+use clap::{Parser, Subcommand};
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+#[derive(Parser)]
+#[command(name = "pipeline", version, about = "hexbake: bake huge static scenes into per-cell packs")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Load a manifest's scene and print its models, instances, triangles and grid.
+    Scene {
+        manifest: PathBuf,
+        /// Print JSON instead of a table.
+        #[arg(long)]
+        json: bool,
+    },
+}
+
+/// An error with the exit code it maps to.
+struct Failure {
+    code: u8,
+    error: anyhow::Error,
+}
+
+fn bad_input(error: impl Into<anyhow::Error>) -> Failure {
+    Failure {
+        code: 2,
+        error: error.into(),
+    }
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match run(cli) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(f) => {
+            eprintln!("error: {:#}", f.error);
+            ExitCode::from(f.code)
+        }
+    }
+}
+
+fn run(cli: Cli) -> Result<(), Failure> {
+    match cli.command {
+        Command::Scene { manifest, json } => {
+            let plan = format::manifest::parse_manifest(&manifest).map_err(bad_input)?;
+            let scene = plan.load_scene().map_err(bad_input)?;
+            let summary = pipeline::scene_cmd::summarize(&plan, &scene);
+            if json {
+                println!(
+                    "{}",
+                    serde_json::to_string_pretty(&summary).expect("summary serializes")
+                );
+            } else {
+                print!("{}", pipeline::scene_cmd::render_text(&summary));
+            }
+            Ok(())
+        }
+    }
 }
