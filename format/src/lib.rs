@@ -5,6 +5,7 @@
 //! the bake reads, the base/cell pack layout with its writer and memory-mapped
 //! reader, the index, and fingerprints.
 
+mod field_positions;
 pub mod load;
 pub mod manifest;
 pub mod mesh;

@@ -1,4 +1,5 @@
 //! Procedural models (for `manifests/demo.ron`) and the procedural albedo pattern
 //! of DESIGN.md "Shading".
-//!
-//! TODO(issue 2).
+
+/// Names `build` knows.
+pub const NAMES: &[&str] = &["torus_knot", "sphere", "box", "column", "vase", "torus"];
