@@ -313,7 +313,7 @@ mod tests {
             f.key_position("scene.models[0].count"),
             Some(TextPosition {
                 line: 4,
-                column: 25
+                column: 24
             })
         );
         assert_eq!(
