@@ -1,15 +1,46 @@
 //! Manifest schema: `manifest.ron` parsed in two stages (STYLE.md habit 8).
 //!
 //! Stage 1 (`RawManifest`) is a plain serde mirror of the file with
-//! `deny_unknown_fields`; stage 2 (`Plan`) is the validated, resolved form the
-//! rest of hexbake reads: relative paths resolved against the manifest's folder,
-//! ranges checked, defaults applied (the paper's values, 000 §4.1.2).
+//! `deny_unknown_fields`, read by `ron`: unknown fields, missing fields, wrong types
+//! and syntax errors come back from ron with their line and column. Stage 2 (`Plan`)
+//! is the validated, resolved form the rest of hexbake reads: relative paths resolved
+//! against the manifest's folder, ranges checked, defaults applied (the paper's
+//! values, 000 §4.1.2). Validation errors find the offending field's line and column
+//! in the text through [`FieldPositions`](crate::field_positions).
 //!
-//! TODO(issue 2): raw schema, validation with file:line:column errors, Park generator.
+//! The syntax (every field not marked optional is required):
+//!
+//! ```ron
+//! (
+//!     name: "demo",                                    // optional, default: file stem
+//!     ground: (min: (0.0, 0.0), max: (300.0, 260.0)),  // x–z rectangle on y = 0
+//!     scene: Park((
+//!         seed: 7,
+//!         models: [
+//!             // File("path") or Procedural("name"); pre_rotation_deg optional
+//!             // (x, y, z Euler degrees, applied x first, before normalising)
+//!             (model: Procedural("torus_knot"), count: 4, target_height: 20.0),
+//!             (model: File("../models/bunny.obj"), count: 7, target_height: 43.2,
+//!              pre_rotation_deg: (0.0, 0.0, 0.0)),
+//!         ],
+//!         tint_min: (0.7, 0.7, 0.7),                   // optional, default (1, 1, 1)
+//!         tint_max: (1.0, 1.0, 1.0),                   // optional, default (1, 1, 1)
+//!     )),
+//!     // or: scene: Instances([(model: File("a.obj"), target_height: 10.0,
+//!     //        translation: (5.0, 0.0, 7.0), rotation_y_deg: 30.0,
+//!     //        scale: 1.0 /* optional */, tint: (1.0, 0.9, 0.8) /* optional */,
+//!     //        pre_rotation_deg: (0.0, 0.0, 0.0) /* optional */), ...]),
+//!     cells: (cell_size: 50.0, min_eye_height: 6.0, max_eye_height: 12.0),
+//!     bake: (image_res: 1024, clustering: true),       // optional, every field optional
+//!     cells_per_job: 4,                                // optional, default 4
+//!     output: "../out/demo",                           // optional, default ../out/<name>
+//! )
+//! ```
 
+use crate::field_positions::{FieldPositions, TextPosition};
 use crate::scene::Ground;
 use serde::{Deserialize, Serialize};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Bake parameters with the paper's names and defaults (000 §3.1, §4.1.2).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -70,7 +101,7 @@ pub struct Plan {
 }
 
 /// Where a model comes from.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
 pub enum ModelSource {
     /// A file, resolved against the manifest's folder.
     File(PathBuf),
@@ -87,6 +118,8 @@ pub enum SceneSpec {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct InstanceSpec {
     pub model: ModelSource,
+    /// Euler rotation (x, y, z degrees, applied x first) before normalising.
+    pub pre_rotation_deg: [f32; 3],
     pub target_height: f32,
     pub translation: [f32; 3],
     /// Rotation about +y, degrees.
@@ -106,6 +139,557 @@ pub struct ParkSpec {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ParkModel {
     pub model: ModelSource,
+    /// Euler rotation (x, y, z degrees, applied x first) before normalising.
+    pub pre_rotation_deg: [f32; 3],
     pub count: u32,
     pub target_height: f32,
+}
+
+impl ModelSource {
+    /// `path` for a file, `procedural:<name>` for a procedural model.
+    pub fn describe(&self) -> String {
+        match self {
+            ModelSource::File(p) => p.display().to_string(),
+            ModelSource::Procedural(name) => format!("procedural:{name}"),
+        }
+    }
+}
+
+/// A manifest that cannot be read, parsed or validated.
+///
+/// Display reads `manifests/x.ron:12:5: unknown field `cel_size`, expected one of ...`.
+#[derive(Debug, thiserror::Error)]
+pub enum ManifestError {
+    #[error("{}: cannot read manifest: {source}", path.display())]
+    Read {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    /// A syntax, unknown-field, missing-field or wrong-type error reported by ron, or a
+    /// value that fails validation. `field` is the dotted path of the field involved
+    /// (`scene.models[1].count`), empty when none applies.
+    #[error("{}:{line}:{column}: {message}", path.display())]
+    At {
+        path: PathBuf,
+        line: usize,
+        column: usize,
+        field: String,
+        message: String,
+    },
+}
+
+impl ManifestError {
+    /// `(line, column)` of the error, 1-based; `None` for a read error.
+    pub fn line_column(&self) -> Option<(usize, usize)> {
+        match self {
+            ManifestError::Read { .. } => None,
+            ManifestError::At { line, column, .. } => Some((*line, *column)),
+        }
+    }
+
+    /// Dotted path of the field involved; `None` for a read error or when unknown.
+    pub fn field(&self) -> Option<&str> {
+        match self {
+            ManifestError::At { field, .. } if !field.is_empty() => Some(field),
+            _ => None,
+        }
+    }
+}
+
+/// Reads, parses and validates the manifest at `path`.
+pub fn parse_manifest(path: &Path) -> Result<Plan, ManifestError> {
+    let text = std::fs::read_to_string(path).map_err(|source| ManifestError::Read {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    parse_manifest_str(&text, path)
+}
+
+/// Parses and validates manifest `text`; `path` names it in messages and anchors
+/// relative paths (its folder), so it need not exist.
+pub fn parse_manifest_str(text: &str, path: &Path) -> Result<Plan, ManifestError> {
+    // Stage 1: ron → raw structs; ron's errors carry a position.
+    let options =
+        ron::Options::default().with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME);
+    let positions = FieldPositions::scan(text);
+    let raw: RawManifest = options
+        .from_str(text)
+        .map_err(|e| ron_error(path, &positions, e))?;
+    // Stage 2: validate and resolve.
+    Validator {
+        path,
+        positions: &positions,
+    }
+    .plan(raw)
+}
+
+/// Default number of cells baked by one job.
+pub const DEFAULT_CELLS_PER_JOB: u32 = 4;
+
+// ---------------------------------------------------------------------------------
+// Stage 1: the raw mirror of the file.
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawManifest {
+    #[serde(default)]
+    name: Option<String>,
+    ground: RawGround,
+    scene: RawScene,
+    cells: RawCells,
+    #[serde(default)]
+    bake: RawBake,
+    #[serde(default)]
+    cells_per_job: Option<u32>,
+    #[serde(default)]
+    output: Option<String>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawGround {
+    min: [f32; 2],
+    max: [f32; 2],
+}
+
+#[derive(Deserialize)]
+enum RawScene {
+    Park(RawPark),
+    Instances(Vec<RawInstance>),
+}
+
+#[derive(Deserialize)]
+enum RawModelSource {
+    File(String),
+    Procedural(String),
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawPark {
+    seed: u64,
+    models: Vec<RawParkModel>,
+    #[serde(default = "unit_tint")]
+    tint_min: [f32; 3],
+    #[serde(default = "unit_tint")]
+    tint_max: [f32; 3],
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawParkModel {
+    model: RawModelSource,
+    count: u32,
+    target_height: f32,
+    #[serde(default)]
+    pre_rotation_deg: [f32; 3],
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawInstance {
+    model: RawModelSource,
+    target_height: f32,
+    translation: [f32; 3],
+    rotation_y_deg: f32,
+    #[serde(default = "unit_scale")]
+    scale: f32,
+    #[serde(default = "unit_tint")]
+    tint: [f32; 3],
+    #[serde(default)]
+    pre_rotation_deg: [f32; 3],
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawCells {
+    cell_size: f32,
+    min_eye_height: f32,
+    max_eye_height: f32,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields, default)]
+struct RawBake {
+    image_res: u32,
+    self_occluding_tolerance_px: f32,
+    edge_length_tolerance: f32,
+    t_c0: f32,
+    t_c1: f32,
+    clustering: bool,
+    occlusion_culling: bool,
+}
+
+impl Default for RawBake {
+    fn default() -> Self {
+        let d = BakeParams::default();
+        RawBake {
+            image_res: d.image_res,
+            self_occluding_tolerance_px: d.self_occluding_tolerance_px,
+            edge_length_tolerance: d.edge_length_tolerance,
+            t_c0: d.t_c0,
+            t_c1: d.t_c1,
+            clustering: d.clustering,
+            occlusion_culling: d.occlusion_culling,
+        }
+    }
+}
+
+fn unit_tint() -> [f32; 3] {
+    [1.0; 3]
+}
+
+fn unit_scale() -> f32 {
+    1.0
+}
+
+/// Turns a ron error into a [`ManifestError`] naming the field involved.
+fn ron_error(
+    path: &Path,
+    positions: &FieldPositions,
+    e: ron::error::SpannedError,
+) -> ManifestError {
+    use ron::error::Error as E;
+    let mut at = TextPosition {
+        line: e.position.line,
+        column: e.position.col,
+    };
+    let enclosing = positions.path_at(at).unwrap_or_default();
+    let one_of = |alts: &[&str]| {
+        alts.iter()
+            .map(|a| format!("`{a}`"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let within = |field: &str| {
+        if field.is_empty() {
+            String::new()
+        } else {
+            format!(" in `{field}`")
+        }
+    };
+    let (field, message) = match &e.code {
+        E::NoSuchStructField {
+            expected, found, ..
+        } => {
+            // Point at the misspelled key itself rather than past it.
+            if let Some(key) = positions.key_before(at, found) {
+                at = key;
+            }
+            let field = positions.path_at(at).unwrap_or_else(|| found.clone());
+            let parent = field.rsplit_once('.').map_or("", |(p, _)| p).to_string();
+            let message = format!(
+                "unknown field `{found}`{}, expected one of {}",
+                within(&parent),
+                one_of(expected)
+            );
+            (field, message)
+        }
+        E::MissingStructField { field, .. } => {
+            let enclosing = positions.struct_at(at).unwrap_or_default();
+            let full = if enclosing.is_empty() {
+                field.to_string()
+            } else {
+                format!("{enclosing}.{field}")
+            };
+            (
+                full,
+                format!("missing field `{field}`{}", within(&enclosing)),
+            )
+        }
+        E::DuplicateStructField { field, .. } => (
+            enclosing.clone(),
+            format!("duplicate field `{field}`{}", within(&enclosing)),
+        ),
+        E::NoSuchEnumVariant {
+            expected, found, ..
+        } => (
+            enclosing.clone(),
+            format!(
+                "unknown variant `{found}`{}, expected one of {}",
+                within(&enclosing),
+                one_of(expected)
+            ),
+        ),
+        other => {
+            let message = if enclosing.is_empty() {
+                other.to_string()
+            } else {
+                format!("`{enclosing}`: {other}")
+            };
+            (enclosing.clone(), message)
+        }
+    };
+    ManifestError::At {
+        path: path.to_path_buf(),
+        line: at.line,
+        column: at.column,
+        field,
+        message,
+    }
+}
+
+// ---------------------------------------------------------------------------------
+// Stage 2: validation and resolution.
+
+struct Validator<'a> {
+    path: &'a Path,
+    positions: &'a FieldPositions,
+}
+
+impl Validator<'_> {
+    /// An error at the field `field` (dotted path).
+    fn error(&self, field: &str, message: String) -> ManifestError {
+        let at = self.positions.nearest_position(field);
+        ManifestError::At {
+            path: self.path.to_path_buf(),
+            line: at.line,
+            column: at.column,
+            field: field.to_string(),
+            message: format!("`{field}` {message}"),
+        }
+    }
+
+    fn finite(&self, field: &str, v: f32) -> Result<f32, ManifestError> {
+        if v.is_finite() {
+            Ok(v)
+        } else {
+            Err(self.error(field, format!("must be a finite number, found {v}")))
+        }
+    }
+
+    fn positive(&self, field: &str, v: f32) -> Result<f32, ManifestError> {
+        if v.is_finite() && v > 0.0 {
+            Ok(v)
+        } else {
+            Err(self.error(field, format!("must be > 0, found {v}")))
+        }
+    }
+
+    fn finite3(&self, field: &str, v: [f32; 3]) -> Result<[f32; 3], ManifestError> {
+        for x in v {
+            self.finite(field, x)?;
+        }
+        Ok(v)
+    }
+
+    fn tint(&self, field: &str, v: [f32; 3]) -> Result<[f32; 3], ManifestError> {
+        if v.iter().all(|x| x.is_finite() && *x >= 0.0) {
+            Ok(v)
+        } else {
+            Err(self.error(
+                field,
+                format!("must have finite components >= 0, found {v:?}"),
+            ))
+        }
+    }
+
+    /// The manifest's folder, against which relative paths resolve.
+    fn base_dir(&self) -> PathBuf {
+        match self.path.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+            _ => PathBuf::from("."),
+        }
+    }
+
+    fn model(&self, field: &str, raw: RawModelSource) -> Result<ModelSource, ManifestError> {
+        match raw {
+            RawModelSource::File(file) => {
+                if file.is_empty() {
+                    return Err(self.error(field, "has an empty file path".into()));
+                }
+                let resolved = self.base_dir().join(&file);
+                let supported = crate::load::ModelFormat::from_path(&resolved).is_some();
+                if !supported {
+                    return Err(self.error(
+                        field,
+                        format!(
+                            "`{file}`: unsupported model format (expected one of {})",
+                            crate::load::SUPPORTED_EXTENSIONS.join(", ")
+                        ),
+                    ));
+                }
+                if !resolved.is_file() {
+                    return Err(self.error(
+                        field,
+                        format!("`{file}`: no such file ({})", resolved.display()),
+                    ));
+                }
+                Ok(ModelSource::File(resolved))
+            }
+            RawModelSource::Procedural(name) => {
+                if crate::procedural::NAMES.contains(&name.as_str()) {
+                    Ok(ModelSource::Procedural(name))
+                } else {
+                    Err(self.error(
+                        field,
+                        format!(
+                            "unknown procedural model `{name}`, expected one of {}",
+                            crate::procedural::NAMES.join(", ")
+                        ),
+                    ))
+                }
+            }
+        }
+    }
+
+    fn plan(&self, raw: RawManifest) -> Result<Plan, ManifestError> {
+        // Name: given, else the file stem.
+        let name = match raw.name {
+            Some(n) if n.trim().is_empty() => {
+                return Err(self.error("name", "must not be empty".into()))
+            }
+            Some(n) => n,
+            None => self
+                .path
+                .file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .filter(|s| !s.is_empty())
+                .unwrap_or_else(|| "scene".into()),
+        };
+
+        // Ground rectangle.
+        for k in 0..2 {
+            self.finite("ground.min", raw.ground.min[k])?;
+            self.finite("ground.max", raw.ground.max[k])?;
+        }
+        if !(raw.ground.min[0] < raw.ground.max[0] && raw.ground.min[1] < raw.ground.max[1]) {
+            return Err(self.error(
+                "ground.max",
+                format!(
+                    "must exceed `ground.min` on both axes, found min {:?} max {:?}",
+                    raw.ground.min, raw.ground.max
+                ),
+            ));
+        }
+        let ground = Ground {
+            min: raw.ground.min,
+            max: raw.ground.max,
+        };
+
+        // Scene.
+        let scene = match raw.scene {
+            RawScene::Park(park) => {
+                if park.models.is_empty() {
+                    return Err(self.error("scene.models", "must list at least one model".into()));
+                }
+                let mut models = Vec::with_capacity(park.models.len());
+                for (i, m) in park.models.into_iter().enumerate() {
+                    let f = |name: &str| format!("scene.models[{i}].{name}");
+                    models.push(ParkModel {
+                        model: self.model(&f("model"), m.model)?,
+                        pre_rotation_deg: self
+                            .finite3(&f("pre_rotation_deg"), m.pre_rotation_deg)?,
+                        count: m.count,
+                        target_height: self.positive(&f("target_height"), m.target_height)?,
+                    });
+                }
+                if models.iter().all(|m| m.count == 0) {
+                    return Err(self.error(
+                        "scene.models",
+                        "places no instance: every `count` is 0".into(),
+                    ));
+                }
+                let tint_min = self.tint("scene.tint_min", park.tint_min)?;
+                let tint_max = self.tint("scene.tint_max", park.tint_max)?;
+                if (0..3).any(|k| tint_min[k] > tint_max[k]) {
+                    return Err(self.error(
+                        "scene.tint_max",
+                        format!("must be >= `tint_min` per channel, found min {tint_min:?} max {tint_max:?}"),
+                    ));
+                }
+                SceneSpec::Park(ParkSpec {
+                    seed: park.seed,
+                    models,
+                    tint_min,
+                    tint_max,
+                })
+            }
+            RawScene::Instances(list) => {
+                if list.is_empty() {
+                    return Err(self.error("scene", "lists no instance".into()));
+                }
+                let mut instances = Vec::with_capacity(list.len());
+                for (i, inst) in list.into_iter().enumerate() {
+                    let f = |name: &str| format!("scene[{i}].{name}");
+                    instances.push(InstanceSpec {
+                        model: self.model(&f("model"), inst.model)?,
+                        pre_rotation_deg: self
+                            .finite3(&f("pre_rotation_deg"), inst.pre_rotation_deg)?,
+                        target_height: self.positive(&f("target_height"), inst.target_height)?,
+                        translation: self.finite3(&f("translation"), inst.translation)?,
+                        rotation_y_deg: self.finite(&f("rotation_y_deg"), inst.rotation_y_deg)?,
+                        scale: self.positive(&f("scale"), inst.scale)?,
+                        tint: self.tint(&f("tint"), inst.tint)?,
+                    });
+                }
+                SceneSpec::Instances(instances)
+            }
+        };
+
+        // Cells.
+        let cell_size = self.positive("cells.cell_size", raw.cells.cell_size)?;
+        let min_eye_height = self.finite("cells.min_eye_height", raw.cells.min_eye_height)?;
+        let max_eye_height = self.finite("cells.max_eye_height", raw.cells.max_eye_height)?;
+        if min_eye_height < 0.0 {
+            return Err(self.error(
+                "cells.min_eye_height",
+                format!("must be >= 0 (eyes above the ground), found {min_eye_height}"),
+            ));
+        }
+        if min_eye_height > max_eye_height {
+            return Err(self.error(
+                "cells.max_eye_height",
+                format!("must be >= `min_eye_height` ({min_eye_height}), found {max_eye_height}"),
+            ));
+        }
+
+        // Bake parameters.
+        let b = raw.bake;
+        if !(16..=16384).contains(&b.image_res) {
+            return Err(self.error(
+                "bake.image_res",
+                format!("must be in 16..=16384, found {}", b.image_res),
+            ));
+        }
+        let bake = BakeParams {
+            image_res: b.image_res,
+            self_occluding_tolerance_px: self.positive(
+                "bake.self_occluding_tolerance_px",
+                b.self_occluding_tolerance_px,
+            )?,
+            edge_length_tolerance: self
+                .positive("bake.edge_length_tolerance", b.edge_length_tolerance)?,
+            t_c0: self.positive("bake.t_c0", b.t_c0)?,
+            t_c1: self.positive("bake.t_c1", b.t_c1)?,
+            clustering: b.clustering,
+            occlusion_culling: b.occlusion_culling,
+        };
+
+        let cells_per_job = raw.cells_per_job.unwrap_or(DEFAULT_CELLS_PER_JOB);
+        if cells_per_job == 0 {
+            return Err(self.error("cells_per_job", "must be >= 1, found 0".into()));
+        }
+
+        let output = match raw.output {
+            Some(o) if o.is_empty() => return Err(self.error("output", "must not be empty".into())),
+            Some(o) => self.base_dir().join(o),
+            None => self.base_dir().join("..").join("out").join(&name),
+        };
+
+        Ok(Plan {
+            manifest_path: self.path.to_path_buf(),
+            name,
+            scene,
+            ground,
+            cells: CellParams {
+                cell_size,
+                min_eye_height,
+                max_eye_height,
+            },
+            bake,
+            cells_per_job,
+            output,
+        })
+    }
 }

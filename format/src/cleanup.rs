@@ -1,0 +1,253 @@
+//! Mesh clean-up shared by every loader and procedural model (issue 2, "Model
+//! loading"): validation, welding, degenerate and duplicate triangle removal, smooth
+//! normals and albedo.
+//!
+//! [`finish_mesh`] reads as its steps:
+//! 1. reject NaN/inf coordinates (naming the vertex) and out-of-range indices (naming
+//!    the face);
+//! 2. weld vertices whose position is bit-identical (after `-0.0 → 0.0`) *and* whose
+//!    file colour is equal — a colour seam stays a seam; new indices follow first use,
+//!    so the result is deterministic (the hash map is only looked up, never iterated);
+//! 3. drop triangles that repeat an index or have exactly zero area, and duplicate
+//!    triangles (the same three vertices in either winding; the first one wins);
+//! 4. drop vertices no triangle uses (keeping the order of the rest);
+//! 5. always recompute smooth, area-weighted normals (the sum of the unnormalised face
+//!    normals around a vertex, accumulated over every vertex at the same position so
+//!    colour seams do not crease the shading); a vertex whose sum is zero gets +y;
+//! 6. albedo: the file's sRGB8 colours when it has them, else the procedural pattern
+//!    (`procedural::apply_albedo`) seeded from the mesh content.
+
+use crate::mesh::Mesh;
+use std::collections::{HashMap, HashSet};
+
+/// A mesh as a loader reads it, before clean-up.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RawMesh {
+    pub positions: Vec<[f32; 3]>,
+    /// sRGB8 colour per vertex when the file has colours.
+    pub colors: Option<Vec<[u8; 4]>>,
+    /// Counter-clockwise triangles, indices into `positions` (unchecked).
+    pub triangles: Vec<[u32; 3]>,
+}
+
+/// What clean-up rejected.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum CleanupError {
+    #[error("vertex {vertex} has a non-finite coordinate {position:?}")]
+    NonFinite { vertex: usize, position: [f32; 3] },
+    #[error("face {face} uses vertex {index}, but there are only {vertex_count} vertices")]
+    IndexOutOfRange {
+        face: usize,
+        index: u32,
+        vertex_count: usize,
+    },
+    #[error("colour count {colors} differs from vertex count {vertices}")]
+    ColorCount { colors: usize, vertices: usize },
+    #[error("no triangle left after removing degenerate ones (read {triangles} triangles)")]
+    NoTriangles { triangles: usize },
+    #[error("{vertices} vertices do not fit 32-bit indices")]
+    TooManyVertices { vertices: usize },
+}
+
+/// What clean-up changed, for reports and tests.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct CleanupStats {
+    pub input_vertices: usize,
+    pub input_triangles: usize,
+    /// Vertices merged into an earlier identical one.
+    pub welded_vertices: usize,
+    /// Triangles with a repeated index or zero area.
+    pub degenerate_triangles: usize,
+    /// Triangles over the same three vertices as an earlier one.
+    pub duplicate_triangles: usize,
+    /// Vertices no triangle uses.
+    pub unreferenced_vertices: usize,
+}
+
+/// Cleans `raw` into a [`Mesh`] (steps in the module docs).
+pub fn finish_mesh(raw: RawMesh) -> Result<(Mesh, CleanupStats), CleanupError> {
+    let RawMesh {
+        positions,
+        colors,
+        triangles,
+    } = raw;
+    let mut stats = CleanupStats {
+        input_vertices: positions.len(),
+        input_triangles: triangles.len(),
+        ..CleanupStats::default()
+    };
+    if u32::try_from(positions.len()).is_err() {
+        return Err(CleanupError::TooManyVertices {
+            vertices: positions.len(),
+        });
+    }
+
+    // Step 1: validate.
+    if let Some(c) = &colors {
+        if c.len() != positions.len() {
+            return Err(CleanupError::ColorCount {
+                colors: c.len(),
+                vertices: positions.len(),
+            });
+        }
+    }
+    if let Some((vertex, p)) = positions
+        .iter()
+        .enumerate()
+        .find(|(_, p)| !p.iter().all(|x| x.is_finite()))
+    {
+        return Err(CleanupError::NonFinite {
+            vertex,
+            position: *p,
+        });
+    }
+    for (face, t) in triangles.iter().enumerate() {
+        if let Some(&index) = t.iter().find(|&&i| i as usize >= positions.len()) {
+            return Err(CleanupError::IndexOutOfRange {
+                face,
+                index,
+                vertex_count: positions.len(),
+            });
+        }
+    }
+
+    // Step 2: weld identical vertices (position bits + colour), first use wins.
+    let key_of = |p: [f32; 3]| p.map(|x| (x + 0.0).to_bits());
+    let white = [255u8; 4];
+    let mut weld: HashMap<([u32; 3], [u8; 4]), u32> = HashMap::with_capacity(positions.len());
+    let mut remap = Vec::with_capacity(positions.len());
+    let mut welded_positions: Vec<[f32; 3]> = Vec::new();
+    let mut welded_colors: Vec<[u8; 4]> = Vec::new();
+    for (i, p) in positions.iter().enumerate() {
+        let color = colors.as_ref().map_or(white, |c| c[i]);
+        let next = welded_positions.len() as u32;
+        let id = *weld.entry((key_of(*p), color)).or_insert(next);
+        if id == next {
+            welded_positions.push(p.map(|x| x + 0.0));
+            welded_colors.push(color);
+        }
+        remap.push(id);
+    }
+    stats.welded_vertices = positions.len() - welded_positions.len();
+    drop(weld);
+
+    // Step 3: drop degenerate and duplicate triangles.
+    let mut kept: Vec<[u32; 3]> = Vec::with_capacity(triangles.len());
+    let mut seen: HashSet<[u32; 3]> = HashSet::with_capacity(triangles.len());
+    for t in &triangles {
+        let t = t.map(|i| remap[i as usize]);
+        if t[0] == t[1] || t[1] == t[2] || t[0] == t[2] {
+            stats.degenerate_triangles += 1;
+            continue;
+        }
+        let n = face_normal_f64(&welded_positions, t);
+        if n == [0.0; 3] {
+            stats.degenerate_triangles += 1;
+            continue;
+        }
+        let mut sorted = t;
+        sorted.sort_unstable();
+        if !seen.insert(sorted) {
+            stats.duplicate_triangles += 1;
+            continue;
+        }
+        kept.push(t);
+    }
+    drop(seen);
+    if kept.is_empty() {
+        return Err(CleanupError::NoTriangles {
+            triangles: triangles.len(),
+        });
+    }
+
+    // Step 4: drop unreferenced vertices, keeping order.
+    let mut used = vec![false; welded_positions.len()];
+    for t in &kept {
+        for &i in t {
+            used[i as usize] = true;
+        }
+    }
+    let mut compact = vec![u32::MAX; welded_positions.len()];
+    let mut out_positions = Vec::with_capacity(welded_positions.len());
+    let mut out_colors = Vec::with_capacity(welded_positions.len());
+    for (i, &u) in used.iter().enumerate() {
+        if u {
+            compact[i] = out_positions.len() as u32;
+            out_positions.push(welded_positions[i]);
+            out_colors.push(welded_colors[i]);
+        }
+    }
+    stats.unreferenced_vertices = welded_positions.len() - out_positions.len();
+    for t in &mut kept {
+        *t = t.map(|i| compact[i as usize]);
+    }
+
+    let mut mesh = Mesh {
+        positions: out_positions,
+        normals: Vec::new(),
+        albedo: out_colors,
+        triangles: kept,
+    };
+    // Step 5: smooth area-weighted normals.
+    recompute_normals(&mut mesh);
+
+    // Step 6: albedo.
+    if colors.is_none() {
+        let seed = u64::from_le_bytes(
+            mesh.geometry_hash()[..8]
+                .try_into()
+                .expect("8 bytes of a 32-byte hash"),
+        );
+        crate::procedural::apply_albedo(&mut mesh, seed);
+    }
+    Ok((mesh, stats))
+}
+
+/// Unnormalised normal (twice the area) of triangle `t`, in f64.
+fn face_normal_f64(positions: &[[f32; 3]], t: [u32; 3]) -> [f64; 3] {
+    let p = t.map(|i| positions[i as usize].map(f64::from));
+    let u = [p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]];
+    let v = [p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]];
+    [
+        u[1] * v[2] - u[2] * v[1],
+        u[2] * v[0] - u[0] * v[2],
+        u[0] * v[1] - u[1] * v[0],
+    ]
+}
+
+/// Replaces `mesh.normals` with smooth area-weighted normals (step 5 of the module
+/// docs): faces are summed over all vertices sharing a position.
+pub fn recompute_normals(mesh: &mut Mesh) {
+    let key_of = |p: [f32; 3]| p.map(|x| (x + 0.0).to_bits());
+    let mut group_of_position: HashMap<[u32; 3], u32> = HashMap::new();
+    let group: Vec<u32> = mesh
+        .positions
+        .iter()
+        .map(|p| {
+            let next = group_of_position.len() as u32;
+            *group_of_position.entry(key_of(*p)).or_insert(next)
+        })
+        .collect();
+    let mut sums = vec![[0.0f64; 3]; group_of_position.len()];
+    for &t in &mesh.triangles {
+        let n = face_normal_f64(&mesh.positions, t);
+        for &i in &t {
+            let s = &mut sums[group[i as usize] as usize];
+            for k in 0..3 {
+                s[k] += n[k];
+            }
+        }
+    }
+    mesh.normals = group
+        .iter()
+        .map(|&g| {
+            let s = sums[g as usize];
+            let len = (s[0] * s[0] + s[1] * s[1] + s[2] * s[2]).sqrt();
+            if len > 0.0 && len.is_finite() {
+                s.map(|x| (x / len) as f32)
+            } else {
+                [0.0, 1.0, 0.0]
+            }
+        })
+        .collect();
+}

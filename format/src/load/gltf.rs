@@ -1,0 +1,226 @@
+//! glTF 2.0 (`.gltf` + buffers, or `.glb`) through the `gltf` crate: every triangle
+//! primitive (modes TRIANGLES, TRIANGLE_STRIP, TRIANGLE_FAN) of every node of the
+//! default scene (else the first scene), with node transforms composed from the root
+//! (a node seen twice along one path — a cycle — or deeper than [`MAX_DEPTH`] is an
+//! error). Mirroring transforms flip the winding so triangles stay CCW. Colours:
+//! `COLOR_0` × the material's base colour factor (both linear, converted to sRGB8)
+//! when any primitive has `COLOR_0` or a non-white factor; else the procedural
+//! albedo. Textures are not read (images are never decoded).
+
+use super::{linear_to_srgb8, parse_error, Location, ModelFormat, Parsed};
+use crate::cleanup::RawMesh;
+use crate::load::LoadError;
+use glam::{Mat3, Mat4, Vec3};
+use std::path::Path;
+
+const FORMAT: ModelFormat = ModelFormat::Gltf;
+
+/// Deepest node hierarchy accepted.
+pub const MAX_DEPTH: usize = 256;
+
+struct Prim {
+    positions: Vec<[f32; 3]>,
+    colors: Option<Vec<[f32; 4]>>,
+    factor: [f32; 4],
+    triangles: Vec<[u32; 3]>,
+}
+
+pub(crate) fn parse(path: &Path, bytes: &[u8]) -> Result<Parsed, LoadError> {
+    let err = |what: String, at: Location| parse_error(path, FORMAT, what, at);
+    let gltf::Gltf { document, blob } = gltf::Gltf::from_slice_without_validation(bytes)
+        .map_err(|e| err(e.to_string(), Location::Unknown))?;
+    // Validate, tolerating only missing POSITION bounds (`min`/`max`), which many
+    // exporters omit and which are not used here.
+    {
+        use gltf::json::validation::{Error as V, Validate};
+        let root = document.as_json();
+        let mut errors: Vec<String> = Vec::new();
+        root.validate(root, gltf::json::Path::new, &mut |path, error| {
+            let path = path();
+            let bounds = path.as_str().ends_with(".min") || path.as_str().ends_with(".max");
+            if !(bounds && matches!(error, V::Missing)) {
+                errors.push(format!("{}: {error}", path.as_str()));
+            }
+        });
+        if !errors.is_empty() {
+            return Err(err(
+                format!("invalid glTF: {}", errors.join("; ")),
+                Location::Unknown,
+            ));
+        }
+    }
+    let base = path.parent();
+    let buffers = gltf::import_buffers(&document, base, blob)
+        .map_err(|e| err(format!("buffers: {e}"), Location::Unknown))?;
+    let scene = document
+        .default_scene()
+        .or_else(|| document.scenes().next())
+        .ok_or_else(|| err("no scene".into(), Location::Unknown))?;
+
+    // Walk the node tree depth-first, composing transforms.
+    let mut prims: Vec<Prim> = Vec::new();
+    let mut nodes_with_geometry = 0usize;
+    let mut stack: Vec<(gltf::Node, Mat4, Vec<usize>)> = scene
+        .nodes()
+        .map(|n| (n, Mat4::IDENTITY, Vec::new()))
+        .collect();
+    stack.reverse();
+    while let Some((node, parent, mut ancestors)) = stack.pop() {
+        let at = || Location::Element(format!("node {}", node.index()));
+        if ancestors.contains(&node.index()) {
+            return Err(err("node hierarchy has a cycle".into(), at()));
+        }
+        if ancestors.len() >= MAX_DEPTH {
+            return Err(err(format!("node hierarchy deeper than {MAX_DEPTH}"), at()));
+        }
+        let local = Mat4::from_cols_array_2d(&node.transform().matrix());
+        let world = parent * local;
+        if !world.is_finite() {
+            return Err(err("node transform is not finite".into(), at()));
+        }
+        if let Some(mesh) = node.mesh() {
+            let before = prims.len();
+            for primitive in mesh.primitives() {
+                if let Some(p) = read_primitive(path, &buffers, &mesh, &primitive, world)? {
+                    prims.push(p);
+                }
+            }
+            if prims.len() > before {
+                nodes_with_geometry += 1;
+            }
+        }
+        ancestors.push(node.index());
+        let children: Vec<_> = node.children().collect();
+        for child in children.into_iter().rev() {
+            stack.push((child, world, ancestors.clone()));
+        }
+    }
+
+    // Concatenate the primitives.
+    let any_colors = prims
+        .iter()
+        .any(|p| p.colors.is_some() || p.factor != [1.0; 4]);
+    let mut raw = RawMesh {
+        colors: any_colors.then(Vec::new),
+        ..RawMesh::default()
+    };
+    for p in &prims {
+        let base = u32::try_from(raw.positions.len())
+            .map_err(|_| err("too many vertices".into(), Location::Unknown))?;
+        raw.positions.extend_from_slice(&p.positions);
+        if let Some(colors) = &mut raw.colors {
+            for i in 0..p.positions.len() {
+                let c = p
+                    .colors
+                    .as_ref()
+                    .and_then(|c| c.get(i))
+                    .copied()
+                    .unwrap_or([1.0; 4]);
+                colors.push([
+                    linear_to_srgb8(c[0] * p.factor[0]),
+                    linear_to_srgb8(c[1] * p.factor[1]),
+                    linear_to_srgb8(c[2] * p.factor[2]),
+                    255,
+                ]);
+            }
+        }
+        raw.triangles.extend(
+            p.triangles
+                .iter()
+                .map(|t| t.map(|i| base.saturating_add(i))),
+        );
+    }
+    Ok(Parsed {
+        raw,
+        nodes: nodes_with_geometry,
+        parts: prims.len(),
+    })
+}
+
+/// One primitive in world space; `None` for points and lines.
+fn read_primitive(
+    path: &Path,
+    buffers: &[gltf::buffer::Data],
+    mesh: &gltf::Mesh,
+    primitive: &gltf::Primitive,
+    world: Mat4,
+) -> Result<Option<Prim>, LoadError> {
+    use gltf::mesh::Mode;
+    let at = || {
+        Location::Element(format!(
+            "mesh {} primitive {}",
+            mesh.index(),
+            primitive.index()
+        ))
+    };
+    let err = |what: String| parse_error(path, FORMAT, what, at());
+    let mode = primitive.mode();
+    if !matches!(
+        mode,
+        Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+    ) {
+        return Ok(None);
+    }
+    let reader = primitive.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+    let positions: Vec<[f32; 3]> = reader
+        .read_positions()
+        .ok_or_else(|| err("no POSITION attribute".into()))?
+        .map(|p| world.transform_point3(Vec3::from(p)).to_array())
+        .collect();
+    let colors = reader
+        .read_colors(0)
+        .map(|c| c.into_rgba_f32().collect::<Vec<_>>());
+    let indices: Vec<u32> = match reader.read_indices() {
+        Some(i) => i.into_u32().collect(),
+        None => {
+            let n = u32::try_from(positions.len()).map_err(|_| err("too many vertices".into()))?;
+            (0..n).collect()
+        }
+    };
+    let mut triangles: Vec<[u32; 3]> = match mode {
+        Mode::Triangles => indices
+            .chunks_exact(3)
+            .map(|t| [t[0], t[1], t[2]])
+            .collect(),
+        Mode::TriangleStrip => indices
+            .windows(3)
+            .enumerate()
+            .map(|(k, t)| {
+                if k % 2 == 0 {
+                    [t[0], t[1], t[2]]
+                } else {
+                    [t[1], t[0], t[2]]
+                }
+            })
+            .collect(),
+        _ => (1..indices.len().saturating_sub(1))
+            .map(|k| [indices[0], indices[k], indices[k + 1]])
+            .collect(),
+    };
+    if let Some((face, t)) = triangles
+        .iter()
+        .enumerate()
+        .find(|(_, t)| t.iter().any(|&i| i as usize >= positions.len()))
+    {
+        return Err(err(format!(
+            "triangle {face} uses vertex {}, but the primitive has only {} vertices",
+            t.iter().copied().max().unwrap_or(0),
+            positions.len()
+        )));
+    }
+    if Mat3::from_mat4(world).determinant() < 0.0 {
+        for t in &mut triangles {
+            t.swap(1, 2);
+        }
+    }
+    let factor = primitive
+        .material()
+        .pbr_metallic_roughness()
+        .base_color_factor();
+    Ok(Some(Prim {
+        positions,
+        colors,
+        factor,
+        triangles,
+    }))
+}

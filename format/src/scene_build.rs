@@ -1,0 +1,243 @@
+//! From a validated [`Plan`] to the [`Scene`] a bake reads (DESIGN.md "Data flow").
+//!
+//! [`build_scene`] reads as its steps:
+//! 1. list the distinct models — a model is (source, pre-rotation, target height) —
+//!    in manifest order;
+//! 2. load each distinct *source* once (`load::load_model` or `procedural::build`);
+//! 3. per model: pre-rotate, normalise ([`normalise`]), hash (`Mesh::content_hash`);
+//! 4. place the instances: the explicit list as given, or the park generator
+//!    (`park::place`) with the normalised footprints.
+
+use crate::load::{load_model, LoadError};
+use crate::manifest::{ModelSource, Plan, SceneSpec};
+use crate::mesh::Mesh;
+use crate::park::{self, ParkEntry, ParkError};
+use crate::scene::{Instance, Model, Scene};
+use glam::{Mat3, Mat4, Vec3};
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+
+#[derive(Debug, thiserror::Error)]
+pub enum SceneError {
+    #[error(transparent)]
+    Load(#[from] LoadError),
+    #[error("procedural model `{0}` is unknown")]
+    UnknownProcedural(String),
+    #[error("{model}: {source}")]
+    Normalise {
+        model: String,
+        source: NormaliseError,
+    },
+    #[error("{}: {source}", manifest.display())]
+    Park {
+        manifest: PathBuf,
+        source: ParkError,
+    },
+}
+
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum NormaliseError {
+    #[error("the model is flat (height {height} after pre-rotation); cannot scale it to a height")]
+    Flat { height: f32 },
+    #[error("the model has no vertices")]
+    Empty,
+}
+
+impl Plan {
+    /// Loads and normalises every model and places the instances (see [`build_scene`]).
+    pub fn load_scene(&self) -> Result<Scene, SceneError> {
+        build_scene(self)
+    }
+}
+
+/// Pre-rotates `mesh` by Euler angles (x, y, z degrees, applied x first: R = Rz·Ry·Rx),
+/// then normalises it: base on y = 0, bounding box centred on x = z = 0, uniformly
+/// scaled so its height is `target_height`. Normals are rotated (uniform scaling
+/// keeps them). Computed in f64: the lowest vertex lands exactly on y = 0.
+pub fn normalise(
+    mesh: &mut Mesh,
+    pre_rotation_deg: [f32; 3],
+    target_height: f32,
+) -> Result<(), NormaliseError> {
+    let [rx, ry, rz] = pre_rotation_deg.map(|a| a.to_radians());
+    let rotation =
+        Mat3::from_rotation_z(rz) * Mat3::from_rotation_y(ry) * Mat3::from_rotation_x(rx);
+    let rotation = rotation.as_dmat3();
+    if pre_rotation_deg != [0.0; 3] {
+        for n in &mut mesh.normals {
+            let r = (rotation * glam::DVec3::from(n.map(f64::from))).normalize_or_zero();
+            *n = r.as_vec3().to_array();
+        }
+    }
+    let rotated: Vec<glam::DVec3> = mesh
+        .positions
+        .iter()
+        .map(|p| rotation * glam::DVec3::from(p.map(f64::from)))
+        .collect();
+    let (Some(lo), Some(hi)) = (
+        rotated.iter().copied().reduce(glam::DVec3::min),
+        rotated.iter().copied().reduce(glam::DVec3::max),
+    ) else {
+        return Err(NormaliseError::Empty);
+    };
+    let height = hi.y - lo.y;
+    if !(height > 0.0 && height.is_finite()) {
+        return Err(NormaliseError::Flat {
+            height: height as f32,
+        });
+    }
+    let scale = f64::from(target_height) / height;
+    let base = glam::DVec3::new((lo.x + hi.x) * 0.5, lo.y, (lo.z + hi.z) * 0.5);
+    for (p, r) in mesh.positions.iter_mut().zip(rotated) {
+        *p = ((r - base) * scale).as_vec3().to_array();
+    }
+    Ok(())
+}
+
+/// A model as the scene distinguishes it.
+#[derive(Clone, Debug, PartialEq, Eq, PartialOrd, Ord)]
+struct ModelKey {
+    source: ModelSource,
+    pre_rotation_bits: [u32; 3],
+    target_height_bits: u32,
+}
+
+fn key(source: &ModelSource, pre_rotation_deg: [f32; 3], target_height: f32) -> ModelKey {
+    ModelKey {
+        source: source.clone(),
+        pre_rotation_bits: pre_rotation_deg.map(f32::to_bits),
+        target_height_bits: target_height.to_bits(),
+    }
+}
+
+/// Builds the scene of `plan` (steps in the module docs). Deterministic.
+pub fn build_scene(plan: &Plan) -> Result<Scene, SceneError> {
+    // Step 1: distinct models in manifest order.
+    let wanted: Vec<(ModelSource, [f32; 3], f32)> = match &plan.scene {
+        SceneSpec::Park(p) => p
+            .models
+            .iter()
+            .map(|m| (m.model.clone(), m.pre_rotation_deg, m.target_height))
+            .collect(),
+        SceneSpec::Instances(list) => list
+            .iter()
+            .map(|i| (i.model.clone(), i.pre_rotation_deg, i.target_height))
+            .collect(),
+    };
+    let mut model_index: BTreeMap<ModelKey, u32> = BTreeMap::new();
+    let mut distinct: Vec<(ModelSource, [f32; 3], f32)> = Vec::new();
+    let mut entry_model: Vec<u32> = Vec::with_capacity(wanted.len());
+    for (source, rot, height) in &wanted {
+        let next = distinct.len() as u32;
+        let id = *model_index
+            .entry(key(source, *rot, *height))
+            .or_insert_with(|| {
+                distinct.push((source.clone(), *rot, *height));
+                next
+            });
+        entry_model.push(id);
+    }
+
+    // Steps 2–3: load each source once, normalise and hash each model.
+    let mut loaded: BTreeMap<ModelSource, Mesh> = BTreeMap::new();
+    let mut models: Vec<Model> = Vec::with_capacity(distinct.len());
+    let mut names_used: BTreeMap<String, u32> = BTreeMap::new();
+    for (source, rot, height) in &distinct {
+        if !loaded.contains_key(source) {
+            let mesh = match source {
+                ModelSource::File(path) => load_model(path)?,
+                ModelSource::Procedural(name) => crate::procedural::build(name)
+                    .ok_or_else(|| SceneError::UnknownProcedural(name.clone()))?,
+            };
+            loaded.insert(source.clone(), mesh);
+        }
+        let mut mesh = loaded[source].clone();
+        normalise(&mut mesh, *rot, *height).map_err(|e| SceneError::Normalise {
+            model: source.describe(),
+            source: e,
+        })?;
+        let base_name = match source {
+            ModelSource::File(p) => p
+                .file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_else(|| "model".into()),
+            ModelSource::Procedural(name) => name.clone(),
+        };
+        let uses = names_used.entry(base_name.clone()).or_insert(0);
+        *uses += 1;
+        let name = if *uses == 1 {
+            base_name
+        } else {
+            format!("{base_name}#{uses}")
+        };
+        let content_hash = mesh.content_hash();
+        models.push(Model {
+            name,
+            source: source.describe(),
+            mesh,
+            content_hash,
+        });
+    }
+
+    // Step 4: instances.
+    let instances = match &plan.scene {
+        SceneSpec::Instances(list) => list
+            .iter()
+            .zip(&entry_model)
+            .map(|(spec, &model)| Instance {
+                model,
+                transform: Mat4::from_translation(Vec3::from(spec.translation))
+                    * Mat4::from_rotation_y(spec.rotation_y_deg.to_radians())
+                    * Mat4::from_scale(Vec3::splat(spec.scale)),
+                tint: Vec3::from(spec.tint),
+            })
+            .collect(),
+        SceneSpec::Park(spec) => {
+            let entries: Vec<ParkEntry> = spec
+                .models
+                .iter()
+                .zip(&entry_model)
+                .map(|(m, &model)| ParkEntry {
+                    count: m.count,
+                    footprint: footprint(&models[model as usize].mesh),
+                })
+                .collect();
+            let (_grid, placements) = park::place(
+                spec.seed,
+                &entries,
+                spec.tint_min,
+                spec.tint_max,
+                &plan.ground,
+            )
+            .map_err(|source| SceneError::Park {
+                manifest: plan.manifest_path.clone(),
+                source,
+            })?;
+            placements
+                .iter()
+                .map(|p| Instance {
+                    model: entry_model[p.model_entry],
+                    transform: park_transform(p),
+                    tint: Vec3::from(p.tint),
+                })
+                .collect()
+        }
+    };
+    Ok(Scene {
+        models,
+        instances,
+        ground: plan.ground,
+    })
+}
+
+/// Object → world transform of a park placement: translate · rotate_y.
+pub fn park_transform(p: &park::Placement) -> Mat4 {
+    Mat4::from_translation(Vec3::from(p.translation))
+        * Mat4::from_rotation_y(p.yaw_deg.to_radians())
+}
+
+/// x–z extent (width, depth) of a normalised mesh.
+pub fn footprint(mesh: &Mesh) -> [f32; 2] {
+    mesh.bounds()
+        .map_or([0.0; 2], |(lo, hi)| [hi[0] - lo[0], hi[2] - lo[2]])
+}

@@ -1,0 +1,271 @@
+//! Manifest parsing: the two stages (ron → raw → validated plan) and their errors,
+//! which must name file:line:column and the field (issue 2, item 2).
+
+use format::manifest::{parse_manifest, parse_manifest_str, ManifestError, ModelSource, SceneSpec};
+use std::path::{Path, PathBuf};
+
+const GOOD: &str = r#"(
+    name: "demo",
+    ground: (min: (0.0, 0.0), max: (300.0, 260.0)),
+    scene: Park((
+        seed: 7,
+        models: [
+            (model: Procedural("torus_knot"), count: 4, target_height: 20.0),
+            (model: File("models/a.obj"), count: 7, target_height: 43.2, pre_rotation_deg: (-90.0, 0.0, 0.0)),
+        ],
+        tint_min: (0.7, 0.7, 0.7),
+        tint_max: (1.0, 1.0, 1.0),
+    )),
+    cells: (cell_size: 50.0, min_eye_height: 6.0, max_eye_height: 12.0),
+    bake: (image_res: 256, clustering: false),
+    cells_per_job: 2,
+    output: "../out/demo",
+)
+"#;
+
+/// A temp dir holding `manifests/m.ron` (contents `text`) and an (empty) model file
+/// `manifests/models/a.obj`; the path only needs to exist for validation.
+fn write_manifest(text: &str) -> (tempfile::TempDir, PathBuf) {
+    let dir = tempfile::tempdir().unwrap();
+    let manifests = dir.path().join("manifests");
+    std::fs::create_dir_all(manifests.join("models")).unwrap();
+    std::fs::write(manifests.join("models/a.obj"), "v 0 0 0\n").unwrap();
+    let path = manifests.join("m.ron");
+    std::fs::write(&path, text).unwrap();
+    (dir, path)
+}
+
+fn parse_err(text: &str) -> (ManifestError, String) {
+    let (_dir, path) = write_manifest(text);
+    let err = parse_manifest(&path).expect_err("manifest should be rejected");
+    let shown = err.to_string();
+    let rel = shown.replace(&path.display().to_string(), "m.ron");
+    (err, rel)
+}
+
+/// 1-based (line, column) of the first occurrence of `needle` in `text`.
+fn position_of(text: &str, needle: &str) -> (usize, usize) {
+    let offset = text.find(needle).expect("needle in text");
+    let line = text[..offset].matches('\n').count() + 1;
+    let line_start = text[..offset].rfind('\n').map_or(0, |k| k + 1);
+    (line, text[line_start..offset].chars().count() + 1)
+}
+
+#[test]
+fn good_manifest_resolves_paths_and_defaults() {
+    let (dir, path) = write_manifest(GOOD);
+    let plan = parse_manifest(&path).unwrap();
+    assert_eq!(plan.name, "demo");
+    assert_eq!(plan.cells.cell_size, 50.0);
+    assert_eq!(plan.cells_per_job, 2);
+    assert_eq!(plan.bake.image_res, 256);
+    assert!(!plan.bake.clustering);
+    // Unspecified bake fields keep the paper's defaults.
+    assert_eq!(plan.bake.self_occluding_tolerance_px, 5.0);
+    assert_eq!(plan.bake.t_c0, 3.4e-4);
+    assert_eq!(plan.output, dir.path().join("manifests/../out/demo"));
+    let SceneSpec::Park(park) = &plan.scene else {
+        panic!("expected a park")
+    };
+    assert_eq!(park.seed, 7);
+    assert_eq!(park.models.len(), 2);
+    assert_eq!(
+        park.models[0].model,
+        ModelSource::Procedural("torus_knot".into())
+    );
+    assert_eq!(park.models[0].pre_rotation_deg, [0.0; 3]);
+    assert_eq!(park.models[1].pre_rotation_deg, [-90.0, 0.0, 0.0]);
+    // Relative file paths resolve against the manifest's folder, not the cwd.
+    assert_eq!(
+        park.models[1].model,
+        ModelSource::File(dir.path().join("manifests/models/a.obj"))
+    );
+    assert!(matches!(&park.models[1].model, ModelSource::File(p) if p.is_file()));
+    assert_eq!(park.tint_min, [0.7; 3]);
+}
+
+#[test]
+fn optional_fields_take_defaults() {
+    let text = r#"(
+        ground: (min: (0.0, 0.0), max: (10.0, 10.0)),
+        scene: Instances([
+            (model: Procedural("box"), target_height: 2.0, translation: (5.0, 0.0, 5.0), rotation_y_deg: 30.0),
+        ]),
+        cells: (cell_size: 5.0, min_eye_height: 1.0, max_eye_height: 2.0),
+    )"#;
+    let plan = parse_manifest_str(text, Path::new("some/dir/small.ron")).unwrap();
+    assert_eq!(plan.name, "small");
+    assert_eq!(plan.bake, format::manifest::BakeParams::default());
+    assert_eq!(plan.cells_per_job, 4);
+    assert_eq!(plan.output, Path::new("some/dir/../out/small"));
+    let SceneSpec::Instances(list) = &plan.scene else {
+        panic!("expected instances")
+    };
+    assert_eq!(list[0].scale, 1.0);
+    assert_eq!(list[0].tint, [1.0; 3]);
+    assert_eq!(list[0].rotation_y_deg, 30.0);
+}
+
+#[test]
+fn misspelled_field_names_line_column_and_field() {
+    let text = GOOD.replace("(cell_size: 50.0", "(cel_size: 50.0");
+    let (err, shown) = parse_err(&text);
+    let (line, col) = position_of(&text, "cel_size");
+    assert_eq!(err.line_column(), Some((line, col)), "{shown}");
+    assert!(
+        shown.starts_with(&format!("m.ron:{line}:{col}: unknown field `cel_size`")),
+        "{shown}"
+    );
+    assert!(shown.contains("expected one of `cell_size`"), "{shown}");
+    assert_eq!(err.field(), Some("cells.cel_size"));
+}
+
+#[test]
+fn misspelled_nested_field_in_list() {
+    let text = GOOD.replace("count: 7", "cuont: 7");
+    let (err, shown) = parse_err(&text);
+    let (line, col) = position_of(&text, "cuont");
+    assert_eq!(err.line_column(), Some((line, col)), "{shown}");
+    assert!(shown.contains("unknown field `cuont`"), "{shown}");
+    assert_eq!(err.field(), Some("scene.models[1].cuont"));
+}
+
+#[test]
+fn missing_field_is_named() {
+    let text = GOOD.replace("min_eye_height: 6.0, ", "");
+    let (err, shown) = parse_err(&text);
+    assert!(shown.contains("missing field `min_eye_height`"), "{shown}");
+    let (line, _) = position_of(&text, "cells:");
+    assert_eq!(err.line_column().unwrap().0, line, "{shown}");
+    assert_eq!(err.field(), Some("cells.min_eye_height"));
+}
+
+#[test]
+fn wrong_type_is_named() {
+    let text = GOOD.replace("cell_size: 50.0", "cell_size: \"fifty\"");
+    let (err, shown) = parse_err(&text);
+    let (line, _) = position_of(&text, "\"fifty\"");
+    assert_eq!(err.line_column().unwrap().0, line, "{shown}");
+    assert_eq!(err.field(), Some("cells.cell_size"), "{shown}");
+    assert!(shown.contains("cells.cell_size"), "{shown}");
+}
+
+#[test]
+fn syntax_error_has_position() {
+    let text = GOOD.replace("seed: 7,", "seed: 7,,");
+    let (err, shown) = parse_err(&text);
+    let (line, _) = position_of(&text, "7,,");
+    assert_eq!(err.line_column().unwrap().0, line, "{shown}");
+}
+
+#[test]
+fn negative_cell_size_is_out_of_range() {
+    let text = GOOD.replace("cell_size: 50.0", "cell_size: -5.0");
+    let (err, shown) = parse_err(&text);
+    let (line, col) = position_of(&text, "cell_size");
+    assert_eq!(err.line_column(), Some((line, col)), "{shown}");
+    assert_eq!(err.field(), Some("cells.cell_size"));
+    assert!(
+        shown.contains("`cells.cell_size` must be > 0, found -5"),
+        "{shown}"
+    );
+}
+
+#[test]
+fn min_eye_above_max_eye_is_rejected() {
+    let text = GOOD.replace("min_eye_height: 6.0", "min_eye_height: 16.0");
+    let (err, shown) = parse_err(&text);
+    let (line, col) = position_of(&text, "max_eye_height");
+    assert_eq!(err.line_column(), Some((line, col)), "{shown}");
+    assert_eq!(err.field(), Some("cells.max_eye_height"));
+}
+
+#[test]
+fn out_of_range_values_name_their_field() {
+    let cases = [
+        (
+            "target_height: 43.2",
+            "target_height: 0.0",
+            "scene.models[1].target_height",
+        ),
+        ("image_res: 256", "image_res: 3", "bake.image_res"),
+        ("cells_per_job: 2", "cells_per_job: 0", "cells_per_job"),
+        ("max: (300.0, 260.0)", "max: (300.0, -1.0)", "ground.max"),
+        (
+            "tint_max: (1.0, 1.0, 1.0)",
+            "tint_max: (1.0, 0.5, 1.0)",
+            "scene.tint_max",
+        ),
+        (
+            "\"models/a.obj\"",
+            "\"models/missing.obj\"",
+            "scene.models[1].model",
+        ),
+        (
+            "\"models/a.obj\"",
+            "\"models/a.fbx\"",
+            "scene.models[1].model",
+        ),
+        (
+            "Procedural(\"torus_knot\")",
+            "Procedural(\"teapot\")",
+            "scene.models[0].model",
+        ),
+        (
+            "pre_rotation_deg: (-90.0, 0.0, 0.0)",
+            "pre_rotation_deg: (-90.0, inf, 0.0)",
+            "scene.models[1].pre_rotation_deg",
+        ),
+    ];
+    for (from, to, field) in cases {
+        let text = GOOD.replace(from, to);
+        assert_ne!(text, GOOD, "{from}");
+        let (err, shown) = parse_err(&text);
+        assert_eq!(err.field(), Some(field), "{shown}");
+        let key = field.rsplit('.').next().unwrap();
+        let (line, col) = position_of(&text[..], &format!("{key}:")[..]);
+        // The key's first occurrence may belong to an earlier element: check the line
+        // names the field.
+        let (eline, ecol) = err.line_column().unwrap();
+        let line_text = text.lines().nth(eline - 1).unwrap();
+        assert!(
+            line_text[..].contains(key),
+            "{shown}: line {eline} is {line_text:?}"
+        );
+        assert!(eline >= line && (eline > line || ecol >= col), "{shown}");
+        assert!(shown.contains(&format!("`{field}`")), "{shown}");
+    }
+}
+
+#[test]
+fn empty_park_is_rejected() {
+    let text = r#"(
+        ground: (min: (0.0, 0.0), max: (10.0, 10.0)),
+        scene: Park((seed: 1, models: [])),
+        cells: (cell_size: 5.0, min_eye_height: 1.0, max_eye_height: 2.0),
+    )"#;
+    let err = parse_manifest_str(text, Path::new("e.ron")).unwrap_err();
+    assert_eq!(err.field(), Some("scene.models"));
+    assert_eq!(err.line_column(), Some((3, 31)), "{err}");
+    assert!(err.to_string().starts_with("e.ron:3:31: "), "{err}");
+}
+
+#[test]
+fn unknown_scene_variant_lists_the_choices() {
+    let text = GOOD.replace("scene: Park((", "scene: Parc((");
+    let (_err, shown) = parse_err(&text);
+    assert!(
+        shown.contains("`Park`") && shown.contains("`Instances`"),
+        "{shown}"
+    );
+}
+
+#[test]
+fn unreadable_manifest_names_the_path() {
+    let err = parse_manifest(Path::new("/nonexistent/dir/m.ron")).unwrap_err();
+    assert!(
+        err.to_string().starts_with("/nonexistent/dir/m.ron: "),
+        "{err}"
+    );
+    assert_eq!(err.line_column(), None);
+}

@@ -1,0 +1,331 @@
+//! Scene building: normalisation, the nested Park generator (determinism, the
+//! 2M ⊂ 4M ⊂ 8M subset property, no overlap) and `manifests/demo.ron`.
+
+use format::manifest::{parse_manifest, parse_manifest_str};
+use format::park::{self, ParkEntry, SlotGrid};
+use format::scene_build::{footprint, normalise};
+use format::{Ground, Scene};
+use proptest::prelude::*;
+use std::path::{Path, PathBuf};
+
+fn repo_root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+fn demo_scene() -> Scene {
+    let plan = parse_manifest(&repo_root().join("manifests/demo.ron")).expect("demo.ron parses");
+    plan.load_scene().expect("demo scene builds")
+}
+
+/// Asserts each model of `scene` is normalised to its target height.
+fn assert_normalised(scene: &Scene, target_heights: &[f32]) {
+    for (model, &target) in scene.models.iter().zip(target_heights) {
+        model.mesh.validate().unwrap();
+        let (lo, hi) = model.mesh.bounds().unwrap();
+        assert_eq!(lo[1], 0.0, "{}: base on y = 0", model.name);
+        assert!(
+            ((hi[1] - target) / target).abs() < 1e-5,
+            "{}: height {} vs target {target}",
+            model.name,
+            hi[1]
+        );
+        for k in [0, 2] {
+            assert!(
+                (lo[k] + hi[k]).abs() <= 1e-5 * target,
+                "{}: centred on axis {k}: {} .. {}",
+                model.name,
+                lo[k],
+                hi[k]
+            );
+        }
+        assert_eq!(model.content_hash, model.mesh.content_hash());
+    }
+}
+
+#[test]
+fn demo_manifest_loads_and_normalises() {
+    let scene = demo_scene();
+    assert_eq!(scene.models.len(), 6);
+    assert_eq!(scene.instances.len(), 18);
+    assert_normalised(&scene, &[20.0, 30.0, 14.0, 10.0, 6.0, 8.0]);
+    let names: Vec<&str> = scene.models.iter().map(|m| m.name.as_str()).collect();
+    assert_eq!(
+        names,
+        ["torus_knot", "column", "vase", "sphere", "torus", "box"]
+    );
+    // Every instance stands on the ground, inside the ground rectangle.
+    for i in 0..scene.instances.len() {
+        let (lo, hi) = scene.instance_bounds(i);
+        assert!(lo.y.abs() < 1e-4, "instance {i} base at {}", lo.y);
+        assert!(
+            lo.x >= 0.0 && hi.x <= 300.0 && lo.z >= 0.0 && hi.z <= 260.0,
+            "{i}: {lo} {hi}"
+        );
+    }
+    println!(
+        "demo: {} instances, {} triangles",
+        scene.instances.len(),
+        scene.triangle_count()
+    );
+}
+
+#[test]
+fn scene_building_is_deterministic() {
+    let a = demo_scene();
+    let b = demo_scene();
+    assert_eq!(a, b);
+    let bytes = |s: &Scene| serde_json::to_vec(s).unwrap();
+    assert_eq!(bytes(&a), bytes(&b));
+}
+
+#[test]
+fn pre_rotation_turns_the_model_before_normalising() {
+    // The column is 8.4 tall and 3.2 wide: lying down (x rotated 90°), its height
+    // is its diameter and its length runs along z.
+    let upright = format::procedural::build("column").unwrap();
+    let mut lying = upright.clone();
+    normalise(&mut lying, [90.0, 0.0, 0.0], 10.0).unwrap();
+    let (lo, hi) = lying.bounds().unwrap();
+    assert_eq!(lo[1], 0.0);
+    assert!((hi[1] - 10.0).abs() < 1e-4);
+    let [w, d] = footprint(&lying);
+    assert!((w - 10.0).abs() < 0.05, "width {w}");
+    assert!((d - 10.0 * 8.4 / 3.2).abs() < 0.1, "length {d}");
+    lying.validate().unwrap();
+    // Normals turned with the mesh: the top cap's normal (+y) now points along −z
+    // or +z (R_x(90°) maps +y to +z).
+    let top = upright
+        .positions
+        .iter()
+        .position(|p| p[1] == 8.4 && p[0] == 0.0 && p[2] == 0.0)
+        .expect("apex of the top cap");
+    let n = lying.normals[top];
+    assert!(n[2] > 0.99, "rotated normal {n:?}");
+}
+
+#[test]
+fn flat_model_cannot_be_normalised() {
+    let mut m = format::Mesh {
+        positions: vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]],
+        normals: vec![[0.0, 1.0, 0.0]; 3],
+        albedo: vec![[255; 4]; 3],
+        triangles: vec![[0, 2, 1]],
+    };
+    assert!(normalise(&mut m, [0.0; 3], 5.0).is_err());
+}
+
+#[test]
+fn explicit_instances_and_shared_models() {
+    let text = r#"(
+        ground: (min: (-50.0, -50.0), max: (50.0, 50.0)),
+        scene: Instances([
+            (model: Procedural("box"), target_height: 2.0, translation: (5.0, 0.0, 7.0), rotation_y_deg: 90.0, scale: 2.0, tint: (1.0, 0.5, 0.25)),
+            (model: Procedural("box"), target_height: 2.0, translation: (-5.0, 0.0, 7.0), rotation_y_deg: 0.0),
+            (model: Procedural("box"), target_height: 3.0, translation: (0.0, 0.0, -9.0), rotation_y_deg: 0.0),
+        ]),
+        cells: (cell_size: 10.0, min_eye_height: 1.0, max_eye_height: 2.0),
+    )"#;
+    let plan = parse_manifest_str(text, Path::new("inline.ron")).unwrap();
+    let scene = plan.load_scene().unwrap();
+    // Same source and height → one model; another height → another model.
+    assert_eq!(scene.models.len(), 2);
+    assert_eq!(scene.models[0].name, "box");
+    assert_eq!(scene.models[1].name, "box#2");
+    assert_eq!(
+        scene.instances.iter().map(|i| i.model).collect::<Vec<_>>(),
+        [0, 0, 1]
+    );
+    let (lo, hi) = scene.instance_bounds(0);
+    assert!((hi.y - 4.0).abs() < 1e-4 && lo.y.abs() < 1e-4, "scaled ×2");
+    assert!(((lo.x + hi.x) / 2.0 - 5.0).abs() < 1e-4);
+    assert!(((lo.z + hi.z) / 2.0 - 7.0).abs() < 1e-4);
+    assert_eq!(scene.instances[0].tint.to_array(), [1.0, 0.5, 0.25]);
+    assert_normalised(&scene, &[2.0, 3.0]);
+}
+
+/// The demo manifest with its counts replaced.
+fn demo_with_counts(counts: [u32; 6]) -> String {
+    let text = std::fs::read_to_string(repo_root().join("manifests/demo.ron")).unwrap();
+    let mut out = String::new();
+    let mut k = 0;
+    for line in text.lines() {
+        if let Some(at) = line.find("count: ") {
+            let end = at + 7 + line[at + 7..].find(',').unwrap();
+            out.push_str(&format!(
+                "{}count: {}{}\n",
+                &line[..at],
+                counts[k],
+                &line[end..]
+            ));
+            k += 1;
+        } else {
+            out.push_str(line);
+            out.push('\n');
+        }
+    }
+    assert_eq!(k, 6);
+    out
+}
+
+#[test]
+fn smaller_park_is_a_subset_of_the_larger_one() {
+    let path = repo_root().join("manifests/demo.ron");
+    let small = parse_manifest_str(&demo_with_counts([1, 2, 0, 3, 1, 1]), &path)
+        .unwrap()
+        .load_scene()
+        .unwrap();
+    let large = parse_manifest_str(&demo_with_counts([4, 5, 3, 3, 2, 6]), &path)
+        .unwrap()
+        .load_scene()
+        .unwrap();
+    assert_eq!(small.models, large.models);
+    assert_eq!(small.instances.len(), 8);
+    assert_eq!(large.instances.len(), 23);
+    for inst in &small.instances {
+        assert!(
+            large.instances.contains(inst),
+            "small-park instance {inst:?} missing from the large park"
+        );
+    }
+}
+
+const GROUND: Ground = Ground {
+    min: [0.0, 0.0],
+    max: [1650.0, 2035.0],
+};
+
+fn entries(counts: &[u32], footprints: &[[f32; 2]]) -> Vec<ParkEntry> {
+    counts
+        .iter()
+        .zip(footprints)
+        .map(|(&count, &footprint)| ParkEntry { count, footprint })
+        .collect()
+}
+
+/// Rotated footprint half extents of a placement.
+fn half_extents(footprint: [f32; 2], yaw_deg: f32) -> [f64; 2] {
+    let (s, c) = f64::from(yaw_deg).to_radians().sin_cos();
+    let [w, d] = footprint.map(|x| f64::from(x) * 0.5);
+    [c.abs() * w + s.abs() * d, s.abs() * w + c.abs() * d]
+}
+
+#[test]
+fn park_order_is_round_robin_by_copy_then_model() {
+    let fp = [[10.0, 5.0], [20.0, 20.0], [4.0, 30.0]];
+    let (_, placed) =
+        park::place(3, &entries(&[2, 1, 3], &fp), [1.0; 3], [1.0; 3], &GROUND).unwrap();
+    let order: Vec<(usize, u32)> = placed.iter().map(|p| (p.model_entry, p.copy)).collect();
+    assert_eq!(order, [(0, 0), (1, 0), (2, 0), (0, 1), (2, 1), (2, 2)]);
+}
+
+#[test]
+fn park_reports_too_few_slots() {
+    let ground = Ground {
+        min: [0.0, 0.0],
+        max: [100.0, 100.0],
+    };
+    // Slot side 1.1 × diag(30, 40) = 55: one slot fits.
+    let err = park::place(
+        1,
+        &entries(&[2], &[[30.0, 40.0]]),
+        [1.0; 3],
+        [1.0; 3],
+        &ground,
+    )
+    .unwrap_err();
+    assert!(
+        matches!(
+            err,
+            park::ParkError::NotEnoughSlots {
+                needed: 2,
+                available: 1,
+                ..
+            }
+        ),
+        "{err}"
+    );
+}
+
+#[test]
+fn splitmix64_sequence_is_fixed() {
+    // Reference values of splitmix64 from seed 0 (Vigna's reference implementation).
+    let mut r = park::SplitMix64::new(0);
+    assert_eq!(r.next_u64(), 0xE220_A839_7B1D_CDAF);
+    assert_eq!(r.next_u64(), 0x6E78_9E6A_A1B9_65F4);
+    assert_eq!(r.next_u64(), 0x06C4_5D18_8009_454F);
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+
+    /// Same seed and models, counts ≤: every instance of the smaller park is placed
+    /// identically in the larger one; and the generator is deterministic.
+    #[test]
+    fn park_placements_are_nested(
+        seed in any::<u64>(),
+        small in prop::collection::vec(0u32..20, 8),
+        extra in prop::collection::vec(0u32..15, 8),
+        footprints in prop::collection::vec((5.0f32..60.0, 5.0f32..60.0), 8),
+    ) {
+        let fp: Vec<[f32; 2]> = footprints.iter().map(|&(w, d)| [w, d]).collect();
+        let large: Vec<u32> = small.iter().zip(&extra).map(|(a, b)| a + b).collect();
+        prop_assume!(small.iter().any(|&c| c > 0));
+        let small_park = park::place(seed, &entries(&small, &fp), [0.5; 3], [1.0; 3], &GROUND);
+        let large_park = park::place(seed, &entries(&large, &fp), [0.5; 3], [1.0; 3], &GROUND);
+        let (Ok((_, small_placed)), Ok((_, large_placed))) = (small_park, large_park) else {
+            // Only a lack of slots may fail, and then for the larger park first.
+            return Ok(());
+        };
+        let again = park::place(seed, &entries(&large, &fp), [0.5; 3], [1.0; 3], &GROUND).unwrap().1;
+        prop_assert_eq!(&again, &large_placed);
+        prop_assert_eq!(small_placed.len() as u32, small.iter().sum::<u32>());
+        for p in &small_placed {
+            prop_assert!(large_placed.contains(p), "{:?} missing", p);
+        }
+    }
+
+    /// Placements never overlap: each yawed footprint lies inside its own slot,
+    /// slots are distinct, and the footprints' boxes are pairwise disjoint; the tint
+    /// lies in its range.
+    #[test]
+    fn park_placements_do_not_overlap(
+        seed in any::<u64>(),
+        counts in prop::collection::vec(1u32..25, 1..9),
+        footprints in prop::collection::vec((1.0f32..80.0, 1.0f32..80.0), 8),
+    ) {
+        let fp: Vec<[f32; 2]> = footprints.iter().map(|&(w, d)| [w, d]).collect();
+        let e = entries(&counts, &fp[..counts.len()]);
+        let grid = SlotGrid::new(&e, &GROUND).unwrap();
+        let Ok((_, placed)) = park::place(seed, &e, [0.25, 0.5, 0.75], [0.5, 0.75, 1.0], &GROUND) else {
+            return Ok(());
+        };
+        let half_slot = f64::from(grid.slot_size) * 0.5;
+        let mut slots: Vec<usize> = placed.iter().map(|p| p.slot).collect();
+        slots.sort_unstable();
+        slots.dedup();
+        prop_assert_eq!(slots.len(), placed.len());
+        let boxes: Vec<[f64; 4]> = placed.iter().map(|p| {
+            let [hx, hz] = half_extents(fp[p.model_entry], p.yaw_deg);
+            let c = grid.centre(p.slot);
+            let (x, z) = (f64::from(p.translation[0]), f64::from(p.translation[2]));
+            assert!((x - c[0]).abs() + hx <= half_slot + 1e-3, "x outside slot");
+            assert!((z - c[1]).abs() + hz <= half_slot + 1e-3, "z outside slot");
+            for k in 0..3 {
+                let lo = [0.25, 0.5, 0.75][k];
+                assert!(p.tint[k] >= lo && p.tint[k] <= lo + 0.25, "tint {:?}", p.tint);
+            }
+            [x - hx, x + hx, z - hz, z + hz]
+        }).collect();
+        for i in 0..boxes.len() {
+            for j in i + 1..boxes.len() {
+                let (a, b) = (boxes[i], boxes[j]);
+                let overlap = a[0] < b[1] - 1e-3 && b[0] < a[1] - 1e-3 && a[2] < b[3] - 1e-3 && b[2] < a[3] - 1e-3;
+                prop_assert!(!overlap, "instances {} and {} overlap", i, j);
+            }
+        }
+        // Inside the ground.
+        for b in &boxes {
+            prop_assert!(b[0] >= -1e-3 && b[1] <= 1650.0 + 1e-3 && b[2] >= -1e-3 && b[3] <= 2035.0 + 1e-3);
+        }
+    }
+}
