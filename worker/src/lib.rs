@@ -3,3 +3,5 @@
 
 pub mod grid;
 pub mod raster;
+pub mod shade;
+pub mod view;

@@ -1,11 +1,38 @@
-//! Software rasterizer for captures (paper 000 §3.1.3: depth, colour and ID
-//! images from a cell centre; DESIGN.md "Capture resolution", "Shading").
+//! Software rasterizer for captures (paper 000 §3.1.3 step (1): "capture the image
+//! and depth image of O using cell's face as the window and cell's center as the
+//! center of projection"; DESIGN.md "Capture resolution", "Shading").
 //!
-//! TODO(issue 3 item 1): the implementation. The types below are the contract the
-//! other kernels (classify, weights, simplify, capture) are written against.
+//! It writes four buffers per pixel: eye-space depth, shaded sRGB8 colour, object
+//! id and triangle id. The pipeline (see [`render_with`]):
+//!
+//! 1. **Transform** every vertex of every item once to clip space, and where it lies
+//!    inside the near plane and the guard band, to 24.8 fixed-point pixel
+//!    coordinates (x right, y down, pixel centres at +0.5) with 1/w.
+//! 2. **Set up and bin** triangles in parallel chunks: trivial reject by outcodes,
+//!    back-face handling by the sign of the fixed-point area, near-plane (and guard
+//!    band) clipping in homogeneous space for the few triangles that need it, early
+//!    reject of triangles whose bounding box holds no pixel centre, and a fast path
+//!    that turns a triangle covering at most one pixel centre into a single
+//!    fragment. Survivors go to per-band bins (bands of [`BAND_ROWS`] rows).
+//! 3. **Rasterize** bands in parallel; each band owns its rows. Coverage uses exact
+//!    integer edge functions with a top-left fill rule (equivalent to nudging the
+//!    sample point by (ε, ε²)), so shared edges and vertices are covered exactly
+//!    once. The depth test keeps the largest 1/w; exactly equal 1/w goes to the
+//!    lower (item index, triangle id). That is a total order, so the result does not
+//!    depend on the order fragments arrive in, hence not on the thread count.
+//! 4. **Resolve** (deferred shading): per visible pixel, perspective-correct
+//!    barycentrics of the visible triangle at the pixel centre by 2D homogeneous
+//!    rasterization (Olano & Greer 1997), then [`Shading`] — DESIGN.md's Lambert
+//!    formula on the interpolated albedo × tint and normal.
+//!
+//! Contract for views: the projection must be an OpenGL-style perspective matrix
+//! whose clip `w` is the eye-space depth −z_eye (every builder in [`crate::view`]
+//! makes one); the depth buffer holds that `w`.
 
+use crate::shade::{linear_to_srgb8, shade, srgb8_to_linear, SKY};
 use format::Mesh;
-use glam::{Mat4, Vec3};
+use glam::{Mat3, Mat4, Vec2, Vec3, Vec4};
+use rayon::prelude::*;
 
 /// Object/triangle id of a pixel nothing covers.
 pub const BACKGROUND_ID: u32 = u32::MAX;
@@ -59,4 +86,698 @@ pub struct Capture {
     pub object_id: Vec<u32>,
     /// Index into the mesh's `triangles` of the visible surface, or `BACKGROUND_ID`.
     pub triangle_id: Vec<u32>,
+}
+
+impl Capture {
+    /// Number of pixels covered by some surface.
+    pub fn covered_pixels(&self) -> usize {
+        self.object_id
+            .iter()
+            .filter(|&&id| id != BACKGROUND_ID)
+            .count()
+    }
+
+    /// Index of pixel `(x, y)` in the buffers.
+    pub fn index(&self, x: u32, y: u32) -> usize {
+        y as usize * self.view.width as usize + x as usize
+    }
+}
+
+/// How a visible pixel is coloured. A later issue adds projective texturing from a
+/// capture (`Projective { .. }`); the rasterizer calls [`Shading::shade_pixel`] per
+/// visible pixel and nothing else depends on the variant.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum Shading {
+    /// DESIGN.md "Shading": per-pixel Lambert of the interpolated vertex albedo
+    /// (sRGB8 → linear) × tint and the interpolated, renormalised world normal.
+    #[default]
+    Lit,
+}
+
+/// What the resolve pass knows about a visible pixel.
+#[derive(Clone, Copy, Debug)]
+pub struct PixelSurface<'a> {
+    pub item: &'a DrawItem<'a>,
+    /// Index into `item.mesh.triangles`.
+    pub triangle: u32,
+    /// Perspective-correct barycentrics of the pixel centre (sum 1, each ≥ 0).
+    pub barycentric: Vec3,
+    /// Inverse-transpose of the item transform's linear part (normals → world).
+    pub normal_matrix: &'a Mat3,
+}
+
+impl Shading {
+    /// sRGB8 colour of one visible pixel.
+    pub fn shade_pixel(&self, s: &PixelSurface<'_>) -> [u8; 4] {
+        match self {
+            Shading::Lit => {
+                let mesh = s.item.mesh;
+                let t = mesh.triangles[s.triangle as usize];
+                let b = s.barycentric;
+                let mut albedo = Vec3::ZERO;
+                let mut normal = Vec3::ZERO;
+                for k in 0..3 {
+                    let v = t[k] as usize;
+                    let a = mesh
+                        .albedo
+                        .get(v)
+                        .map_or(Vec3::ONE, |&c| srgb8_to_linear(c));
+                    albedo += b[k] * a;
+                    if let Some(n) = mesh.normals.get(v) {
+                        normal += b[k] * Vec3::from_array(*n);
+                    }
+                }
+                let mut n = *s.normal_matrix * normal;
+                if !(n.length_squared() > 1e-20) || !n.is_finite() {
+                    // No usable vertex normals: the geometric normal.
+                    let p = t.map(|v| {
+                        s.item
+                            .transform
+                            .transform_point3(Vec3::from_array(mesh.positions[v as usize]))
+                    });
+                    n = (p[1] - p[0]).cross(p[2] - p[0]);
+                }
+                let n = n.normalize_or_zero();
+                linear_to_srgb8(shade(albedo * s.item.tint, n))
+            }
+        }
+    }
+}
+
+/// Rows per band: the unit of parallel work and of triangle binning.
+pub const BAND_ROWS: u32 = 16;
+/// Triangles per setup chunk.
+const SETUP_CHUNK: usize = 4096;
+/// Sub-pixel precision of the fixed-point screen coordinates (bits).
+const SUB_BITS: i32 = 8;
+const SUB: i32 = 1 << SUB_BITS;
+/// Guard band beyond the image, in pixels; geometry beyond it is clipped.
+const GUARD_PX: f32 = 8192.0;
+/// Largest image side supported (keeps fixed-point products within i64).
+pub const MAX_SIDE: u32 = 16384;
+
+// Vertex flags.
+const OUT_LEFT: u32 = 1;
+const OUT_RIGHT: u32 = 2;
+const OUT_BOTTOM: u32 = 4;
+const OUT_TOP: u32 = 8;
+const OUT_NEAR: u32 = 16;
+const OUT_FAR: u32 = 32;
+/// Outside the near plane or the guard band: the triangle needs clipping.
+const NEEDS_CLIP: u32 = 64;
+
+/// One transformed vertex.
+#[derive(Clone, Copy, Debug, Default)]
+struct ScreenVert {
+    x: i32,
+    y: i32,
+    inv_w: f32,
+    flags: u32,
+}
+
+/// A set-up triangle, oriented so that its fixed-point area is positive.
+#[derive(Clone, Copy, Debug)]
+struct TriSetup {
+    /// Fixed-point vertices; a band computes its edge functions from them exactly.
+    vx: [i32; 3],
+    vy: [i32; 3],
+    /// 1/w of each vertex divided by the doubled area.
+    iw_over_area: [f32; 3],
+    x_min: i32,
+    x_max: i32,
+    y_min: i32,
+    y_max: i32,
+    id: u64,
+}
+
+/// A triangle that covers exactly one pixel centre: already resolved to a fragment.
+#[derive(Clone, Copy, Debug)]
+struct Fragment {
+    x: u32,
+    y: u32,
+    key: f32,
+    id: u64,
+}
+
+/// Output of setting up one chunk of triangles.
+struct SetupChunk {
+    tris: Vec<TriSetup>,
+    frags: Vec<Fragment>,
+    /// Per band: indices into `tris`.
+    tri_bins: Vec<Vec<u32>>,
+    /// Per band: indices into `frags`.
+    frag_bins: Vec<Vec<u32>>,
+}
+
+/// Per-item data shared by setup and resolve.
+struct ItemData {
+    clip: Vec<Vec4>,
+    screen: Vec<ScreenVert>,
+    normal_matrix: Mat3,
+}
+
+/// Screen mapping of one view.
+#[derive(Clone, Copy)]
+struct Viewport {
+    width: u32,
+    height: u32,
+    half_w: f32,
+    half_h: f32,
+    /// Guard band extents in NDC units.
+    guard_x: f32,
+    guard_y: f32,
+    bands: usize,
+}
+
+impl Viewport {
+    fn new(view: &View) -> Viewport {
+        let w = view.width.min(MAX_SIDE);
+        let h = view.height.min(MAX_SIDE);
+        Viewport {
+            width: w,
+            height: h,
+            half_w: w as f32 * 0.5,
+            half_h: h as f32 * 0.5,
+            guard_x: 1.0 + 2.0 * GUARD_PX / w.max(1) as f32,
+            guard_y: 1.0 + 2.0 * GUARD_PX / h.max(1) as f32,
+            bands: h.div_ceil(BAND_ROWS) as usize,
+        }
+    }
+
+    #[inline]
+    fn flags(&self, c: Vec4) -> u32 {
+        let mut f = 0;
+        if c.x < -c.w {
+            f |= OUT_LEFT;
+        }
+        if c.x > c.w {
+            f |= OUT_RIGHT;
+        }
+        if c.y < -c.w {
+            f |= OUT_BOTTOM;
+        }
+        if c.y > c.w {
+            f |= OUT_TOP;
+        }
+        if c.z > c.w {
+            f |= OUT_FAR;
+        }
+        // `!(a >= b)` so that NaN coordinates count as outside.
+        if !(c.z >= -c.w) || !(c.w > 0.0) {
+            f |= OUT_NEAR | NEEDS_CLIP;
+        }
+        if !(c.x.abs() <= self.guard_x * c.w) || !(c.y.abs() <= self.guard_y * c.w) {
+            f |= NEEDS_CLIP;
+        }
+        f
+    }
+
+    /// Fixed-point screen position of a clip-space point inside the near plane and
+    /// the guard band.
+    #[inline]
+    fn to_screen(&self, c: Vec4) -> ScreenVert {
+        let inv_w = 1.0 / c.w;
+        let sx = (c.x * inv_w + 1.0) * self.half_w;
+        let sy = (1.0 - c.y * inv_w) * self.half_h;
+        ScreenVert {
+            x: (sx * SUB as f32).round() as i32,
+            y: (sy * SUB as f32).round() as i32,
+            inv_w,
+            flags: 0,
+        }
+    }
+}
+
+/// Renders `items` from `view` with DESIGN.md's lighting ([`Shading::Lit`]).
+pub fn render(view: &View, items: &[DrawItem], cull: CullMode) -> Capture {
+    render_with(view, items, cull, Shading::Lit)
+}
+
+/// Renders `items` from `view`, colouring visible pixels with `shading`.
+///
+/// Images larger than [`MAX_SIDE`] on a side are cropped to it. Triangles with
+/// out-of-range vertex indices (and subset entries out of range) are skipped.
+/// The result is bit-identical for any rayon thread count.
+pub fn render_with(view: &View, items: &[DrawItem], cull: CullMode, shading: Shading) -> Capture {
+    let vp = Viewport::new(view);
+    let (w, h) = (vp.width as usize, vp.height as usize);
+
+    // Step 1: transform every vertex once per item.
+    let view_proj = view.proj * view.view;
+    let item_data: Vec<ItemData> = items
+        .iter()
+        .map(|item| transform_item(&vp, view_proj, item))
+        .collect();
+
+    // Step 2: set up triangles in chunks (item order, then triangle order) and bin
+    // them per band.
+    let mut chunks_desc = Vec::new();
+    for (i, item) in items.iter().enumerate() {
+        let n = item
+            .triangles
+            .map_or(item.mesh.triangles.len(), |subset| subset.len());
+        let mut start = 0;
+        while start < n {
+            let end = (start + SETUP_CHUNK).min(n);
+            chunks_desc.push((i, start, end));
+            start = end;
+        }
+    }
+    let chunks: Vec<SetupChunk> = chunks_desc
+        .par_iter()
+        .map(|&(i, start, end)| setup_chunk(&vp, cull, items, &item_data, i, start, end))
+        .collect();
+
+    // Step 3: rasterize bands; each band owns `BAND_ROWS` full rows.
+    let mut key = vec![0.0f32; w * h];
+    let mut ids = vec![u64::MAX; w * h];
+    let far_key = 1.0 / view.far;
+    let band_len = w * BAND_ROWS as usize;
+    if w > 0 && h > 0 {
+        key.par_chunks_mut(band_len)
+            .zip(ids.par_chunks_mut(band_len))
+            .enumerate()
+            .for_each(|(band, (key, ids))| {
+                key.fill(if far_key.is_finite() { far_key } else { 0.0 });
+                let y0 = band as i32 * BAND_ROWS as i32;
+                let y1 = y0 + (key.len() / w) as i32;
+                for chunk in &chunks {
+                    for &f in &chunk.frag_bins[band] {
+                        let f = &chunk.frags[f as usize];
+                        let o = (f.y as usize - y0 as usize) * w + f.x as usize;
+                        depth_test(&mut key[o], &mut ids[o], f.key, f.id);
+                    }
+                    for &t in &chunk.tri_bins[band] {
+                        raster_triangle(&chunk.tris[t as usize], w, y0, y1, key, ids);
+                    }
+                }
+            });
+    }
+
+    // Step 4: resolve depth, ids and colour per pixel.
+    let mut depth = vec![f32::INFINITY; w * h];
+    let mut color = vec![SKY; w * h];
+    let mut object_id = vec![BACKGROUND_ID; w * h];
+    let mut triangle_id = vec![BACKGROUND_ID; w * h];
+    if w > 0 && h > 0 {
+        depth
+            .par_chunks_mut(w)
+            .zip(color.par_chunks_mut(w))
+            .zip(object_id.par_chunks_mut(w))
+            .zip(triangle_id.par_chunks_mut(w))
+            .enumerate()
+            .for_each(|(y, (((depth, color), object_id), triangle_id))| {
+                for x in 0..w {
+                    let o = y * w + x;
+                    let id = ids[o];
+                    if id == u64::MAX {
+                        continue;
+                    }
+                    let item_index = (id >> 32) as usize;
+                    let tri = id as u32;
+                    let item = &items[item_index];
+                    depth[x] = 1.0 / key[o];
+                    object_id[x] = item.object_id;
+                    triangle_id[x] = tri;
+                    let data = &item_data[item_index];
+                    let t = item.mesh.triangles[tri as usize];
+                    let ndc = Vec2::new(
+                        (x as f32 + 0.5) / vp.half_w - 1.0,
+                        1.0 - (y as f32 + 0.5) / vp.half_h,
+                    );
+                    let barycentric = homogeneous_barycentrics(
+                        [
+                            data.clip[t[0] as usize],
+                            data.clip[t[1] as usize],
+                            data.clip[t[2] as usize],
+                        ],
+                        ndc,
+                    );
+                    color[x] = shading.shade_pixel(&PixelSurface {
+                        item,
+                        triangle: tri,
+                        barycentric,
+                        normal_matrix: &data.normal_matrix,
+                    });
+                }
+            });
+    }
+
+    let mut view_out = *view;
+    view_out.width = vp.width;
+    view_out.height = vp.height;
+    Capture {
+        view: view_out,
+        depth,
+        color,
+        object_id,
+        triangle_id,
+    }
+}
+
+fn transform_item(vp: &Viewport, view_proj: Mat4, item: &DrawItem) -> ItemData {
+    let mvp = view_proj * item.transform;
+    let positions = &item.mesh.positions;
+    let mut clip = vec![Vec4::ZERO; positions.len()];
+    let mut screen = vec![ScreenVert::default(); positions.len()];
+    const CHUNK: usize = 8192;
+    clip.par_chunks_mut(CHUNK)
+        .zip(screen.par_chunks_mut(CHUNK))
+        .zip(positions.par_chunks(CHUNK))
+        .for_each(|((clip, screen), positions)| {
+            for ((c, s), p) in clip.iter_mut().zip(screen.iter_mut()).zip(positions) {
+                let cp = mvp * Vec4::new(p[0], p[1], p[2], 1.0);
+                *c = cp;
+                let flags = vp.flags(cp);
+                *s = if flags & NEEDS_CLIP == 0 {
+                    vp.to_screen(cp)
+                } else {
+                    ScreenVert::default()
+                };
+                s.flags = flags;
+            }
+        });
+    let linear = Mat3::from_mat4(item.transform);
+    let normal_matrix = if linear.determinant().abs() > 1e-30 {
+        linear.inverse().transpose()
+    } else {
+        linear
+    };
+    ItemData {
+        clip,
+        screen,
+        normal_matrix,
+    }
+}
+
+/// Doubled signed area / edge function: (b − a) × (p − a) in fixed point.
+#[inline(always)]
+fn edge(ax: i32, ay: i32, bx: i32, by: i32, px: i64, py: i64) -> i64 {
+    (bx as i64 - ax as i64) * (py - ay as i64) - (by as i64 - ay as i64) * (px - ax as i64)
+}
+
+/// Top-left rule: an edge a→b of a positively oriented triangle owns the pixel
+/// centres exactly on it when it points up the screen (dy < 0), or right when
+/// horizontal. Returns the bias added to the edge function (0 or −1).
+#[inline(always)]
+fn edge_bias(ax: i32, ay: i32, bx: i32, by: i32) -> i64 {
+    let dy = by - ay;
+    let dx = bx - ax;
+    if dy < 0 || (dy == 0 && dx > 0) {
+        0
+    } else {
+        -1
+    }
+}
+
+#[inline(always)]
+fn depth_test(key: &mut f32, id: &mut u64, k: f32, new_id: u64) {
+    if k > *key || (k == *key && new_id < *id) {
+        *key = k;
+        *id = new_id;
+    }
+}
+
+/// Sets up triangles `[start, end)` of item `i` (indices into its subset or mesh).
+fn setup_chunk(
+    vp: &Viewport,
+    cull: CullMode,
+    items: &[DrawItem],
+    item_data: &[ItemData],
+    i: usize,
+    start: usize,
+    end: usize,
+) -> SetupChunk {
+    let mut out = SetupChunk {
+        tris: Vec::new(),
+        frags: Vec::new(),
+        tri_bins: vec![Vec::new(); vp.bands],
+        frag_bins: vec![Vec::new(); vp.bands],
+    };
+    let item = &items[i];
+    let data = &item_data[i];
+    let tris = &item.mesh.triangles;
+    let nverts = data.screen.len();
+    for k in start..end {
+        let tri_index = match item.triangles {
+            Some(subset) => subset[k],
+            None => k as u32,
+        };
+        let Some(t) = tris.get(tri_index as usize) else {
+            continue;
+        };
+        if t[0] as usize >= nverts || t[1] as usize >= nverts || t[2] as usize >= nverts {
+            continue;
+        }
+        let v = [
+            data.screen[t[0] as usize],
+            data.screen[t[1] as usize],
+            data.screen[t[2] as usize],
+        ];
+        let id = ((i as u64) << 32) | tri_index as u64;
+        let all = v[0].flags & v[1].flags & v[2].flags;
+        if all & !NEEDS_CLIP != 0 {
+            continue; // entirely outside one frustum plane
+        }
+        let any = v[0].flags | v[1].flags | v[2].flags;
+        if any & NEEDS_CLIP == 0 {
+            setup_triangle(vp, cull, v, id, &mut out);
+        } else {
+            let c = [
+                data.clip[t[0] as usize],
+                data.clip[t[1] as usize],
+                data.clip[t[2] as usize],
+            ];
+            setup_clipped(vp, cull, c, id, &mut out);
+        }
+    }
+    out
+}
+
+/// Sets up one triangle whose vertices are all inside the near plane and the guard
+/// band: cull, early reject, single-pixel fast path, or bin.
+#[inline(always)]
+fn setup_triangle(
+    vp: &Viewport,
+    cull: CullMode,
+    v: [ScreenVert; 3],
+    id: u64,
+    out: &mut SetupChunk,
+) {
+    // Pixel-centre range of the bounding box: the first centre at or right of the
+    // minimum, the last at or left of the maximum.
+    let x_lo = v[0].x.min(v[1].x).min(v[2].x);
+    let x_hi = v[0].x.max(v[1].x).max(v[2].x);
+    let y_lo = v[0].y.min(v[1].y).min(v[2].y);
+    let y_hi = v[0].y.max(v[1].y).max(v[2].y);
+    let x_min = ((x_lo - SUB / 2 + SUB - 1) >> SUB_BITS).max(0);
+    let x_max = ((x_hi - SUB / 2) >> SUB_BITS).min(vp.width as i32 - 1);
+    let y_min = ((y_lo - SUB / 2 + SUB - 1) >> SUB_BITS).max(0);
+    let y_max = ((y_hi - SUB / 2) >> SUB_BITS).min(vp.height as i32 - 1);
+    if x_min > x_max || y_min > y_max {
+        return; // no pixel centre in the box
+    }
+    let area = edge(v[0].x, v[0].y, v[1].x, v[1].y, v[2].x as i64, v[2].y as i64);
+    // Screen y points down, so a counter-clockwise (front) triangle has area < 0.
+    if area == 0 || (cull == CullMode::Back && area > 0) {
+        return;
+    }
+    let (v1, v2) = if area < 0 { (v[2], v[1]) } else { (v[1], v[2]) };
+    let v0 = v[0];
+    let area = area.unsigned_abs() as f32;
+    let inv_area = 1.0 / area;
+    let tri = TriSetup {
+        vx: [v0.x, v1.x, v2.x],
+        vy: [v0.y, v1.y, v2.y],
+        iw_over_area: [
+            v0.inv_w * inv_area,
+            v1.inv_w * inv_area,
+            v2.inv_w * inv_area,
+        ],
+        x_min,
+        x_max,
+        y_min,
+        y_max,
+        id,
+    };
+    if x_min == x_max && y_min == y_max {
+        // Fast path: one candidate pixel centre.
+        if let Some(k) = sample(&tri, x_min, y_min) {
+            out.frag_bins[(y_min as u32 / BAND_ROWS) as usize].push(out.frags.len() as u32);
+            out.frags.push(Fragment {
+                x: x_min as u32,
+                y: y_min as u32,
+                key: k,
+                id,
+            });
+        }
+        return;
+    }
+    let b0 = (y_min as u32 / BAND_ROWS) as usize;
+    let b1 = (y_max as u32 / BAND_ROWS) as usize;
+    let index = out.tris.len() as u32;
+    for bin in &mut out.tri_bins[b0..=b1] {
+        bin.push(index);
+    }
+    out.tris.push(tri);
+}
+
+/// Coverage and 1/w of one pixel centre, `None` when not covered.
+#[inline(always)]
+fn sample(t: &TriSetup, x: i32, y: i32) -> Option<f32> {
+    let px = ((x as i64) << SUB_BITS) + (SUB / 2) as i64;
+    let py = ((y as i64) << SUB_BITS) + (SUB / 2) as i64;
+    let [x0, x1, x2] = t.vx;
+    let [y0, y1, y2] = t.vy;
+    let e0 = edge(x1, y1, x2, y2, px, py) + edge_bias(x1, y1, x2, y2);
+    let e1 = edge(x2, y2, x0, y0, px, py) + edge_bias(x2, y2, x0, y0);
+    let e2 = edge(x0, y0, x1, y1, px, py) + edge_bias(x0, y0, x1, y1);
+    if (e0 | e1 | e2) < 0 {
+        return None;
+    }
+    Some(
+        e0 as f32 * t.iw_over_area[0]
+            + e1 as f32 * t.iw_over_area[1]
+            + e2 as f32 * t.iw_over_area[2],
+    )
+}
+
+/// Rasterizes a set-up triangle into the rows `[y0, y1)` a band owns.
+#[inline]
+fn raster_triangle(t: &TriSetup, w: usize, y0: i32, y1: i32, key: &mut [f32], ids: &mut [u64]) {
+    let ys = t.y_min.max(y0);
+    let ye = t.y_max.min(y1 - 1);
+    if ys > ye {
+        return;
+    }
+    let [x0, x1, x2] = t.vx;
+    let [vy0, vy1, vy2] = t.vy;
+    // Edge functions at the centre of pixel (x_min, ys), exactly, then stepped in
+    // exact integers: the values do not depend on where a band starts.
+    let px = ((t.x_min as i64) << SUB_BITS) + (SUB / 2) as i64;
+    let py = ((ys as i64) << SUB_BITS) + (SUB / 2) as i64;
+    let mut r0 = edge(x1, vy1, x2, vy2, px, py) + edge_bias(x1, vy1, x2, vy2);
+    let mut r1 = edge(x2, vy2, x0, vy0, px, py) + edge_bias(x2, vy2, x0, vy0);
+    let mut r2 = edge(x0, vy0, x1, vy1, px, py) + edge_bias(x0, vy0, x1, vy1);
+    // d/dx of edge a→b is −(b.y − a.y)·SUB, d/dy is (b.x − a.x)·SUB.
+    let sx0 = -((vy2 - vy1) as i64) << SUB_BITS;
+    let sx1 = -((vy0 - vy2) as i64) << SUB_BITS;
+    let sx2 = -((vy1 - vy0) as i64) << SUB_BITS;
+    let sy0 = ((x2 - x1) as i64) << SUB_BITS;
+    let sy1 = ((x0 - x2) as i64) << SUB_BITS;
+    let sy2 = ((x1 - x0) as i64) << SUB_BITS;
+    let [a0, a1, a2] = t.iw_over_area;
+    for y in ys..=ye {
+        let row = (y - y0) as usize * w;
+        let (mut e0, mut e1, mut e2) = (r0, r1, r2);
+        let mut inside_seen = false;
+        for x in t.x_min..=t.x_max {
+            if (e0 | e1 | e2) >= 0 {
+                inside_seen = true;
+                let k = e0 as f32 * a0 + e1 as f32 * a1 + e2 as f32 * a2;
+                let o = row + x as usize;
+                depth_test(&mut key[o], &mut ids[o], k, t.id);
+            } else if inside_seen {
+                break; // a triangle's span on a row is contiguous
+            }
+            e0 += sx0;
+            e1 += sx1;
+            e2 += sx2;
+        }
+        r0 += sy0;
+        r1 += sy1;
+        r2 += sy2;
+    }
+}
+
+/// Clips a triangle in homogeneous space against the near plane (z ≥ −w) and the
+/// guard band, then sets up the resulting fan.
+fn setup_clipped(vp: &Viewport, cull: CullMode, c: [Vec4; 3], id: u64, out: &mut SetupChunk) {
+    let planes = [
+        Vec4::new(0.0, 0.0, 1.0, 1.0),
+        Vec4::new(1.0, 0.0, 0.0, vp.guard_x),
+        Vec4::new(-1.0, 0.0, 0.0, vp.guard_x),
+        Vec4::new(0.0, 1.0, 0.0, vp.guard_y),
+        Vec4::new(0.0, -1.0, 0.0, vp.guard_y),
+    ];
+    let mut poly = [Vec4::ZERO; 9];
+    let mut n = 3;
+    poly[..3].copy_from_slice(&c);
+    let mut next = [Vec4::ZERO; 9];
+    for plane in planes {
+        let mut m = 0;
+        for i in 0..n {
+            let a = poly[i];
+            let b = poly[(i + 1) % n];
+            let da = plane.dot(a);
+            let db = plane.dot(b);
+            if da >= 0.0 {
+                next[m] = a;
+                m += 1;
+            }
+            if (da >= 0.0) != (db >= 0.0) {
+                next[m] = intersect(a, da, b, db);
+                m += 1;
+            }
+        }
+        n = m;
+        poly[..n].copy_from_slice(&next[..n]);
+        if n < 3 {
+            return;
+        }
+    }
+    if poly[..n].iter().any(|p| !(p.w > 0.0) || !p.is_finite()) {
+        return;
+    }
+    let s: [ScreenVert; 9] = std::array::from_fn(|i| {
+        if i < n {
+            vp.to_screen(poly[i])
+        } else {
+            ScreenVert::default()
+        }
+    });
+    for i in 1..n - 1 {
+        setup_triangle(vp, cull, [s[0], s[i], s[i + 1]], id, out);
+    }
+}
+
+/// Intersection of segment a–b with a plane, computed from a canonical end so that
+/// an edge shared by two triangles is cut at the same point whichever way it runs.
+#[inline]
+fn intersect(a: Vec4, da: f32, b: Vec4, db: f32) -> Vec4 {
+    let a_first = (a.x, a.y, a.z, a.w)
+        .partial_cmp(&(b.x, b.y, b.z, b.w))
+        .is_none_or(|o| o.is_le());
+    let (p, dp, q, dq) = if a_first {
+        (a, da, b, db)
+    } else {
+        (b, db, a, da)
+    };
+    let t = dp / (dp - dq);
+    p + (q - p) * t
+}
+
+/// Perspective-correct barycentrics of the NDC point `ndc` in a triangle given by
+/// clip-space vertices (2D homogeneous rasterization: λ ∝ M⁻¹·(u, v, 1) with M's
+/// columns the vertices' (x, y, w)); valid for any sign of w. Clamped to ≥ 0 and
+/// normalised to sum 1.
+pub fn homogeneous_barycentrics(c: [Vec4; 3], ndc: Vec2) -> Vec3 {
+    let col = c.map(|v| Vec3::new(v.x, v.y, v.w));
+    let q = Vec3::new(ndc.x, ndc.y, 1.0);
+    let l = Vec3::new(
+        col[1].cross(col[2]).dot(q),
+        col[2].cross(col[0]).dot(q),
+        col[0].cross(col[1]).dot(q),
+    );
+    let sum = l.x + l.y + l.z;
+    if !(sum.abs() > 0.0) || !sum.is_finite() {
+        return Vec3::splat(1.0 / 3.0);
+    }
+    let l = (l / sum).max(Vec3::ZERO);
+    let s = l.x + l.y + l.z;
+    if s > 0.0 {
+        l / s
+    } else {
+        Vec3::splat(1.0 / 3.0)
+    }
 }
