@@ -6,7 +6,7 @@
 //! is the validated, resolved form the rest of hexbake reads: relative paths resolved
 //! against the manifest's folder, ranges checked, defaults applied (the paper's
 //! values, 000 §4.1.2). Validation errors find the offending field's line and column
-//! in the text through [`FieldPositions`](crate::field_positions).
+//! in the text through a structural scan of the text (`field_positions.rs`).
 //!
 //! The syntax (every field not marked optional is required):
 //!
