@@ -35,6 +35,7 @@ pub struct RawMesh {
 pub enum CleanupError {
     #[error("vertex {vertex} has a non-finite coordinate {position:?}")]
     NonFinite { vertex: usize, position: [f32; 3] },
+    /// `face` counts triangles after the loader's triangulation.
     #[error("face {face} uses vertex {index}, but there are only {vertex_count} vertices")]
     IndexOutOfRange {
         face: usize,

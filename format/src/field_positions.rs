@@ -337,4 +337,22 @@ mod tests {
             Some("cells.cell_size")
         );
     }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(256))]
+        /// Any text scans without panicking, and every query answers.
+        #[test]
+        fn scan_never_panics(text in "[ -~\n\té\"()\\[\\]{}:,/*#]{0,200}") {
+            let f = FieldPositions::scan(&text);
+            for line in 0..4 {
+                for column in 0..30 {
+                    let at = TextPosition { line, column };
+                    let _ = f.path_at(at);
+                    let _ = f.struct_at(at);
+                    let _ = f.key_before(at, "a");
+                }
+            }
+            let _ = f.nearest_position("a.b[0].c");
+        }
+    }
 }

@@ -4,6 +4,17 @@
 //! folders"): the manifest schema (raw + validated), the model loaders, the scene
 //! the bake reads, the base/cell pack layout with its writer and memory-mapped
 //! reader, the index, and fingerprints.
+//!
+//! Scene input, in the order data flows:
+//! - [`manifest`]: `parse_manifest(path) -> Plan` (raw serde structs → validated plan,
+//!   errors with file:line:column and the field);
+//! - [`load`]: `load_model(path) -> Mesh` for glTF/GLB, OBJ, PLY, OFF, STL, through
+//!   [`cleanup`] (validation, welding, degenerate/duplicate removal, smooth normals,
+//!   albedo);
+//! - [`procedural`]: the demo's procedural models and the procedural albedo pattern;
+//! - [`scene_build`]: `Plan::load_scene() -> Scene` (normalise each model, place the
+//!   instances; parks via [`park`]);
+//! - [`mesh_ext`]: `Mesh::validate`, `Mesh::content_hash`, topology checks.
 
 pub mod cleanup;
 mod field_positions;

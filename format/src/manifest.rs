@@ -6,7 +6,7 @@
 //! is the validated, resolved form the rest of hexbake reads: relative paths resolved
 //! against the manifest's folder, ranges checked, defaults applied (the paper's
 //! values, 000 §4.1.2). Validation errors find the offending field's line and column
-//! in the text through [`FieldPositions`](crate::field_positions).
+//! in the text through a structural scan of the text (`field_positions.rs`).
 //!
 //! The syntax (every field not marked optional is required):
 //!
@@ -377,10 +377,8 @@ fn ron_error(
                 at = key;
             }
             let field = positions.path_at(at).unwrap_or_else(|| found.clone());
-            let parent = field.rsplit_once('.').map_or("", |(p, _)| p).to_string();
             let message = format!(
-                "unknown field `{found}`{}, expected one of {}",
-                within(&parent),
+                "unknown field `{found}`, expected one of {}",
                 one_of(expected)
             );
             (field, message)
@@ -412,10 +410,14 @@ fn ron_error(
             ),
         ),
         other => {
+            let mut text = other.to_string();
+            if let Some(first) = text.get(..1) {
+                text = first.to_lowercase() + &text[1..];
+            }
             let message = if enclosing.is_empty() {
-                other.to_string()
+                text
             } else {
-                format!("`{enclosing}`: {other}")
+                format!("`{enclosing}`: {text}")
             };
             (enclosing.clone(), message)
         }
@@ -496,7 +498,7 @@ impl Validator<'_> {
         match raw {
             RawModelSource::File(file) => {
                 if file.is_empty() {
-                    return Err(self.error(field, "has an empty file path".into()));
+                    return Err(self.error(field, "names an empty file path".into()));
                 }
                 let resolved = self.base_dir().join(&file);
                 let supported = crate::load::ModelFormat::from_path(&resolved).is_some();
@@ -504,7 +506,7 @@ impl Validator<'_> {
                     return Err(self.error(
                         field,
                         format!(
-                            "`{file}`: unsupported model format (expected one of {})",
+                            "names `{file}`, an unsupported model format (expected one of {})",
                             crate::load::SUPPORTED_EXTENSIONS.join(", ")
                         ),
                     ));
@@ -512,7 +514,10 @@ impl Validator<'_> {
                 if !resolved.is_file() {
                     return Err(self.error(
                         field,
-                        format!("`{file}`: no such file ({})", resolved.display()),
+                        format!(
+                            "names `{file}`, which does not exist (resolved: {})",
+                            resolved.display()
+                        ),
                     ));
                 }
                 Ok(ModelSource::File(resolved))
@@ -524,7 +529,7 @@ impl Validator<'_> {
                     Err(self.error(
                         field,
                         format!(
-                            "unknown procedural model `{name}`, expected one of {}",
+                            "names an unknown procedural model `{name}`, expected one of {}",
                             crate::procedural::NAMES.join(", ")
                         ),
                     ))

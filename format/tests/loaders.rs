@@ -458,6 +458,12 @@ fn gltf_node_transforms_compose() {
     let n = mesh.normals[mesh.triangles[2][0] as usize];
     assert_eq!(n, [0.0, 0.0, 1.0]);
     assert_eq!(mesh.normals[mesh.triangles[0][0] as usize], [0.0, 0.0, 1.0]);
+    // Truncated JSON, or a buffer shorter than declared, are errors.
+    for cut in [0, 1, json.len() / 3, json.len() / 2, json.len() - 2] {
+        expect_error(&write(dir.path(), "cut.gltf", &json.as_bytes()[..cut]));
+    }
+    std::fs::write(dir.path().join("t.bin"), &bin[..30]).unwrap();
+    expect_error(&path);
     // A missing buffer file is an error, not a panic.
     std::fs::remove_file(dir.path().join("t.bin")).unwrap();
     expect_error(&path);
@@ -545,6 +551,16 @@ fn truncated_files_are_errors_not_panics() {
     // Hand-made files of every format, always available.
     let errors = truncations("t.off", TETRA_OFF.as_bytes(), &[0, 10, 30, 50]);
     assert!(errors >= 4);
+    for (name, bytes) in hostile::seeds() {
+        let len = bytes.len();
+        let must_fail = if name.ends_with(".obj") {
+            vec![0]
+        } else {
+            vec![0, len / 2, len - 3]
+        };
+        let errors = truncations(name, &bytes, &must_fail);
+        assert!(errors >= must_fail.len(), "{name}: {errors}");
+    }
 }
 
 mod hostile {
@@ -552,7 +568,7 @@ mod hostile {
     use proptest::prelude::*;
 
     /// Small valid files of every format, to mutate.
-    fn seeds() -> Vec<(&'static str, Vec<u8>)> {
+    pub(super) fn seeds() -> Vec<(&'static str, Vec<u8>)> {
         let mut stl = b"binary".to_vec();
         stl.resize(80, 0);
         stl.extend_from_slice(&2u32.to_le_bytes());

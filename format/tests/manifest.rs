@@ -269,3 +269,55 @@ fn unreadable_manifest_names_the_path() {
     );
     assert_eq!(err.line_column(), None);
 }
+
+#[test]
+fn integers_are_accepted_for_float_fields() {
+    let text = GOOD
+        .replace("cell_size: 50.0", "cell_size: 50")
+        .replace("target_height: 20.0", "target_height: 20");
+    let (_dir, path) = write_manifest(&text);
+    let plan = parse_manifest(&path).unwrap();
+    assert_eq!(plan.cells.cell_size, 50.0);
+}
+
+#[test]
+fn demo_manifest_parses() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../manifests/demo.ron");
+    let plan = parse_manifest(&path).unwrap();
+    assert_eq!(plan.name, "demo");
+    assert_eq!(plan.bake.image_res, 256);
+    assert_eq!(plan.cells.cell_size, 50.0);
+    assert_eq!(plan.output, path.parent().unwrap().join("../out/demo"));
+}
+
+mod hostile {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(128))]
+        /// Random edits of a good manifest give a plan or a positioned error, never a
+        /// panic; every error's line lies within the text.
+        #[test]
+        fn edited_manifests_give_errors_not_panics(
+            edits in prop::collection::vec((any::<prop::sample::Index>(), "[ -~\n]{0,3}"), 1..5),
+        ) {
+            let mut text = GOOD.to_string();
+            for (at, insert) in edits {
+                let mut i = at.index(text.len());
+                while !text.is_char_boundary(i) {
+                    i -= 1;
+                }
+                let end = (i + insert.len().min(2)).min(text.len());
+                let end = (end..=text.len()).find(|&e| text.is_char_boundary(e)).unwrap();
+                text.replace_range(i..end, &insert);
+            }
+            if let Err(ManifestError::At { line, column, .. }) =
+                parse_manifest_str(&text, Path::new("/nonexistent/m.ron"))
+            {
+                prop_assert!(line >= 1 && line <= text.lines().count() + 1);
+                prop_assert!(column >= 1);
+            }
+        }
+    }
+}

@@ -1,8 +1,8 @@
-//! Model loaders: glTF/GLB, OBJ, PLY, OFF, STL → [`Mesh`](crate::Mesh) (issue 2,
+//! Model loaders: glTF/GLB, OBJ, PLY, OFF, STL → [`Mesh`] (issue 2,
 //! "Model loading").
 //!
 //! One file per format, each turning the file's bytes into a
-//! [`RawMesh`](crate::cleanup::RawMesh) (positions, optional sRGB8 colours,
+//! [`RawMesh`] (positions, optional sRGB8 colours,
 //! triangles); [`load_model`] then runs the common clean-up
 //! ([`cleanup::finish_mesh`](crate::cleanup::finish_mesh): reject NaN/inf and bad
 //! indices, weld, drop degenerate and duplicate triangles, smooth normals, albedo).

@@ -1,6 +1,7 @@
 //! Wavefront OBJ through `tobj` (polygons triangulated, position indices only —
 //! normals and texture coordinates are not used; `v x y z r g b` vertex colours are
 //! read as sRGB). Every object/group is concatenated; materials are not loaded.
+//! `v` lines are checked first, so a bad or non-finite coordinate names its line.
 
 use super::{parse_error, unit_to_u8, Location, ModelFormat, Parsed};
 use crate::cleanup::RawMesh;
@@ -10,7 +11,48 @@ use std::path::Path;
 
 const FORMAT: ModelFormat = ModelFormat::Obj;
 
+/// Checks every `v` line before tobj reads the file, so a bad or non-finite
+/// coordinate is reported with its line (tobj's errors carry no position).
+fn check_vertex_lines(path: &Path, bytes: &[u8]) -> Result<(), LoadError> {
+    let mut vertex = 0usize;
+    for (i, line) in bytes.split(|&b| b == b'\n').enumerate() {
+        let Some(rest) = line
+            .strip_prefix(b"v")
+            .filter(|r| r.first().is_some_and(u8::is_ascii_whitespace))
+        else {
+            continue;
+        };
+        let at = Location::Line(i + 1);
+        let text = String::from_utf8_lossy(rest);
+        let mut coords = text.split_whitespace().map(str::parse::<f32>);
+        for _ in 0..3 {
+            match coords.next() {
+                Some(Ok(x)) if x.is_finite() => {}
+                Some(Ok(x)) => {
+                    return Err(parse_error(
+                        path,
+                        FORMAT,
+                        format!("vertex {vertex} has a non-finite coordinate {x}"),
+                        at,
+                    ))
+                }
+                _ => {
+                    return Err(parse_error(
+                        path,
+                        FORMAT,
+                        format!("vertex {vertex} needs three numeric coordinates"),
+                        at,
+                    ))
+                }
+            }
+        }
+        vertex += 1;
+    }
+    Ok(())
+}
+
 pub(crate) fn parse(path: &Path, bytes: &[u8]) -> Result<Parsed, LoadError> {
+    check_vertex_lines(path, bytes)?;
     let options = tobj::LoadOptions {
         triangulate: true,
         single_index: false,
