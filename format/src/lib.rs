@@ -20,6 +20,7 @@ pub mod cleanup;
 mod field_positions;
 pub mod load;
 pub mod manifest;
+pub mod path;
 pub mod mesh;
 pub mod mesh_ext;
 pub mod park;

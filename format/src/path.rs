@@ -72,8 +72,8 @@ impl CameraPath {
     pub fn parse(text: &str, path: &Path) -> Result<CameraPath, PathError> {
         let parsed: CameraPath = ron::from_str(text).map_err(|e| PathError::Parse {
             path: path.to_path_buf(),
-            line: e.span.start.line,
-            col: e.span.start.col,
+            line: e.position.line,
+            col: e.position.col,
             message: e.code.to_string(),
         })?;
         let invalid = |field, message: &str| PathError::Invalid {
