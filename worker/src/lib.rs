@@ -2,6 +2,7 @@
 //! paper 000 §3.1 (Chen et al. 2003) and its precursor 003 §4.1.
 
 pub mod grid;
+pub mod picture;
 pub mod raster;
 pub mod shade;
 pub mod view;
