@@ -8,6 +8,7 @@
 pub mod load;
 pub mod manifest;
 pub mod mesh;
+pub mod pack;
 pub mod procedural;
 pub mod scene;
 
