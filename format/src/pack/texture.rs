@@ -1,7 +1,8 @@
 //! Capture textures of proxy views (paper 000 §3.1.2: one capture per SV proxy, up to
 //! seven per MV proxy). Decoded texels are RGBA8, sRGB. Two lossless, cheap-to-decode
 //! encodings exist; the `textures` section is then zstd-compressed as a whole
-//! (format/README.md, "Textures", has the measurements behind the choice).
+//! (format/README.md, "Textures", has the measurements behind the choice); the
+//! writer-side helper [`Texture::from_rgba8_smallest`] picks the encoding per image.
 
 /// Largest texture side accepted by readers and writers.
 pub const MAX_TEXTURE_SIDE: u32 = 16384;
@@ -76,6 +77,25 @@ impl Texture {
             height,
             encoding,
             data,
+        })
+    }
+
+    /// Encodes `rgba` with whichever lossless encoding zstd compresses smaller for this
+    /// image (trial compression at level 3; ties keep [`TextureEncoding::Rgba8`]).
+    /// Neither wins everywhere: the left predictor helps smooth shading, plain RGBA8
+    /// keeps long matches of hard procedural patterns (README "Textures").
+    pub fn from_rgba8_smallest(width: u32, height: u32, rgba: &[u8]) -> Result<Texture, String> {
+        let plain = Texture::from_rgba8(width, height, rgba, TextureEncoding::Rgba8)?;
+        let left = Texture::from_rgba8(width, height, rgba, TextureEncoding::Rgba8Left)?;
+        let size = |t: &Texture| {
+            zstd::bulk::compress(&t.data, 3)
+                .map(|c| c.len())
+                .unwrap_or(usize::MAX)
+        };
+        Ok(if size(&left) < size(&plain) {
+            left
+        } else {
+            plain
         })
     }
 
