@@ -550,3 +550,45 @@ proptest! {
         prop_assert!(Index::from_bytes(&bytes).is_err());
     }
 }
+
+#[test]
+fn raw_sections_are_zero_copy_and_aligned() {
+    // Incompressible positions stay raw and are viewed in place, mapped or read.
+    let mut base = sample::small_base();
+    let mut rng = sample::SplitMix(5);
+    for p in base.models[1].mesh.positions.iter_mut() {
+        *p = [rng.unit() * 100.0, rng.unit() * 7.0, rng.unit() - 0.5];
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("base.pack");
+    base.write(&path).unwrap();
+    for pack in [
+        PackFile::open(&path).unwrap(),
+        PackFile::read(&path).unwrap(),
+    ] {
+        let info = *pack.section_info(SectionKind::POSITIONS).unwrap();
+        assert_eq!(info.codec, Codec::Raw);
+        assert_eq!(info.offset % 64, 0);
+        let view = pack
+            .raw_slice::<[f32; 3]>(SectionKind::POSITIONS)
+            .unwrap()
+            .expect("raw");
+        assert_eq!(
+            view.as_ptr() as usize % 64,
+            0,
+            "section start is 64-byte aligned in memory"
+        );
+        assert_eq!(&view[4..], base.models[1].mesh.positions.as_slice());
+        let inside = pack.bytes().as_ptr_range();
+        assert!(
+            inside.contains(&(view.as_ptr() as *const u8)),
+            "a view into the pack, not a copy"
+        );
+        // Compressed sections are not offered zero-copy.
+        assert!(pack
+            .raw_slice::<[u32; 3]>(SectionKind::TRIANGLES)
+            .unwrap()
+            .is_none());
+        assert_eq!(BasePack::decode(&pack).unwrap(), base);
+    }
+}

@@ -1,1 +1,2 @@
 //! hexbake's coordinator: plan, executors (local rayon, Slurm), resume, reports.
+pub mod inspect;

@@ -8,7 +8,9 @@
 use super::error::PackError;
 use super::layout::{FileKind, SectionKind};
 use super::reader::{pod_vec, PackFile};
-use super::writer::{assemble, write_atomic, SectionData, RAW_ONLY, TRY_INDICES, TRY_ZSTD};
+use super::writer::{
+    assemble, write_atomic, SectionData, RAW_ONLY, TRY_INDICES, TRY_ZSTD, TRY_ZSTD_PREFER_RAW,
+};
 use super::{invalid, malformed};
 use crate::mesh::Mesh;
 use crate::scene::Scene;
@@ -235,12 +237,12 @@ impl BasePack {
                 SectionData {
                     kind: SectionKind::POSITIONS,
                     raw: positions,
-                    codecs: TRY_ZSTD,
+                    codecs: TRY_ZSTD_PREFER_RAW,
                 },
                 SectionData {
                     kind: SectionKind::NORMALS,
                     raw: normals,
-                    codecs: TRY_ZSTD,
+                    codecs: TRY_ZSTD_PREFER_RAW,
                 },
                 SectionData {
                     kind: SectionKind::VERTEX_COLOURS,

@@ -10,10 +10,14 @@ use std::io::Read;
 /// The zstd level every writer uses. Fixed: the same input must give the same bytes.
 pub const ZSTD_LEVEL: i32 = 15;
 
-/// A compressed section is kept only if it saves at least 1/16 of the raw size;
-/// otherwise it is stored raw (and stays usable zero-copy).
-fn pays(raw: usize, stored: usize) -> bool {
-    stored.saturating_mul(16) <= raw.saturating_mul(15)
+/// A compressed section is kept only if it saves at least 1/16 of the raw size — or
+/// 1/4 for sections that prefer to stay raw (vertex arrays, which a memory-mapped
+/// reader can hand to the GPU zero-copy; zstd saves only 8-10% on real float
+/// positions) — and does not expand by more than [`MAX_EXPANSION`]; otherwise the
+/// section is stored raw.
+fn pays(raw: usize, stored: usize, prefer_raw: bool) -> bool {
+    let (num, den) = if prefer_raw { (3, 4) } else { (15, 16) };
+    stored.saturating_mul(den) <= raw.saturating_mul(num)
         && (stored as u64).saturating_mul(MAX_EXPANSION) >= raw as u64
 }
 
@@ -67,6 +71,11 @@ pub fn postdecode_delta_u32(planes: &[u8]) -> Option<Vec<u8>> {
 /// falling back to [`Codec::Raw`] when no compression pays. Returns the codec and the
 /// stored bytes.
 pub fn encode_best(raw: &[u8], candidates: &[Codec]) -> (Codec, Vec<u8>) {
+    encode_best_with(raw, candidates, false)
+}
+
+/// As [`encode_best`]; `prefer_raw` demands a saving of 1/4 before giving up raw.
+pub fn encode_best_with(raw: &[u8], candidates: &[Codec], prefer_raw: bool) -> (Codec, Vec<u8>) {
     let mut best: (Codec, Vec<u8>) = (Codec::Raw, raw.to_vec());
     for &c in candidates {
         let stored = match c {
@@ -79,7 +88,7 @@ pub fn encode_best(raw: &[u8], candidates: &[Codec]) -> (Codec, Vec<u8>) {
                 zstd_compress(&precode_delta_u32(raw))
             }
         };
-        if pays(raw.len(), stored.len()) && stored.len() < best.1.len() {
+        if pays(raw.len(), stored.len(), prefer_raw) && stored.len() < best.1.len() {
             best = (c, stored);
         }
     }

@@ -15,7 +15,8 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 
 /// One section to write: its kind, its decoded content, and the codecs worth trying
-/// (the writer keeps the smallest that pays, else stores it raw).
+/// (the writer keeps the smallest that pays, else stores it raw; listing
+/// [`Codec::Raw`] among them means "prefer raw": compress only for a 1/4 saving).
 #[derive(Clone, Debug)]
 pub struct SectionData {
     pub kind: SectionKind,
@@ -25,6 +26,9 @@ pub struct SectionData {
 
 /// Codec candidates for general data.
 pub const TRY_ZSTD: &[Codec] = &[Codec::Zstd];
+/// Codec candidates for vertex arrays: zstd only where it saves a quarter (else they
+/// stay raw, usable zero-copy from a memory map).
+pub const TRY_ZSTD_PREFER_RAW: &[Codec] = &[Codec::Zstd, Codec::Raw];
 /// Codec candidates for u32 index streams.
 pub const TRY_INDICES: &[Codec] = &[Codec::Zstd, Codec::ZstdDeltaU32];
 /// Store raw (tiny fixed-size metadata).
@@ -67,7 +71,8 @@ pub fn assemble(file_kind: FileKind, sections: &[SectionData]) -> Result<Vec<u8>
     let mut entries = Vec::with_capacity(sections.len());
     let mut stored_all = Vec::with_capacity(sections.len());
     for s in sections {
-        let (codec, stored) = codec::encode_best(&s.raw, s.codecs);
+        let prefer_raw = s.codecs.contains(&Codec::Raw);
+        let (codec, stored) = codec::encode_best_with(&s.raw, s.codecs, prefer_raw);
         let offset = align_up(cursor).ok_or_else(|| PackError::Invalid {
             what: "pack too large".into(),
         })?;
