@@ -23,6 +23,7 @@ pub mod manifest;
 pub mod path;
 pub mod mesh;
 pub mod mesh_ext;
+pub mod pack;
 pub mod park;
 pub mod procedural;
 pub mod scene;

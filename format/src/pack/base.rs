@@ -1,0 +1,455 @@
+//! `base.pack`: everything every cell shares — the models (positions, normals, vertex
+//! colours, triangles), the instance table, the hex-grid parameters and the scene
+//! fingerprint (DESIGN.md, "Data flow" and "Representations"). Cell packs refer to
+//! instances by index into this file's instance table and to vertices by index into
+//! the instance's model, so geometry is stored once (paper 000 §3.1.3.3: half-edge
+//! collapse keeps original vertices, so a proxy is just a new index buffer).
+
+use super::error::PackError;
+use super::layout::{FileKind, SectionKind};
+use super::reader::{pod_vec, PackFile};
+use super::writer::{
+    assemble, write_atomic, SectionData, RAW_ONLY, TRY_INDICES, TRY_ZSTD, TRY_ZSTD_PREFER_RAW,
+};
+use super::{invalid, malformed};
+use crate::mesh::Mesh;
+use crate::scene::Scene;
+use bytemuck::{Pod, Zeroable};
+use std::path::Path;
+
+/// Hex-grid parameters the player needs to find the current cell (DESIGN.md,
+/// "Conventions": flat-top hexagons, cell id = row · n_cols + col).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GridParams {
+    pub ground_min: [f32; 2],
+    pub ground_max: [f32; 2],
+    /// Centre-to-corner distance of a cell (the paper's |VV'|).
+    pub cell_size: f32,
+    pub min_eye_height: f32,
+    pub max_eye_height: f32,
+    pub n_cols: u32,
+    pub n_rows: u32,
+}
+
+/// One model: its name, content hash and mesh (model space).
+#[derive(Clone, Debug, PartialEq)]
+pub struct PackedModel {
+    pub name: String,
+    /// blake3 of the loaded mesh (`format::Model::content_hash`).
+    pub content_hash: [u8; 32],
+    pub mesh: Mesh,
+}
+
+/// One placed copy of a model.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PackedInstance {
+    /// Index into [`BasePack::models`].
+    pub model: u32,
+    /// Object → world, column-major.
+    pub transform: [f32; 16],
+    /// Linear RGB multiplier of the model's albedo.
+    pub tint: [f32; 3],
+}
+
+/// The content of `base.pack`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BasePack {
+    pub scene_fingerprint: [u8; 32],
+    pub grid: GridParams,
+    pub models: Vec<PackedModel>,
+    pub instances: Vec<PackedInstance>,
+}
+
+/// Section `base-meta` (80 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct BaseMetaRecord {
+    pub scene_fingerprint: [u8; 32],
+    pub ground_min: [f32; 2],
+    pub ground_max: [f32; 2],
+    pub cell_size: f32,
+    pub min_eye_height: f32,
+    pub max_eye_height: f32,
+    pub n_cols: u32,
+    pub n_rows: u32,
+    pub model_count: u32,
+    pub instance_count: u32,
+    pub reserved: u32,
+}
+const _: () = assert!(std::mem::size_of::<BaseMetaRecord>() == 80);
+
+/// One entry of section `model-table` (48 bytes). A model's vertices and triangles
+/// follow those of the models before it in `positions`/`normals`/`vertex-colours` and
+/// `triangles`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct ModelRecord {
+    pub vertex_count: u32,
+    pub triangle_count: u32,
+    /// Byte range of the name in `model-names` (UTF-8).
+    pub name_offset: u32,
+    pub name_len: u32,
+    pub content_hash: [u8; 32],
+}
+const _: () = assert!(std::mem::size_of::<ModelRecord>() == 48);
+
+/// One entry of section `instances` (80 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct InstanceRecord {
+    pub transform: [f32; 16],
+    pub tint: [f32; 3],
+    pub model: u32,
+}
+const _: () = assert!(std::mem::size_of::<InstanceRecord>() == 80);
+
+impl BasePack {
+    /// The base pack of a scene.
+    pub fn from_scene(scene: &Scene, grid: GridParams, scene_fingerprint: [u8; 32]) -> BasePack {
+        BasePack {
+            scene_fingerprint,
+            grid,
+            models: scene
+                .models
+                .iter()
+                .map(|m| PackedModel {
+                    name: m.name.clone(),
+                    content_hash: m.content_hash,
+                    mesh: m.mesh.clone(),
+                })
+                .collect(),
+            instances: scene
+                .instances
+                .iter()
+                .map(|i| PackedInstance {
+                    model: i.model,
+                    transform: i.transform.to_cols_array(),
+                    tint: i.tint.to_array(),
+                })
+                .collect(),
+        }
+    }
+
+    /// The pack's bytes (deterministic).
+    pub fn encode(&self) -> Result<Vec<u8>, PackError> {
+        // 1. Check what the format cannot express.
+        let model_count =
+            u32::try_from(self.models.len()).map_err(|_| invalid("more than 2^32 models"))?;
+        let instance_count =
+            u32::try_from(self.instances.len()).map_err(|_| invalid("more than 2^32 instances"))?;
+        let mut records = Vec::with_capacity(self.models.len());
+        let mut names = Vec::new();
+        let (mut positions, mut normals, mut colours, mut triangles) =
+            (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        for (i, m) in self.models.iter().enumerate() {
+            let mesh = &m.mesh;
+            let n = mesh.positions.len();
+            if mesh.normals.len() != n || mesh.albedo.len() != n {
+                return Err(invalid(format!(
+                    "model {i} ({}): {n} positions but {} normals and {} colours",
+                    m.name,
+                    mesh.normals.len(),
+                    mesh.albedo.len()
+                )));
+            }
+            let vertex_count =
+                u32::try_from(n).map_err(|_| invalid(format!("model {i}: too many vertices")))?;
+            if let Some(t) = mesh
+                .triangles
+                .iter()
+                .find(|t| t.iter().any(|&v| v >= vertex_count))
+            {
+                return Err(invalid(format!(
+                    "model {i} ({}): triangle {t:?} indexes past {n} vertices",
+                    m.name
+                )));
+            }
+            records.push(ModelRecord {
+                vertex_count,
+                triangle_count: u32::try_from(mesh.triangles.len())
+                    .map_err(|_| invalid(format!("model {i}: too many triangles")))?,
+                name_offset: u32::try_from(names.len())
+                    .map_err(|_| invalid("model names too long"))?,
+                name_len: u32::try_from(m.name.len())
+                    .map_err(|_| invalid("model name too long"))?,
+                content_hash: m.content_hash,
+            });
+            names.extend_from_slice(m.name.as_bytes());
+            positions.extend_from_slice(bytemuck::cast_slice::<_, u8>(&mesh.positions));
+            normals.extend_from_slice(bytemuck::cast_slice::<_, u8>(&mesh.normals));
+            colours.extend_from_slice(bytemuck::cast_slice::<_, u8>(&mesh.albedo));
+            triangles.extend_from_slice(bytemuck::cast_slice::<_, u8>(&mesh.triangles));
+        }
+        if let Some((i, inst)) = self
+            .instances
+            .iter()
+            .enumerate()
+            .find(|(_, x)| x.model >= model_count)
+        {
+            return Err(invalid(format!(
+                "instance {i} refers to model {} of {model_count}",
+                inst.model
+            )));
+        }
+        let g = &self.grid;
+        let meta = BaseMetaRecord {
+            scene_fingerprint: self.scene_fingerprint,
+            ground_min: g.ground_min,
+            ground_max: g.ground_max,
+            cell_size: g.cell_size,
+            min_eye_height: g.min_eye_height,
+            max_eye_height: g.max_eye_height,
+            n_cols: g.n_cols,
+            n_rows: g.n_rows,
+            model_count,
+            instance_count,
+            reserved: 0,
+        };
+        let instances: Vec<InstanceRecord> = self
+            .instances
+            .iter()
+            .map(|i| InstanceRecord {
+                transform: i.transform,
+                tint: i.tint,
+                model: i.model,
+            })
+            .collect();
+
+        // 2. Sections; positions and normals stay raw unless zstd pays (zero-copy).
+        assemble(
+            FileKind::Base,
+            &[
+                SectionData {
+                    kind: SectionKind::BASE_META,
+                    raw: bytemuck::bytes_of(&meta).to_vec(),
+                    codecs: RAW_ONLY,
+                },
+                SectionData {
+                    kind: SectionKind::MODEL_TABLE,
+                    raw: bytemuck::cast_slice(&records).to_vec(),
+                    codecs: TRY_ZSTD,
+                },
+                SectionData {
+                    kind: SectionKind::MODEL_NAMES,
+                    raw: names,
+                    codecs: TRY_ZSTD,
+                },
+                SectionData {
+                    kind: SectionKind::POSITIONS,
+                    raw: positions,
+                    codecs: TRY_ZSTD_PREFER_RAW,
+                },
+                SectionData {
+                    kind: SectionKind::NORMALS,
+                    raw: normals,
+                    codecs: TRY_ZSTD_PREFER_RAW,
+                },
+                SectionData {
+                    kind: SectionKind::VERTEX_COLOURS,
+                    raw: colours,
+                    codecs: TRY_ZSTD,
+                },
+                SectionData {
+                    kind: SectionKind::TRIANGLES,
+                    raw: triangles,
+                    codecs: TRY_INDICES,
+                },
+                SectionData {
+                    kind: SectionKind::INSTANCES,
+                    raw: bytemuck::cast_slice(&instances).to_vec(),
+                    codecs: TRY_ZSTD,
+                },
+            ],
+        )
+    }
+
+    /// Decodes a validated pack (every reference is checked; unknown sections are skipped).
+    pub fn decode(pack: &PackFile) -> Result<BasePack, PackError> {
+        pack.expect_kind(FileKind::Base)?;
+        let file = pack.path();
+        // 1. Fixed-size metadata.
+        let meta_bytes = pack.section(SectionKind::BASE_META)?;
+        if meta_bytes.len() != std::mem::size_of::<BaseMetaRecord>() {
+            return Err(malformed(
+                file,
+                SectionKind::BASE_META,
+                0,
+                format!("{} bytes, expected 80", meta_bytes.len()),
+            ));
+        }
+        let meta: BaseMetaRecord = bytemuck::pod_read_unaligned(&meta_bytes);
+        // 2. Tables, checked against the counts.
+        let records: Vec<ModelRecord> = pack.section_vec(SectionKind::MODEL_TABLE)?;
+        if records.len() != meta.model_count as usize {
+            return Err(malformed(
+                file,
+                SectionKind::MODEL_TABLE,
+                0,
+                format!(
+                    "{} models, base-meta says {}",
+                    records.len(),
+                    meta.model_count
+                ),
+            ));
+        }
+        let instances: Vec<InstanceRecord> = pack.section_vec(SectionKind::INSTANCES)?;
+        if instances.len() != meta.instance_count as usize {
+            return Err(malformed(
+                file,
+                SectionKind::INSTANCES,
+                0,
+                format!(
+                    "{} instances, base-meta says {}",
+                    instances.len(),
+                    meta.instance_count
+                ),
+            ));
+        }
+        let names = pack.section(SectionKind::MODEL_NAMES)?;
+        let positions: Vec<[f32; 3]> = pack.section_vec(SectionKind::POSITIONS)?;
+        let normals: Vec<[f32; 3]> = pack.section_vec(SectionKind::NORMALS)?;
+        let colours: Vec<[u8; 4]> = pack.section_vec(SectionKind::VERTEX_COLOURS)?;
+        let triangles: Vec<[u32; 3]> = pack_triangles(pack, SectionKind::TRIANGLES)?;
+        let total_vertices: u64 = records.iter().map(|r| r.vertex_count as u64).sum();
+        let total_triangles: u64 = records.iter().map(|r| r.triangle_count as u64).sum();
+        for (kind, len) in [
+            (SectionKind::POSITIONS, positions.len()),
+            (SectionKind::NORMALS, normals.len()),
+            (SectionKind::VERTEX_COLOURS, colours.len()),
+        ] {
+            if len as u64 != total_vertices {
+                return Err(malformed(
+                    file,
+                    kind,
+                    0,
+                    format!("{len} vertices, the model table says {total_vertices}"),
+                ));
+            }
+        }
+        if triangles.len() as u64 != total_triangles {
+            return Err(malformed(
+                file,
+                SectionKind::TRIANGLES,
+                0,
+                format!(
+                    "{} triangles, the model table says {total_triangles}",
+                    triangles.len()
+                ),
+            ));
+        }
+
+        // 3. Models: split the shared arrays, check names and vertex references.
+        let mut models = Vec::with_capacity(records.len());
+        let (mut v0, mut t0) = (0usize, 0usize);
+        for (i, r) in records.iter().enumerate() {
+            let rec_off = (i * std::mem::size_of::<ModelRecord>()) as u64;
+            let name_end = (r.name_offset as usize).checked_add(r.name_len as usize);
+            let name_bytes = name_end
+                .and_then(|e| names.get(r.name_offset as usize..e))
+                .ok_or_else(|| {
+                    malformed(
+                        file,
+                        SectionKind::MODEL_TABLE,
+                        rec_off,
+                        format!("model {i}: name range outside model-names"),
+                    )
+                })?;
+            let name = std::str::from_utf8(name_bytes)
+                .map_err(|e| {
+                    malformed(
+                        file,
+                        SectionKind::MODEL_NAMES,
+                        r.name_offset as u64,
+                        format!("model {i}: {e}"),
+                    )
+                })?
+                .to_string();
+            let (v1, t1) = (v0 + r.vertex_count as usize, t0 + r.triangle_count as usize);
+            let tris = &triangles[t0..t1];
+            if let Some(k) = tris
+                .iter()
+                .position(|t| t.iter().any(|&v| v >= r.vertex_count))
+            {
+                return Err(malformed(
+                    file,
+                    SectionKind::TRIANGLES,
+                    ((t0 + k) * 12) as u64,
+                    format!(
+                        "model {i}: triangle {:?} indexes past {} vertices",
+                        tris[k], r.vertex_count
+                    ),
+                ));
+            }
+            models.push(PackedModel {
+                name,
+                content_hash: r.content_hash,
+                mesh: Mesh {
+                    positions: positions[v0..v1].to_vec(),
+                    normals: normals[v0..v1].to_vec(),
+                    albedo: colours[v0..v1].to_vec(),
+                    triangles: tris.to_vec(),
+                },
+            });
+            (v0, t0) = (v1, t1);
+        }
+
+        // 4. Instances.
+        let mut out_instances = Vec::with_capacity(instances.len());
+        for (i, r) in instances.iter().enumerate() {
+            if r.model >= meta.model_count {
+                return Err(malformed(
+                    file,
+                    SectionKind::INSTANCES,
+                    (i * std::mem::size_of::<InstanceRecord>() + 76) as u64,
+                    format!(
+                        "instance {i} refers to model {} of {}",
+                        r.model, meta.model_count
+                    ),
+                ));
+            }
+            out_instances.push(PackedInstance {
+                model: r.model,
+                transform: r.transform,
+                tint: r.tint,
+            });
+        }
+        Ok(BasePack {
+            scene_fingerprint: meta.scene_fingerprint,
+            grid: GridParams {
+                ground_min: meta.ground_min,
+                ground_max: meta.ground_max,
+                cell_size: meta.cell_size,
+                min_eye_height: meta.min_eye_height,
+                max_eye_height: meta.max_eye_height,
+                n_cols: meta.n_cols,
+                n_rows: meta.n_rows,
+            },
+            models,
+            instances: out_instances,
+        })
+    }
+
+    /// Validates and decodes pack bytes held in memory.
+    pub fn from_bytes(bytes: &[u8]) -> Result<BasePack, PackError> {
+        BasePack::decode(&PackFile::from_bytes(bytes)?)
+    }
+
+    /// Writes the pack atomically to `path`.
+    pub fn write(&self, path: &Path) -> Result<(), PackError> {
+        write_atomic(path, &self.encode()?)
+    }
+
+    /// Memory-maps, validates and decodes the pack at `path`.
+    pub fn read(path: &Path) -> Result<BasePack, PackError> {
+        BasePack::decode(&PackFile::open(path)?)
+    }
+}
+
+/// A u32 index section as triangles.
+pub(crate) fn pack_triangles(
+    pack: &PackFile,
+    kind: SectionKind,
+) -> Result<Vec<[u32; 3]>, PackError> {
+    let bytes = pack.section(kind)?;
+    pod_vec(&bytes, pack.path(), kind)
+}

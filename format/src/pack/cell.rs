@@ -1,0 +1,552 @@
+//! `cells/<id>.pack`: what the player draws from one view cell (DESIGN.md,
+//! "Representations"; paper 000 §3 — the hybrid representation of a cell): the ids of
+//! the instances drawn as Original geometry, and the proxies of the outside objects —
+//! SvMesh (one capture, projective texturing, §3.1), Cluster (SV objects merged by
+//! greedy clustering, §3.1.4), MvMesh (captures from the cell centre and its
+//! neighbours with a per-triangle view mask, §3.2) — each as index buffers into the
+//! members' model vertices plus capture matrices and textures. Culled objects are
+//! listed nowhere. Layered impostors (paper 001) have a reserved kind and section.
+
+use super::base::{pack_triangles, BasePack};
+use super::error::PackError;
+use super::layout::{FileKind, SectionKind};
+use super::reader::PackFile;
+use super::texture::{Texture, TextureEncoding};
+use super::writer::{assemble, write_atomic, SectionData, RAW_ONLY, TRY_INDICES, TRY_ZSTD};
+use super::{invalid, malformed};
+use bytemuck::{Pod, Zeroable};
+use std::path::Path;
+
+/// Most views an MvMesh may have: the centre and the six neighbours (paper 000 §3.2)
+/// and one spare; view masks are one byte per triangle.
+pub const MAX_MV_VIEWS: usize = 8;
+
+/// How a proxy is drawn.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum ProxyKind {
+    /// Simplified mesh, one capture from the cell centre, projective texturing.
+    SvMesh = 1,
+    /// Several SV objects merged into one proxy with one capture.
+    Cluster = 2,
+    /// Simplified mesh with captures from the centre and up to 6 neighbours; each
+    /// triangle carries a mask of the views that see it; the player blends two views.
+    MvMesh = 3,
+    /// Reserved for layered impostors (paper 001); its textures and layer data will
+    /// live in the `layered-impostors` section.
+    LayeredImpostor = 4,
+}
+
+impl ProxyKind {
+    pub fn from_u32(v: u32) -> Option<ProxyKind> {
+        match v {
+            1 => Some(ProxyKind::SvMesh),
+            2 => Some(ProxyKind::Cluster),
+            3 => Some(ProxyKind::MvMesh),
+            4 => Some(ProxyKind::LayeredImpostor),
+            _ => None,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            ProxyKind::SvMesh => "SvMesh",
+            ProxyKind::Cluster => "Cluster",
+            ProxyKind::MvMesh => "MvMesh",
+            ProxyKind::LayeredImpostor => "LayeredImpostor",
+        }
+    }
+}
+
+/// One instance's share of a proxy.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct ProxyMember {
+    /// Index into the base pack's instance table.
+    pub instance: u32,
+    /// Triangles as indices into that instance's model vertices.
+    pub triangles: Vec<[u32; 3]>,
+    /// MvMesh only: per triangle, bit i set = view i of the proxy sees it. Empty for
+    /// every other kind.
+    pub view_masks: Vec<u8>,
+}
+
+/// One capture of a proxy.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ProxyView {
+    /// Where the capture was taken from (world space).
+    pub eye: [f32; 3],
+    /// World → texture coordinates (projective texturing), column-major.
+    pub matrix: [f32; 16],
+    pub texture: Texture,
+}
+
+/// One proxy of the cell.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Proxy {
+    pub kind: ProxyKind,
+    pub members: Vec<ProxyMember>,
+    pub views: Vec<ProxyView>,
+}
+
+/// The content of one cell pack.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CellPack {
+    pub cell_id: u32,
+    /// The bake job fingerprint this cell was built with.
+    pub fingerprint: [u8; 32],
+    /// Instances drawn as original geometry (they intersect the cell's prism).
+    pub originals: Vec<u32>,
+    pub proxies: Vec<Proxy>,
+}
+
+/// Section `cell-meta` (64 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct CellMetaRecord {
+    pub fingerprint: [u8; 32],
+    pub cell_id: u32,
+    pub original_count: u32,
+    pub proxy_count: u32,
+    pub member_count: u32,
+    pub view_count: u32,
+    pub reserved: [u32; 3],
+}
+const _: () = assert!(std::mem::size_of::<CellMetaRecord>() == 64);
+
+/// One entry of section `proxies` (16 bytes). A proxy's members and views follow
+/// those of the proxies before it.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct ProxyRecord {
+    pub kind: u32,
+    pub member_count: u32,
+    pub view_count: u32,
+    pub reserved: u32,
+}
+const _: () = assert!(std::mem::size_of::<ProxyRecord>() == 16);
+
+/// One entry of section `members` (16 bytes). A member's triangles (in
+/// `member-triangles`) and masks (in `view-masks`) follow those before it.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct MemberRecord {
+    pub instance: u32,
+    pub triangle_count: u32,
+    /// `triangle_count` for MvMesh members, 0 otherwise.
+    pub mask_count: u32,
+    pub reserved: u32,
+}
+const _: () = assert!(std::mem::size_of::<MemberRecord>() == 16);
+
+/// One entry of section `views` (96 bytes). A view's texture data (in `textures`)
+/// follows that of the views before it.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct ViewRecord {
+    pub matrix: [f32; 16],
+    pub eye: [f32; 3],
+    pub width: u32,
+    pub height: u32,
+    pub encoding: u32,
+    pub data_len: u64,
+}
+const _: () = assert!(std::mem::size_of::<ViewRecord>() == 96);
+
+fn check_masks(kind: ProxyKind, member: &ProxyMember, view_count: usize) -> Result<(), String> {
+    match kind {
+        ProxyKind::MvMesh => {
+            if view_count > MAX_MV_VIEWS {
+                return Err(format!(
+                    "MvMesh with {view_count} views, at most {MAX_MV_VIEWS}"
+                ));
+            }
+            if member.view_masks.len() != member.triangles.len() {
+                return Err(format!(
+                    "MvMesh member of instance {}: {} view masks for {} triangles",
+                    member.instance,
+                    member.view_masks.len(),
+                    member.triangles.len()
+                ));
+            }
+            let allowed = if view_count >= 8 {
+                0xff
+            } else {
+                (1u32 << view_count) as u8 - 1
+            };
+            if let Some(m) = member.view_masks.iter().find(|&&m| m & !allowed != 0) {
+                return Err(format!(
+                    "view mask {m:#010b} names a view past {view_count}"
+                ));
+            }
+            Ok(())
+        }
+        _ if !member.view_masks.is_empty() => Err(format!(
+            "{} member of instance {} has view masks (MvMesh only)",
+            kind.name(),
+            member.instance
+        )),
+        _ => Ok(()),
+    }
+}
+
+impl CellPack {
+    /// The pack's bytes (deterministic).
+    pub fn encode(&self) -> Result<Vec<u8>, PackError> {
+        let u32_of = |n: usize, what: &str| {
+            u32::try_from(n).map_err(|_| invalid(format!("too many {what}")))
+        };
+        let mut proxies = Vec::new();
+        let mut members = Vec::new();
+        let mut views = Vec::new();
+        let mut triangles: Vec<u8> = Vec::new();
+        let mut masks = Vec::new();
+        let mut textures = Vec::new();
+        for (p, proxy) in self.proxies.iter().enumerate() {
+            proxies.push(ProxyRecord {
+                kind: proxy.kind as u32,
+                member_count: u32_of(proxy.members.len(), "members")?,
+                view_count: u32_of(proxy.views.len(), "views")?,
+                reserved: 0,
+            });
+            for m in &proxy.members {
+                check_masks(proxy.kind, m, proxy.views.len())
+                    .map_err(|e| invalid(format!("proxy {p}: {e}")))?;
+                members.push(MemberRecord {
+                    instance: m.instance,
+                    triangle_count: u32_of(m.triangles.len(), "triangles")?,
+                    mask_count: u32_of(m.view_masks.len(), "view masks")?,
+                    reserved: 0,
+                });
+                triangles.extend_from_slice(bytemuck::cast_slice(&m.triangles));
+                masks.extend_from_slice(&m.view_masks);
+            }
+            for (v, view) in proxy.views.iter().enumerate() {
+                view.texture
+                    .validate()
+                    .map_err(|e| invalid(format!("proxy {p} view {v}: {e}")))?;
+                views.push(ViewRecord {
+                    matrix: view.matrix,
+                    eye: view.eye,
+                    width: view.texture.width,
+                    height: view.texture.height,
+                    encoding: view.texture.encoding as u32,
+                    data_len: view.texture.data.len() as u64,
+                });
+                textures.extend_from_slice(&view.texture.data);
+            }
+        }
+        let meta = CellMetaRecord {
+            fingerprint: self.fingerprint,
+            cell_id: self.cell_id,
+            original_count: u32_of(self.originals.len(), "originals")?,
+            proxy_count: u32_of(proxies.len(), "proxies")?,
+            member_count: u32_of(members.len(), "members")?,
+            view_count: u32_of(views.len(), "views")?,
+            reserved: [0; 3],
+        };
+        assemble(
+            FileKind::Cell,
+            &[
+                SectionData {
+                    kind: SectionKind::CELL_META,
+                    raw: bytemuck::bytes_of(&meta).to_vec(),
+                    codecs: RAW_ONLY,
+                },
+                SectionData {
+                    kind: SectionKind::ORIGINALS,
+                    raw: bytemuck::cast_slice(&self.originals).to_vec(),
+                    codecs: TRY_INDICES,
+                },
+                SectionData {
+                    kind: SectionKind::PROXIES,
+                    raw: bytemuck::cast_slice(&proxies).to_vec(),
+                    codecs: TRY_ZSTD,
+                },
+                SectionData {
+                    kind: SectionKind::MEMBERS,
+                    raw: bytemuck::cast_slice(&members).to_vec(),
+                    codecs: TRY_ZSTD,
+                },
+                SectionData {
+                    kind: SectionKind::MEMBER_TRIANGLES,
+                    raw: triangles,
+                    codecs: TRY_INDICES,
+                },
+                SectionData {
+                    kind: SectionKind::VIEW_MASKS,
+                    raw: masks,
+                    codecs: TRY_ZSTD,
+                },
+                SectionData {
+                    kind: SectionKind::VIEWS,
+                    raw: bytemuck::cast_slice(&views).to_vec(),
+                    codecs: TRY_ZSTD,
+                },
+                SectionData {
+                    kind: SectionKind::TEXTURES,
+                    raw: textures,
+                    codecs: TRY_ZSTD,
+                },
+            ],
+        )
+    }
+
+    /// Decodes a validated cell pack. Instance ids and vertex indices can only be
+    /// checked against the base pack: see [`CellPack::check_against`].
+    pub fn decode(pack: &PackFile) -> Result<CellPack, PackError> {
+        pack.expect_kind(FileKind::Cell)?;
+        let file = pack.path();
+        // 1. Metadata and record tables.
+        let meta_bytes = pack.section(SectionKind::CELL_META)?;
+        if meta_bytes.len() != std::mem::size_of::<CellMetaRecord>() {
+            return Err(malformed(
+                file,
+                SectionKind::CELL_META,
+                0,
+                format!("{} bytes, expected 64", meta_bytes.len()),
+            ));
+        }
+        let meta: CellMetaRecord = bytemuck::pod_read_unaligned(&meta_bytes);
+        let originals: Vec<u32> = pack.section_vec(SectionKind::ORIGINALS)?;
+        let proxies: Vec<ProxyRecord> = pack.section_vec(SectionKind::PROXIES)?;
+        let members: Vec<MemberRecord> = pack.section_vec(SectionKind::MEMBERS)?;
+        let views: Vec<ViewRecord> = pack.section_vec(SectionKind::VIEWS)?;
+        for (kind, len, expected) in [
+            (SectionKind::ORIGINALS, originals.len(), meta.original_count),
+            (SectionKind::PROXIES, proxies.len(), meta.proxy_count),
+            (SectionKind::MEMBERS, members.len(), meta.member_count),
+            (SectionKind::VIEWS, views.len(), meta.view_count),
+        ] {
+            if len != expected as usize {
+                return Err(malformed(
+                    file,
+                    kind,
+                    0,
+                    format!("{len} records, cell-meta says {expected}"),
+                ));
+            }
+        }
+        let triangles = pack_triangles(pack, SectionKind::MEMBER_TRIANGLES)?;
+        let masks = pack.section(SectionKind::VIEW_MASKS)?;
+        let textures = pack.section(SectionKind::TEXTURES)?;
+
+        // 2. Walk proxies, consuming members, triangles, masks, views and texture bytes
+        //    in order; every count is checked against what is left.
+        let (mut next_member, mut next_view, mut next_tri, mut next_mask, mut next_tex) =
+            (0usize, 0usize, 0usize, 0usize, 0usize);
+        let mut out = Vec::with_capacity(proxies.len());
+        for (p, r) in proxies.iter().enumerate() {
+            let rec_off = (p * std::mem::size_of::<ProxyRecord>()) as u64;
+            let kind = ProxyKind::from_u32(r.kind).ok_or_else(|| {
+                malformed(
+                    file,
+                    SectionKind::PROXIES,
+                    rec_off,
+                    format!("proxy {p}: unknown kind {}", r.kind),
+                )
+            })?;
+            let member_recs = take(&members, &mut next_member, r.member_count as usize)
+                .ok_or_else(|| {
+                    malformed(
+                        file,
+                        SectionKind::PROXIES,
+                        rec_off + 4,
+                        format!(
+                            "proxy {p}: member count {} past the members table",
+                            r.member_count
+                        ),
+                    )
+                })?;
+            let view_recs =
+                take(&views, &mut next_view, r.view_count as usize).ok_or_else(|| {
+                    malformed(
+                        file,
+                        SectionKind::PROXIES,
+                        rec_off + 8,
+                        format!(
+                            "proxy {p}: view count {} past the views table",
+                            r.view_count
+                        ),
+                    )
+                })?;
+            let mut proxy_members = Vec::with_capacity(member_recs.len());
+            for m in member_recs {
+                let tris = take(&triangles, &mut next_tri, m.triangle_count as usize).ok_or_else(
+                    || {
+                        malformed(
+                            file,
+                            SectionKind::MEMBERS,
+                            0,
+                            format!(
+                                "proxy {p}: triangle count {} past member-triangles",
+                                m.triangle_count
+                            ),
+                        )
+                    },
+                )?;
+                let mk = take(&masks, &mut next_mask, m.mask_count as usize).ok_or_else(|| {
+                    malformed(
+                        file,
+                        SectionKind::MEMBERS,
+                        0,
+                        format!("proxy {p}: mask count {} past view-masks", m.mask_count),
+                    )
+                })?;
+                let member = ProxyMember {
+                    instance: m.instance,
+                    triangles: tris.to_vec(),
+                    view_masks: mk.to_vec(),
+                };
+                check_masks(kind, &member, view_recs.len()).map_err(|e| {
+                    malformed(
+                        file,
+                        SectionKind::VIEW_MASKS,
+                        next_mask as u64,
+                        format!("proxy {p}: {e}"),
+                    )
+                })?;
+                proxy_members.push(member);
+            }
+            let mut proxy_views = Vec::with_capacity(view_recs.len());
+            for v in view_recs {
+                let len = usize::try_from(v.data_len).ok();
+                let data = len
+                    .and_then(|l| take(&textures, &mut next_tex, l))
+                    .ok_or_else(|| {
+                        malformed(
+                            file,
+                            SectionKind::VIEWS,
+                            0,
+                            format!(
+                                "proxy {p}: texture of {} bytes past the textures section",
+                                v.data_len
+                            ),
+                        )
+                    })?;
+                let encoding = TextureEncoding::from_u32(v.encoding).ok_or_else(|| {
+                    malformed(
+                        file,
+                        SectionKind::VIEWS,
+                        0,
+                        format!("proxy {p}: unknown texture encoding {}", v.encoding),
+                    )
+                })?;
+                let texture = Texture {
+                    width: v.width,
+                    height: v.height,
+                    encoding,
+                    data: data.to_vec(),
+                };
+                texture.validate().map_err(|e| {
+                    malformed(
+                        file,
+                        SectionKind::TEXTURES,
+                        next_tex as u64,
+                        format!("proxy {p}: {e}"),
+                    )
+                })?;
+                proxy_views.push(ProxyView {
+                    eye: v.eye,
+                    matrix: v.matrix,
+                    texture,
+                });
+            }
+            out.push(Proxy {
+                kind,
+                members: proxy_members,
+                views: proxy_views,
+            });
+        }
+        // 3. Nothing may be left over.
+        for (kind, used, len) in [
+            (SectionKind::MEMBERS, next_member, members.len()),
+            (SectionKind::VIEWS, next_view, views.len()),
+            (SectionKind::MEMBER_TRIANGLES, next_tri, triangles.len()),
+            (SectionKind::VIEW_MASKS, next_mask, masks.len()),
+            (SectionKind::TEXTURES, next_tex, textures.len()),
+        ] {
+            if used != len {
+                return Err(malformed(
+                    file,
+                    kind,
+                    used as u64,
+                    format!("{} records not referenced by any proxy", len - used),
+                ));
+            }
+        }
+        Ok(CellPack {
+            cell_id: meta.cell_id,
+            fingerprint: meta.fingerprint,
+            originals,
+            proxies: out,
+        })
+    }
+
+    /// Checks every instance id and vertex index against the base pack (what the
+    /// player does before uploading index buffers).
+    pub fn check_against(&self, base: &BasePack) -> Result<(), PackError> {
+        let instance = |id: u32, what: &str| -> Result<u32, PackError> {
+            let inst = base.instances.get(id as usize).ok_or_else(|| {
+                invalid(format!(
+                    "cell {}: {what} refers to instance {id} of {}",
+                    self.cell_id,
+                    base.instances.len()
+                ))
+            })?;
+            let model = base
+                .models
+                .get(inst.model as usize)
+                .ok_or_else(|| invalid(format!("instance {id}: bad model")))?;
+            Ok(model.mesh.positions.len() as u32)
+        };
+        for &o in &self.originals {
+            instance(o, "an original")?;
+        }
+        for (p, proxy) in self.proxies.iter().enumerate() {
+            for m in &proxy.members {
+                let vertices = instance(m.instance, "a proxy member")?;
+                if let Some(t) = m
+                    .triangles
+                    .iter()
+                    .find(|t| t.iter().any(|&v| v >= vertices))
+                {
+                    return Err(invalid(format!(
+                        "cell {} proxy {p}: triangle {t:?} of instance {} indexes past {vertices} vertices",
+                        self.cell_id, m.instance
+                    )));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Validates and decodes pack bytes held in memory.
+    pub fn from_bytes(bytes: &[u8]) -> Result<CellPack, PackError> {
+        CellPack::decode(&PackFile::from_bytes(bytes)?)
+    }
+
+    /// Writes the pack atomically to `path`.
+    pub fn write(&self, path: &Path) -> Result<(), PackError> {
+        write_atomic(path, &self.encode()?)
+    }
+
+    /// Memory-maps, validates and decodes the pack at `path`.
+    pub fn read(path: &Path) -> Result<CellPack, PackError> {
+        CellPack::decode(&PackFile::open(path)?)
+    }
+
+    pub fn triangle_count(&self) -> u64 {
+        self.proxies
+            .iter()
+            .flat_map(|p| &p.members)
+            .map(|m| m.triangles.len() as u64)
+            .sum()
+    }
+}
+
+/// The next `n` items of `items` from `*next`, advancing it; `None` if fewer remain.
+fn take<'a, T>(items: &'a [T], next: &mut usize, n: usize) -> Option<&'a [T]> {
+    let end = next.checked_add(n)?;
+    let s = items.get(*next..end)?;
+    *next = end;
+    Some(s)
+}

@@ -1,0 +1,142 @@
+//! Section codecs (format/README.md, "Codecs"): raw, zstd, and zstd over a
+//! delta + zig-zag + byte-plane pre-coding of u32 index streams. Encoding is
+//! deterministic (fixed zstd level, single-threaded, no content-size-dependent
+//! options); decoding never allocates more than the entry's `raw_len`, which the
+//! table validation has already bounded.
+
+use super::layout::{Codec, MAX_EXPANSION};
+use std::io::Read;
+
+/// The zstd level every writer uses. Fixed: the same input must give the same bytes.
+pub const ZSTD_LEVEL: i32 = 15;
+
+/// A compressed section is kept only if it saves at least 1/16 of the raw size — or
+/// 1/4 for sections that prefer to stay raw (vertex arrays, which a memory-mapped
+/// reader can hand to the GPU zero-copy; zstd saves only 8-10% on real float
+/// positions) — and does not expand by more than [`MAX_EXPANSION`]; otherwise the
+/// section is stored raw.
+fn pays(raw: usize, stored: usize, prefer_raw: bool) -> bool {
+    let (num, den) = if prefer_raw { (3, 4) } else { (15, 16) };
+    stored.saturating_mul(den) <= raw.saturating_mul(num)
+        && (stored as u64).saturating_mul(MAX_EXPANSION) >= raw as u64
+}
+
+fn zstd_compress(bytes: &[u8]) -> Vec<u8> {
+    // Level and parameters fixed; `bulk` compresses in one call without threads.
+    zstd::bulk::compress(bytes, ZSTD_LEVEL).expect("zstd compression of an in-memory buffer")
+}
+
+/// Delta + zig-zag + byte planes of a little-endian u32 stream (`bytes.len() % 4 == 0`).
+pub fn precode_delta_u32(bytes: &[u8]) -> Vec<u8> {
+    let n = bytes.len() / 4;
+    let mut out = vec![0u8; n * 4];
+    let mut prev = 0u32;
+    for (i, c) in bytes.chunks_exact(4).enumerate() {
+        let v = u32::from_le_bytes([c[0], c[1], c[2], c[3]]);
+        let d = v.wrapping_sub(prev) as i32;
+        prev = v;
+        let z = ((d << 1) ^ (d >> 31)) as u32;
+        let zb = z.to_le_bytes();
+        for (k, b) in zb.iter().enumerate() {
+            out[k * n + i] = *b;
+        }
+    }
+    out
+}
+
+/// Inverse of [`precode_delta_u32`]; `None` if the length is not a multiple of 4.
+pub fn postdecode_delta_u32(planes: &[u8]) -> Option<Vec<u8>> {
+    if planes.len() % 4 != 0 {
+        return None;
+    }
+    let n = planes.len() / 4;
+    let mut out = Vec::with_capacity(planes.len());
+    let mut prev = 0u32;
+    for i in 0..n {
+        let z = u32::from_le_bytes([
+            planes[i],
+            planes[n + i],
+            planes[2 * n + i],
+            planes[3 * n + i],
+        ]);
+        let d = (z >> 1) as i32 ^ -((z & 1) as i32);
+        let v = prev.wrapping_add(d as u32);
+        prev = v;
+        out.extend_from_slice(&v.to_le_bytes());
+    }
+    Some(out)
+}
+
+/// Encodes a section with the codec the writer would choose from `candidates`,
+/// falling back to [`Codec::Raw`] when no compression pays. Returns the codec and the
+/// stored bytes.
+pub fn encode_best(raw: &[u8], candidates: &[Codec]) -> (Codec, Vec<u8>) {
+    encode_best_with(raw, candidates, false)
+}
+
+/// As [`encode_best`]; `prefer_raw` demands a saving of 1/4 before giving up raw.
+pub fn encode_best_with(raw: &[u8], candidates: &[Codec], prefer_raw: bool) -> (Codec, Vec<u8>) {
+    let mut best: (Codec, Vec<u8>) = (Codec::Raw, raw.to_vec());
+    for &c in candidates {
+        let stored = match c {
+            Codec::Raw => continue,
+            Codec::Zstd => zstd_compress(raw),
+            Codec::ZstdDeltaU32 => {
+                if raw.len() % 4 != 0 {
+                    continue;
+                }
+                zstd_compress(&precode_delta_u32(raw))
+            }
+        };
+        if pays(raw.len(), stored.len(), prefer_raw) && stored.len() < best.1.len() {
+            best = (c, stored);
+        }
+    }
+    best
+}
+
+/// Decodes stored bytes into exactly `raw_len` bytes, or says why not.
+pub fn decode(codec: Codec, stored: &[u8], raw_len: u64) -> Result<Vec<u8>, String> {
+    match codec {
+        Codec::Raw => {
+            if stored.len() as u64 != raw_len {
+                return Err(format!(
+                    "raw section of {} bytes, table says {raw_len}",
+                    stored.len()
+                ));
+            }
+            Ok(stored.to_vec())
+        }
+        Codec::Zstd => zstd_decompress(stored, raw_len),
+        Codec::ZstdDeltaU32 => {
+            if raw_len % 4 != 0 {
+                return Err(format!(
+                    "delta-u32 section raw length {raw_len} is not a multiple of 4"
+                ));
+            }
+            let planes = zstd_decompress(stored, raw_len)?;
+            postdecode_delta_u32(&planes).ok_or_else(|| "bad delta-u32 length".to_string())
+        }
+    }
+}
+
+fn zstd_decompress(stored: &[u8], raw_len: u64) -> Result<Vec<u8>, String> {
+    // Stream into a buffer that grows with the real output, never past raw_len + 1:
+    // a frame lying about its size cannot make us allocate more than that.
+    let mut decoder = zstd::stream::read::Decoder::with_buffer(stored)
+        .map_err(|e| e.to_string())?
+        .single_frame();
+    let mut out = Vec::new();
+    (&mut decoder)
+        .take(raw_len.saturating_add(1))
+        .read_to_end(&mut out)
+        .map_err(|e| e.to_string())?;
+    if out.len() as u64 != raw_len {
+        return Err(format!(
+            "decompressed to {}{} bytes, table says {raw_len}",
+            out.len(),
+            if out.len() as u64 > raw_len { "+" } else { "" }
+        ));
+    }
+    Ok(out)
+}

@@ -1,0 +1,317 @@
+//! `index.pack`: the table of contents of a bake — for each cell, its pack file
+//! (relative to the bake's output directory), byte size, blake3 checksum, neighbour
+//! cells (what the player prefetches) and job fingerprint, plus the build fingerprint
+//! (DESIGN.md "Data flow": the player mmaps packs, finds the current cell, prefetches
+//! neighbours).
+
+use super::error::{hex, PackError};
+use super::layout::{FileKind, SectionKind};
+use super::reader::PackFile;
+use super::writer::{assemble, write_atomic, SectionData, RAW_ONLY, TRY_INDICES, TRY_ZSTD};
+use super::{invalid, malformed};
+use bytemuck::{Pod, Zeroable};
+use std::path::Path;
+
+/// One cell's entry.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct IndexEntry {
+    pub cell_id: u32,
+    /// Path of the cell pack relative to the bake directory, `/`-separated
+    /// (e.g. `cells/17.pack`); never absolute, never `..`.
+    pub file: String,
+    /// Size of that file in bytes.
+    pub bytes: u64,
+    /// blake3 of the whole file.
+    pub checksum: [u8; 32],
+    /// Ids of the neighbouring cells, in the order the player should prefetch them.
+    pub neighbours: Vec<u32>,
+    /// The job fingerprint the cell was baked with.
+    pub fingerprint: [u8; 32],
+}
+
+/// The content of `index.pack`. Cells are sorted by id, ids unique.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Index {
+    pub build_fingerprint: [u8; 32],
+    pub cells: Vec<IndexEntry>,
+}
+
+/// Section `index-meta` (48 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct IndexMetaRecord {
+    pub build_fingerprint: [u8; 32],
+    pub cell_count: u32,
+    pub reserved: [u32; 3],
+}
+const _: () = assert!(std::mem::size_of::<IndexMetaRecord>() == 48);
+
+/// One entry of section `index-cells` (88 bytes). A cell's neighbours (in
+/// `index-neighbours`) follow those of the cells before it.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct CellRecord {
+    pub cell_id: u32,
+    pub neighbour_count: u32,
+    pub bytes: u64,
+    pub checksum: [u8; 32],
+    pub fingerprint: [u8; 32],
+    /// Byte range of the file name in `index-file-names` (UTF-8).
+    pub name_offset: u32,
+    pub name_len: u32,
+}
+const _: () = assert!(std::mem::size_of::<CellRecord>() == 88);
+
+/// Whether `file` is a safe relative path (`/`-separated, no empty, `.` or `..`
+/// component, no backslash or NUL).
+pub fn check_relative_path(file: &str) -> Result<(), String> {
+    if file.is_empty() || file.contains('\\') || file.contains('\0') {
+        return Err(format!(
+            "file name {file:?} is empty or contains '\\' or NUL"
+        ));
+    }
+    if file
+        .split('/')
+        .any(|c| c.is_empty() || c == "." || c == "..")
+    {
+        return Err(format!("file name {file:?} is not a plain relative path"));
+    }
+    Ok(())
+}
+
+impl IndexEntry {
+    /// The entry of the cell pack at `dir/file`: its size and blake3 are read from disk.
+    pub fn for_file(
+        dir: &Path,
+        file: &str,
+        cell_id: u32,
+        neighbours: Vec<u32>,
+        fingerprint: [u8; 32],
+    ) -> Result<IndexEntry, PackError> {
+        check_relative_path(file).map_err(invalid)?;
+        let path = dir.join(file);
+        let data = std::fs::read(&path).map_err(|source| PackError::Io {
+            file: path.clone(),
+            source,
+        })?;
+        Ok(IndexEntry {
+            cell_id,
+            file: file.to_string(),
+            bytes: data.len() as u64,
+            checksum: *blake3::hash(&data).as_bytes(),
+            neighbours,
+            fingerprint,
+        })
+    }
+
+    /// Checks that `dir/file` has the recorded size and checksum.
+    pub fn verify(&self, dir: &Path) -> Result<(), PackError> {
+        let path = dir.join(&self.file);
+        let data = std::fs::read(&path).map_err(|source| PackError::Io {
+            file: path.clone(),
+            source,
+        })?;
+        if data.len() as u64 != self.bytes {
+            return Err(PackError::LengthMismatch {
+                file: path,
+                expected: self.bytes,
+                found: data.len() as u64,
+            });
+        }
+        let found = blake3::hash(&data);
+        if *found.as_bytes() != self.checksum {
+            return Err(PackError::HeaderChecksum {
+                file: path,
+                expected: hex(&self.checksum),
+                found: hex(found.as_bytes()),
+            });
+        }
+        Ok(())
+    }
+}
+
+impl Index {
+    /// The entry of `cell_id`, if the index has one.
+    pub fn cell(&self, cell_id: u32) -> Option<&IndexEntry> {
+        self.cells
+            .binary_search_by_key(&cell_id, |e| e.cell_id)
+            .ok()
+            .map(|i| &self.cells[i])
+    }
+
+    /// The pack's bytes (deterministic). Cells must be sorted by id, ids unique.
+    pub fn encode(&self) -> Result<Vec<u8>, PackError> {
+        let mut records = Vec::with_capacity(self.cells.len());
+        let mut names = Vec::new();
+        let mut neighbours: Vec<u32> = Vec::new();
+        for (i, c) in self.cells.iter().enumerate() {
+            if i > 0 && self.cells[i - 1].cell_id >= c.cell_id {
+                return Err(invalid(format!(
+                    "index cells not sorted by unique id at entry {i} (cell {})",
+                    c.cell_id
+                )));
+            }
+            check_relative_path(&c.file)
+                .map_err(|e| invalid(format!("cell {}: {e}", c.cell_id)))?;
+            records.push(CellRecord {
+                cell_id: c.cell_id,
+                neighbour_count: u32::try_from(c.neighbours.len())
+                    .map_err(|_| invalid("too many neighbours"))?,
+                bytes: c.bytes,
+                checksum: c.checksum,
+                fingerprint: c.fingerprint,
+                name_offset: u32::try_from(names.len())
+                    .map_err(|_| invalid("file names too long"))?,
+                name_len: u32::try_from(c.file.len()).map_err(|_| invalid("file name too long"))?,
+            });
+            names.extend_from_slice(c.file.as_bytes());
+            neighbours.extend_from_slice(&c.neighbours);
+        }
+        let meta = IndexMetaRecord {
+            build_fingerprint: self.build_fingerprint,
+            cell_count: u32::try_from(self.cells.len()).map_err(|_| invalid("too many cells"))?,
+            reserved: [0; 3],
+        };
+        assemble(
+            FileKind::Index,
+            &[
+                SectionData {
+                    kind: SectionKind::INDEX_META,
+                    raw: bytemuck::bytes_of(&meta).to_vec(),
+                    codecs: RAW_ONLY,
+                },
+                SectionData {
+                    kind: SectionKind::INDEX_CELLS,
+                    raw: bytemuck::cast_slice(&records).to_vec(),
+                    codecs: TRY_ZSTD,
+                },
+                SectionData {
+                    kind: SectionKind::INDEX_FILE_NAMES,
+                    raw: names,
+                    codecs: TRY_ZSTD,
+                },
+                SectionData {
+                    kind: SectionKind::INDEX_NEIGHBOURS,
+                    raw: bytemuck::cast_slice(&neighbours).to_vec(),
+                    codecs: TRY_INDICES,
+                },
+            ],
+        )
+    }
+
+    /// Decodes a validated index pack.
+    pub fn decode(pack: &PackFile) -> Result<Index, PackError> {
+        pack.expect_kind(FileKind::Index)?;
+        let file = pack.path();
+        let meta_bytes = pack.section(SectionKind::INDEX_META)?;
+        if meta_bytes.len() != std::mem::size_of::<IndexMetaRecord>() {
+            return Err(malformed(
+                file,
+                SectionKind::INDEX_META,
+                0,
+                format!("{} bytes, expected 48", meta_bytes.len()),
+            ));
+        }
+        let meta: IndexMetaRecord = bytemuck::pod_read_unaligned(&meta_bytes);
+        let records: Vec<CellRecord> = pack.section_vec(SectionKind::INDEX_CELLS)?;
+        if records.len() != meta.cell_count as usize {
+            return Err(malformed(
+                file,
+                SectionKind::INDEX_CELLS,
+                0,
+                format!(
+                    "{} cells, index-meta says {}",
+                    records.len(),
+                    meta.cell_count
+                ),
+            ));
+        }
+        let names = pack.section(SectionKind::INDEX_FILE_NAMES)?;
+        let neighbours: Vec<u32> = pack.section_vec(SectionKind::INDEX_NEIGHBOURS)?;
+        let mut next = 0usize;
+        let mut cells = Vec::with_capacity(records.len());
+        for (i, r) in records.iter().enumerate() {
+            let off = (i * std::mem::size_of::<CellRecord>()) as u64;
+            if i > 0 && records[i - 1].cell_id >= r.cell_id {
+                return Err(malformed(
+                    file,
+                    SectionKind::INDEX_CELLS,
+                    off,
+                    format!("cell ids not increasing at entry {i}"),
+                ));
+            }
+            let end = (r.name_offset as usize).checked_add(r.name_len as usize);
+            let name = end
+                .and_then(|e| names.get(r.name_offset as usize..e))
+                .ok_or_else(|| {
+                    malformed(
+                        file,
+                        SectionKind::INDEX_CELLS,
+                        off,
+                        format!("cell {}: name outside index-file-names", r.cell_id),
+                    )
+                })?;
+            let name = std::str::from_utf8(name).map_err(|e| {
+                malformed(
+                    file,
+                    SectionKind::INDEX_FILE_NAMES,
+                    r.name_offset as u64,
+                    e.to_string(),
+                )
+            })?;
+            check_relative_path(name).map_err(|e| {
+                malformed(file, SectionKind::INDEX_FILE_NAMES, r.name_offset as u64, e)
+            })?;
+            let nb_end = next.checked_add(r.neighbour_count as usize);
+            let nb = nb_end
+                .and_then(|e| neighbours.get(next..e))
+                .ok_or_else(|| {
+                    malformed(
+                        file,
+                        SectionKind::INDEX_CELLS,
+                        off + 4,
+                        format!("cell {}: neighbour count past index-neighbours", r.cell_id),
+                    )
+                })?;
+            next += nb.len();
+            cells.push(IndexEntry {
+                cell_id: r.cell_id,
+                file: name.to_string(),
+                bytes: r.bytes,
+                checksum: r.checksum,
+                neighbours: nb.to_vec(),
+                fingerprint: r.fingerprint,
+            });
+        }
+        if next != neighbours.len() {
+            return Err(malformed(
+                file,
+                SectionKind::INDEX_NEIGHBOURS,
+                (next * 4) as u64,
+                format!(
+                    "{} neighbours not referenced by any cell",
+                    neighbours.len() - next
+                ),
+            ));
+        }
+        Ok(Index {
+            build_fingerprint: meta.build_fingerprint,
+            cells,
+        })
+    }
+
+    /// Validates and decodes pack bytes held in memory.
+    pub fn from_bytes(bytes: &[u8]) -> Result<Index, PackError> {
+        Index::decode(&PackFile::from_bytes(bytes)?)
+    }
+
+    /// Writes the pack atomically to `path`.
+    pub fn write(&self, path: &Path) -> Result<(), PackError> {
+        write_atomic(path, &self.encode()?)
+    }
+
+    /// Memory-maps, validates and decodes the pack at `path`.
+    pub fn read(path: &Path) -> Result<Index, PackError> {
+        Index::decode(&PackFile::open(path)?)
+    }
+}

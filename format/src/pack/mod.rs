@@ -1,0 +1,49 @@
+//! Versioned, checksummed, memory-mappable zstd packs: `base.pack`, `cells/<id>.pack`
+//! and `index.pack` (DESIGN.md "Data flow"; issue 5). format/README.md is the
+//! byte-level specification and the compatibility policy.
+//!
+//! - [`layout`]: header, section table, section kinds, codecs (the spec in code).
+//! - [`writer`]: deterministic assembly, atomic writes.
+//! - [`reader`]: [`PackFile`] — mmap or read, validated before use, lazy sections.
+//! - [`base`], [`cell`], [`index`]: the three files' contents.
+//! - [`texture`]: capture texture encodings.
+
+pub mod base;
+pub mod cell;
+pub mod codec;
+pub mod error;
+pub mod index;
+pub mod layout;
+pub mod reader;
+pub mod sample;
+pub mod texture;
+pub mod writer;
+
+pub use base::{BasePack, GridParams, PackedInstance, PackedModel};
+pub use cell::{CellPack, Proxy, ProxyKind, ProxyMember, ProxyView};
+pub use error::PackError;
+pub use index::{Index, IndexEntry};
+pub use layout::{Codec, FileKind, SectionKind, FORMAT_VERSION};
+pub use reader::{scan, PackFile, PackScan, SectionInfo};
+pub use texture::{Texture, TextureEncoding};
+pub use writer::write_atomic;
+
+use std::path::Path;
+
+pub(crate) fn invalid(what: impl Into<String>) -> PackError {
+    PackError::Invalid { what: what.into() }
+}
+
+pub(crate) fn malformed(
+    file: &Path,
+    section: SectionKind,
+    offset: u64,
+    what: impl Into<String>,
+) -> PackError {
+    PackError::Malformed {
+        file: file.to_path_buf(),
+        section,
+        offset,
+        what: what.into(),
+    }
+}

@@ -1,0 +1,370 @@
+//! Deterministic sample packs: the content of the golden files under `tests/data/`,
+//! the seeds of the fuzzers, and the synthetic "realistic" cell of the benchmark.
+//! Public so that tests, fuzz targets and benches across crates build the very same
+//! packs; nothing here is used by a bake.
+
+use super::base::{BasePack, GridParams, PackedInstance, PackedModel};
+use super::cell::{CellPack, Proxy, ProxyKind, ProxyMember, ProxyView};
+use super::index::{Index, IndexEntry};
+use super::texture::{Texture, TextureEncoding};
+use crate::mesh::Mesh;
+
+/// A small deterministic generator (SplitMix64), so samples need no `rand`.
+#[derive(Clone, Debug)]
+pub struct SplitMix(pub u64);
+
+impl SplitMix {
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^ (z >> 31)
+    }
+
+    /// Uniform in [0, n) (n > 0).
+    pub fn below(&mut self, n: u64) -> u64 {
+        self.next_u64() % n.max(1)
+    }
+
+    /// Uniform in [0, 1).
+    pub fn unit(&mut self) -> f32 {
+        (self.next_u64() >> 40) as f32 / (1u64 << 24) as f32
+    }
+}
+
+/// A `cols × rows` height-field grid mesh (2 · cols · rows triangles), a stand-in
+/// for a scanned model with a realistic vertex order.
+pub fn grid_mesh(cols: u32, rows: u32, seed: u64) -> Mesh {
+    let mut rng = SplitMix(seed);
+    let mut mesh = Mesh::default();
+    for r in 0..=rows {
+        for c in 0..=cols {
+            let y = 0.1 * rng.unit();
+            mesh.positions
+                .push([c as f32 / cols as f32, y, r as f32 / rows as f32]);
+            mesh.normals.push([0.0, 1.0, 0.0]);
+            mesh.albedo
+                .push([(c * 255 / cols) as u8, (r * 255 / rows) as u8, 128, 255]);
+        }
+    }
+    let w = cols + 1;
+    for r in 0..rows {
+        for c in 0..cols {
+            let v = r * w + c;
+            mesh.triangles.push([v, v + w, v + 1]);
+            mesh.triangles.push([v + 1, v + w, v + w + 1]);
+        }
+    }
+    mesh
+}
+
+/// An image that looks like a capture (DESIGN.md "Shading"): fixed sky colour
+/// around a Lambert-shaded (ambient 0.3, L = normalize(0.4, 1, 0.3)) ellipsoid whose
+/// albedo is a fine procedural stripe pattern, sRGB8.
+pub fn capture_like_rgba(width: u32, height: u32, seed: u64) -> Vec<u8> {
+    let mut rng = SplitMix(seed);
+    let (cx, cy) = (
+        0.5 + 0.1 * (rng.unit() - 0.5),
+        0.5 + 0.1 * (rng.unit() - 0.5),
+    );
+    let (rx, ry) = (0.3 + 0.15 * rng.unit(), 0.35 + 0.1 * rng.unit());
+    let base = [
+        0.4 + 0.5 * rng.unit(),
+        0.4 + 0.5 * rng.unit(),
+        0.3 + 0.4 * rng.unit(),
+    ];
+    let l = {
+        let v = [0.4f32, 1.0, 0.3];
+        let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+        [v[0] / n, v[1] / n, v[2] / n]
+    };
+    let srgb = |x: f32| -> u8 {
+        let x = x.clamp(0.0, 1.0);
+        let s = if x <= 0.003_130_8 {
+            12.92 * x
+        } else {
+            1.055 * x.powf(1.0 / 2.4) - 0.055
+        };
+        (s * 255.0 + 0.5) as u8
+    };
+    let mut out = Vec::with_capacity(width as usize * height as usize * 4);
+    for y in 0..height {
+        for x in 0..width {
+            let u = (x as f32 + 0.5) / width as f32;
+            let v = (y as f32 + 0.5) / height as f32;
+            let (dx, dy) = ((u - cx) / rx, (cy - v) / ry);
+            let d2 = dx * dx + dy * dy;
+            if d2 >= 1.0 {
+                out.extend_from_slice(&[135, 180, 235, 255]); // sky
+                continue;
+            }
+            let n = [dx, dy, (1.0 - d2).sqrt()];
+            let ndl = (n[0] * l[0] + n[1] * l[1] + n[2] * l[2]).max(0.0);
+            let shade = 0.3 + 0.7 * ndl;
+            let stripe = if ((dx * 9.0 + dy * 4.0).sin() * (dy * 13.0).cos()) > 0.0 {
+                1.0
+            } else {
+                0.6
+            };
+            out.extend_from_slice(&[
+                srgb(base[0] * stripe * shade),
+                srgb(base[1] * stripe * shade),
+                srgb(base[2] * stripe * shade),
+                255,
+            ]);
+        }
+    }
+    out
+}
+
+/// The content of `tests/data/base-v1.pack`.
+pub fn small_base() -> BasePack {
+    let tetra = Mesh {
+        positions: vec![
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+        ],
+        normals: vec![
+            [-0.577, -0.577, -0.577],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+        ],
+        albedo: vec![
+            [255, 0, 0, 255],
+            [0, 255, 0, 255],
+            [0, 0, 255, 255],
+            [255, 255, 255, 255],
+        ],
+        triangles: vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],
+    };
+    let translate = |x: f32, z: f32| {
+        let mut m = [0.0f32; 16];
+        m[0] = 1.0;
+        m[5] = 1.0;
+        m[10] = 1.0;
+        m[15] = 1.0;
+        m[12] = x;
+        m[14] = z;
+        m
+    };
+    BasePack {
+        scene_fingerprint: *blake3::hash(b"hexbake sample scene").as_bytes(),
+        grid: GridParams {
+            ground_min: [0.0, 0.0],
+            ground_max: [100.0, 80.0],
+            cell_size: 10.0,
+            min_eye_height: 1.5,
+            max_eye_height: 2.0,
+            n_cols: 7,
+            n_rows: 5,
+        },
+        models: vec![
+            PackedModel {
+                name: "tetra".into(),
+                content_hash: *blake3::hash(b"tetra").as_bytes(),
+                mesh: tetra,
+            },
+            PackedModel {
+                name: "grid-16".into(),
+                content_hash: *blake3::hash(b"grid").as_bytes(),
+                mesh: grid_mesh(16, 16, 7),
+            },
+        ],
+        instances: vec![
+            PackedInstance {
+                model: 0,
+                transform: translate(10.0, 12.0),
+                tint: [1.0, 1.0, 1.0],
+            },
+            PackedInstance {
+                model: 1,
+                transform: translate(30.0, 40.0),
+                tint: [0.8, 0.9, 1.0],
+            },
+            PackedInstance {
+                model: 1,
+                transform: translate(60.0, 20.0),
+                tint: [1.0, 0.7, 0.7],
+            },
+        ],
+    }
+}
+
+fn view(eye: [f32; 3], side: u32, seed: u64, encoding: TextureEncoding) -> ProxyView {
+    let mut matrix = [0.0f32; 16];
+    for (i, m) in matrix.iter_mut().enumerate() {
+        *m = (i as f32 * 0.25 + seed as f32).sin();
+    }
+    ProxyView {
+        eye,
+        matrix,
+        texture: Texture::from_rgba8(side, side, &capture_like_rgba(side, side, seed), encoding)
+            .expect("valid sample texture"),
+    }
+}
+
+/// The content of `tests/data/cell-v1.pack`: one proxy of each v1 kind
+/// (SvMesh, Cluster with two members, MvMesh with three views).
+pub fn small_cell() -> CellPack {
+    let base = small_base();
+    let grid_tris = &base.models[1].mesh.triangles;
+    let mv_tris: Vec<[u32; 3]> = grid_tris.iter().step_by(3).copied().collect();
+    let mv_masks = (0..mv_tris.len())
+        .map(|i| [1u8, 3, 6, 5, 7][i % 5])
+        .collect();
+    CellPack {
+        cell_id: 12,
+        fingerprint: *blake3::hash(b"hexbake sample cell 12").as_bytes(),
+        originals: vec![0],
+        proxies: vec![
+            Proxy {
+                kind: ProxyKind::SvMesh,
+                members: vec![ProxyMember {
+                    instance: 1,
+                    triangles: grid_tris[..200].to_vec(),
+                    view_masks: vec![],
+                }],
+                views: vec![view([35.0, 1.7, 25.0], 16, 1, TextureEncoding::Rgba8Left)],
+            },
+            Proxy {
+                kind: ProxyKind::Cluster,
+                members: vec![
+                    ProxyMember {
+                        instance: 0,
+                        triangles: vec![[0, 2, 1], [1, 2, 3]],
+                        view_masks: vec![],
+                    },
+                    ProxyMember {
+                        instance: 2,
+                        triangles: grid_tris[100..180].to_vec(),
+                        view_masks: vec![],
+                    },
+                ],
+                views: vec![view([35.0, 1.7, 25.0], 8, 2, TextureEncoding::Rgba8)],
+            },
+            Proxy {
+                kind: ProxyKind::MvMesh,
+                members: vec![ProxyMember {
+                    instance: 2,
+                    triangles: mv_tris,
+                    view_masks: mv_masks,
+                }],
+                views: vec![
+                    view([35.0, 1.7, 25.0], 8, 3, TextureEncoding::Rgba8Left),
+                    view([45.0, 1.7, 25.0], 8, 4, TextureEncoding::Rgba8Left),
+                    view([40.0, 1.7, 33.0], 8, 5, TextureEncoding::Rgba8Left),
+                ],
+            },
+        ],
+    }
+}
+
+/// The content of `tests/data/index-v1.pack`.
+pub fn small_index() -> Index {
+    let entry = |cell_id: u32, neighbours: Vec<u32>| IndexEntry {
+        cell_id,
+        file: format!("cells/{cell_id}.pack"),
+        bytes: 1000 + cell_id as u64 * 37,
+        checksum: *blake3::hash(&cell_id.to_le_bytes()).as_bytes(),
+        neighbours,
+        fingerprint: *blake3::hash(format!("job {cell_id}").as_bytes()).as_bytes(),
+    };
+    Index {
+        build_fingerprint: *blake3::hash(b"hexbake sample build").as_bytes(),
+        cells: vec![
+            entry(5, vec![6, 12]),
+            entry(6, vec![5, 12, 13]),
+            entry(12, vec![5, 6]),
+            entry(13, vec![]),
+        ],
+    }
+}
+
+/// A base pack whose models are `model_count` grid meshes of `tris_per_model`
+/// triangles (rounded to an even grid), one instance each.
+pub fn synthetic_base(model_count: u32, tris_per_model: u32) -> BasePack {
+    let side = ((tris_per_model / 2) as f32).sqrt().max(1.0) as u32;
+    let mut base = small_base();
+    base.models = (0..model_count)
+        .map(|i| PackedModel {
+            name: format!("model-{i}"),
+            content_hash: *blake3::hash(&i.to_le_bytes()).as_bytes(),
+            mesh: grid_mesh(side, side, i as u64),
+        })
+        .collect();
+    base.instances = (0..model_count)
+        .map(|i| PackedInstance {
+            model: i,
+            transform: small_base().instances[0].transform,
+            tint: [1.0; 3],
+        })
+        .collect();
+    base
+}
+
+/// A cell of realistic size for benchmarks: `proxy_count` proxies over the models of
+/// [`synthetic_base`] with about `total_triangles` triangles in all (each proxy a
+/// simplified subset of its model's triangles: runs of 7 kept, 7 dropped, as a
+/// half-edge-collapse simplifier keeping original vertices leaves them), every
+/// `mv_every`-th proxy an MvMesh with three views, the others SvMesh with one, and
+/// captures of `texture_side`² to `2 · texture_side`² texels (capture-like images).
+pub fn synthetic_cell(
+    proxy_count: u32,
+    total_triangles: u32,
+    mv_every: u32,
+    texture_side: u32,
+) -> CellPack {
+    let base = synthetic_base(proxy_count, total_triangles / proxy_count.max(1) * 2);
+    let mut rng = SplitMix(99);
+    let mut proxies = Vec::new();
+    for p in 0..proxy_count {
+        let tris = &base.models[p as usize].mesh.triangles;
+        let kept: Vec<[u32; 3]> = tris
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| (i / 7) % 2 == 0)
+            .map(|(_, t)| *t)
+            .collect();
+        let mv = mv_every > 0 && p % mv_every == mv_every - 1;
+        let (kind, n_views) = if mv {
+            (ProxyKind::MvMesh, 3usize)
+        } else {
+            (ProxyKind::SvMesh, 1)
+        };
+        let masks = if mv {
+            kept.iter().map(|_| rng.below(7) as u8 + 1).collect()
+        } else {
+            Vec::new()
+        };
+        let views = (0..n_views)
+            .map(|v| {
+                let side = texture_side + (rng.below(texture_side as u64 + 1) as u32 & !15);
+                view(
+                    [p as f32, 1.7, v as f32],
+                    side,
+                    p as u64 * 8 + v as u64,
+                    TextureEncoding::Rgba8Left,
+                )
+            })
+            .collect();
+        proxies.push(Proxy {
+            kind,
+            members: vec![ProxyMember {
+                instance: p,
+                triangles: kept,
+                view_masks: masks,
+            }],
+            views,
+        });
+    }
+    CellPack {
+        cell_id: 42,
+        fingerprint: *blake3::hash(b"synthetic").as_bytes(),
+        originals: (0..proxy_count).step_by(5).collect(),
+        proxies,
+    }
+}

@@ -1,0 +1,594 @@
+//! Hostile input (meshoptimizer style, STYLE.md habit 5): every truncation of a small
+//! pack, a zeroed header, a future version, a trailing byte, a flipped bit anywhere
+//! (header, table, each section, padding) are all rejected with an error; structurally
+//! valid packs with inconsistent content (checksums recomputed) decode to an error,
+//! never a panic; unknown section kinds are skipped; round trips are exact (proptest).
+
+use format::pack::layout::{Codec, SectionKind, HEADER_SIZE};
+use format::pack::writer::{assemble, SectionData, TRY_INDICES, TRY_ZSTD};
+use format::pack::{
+    sample, BasePack, CellPack, FileKind, GridParams, Index, IndexEntry, PackError, PackFile,
+    PackedInstance, PackedModel, Proxy, ProxyKind, ProxyMember, ProxyView, Texture,
+    TextureEncoding,
+};
+use format::Mesh;
+use proptest::prelude::*;
+
+/// Decodes `bytes` with the reader of `kind`.
+fn decode(kind: FileKind, bytes: &[u8]) -> Result<(), PackError> {
+    match kind {
+        FileKind::Base => BasePack::from_bytes(bytes).map(drop),
+        FileKind::Cell => CellPack::from_bytes(bytes).map(drop),
+        FileKind::Index => Index::from_bytes(bytes).map(drop),
+    }
+}
+
+fn samples() -> Vec<(FileKind, Vec<u8>)> {
+    vec![
+        (FileKind::Base, sample::small_base().encode().unwrap()),
+        (FileKind::Cell, sample::small_cell().encode().unwrap()),
+        (FileKind::Index, sample::small_index().encode().unwrap()),
+    ]
+}
+
+#[test]
+fn samples_decode() {
+    for (kind, bytes) in samples() {
+        decode(kind, &bytes).unwrap();
+    }
+}
+
+#[test]
+fn every_truncation_is_rejected() {
+    for (kind, bytes) in samples() {
+        for len in 0..bytes.len() {
+            let r = decode(kind, &bytes[..len]);
+            assert!(
+                r.is_err(),
+                "{kind:?} truncated to {len} of {} bytes was accepted",
+                bytes.len()
+            );
+        }
+    }
+}
+
+#[test]
+fn zeroed_header_is_rejected_as_bad_magic() {
+    for (kind, mut bytes) in samples() {
+        bytes[..HEADER_SIZE].fill(0);
+        assert!(matches!(
+            decode(kind, &bytes),
+            Err(PackError::BadMagic { .. })
+        ));
+    }
+}
+
+#[test]
+fn future_version_is_rejected_with_a_clear_error() {
+    for (kind, mut bytes) in samples() {
+        bytes[12..16].copy_from_slice(&2u32.to_le_bytes());
+        match decode(kind, &bytes) {
+            Err(
+                e @ PackError::FutureVersion {
+                    found: 2,
+                    supported: 1,
+                    ..
+                },
+            ) => {
+                assert!(e.to_string().contains("newer than this reader"), "{e}");
+            }
+            other => panic!("{kind:?}: expected FutureVersion, got {other:?}"),
+        }
+        bytes[12..16].copy_from_slice(&u32::MAX.to_le_bytes());
+        assert!(matches!(
+            decode(kind, &bytes),
+            Err(PackError::FutureVersion { .. })
+        ));
+        bytes[12..16].copy_from_slice(&0u32.to_le_bytes());
+        assert!(matches!(
+            decode(kind, &bytes),
+            Err(PackError::UnknownVersion { .. })
+        ));
+    }
+}
+
+#[test]
+fn one_trailing_byte_is_rejected() {
+    for (kind, mut bytes) in samples() {
+        bytes.push(0);
+        assert!(
+            matches!(decode(kind, &bytes), Err(PackError::LengthMismatch { .. })),
+            "{kind:?}"
+        );
+    }
+}
+
+#[test]
+fn wrong_file_kind_is_rejected() {
+    let cell = sample::small_cell().encode().unwrap();
+    assert!(matches!(
+        BasePack::from_bytes(&cell),
+        Err(PackError::WrongFileKind { .. })
+    ));
+    assert!(matches!(
+        Index::from_bytes(&cell),
+        Err(PackError::WrongFileKind { .. })
+    ));
+}
+
+#[test]
+fn every_flipped_bit_is_rejected() {
+    // Every bit of every byte: header, table, padding and each section.
+    for (kind, bytes) in samples() {
+        let sections = PackFile::from_bytes(&bytes).unwrap().sections().to_vec();
+        let mut copy = bytes.clone();
+        for i in 0..bytes.len() {
+            for bit in 0..8 {
+                copy[i] ^= 1 << bit;
+                let r = decode(kind, &copy);
+                copy[i] ^= 1 << bit;
+                let Err(e) = r else {
+                    panic!("{kind:?}: flipping bit {bit} of byte {i} was accepted");
+                };
+                // A flip inside a section is reported as that section's checksum error.
+                if let Some(s) = sections
+                    .iter()
+                    .find(|s| (s.offset..s.offset + s.stored_len).contains(&(i as u64)))
+                {
+                    match e {
+                        PackError::SectionChecksum { section, .. } => assert_eq!(section, s.kind),
+                        other => panic!("{kind:?} byte {i} in {}: {other}", s.kind),
+                    }
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn section_checksum_error_names_the_section_and_offset() {
+    let bytes = sample::small_cell().encode().unwrap();
+    let pack = PackFile::from_bytes(&bytes).unwrap();
+    let s = *pack.section_info(SectionKind::PROXIES).unwrap();
+    let mut bad = bytes.clone();
+    bad[s.offset as usize] ^= 0x10;
+    let e = CellPack::from_bytes(&bad).unwrap_err();
+    let msg = e.to_string();
+    assert!(
+        msg.contains("proxies") && msg.contains(&s.offset.to_string()),
+        "{msg}"
+    );
+}
+
+/// The sections of a sample pack as writer input (decoded content, same kinds).
+fn sections_of(bytes: &[u8]) -> Vec<SectionData> {
+    let pack = PackFile::from_bytes(bytes).unwrap();
+    pack.sections()
+        .iter()
+        .map(|s| SectionData {
+            kind: s.kind,
+            raw: pack.section(s.kind).unwrap().into_owned(),
+            codecs: TRY_INDICES,
+        })
+        .collect()
+}
+
+#[test]
+fn unknown_section_kinds_are_skipped() {
+    let cell = sample::small_cell();
+    let bytes = cell.encode().unwrap();
+    let mut sections = sections_of(&bytes);
+    sections.insert(
+        2,
+        SectionData {
+            kind: SectionKind(0x02ff),
+            raw: vec![7; 300],
+            codecs: TRY_ZSTD,
+        },
+    );
+    sections.push(SectionData {
+        kind: SectionKind::LAYERED_IMPOSTORS,
+        raw: vec![1, 2, 3],
+        codecs: &[],
+    });
+    let extended = assemble(FileKind::Cell, &sections).unwrap();
+    assert_eq!(CellPack::from_bytes(&extended).unwrap(), cell);
+}
+
+#[test]
+fn missing_section_is_an_error() {
+    let bytes = sample::small_index().encode().unwrap();
+    let mut sections = sections_of(&bytes);
+    sections.retain(|s| s.kind != SectionKind::INDEX_NEIGHBOURS);
+    let e = Index::from_bytes(&assemble(FileKind::Index, &sections).unwrap()).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            PackError::MissingSection {
+                section: SectionKind::INDEX_NEIGHBOURS,
+                ..
+            }
+        ),
+        "{e}"
+    );
+}
+
+#[test]
+fn lying_raw_length_is_rejected() {
+    // A zstd section whose table entry claims a different decoded length.
+    let bytes = sample::small_base().encode().unwrap();
+    let pack = PackFile::from_bytes(&bytes).unwrap();
+    let s = *pack
+        .sections()
+        .iter()
+        .find(|s| s.codec != Codec::Raw)
+        .expect("a compressed section");
+    let mut bad = bytes.clone();
+    let entry = HEADER_SIZE + s.entry as usize * 64;
+    bad[entry + 24..entry + 32].copy_from_slice(&(s.raw_len + 4).to_le_bytes());
+    // Re-seal the header so only the lie remains.
+    let table_end = HEADER_SIZE + pack.sections().len() * 64;
+    let sum = format::pack::layout::header_checksum(&bad[..48], &bad[HEADER_SIZE..table_end]);
+    bad[48..64].copy_from_slice(&sum);
+    let pack = PackFile::from_bytes(&bad).unwrap();
+    let e = pack.section(s.kind).unwrap_err();
+    assert!(matches!(e, PackError::Decompress { .. }), "{e}");
+    assert!(BasePack::decode(&pack).is_err());
+}
+
+/// Structure-aware corruption: mutate decoded section content, re-assemble (valid
+/// checksums), decode. Must never panic; must reject what it cannot represent.
+fn mutate_and_decode(kind: FileKind, bytes: &[u8], seed: u64) {
+    let mut rng = sample::SplitMix(seed);
+    let mut sections = sections_of(bytes);
+    let s = rng.below(sections.len() as u64) as usize;
+    let raw = &mut sections[s].raw;
+    match rng.below(4) {
+        0 if !raw.is_empty() => {
+            let i = rng.below(raw.len() as u64) as usize;
+            raw[i] ^= 1 << rng.below(8);
+        }
+        1 if !raw.is_empty() => {
+            let i = rng.below(raw.len() as u64) as usize;
+            raw[i] = [0x00, 0xff, 0x7f, 0x80][rng.below(4) as usize];
+        }
+        2 => {
+            let n = rng.below(raw.len() as u64 + 1) as usize;
+            raw.truncate(n);
+        }
+        _ => {
+            let n = rng.below(9) as usize;
+            raw.extend((0..n).map(|_| rng.below(256) as u8));
+        }
+    }
+    let rebuilt = assemble(kind, &sections).unwrap();
+    let _ = decode(kind, &rebuilt);
+}
+
+#[test]
+fn corrupt_content_with_valid_checksums_never_panics() {
+    for (kind, bytes) in samples() {
+        for seed in 0..400 {
+            mutate_and_decode(kind, &bytes, seed);
+        }
+    }
+}
+
+#[test]
+fn inconsistent_cell_content_is_rejected_by_the_writer_and_check_against() {
+    let mut cell = sample::small_cell();
+    cell.proxies[0].members[0].view_masks = vec![1; cell.proxies[0].members[0].triangles.len()];
+    assert!(
+        matches!(cell.encode(), Err(PackError::Invalid { .. })),
+        "SV proxy with view masks"
+    );
+    let mut cell = sample::small_cell();
+    cell.proxies[2].members[0].view_masks[0] = 0b1000; // only 3 views
+    assert!(cell.encode().is_err());
+    let mut cell = sample::small_cell();
+    cell.proxies[0].members[0].triangles[0] = [0, 1, 10_000];
+    let bytes = cell.encode().unwrap();
+    let decoded = CellPack::from_bytes(&bytes).unwrap();
+    assert!(decoded.check_against(&sample::small_base()).is_err());
+    let mut cell = sample::small_cell();
+    cell.originals.push(99);
+    assert!(cell.check_against(&sample::small_base()).is_err());
+}
+
+#[test]
+fn atomic_write_replaces_and_leaves_no_temp_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("cell.pack");
+    sample::small_cell().write(&path).unwrap();
+    let mapped = PackFile::open(&path).unwrap();
+    let mut other = sample::small_cell();
+    other.cell_id = 99;
+    other.write(&path).unwrap();
+    // The old map still sees the old, valid file (rename, not in-place write).
+    assert_eq!(CellPack::decode(&mapped).unwrap().cell_id, 12);
+    assert_eq!(CellPack::read(&path).unwrap().cell_id, 99);
+    let names: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(names, vec![std::ffi::OsString::from("cell.pack")]);
+    assert!(matches!(
+        CellPack::read(&dir.path().join("missing.pack")),
+        Err(PackError::Io { .. })
+    ));
+}
+
+#[test]
+fn index_entry_for_file_and_verify() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::create_dir(dir.path().join("cells")).unwrap();
+    sample::small_cell()
+        .write(&dir.path().join("cells/12.pack"))
+        .unwrap();
+    let e = IndexEntry::for_file(dir.path(), "cells/12.pack", 12, vec![5], [3; 32]).unwrap();
+    e.verify(dir.path()).unwrap();
+    assert!(IndexEntry::for_file(dir.path(), "../x", 1, vec![], [0; 32]).is_err());
+    let mut wrong = e.clone();
+    wrong.checksum[0] ^= 1;
+    assert!(wrong.verify(dir.path()).is_err());
+}
+
+// ---- round-trip property tests ----
+
+fn arb_mesh() -> impl Strategy<Value = Mesh> {
+    (1usize..20, 0usize..30).prop_flat_map(|(nv, nt)| {
+        (
+            prop::collection::vec(prop::array::uniform3(-1e3f32..1e3), nv),
+            prop::collection::vec(prop::array::uniform3(-1f32..1.0), nv),
+            prop::collection::vec(prop::array::uniform4(any::<u8>()), nv),
+            prop::collection::vec(prop::array::uniform3(0..nv as u32), nt),
+        )
+            .prop_map(|(positions, normals, albedo, triangles)| Mesh {
+                positions,
+                normals,
+                albedo,
+                triangles,
+            })
+    })
+}
+
+fn arb_base() -> impl Strategy<Value = BasePack> {
+    (
+        prop::collection::vec(("[a-z0-9é]{0,12}", arb_mesh()), 0..4),
+        any::<[u8; 32]>(),
+        0usize..6,
+    )
+        .prop_flat_map(|(models, fp, ni)| {
+            let nm = models.len() as u32;
+            let inst = if nm == 0 {
+                Just(vec![]).boxed()
+            } else {
+                prop::collection::vec(
+                    (
+                        0..nm,
+                        prop::array::uniform16(-1e3f32..1e3),
+                        prop::array::uniform3(0f32..2.0),
+                    )
+                        .prop_map(|(model, transform, tint)| PackedInstance {
+                            model,
+                            transform,
+                            tint,
+                        }),
+                    ni,
+                )
+                .boxed()
+            };
+            (Just(models), Just(fp), inst).prop_map(|(models, scene_fingerprint, instances)| {
+                BasePack {
+                    scene_fingerprint,
+                    grid: GridParams {
+                        ground_min: [-5.0, -6.0],
+                        ground_max: [50.0, 60.0],
+                        cell_size: 5.0,
+                        min_eye_height: 1.0,
+                        max_eye_height: 2.0,
+                        n_cols: 6,
+                        n_rows: 7,
+                    },
+                    models: models
+                        .into_iter()
+                        .map(|(name, mesh)| PackedModel {
+                            content_hash: *blake3::hash(name.as_bytes()).as_bytes(),
+                            name,
+                            mesh,
+                        })
+                        .collect(),
+                    instances,
+                }
+            })
+        })
+}
+
+fn arb_texture() -> impl Strategy<Value = Texture> {
+    (1u32..6, 1u32..6, any::<bool>(), any::<u64>()).prop_map(|(w, h, left, seed)| {
+        let mut rng = sample::SplitMix(seed);
+        let rgba: Vec<u8> = (0..w * h * 4).map(|_| rng.below(256) as u8).collect();
+        let enc = if left {
+            TextureEncoding::Rgba8Left
+        } else {
+            TextureEncoding::Rgba8
+        };
+        Texture::from_rgba8(w, h, &rgba, enc).unwrap()
+    })
+}
+
+fn arb_proxy() -> impl Strategy<Value = Proxy> {
+    (0u32..3, 1usize..4, 1usize..4).prop_flat_map(|(k, nmembers, nviews)| {
+        let kind = [ProxyKind::SvMesh, ProxyKind::Cluster, ProxyKind::MvMesh][k as usize];
+        let nviews = if kind == ProxyKind::MvMesh {
+            nviews.max(1)
+        } else {
+            1
+        };
+        let member = (
+            any::<u32>(),
+            prop::collection::vec(prop::array::uniform3(any::<u32>()), 0..40),
+            any::<u64>(),
+        )
+            .prop_map(move |(instance, triangles, seed)| {
+                let mut rng = sample::SplitMix(seed);
+                let view_masks = if kind == ProxyKind::MvMesh {
+                    triangles
+                        .iter()
+                        .map(|_| rng.below(1 << nviews) as u8)
+                        .collect()
+                } else {
+                    vec![]
+                };
+                ProxyMember {
+                    instance,
+                    triangles,
+                    view_masks,
+                }
+            });
+        let view = (
+            prop::array::uniform3(-1e3f32..1e3),
+            prop::array::uniform16(-10f32..10.0),
+            arb_texture(),
+        )
+            .prop_map(|(eye, matrix, texture)| ProxyView {
+                eye,
+                matrix,
+                texture,
+            });
+        (
+            prop::collection::vec(member, nmembers),
+            prop::collection::vec(view, nviews),
+        )
+            .prop_map(move |(members, views)| Proxy {
+                kind,
+                members,
+                views,
+            })
+    })
+}
+
+fn arb_cell() -> impl Strategy<Value = CellPack> {
+    (
+        any::<u32>(),
+        any::<[u8; 32]>(),
+        prop::collection::vec(any::<u32>(), 0..20),
+        prop::collection::vec(arb_proxy(), 0..5),
+    )
+        .prop_map(|(cell_id, fingerprint, originals, proxies)| CellPack {
+            cell_id,
+            fingerprint,
+            originals,
+            proxies,
+        })
+}
+
+fn arb_index() -> impl Strategy<Value = Index> {
+    (
+        any::<[u8; 32]>(),
+        prop::collection::btree_map(
+            any::<u32>(),
+            (
+                prop::collection::vec(any::<u32>(), 0..7),
+                any::<u64>(),
+                "[a-z]{1,8}(/[a-z0-9.]{1,8})?",
+            ),
+            0..10,
+        ),
+    )
+        .prop_map(|(build_fingerprint, cells)| Index {
+            build_fingerprint,
+            cells: cells
+                .into_iter()
+                .filter(|(_, (_, _, f))| format::pack::index::check_relative_path(f).is_ok())
+                .map(|(cell_id, (neighbours, bytes, file))| IndexEntry {
+                    cell_id,
+                    file,
+                    bytes,
+                    checksum: *blake3::hash(&bytes.to_le_bytes()).as_bytes(),
+                    neighbours,
+                    fingerprint: [cell_id as u8; 32],
+                })
+                .collect(),
+        })
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(96))]
+
+    #[test]
+    fn base_round_trips(base in arb_base()) {
+        let bytes = base.encode().unwrap();
+        prop_assert_eq!(BasePack::from_bytes(&bytes).unwrap(), base.clone());
+        prop_assert_eq!(base.encode().unwrap(), bytes);
+    }
+
+    #[test]
+    fn cell_round_trips(cell in arb_cell()) {
+        let bytes = cell.encode().unwrap();
+        prop_assert_eq!(CellPack::from_bytes(&bytes).unwrap(), cell.clone());
+        prop_assert_eq!(cell.encode().unwrap(), bytes);
+        for p in &cell.proxies {
+            for v in &p.views {
+                let rgba = v.texture.to_rgba8().unwrap();
+                let again = Texture::from_rgba8(v.texture.width, v.texture.height, &rgba, v.texture.encoding).unwrap();
+                prop_assert_eq!(&again, &v.texture);
+            }
+        }
+    }
+
+    #[test]
+    fn index_round_trips(index in arb_index()) {
+        let bytes = index.encode().unwrap();
+        prop_assert_eq!(Index::from_bytes(&bytes).unwrap(), index);
+    }
+
+    #[test]
+    fn random_bytes_after_a_valid_header_are_rejected(tail in prop::collection::vec(any::<u8>(), 0..600)) {
+        let mut bytes = sample::small_index().encode().unwrap()[..HEADER_SIZE].to_vec();
+        bytes.extend_from_slice(&tail);
+        prop_assert!(Index::from_bytes(&bytes).is_err());
+    }
+}
+
+#[test]
+fn raw_sections_are_zero_copy_and_aligned() {
+    // Incompressible positions stay raw and are viewed in place, mapped or read.
+    let mut base = sample::small_base();
+    let mut rng = sample::SplitMix(5);
+    for p in base.models[1].mesh.positions.iter_mut() {
+        *p = [rng.unit() * 100.0, rng.unit() * 7.0, rng.unit() - 0.5];
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("base.pack");
+    base.write(&path).unwrap();
+    for pack in [
+        PackFile::open(&path).unwrap(),
+        PackFile::read(&path).unwrap(),
+    ] {
+        let info = *pack.section_info(SectionKind::POSITIONS).unwrap();
+        assert_eq!(info.codec, Codec::Raw);
+        assert_eq!(info.offset % 64, 0);
+        let view = pack
+            .raw_slice::<[f32; 3]>(SectionKind::POSITIONS)
+            .unwrap()
+            .expect("raw");
+        assert_eq!(
+            view.as_ptr() as usize % 64,
+            0,
+            "section start is 64-byte aligned in memory"
+        );
+        assert_eq!(&view[4..], base.models[1].mesh.positions.as_slice());
+        let inside = pack.bytes().as_ptr_range();
+        assert!(
+            inside.contains(&(view.as_ptr() as *const u8)),
+            "a view into the pack, not a copy"
+        );
+        // Compressed sections are not offered zero-copy.
+        assert!(pack
+            .raw_slice::<[u32; 3]>(SectionKind::TRIANGLES)
+            .unwrap()
+            .is_none());
+        assert_eq!(BasePack::decode(&pack).unwrap(), base);
+    }
+}
