@@ -21,6 +21,14 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Print a pack's header and sections and check every checksum.
+    Inspect {
+        /// A `base.pack`, `cells/<id>.pack` or `index.pack`.
+        pack: PathBuf,
+        /// Print JSON instead of text.
+        #[arg(long)]
+        json: bool,
+    },
 }
 
 /// An error with the exit code it maps to.
@@ -61,6 +69,16 @@ fn run(cli: Cli) -> Result<(), Failure> {
             } else {
                 print!("{}", pipeline::scene_cmd::render_text(&summary));
             }
+            Ok(())
+        }
+        Command::Inspect { pack, json } => {
+            // A pack that fails validation is a failure of the data (exit 1), not of
+            // the command line; the message names the file and the bad section.
+            let text = pipeline::inspect::inspect(&pack, json).map_err(|error| Failure {
+                code: 1,
+                error,
+            })?;
+            print!("{text}");
             Ok(())
         }
     }
