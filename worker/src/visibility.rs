@@ -18,22 +18,40 @@
 //!
 //! # The depth-buffer test
 //!
-//! A vertex lies on the corner of several triangles, so the pixel it projects into can
-//! show a neighbouring surface even when the vertex is visible (a crease, the rim of an
-//! ear in front of the body) and the depth at the pixel centre is not the vertex's depth.
-//! We therefore look at the `(2r+1)²` pixels around the vertex (`r =`
-//! [`DepthTolerance::neighbourhood_px`], default 1 → 3×3). A pixel *supports* the vertex
-//! when it is covered by some object and either
-//! - it shows one of the vertex's own triangles (the capture's triangle-ID buffer,
-//!   for pixels of `object_id`) — the vertex's surface is what the eye sees there; or
-//! - the vertex is not behind the surface seen there: `z_v ≤ z_q · (1 + relative)`.
+//! 1. A vertex whose incident triangles all face away from the eye is hidden (the
+//!    object itself covers it; this is also the paper's "back-facing vertex").
+//! 2. Otherwise it is projected; behind the eye, outside the near/far range or
+//!    outside the image it is [`DepthVisibility::Outside`].
+//! 3. A vertex lies on the corner of several triangles, so the pixel it projects into
+//!    can show a neighbouring surface even when the vertex is visible (a crease, the
+//!    rim of an ear in front of the body). A pixel *supports* the vertex when it is
+//!    covered and either
+//!    - it lies in the `(2r+1)²` neighbourhood (`r =`
+//!      [`DepthTolerance::neighbourhood_px`], default 1 → 3×3) and shows one of the
+//!      vertex's own triangles (triangle-ID buffer, pixels of `object_id`), or
+//!    - it is the vertex's own pixel and the vertex is not behind the surface seen
+//!      there: `z_v ≤ z_q + k · footprint(z_q)` (`k =`
+//!      [`DepthTolerance::footprint_px`], default 1 pixel footprint).
 //!
-//! The vertex is visible when some pixel supports it; the supporting pixel nearest to
-//! the projected point (the vertex's own pixel when it qualifies, object pixels before
-//! foreign ones) is the pixel "that gets projected". Background pixels never support a
-//! vertex: a vertex on the far side of the object just behind its outline projects
-//! next to background, and must still count as hidden. A vertex behind the eye,
-//! outside the near/far range or outside the image is [`DepthVisibility::Outside`].
+//!    The supporting pixel nearest to the projection (object pixels before foreign
+//!    ones) is the pixel "that gets projected".
+//! 4. With no supporting pixel the vertex is visible only when its own pixel is empty:
+//!    nothing is in front at the sample, i.e. the paper's comparison with the
+//!    background Z passes (a vertex on the outline whose pixel centre the object
+//!    misses); its pixel is then the nearest object pixel of the neighbourhood.
+//!
+//! Only the own pixel's depth is compared: the depths of neighbouring pixels let
+//! hidden vertices just behind an occluding edge pass (the surface beyond the edge is
+//! farther), which the triangle-ID rule does not.
+//!
+//! # Agreement with the ray oracle
+//!
+//! The two oracles differ only where visibility changes within a pixel. On the bunny
+//! (tests/analysis.rs, 1024² tight captures from a cell-centre eye at 100, 250 and 600
+//! units) they agree on ≈ 98 % of all vertices and on ≈ 99.5 % of the vertices off the
+//! contour generator; the rest are vertices on the contour generator, where the eye
+//! ray grazes the scanned surface and its answer turns on bumps smaller than a pixel,
+//! and vertices within a pixel of an occluding edge. See [`Agreement`].
 //!
 //! # The ray oracle
 //!
@@ -43,7 +61,7 @@
 //! vertex, so they can never occlude it; skipping them removes the numerical noise of
 //! hitting them at the vertex itself).
 
-use crate::backface::world_positions;
+use crate::backface::{planes_of, world_positions};
 use crate::raster::{Capture, CullMode, DrawItem, View, BACKGROUND_ID};
 use format::Mesh;
 use glam::{Mat3, Mat4, Vec2, Vec3, Vec3A, Vec4};
@@ -95,12 +113,24 @@ pub fn pixel_index(view: &View, point: PixelPoint) -> Option<usize> {
     Some(y as usize * view.width as usize + x as usize)
 }
 
+/// Height of one pixel at eye depth `depth` (world units), from the projection's
+/// vertical scale: `2 · depth / (proj[1][1] · height)` — exact on the view axis of a
+/// symmetric or off-axis perspective.
+pub fn pixel_footprint(view: &View, depth: f32) -> f32 {
+    let scale = view.proj.y_axis.y;
+    if scale <= 0.0 || view.height == 0 {
+        return 0.0;
+    }
+    2.0 * depth / (scale * view.height as f32)
+}
+
 /// Tolerance of the depth-buffer visibility test (module docs).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DepthTolerance {
     /// A vertex at eye depth `z_v` is not behind a pixel of depth `z_q` when
-    /// `z_v ≤ z_q · (1 + relative)`.
-    pub relative: f32,
+    /// `z_v ≤ z_q + footprint_px · footprint(z_q)`, where `footprint(z)` is the width
+    /// of one pixel at eye depth `z` ([`pixel_footprint`]).
+    pub footprint_px: f32,
     /// Half-size of the pixel neighbourhood searched around the vertex (1 → 3×3).
     pub neighbourhood_px: u32,
 }
@@ -109,7 +139,7 @@ impl Default for DepthTolerance {
     /// 0.1 % of the eye depth and a 3×3 neighbourhood.
     fn default() -> Self {
         DepthTolerance {
-            relative: 1e-3,
+            footprint_px: 1.0,
             neighbourhood_px: 1,
         }
     }
@@ -152,13 +182,32 @@ pub fn depth_visibility(
     {
         return vec![DepthVisibility::Outside; world.len()];
     }
+
+    // Step 1: vertices with some front-facing incident triangle (the others face away
+    // from the eye on every side and are hidden by the object itself).
+    let eye = view.eye.as_dvec3();
+    let mut front_facing = vec![false; world.len()];
+    for (tri, plane) in mesh
+        .triangles
+        .iter()
+        .zip(planes_of(&world, &mesh.triangles))
+    {
+        if plane.is_some_and(|p| p.faces(eye)) {
+            for &v in tri {
+                front_facing[v as usize] = true;
+            }
+        }
+    }
+
+    // Step 2: per vertex, the supporting pixels around its projection.
     let radius = tol.neighbourhood_px as i64;
+    let footprint_per_depth = pixel_footprint(view, 1.0);
     let incident = |tid: u32, v: u32| {
         mesh.triangles
             .get(tid as usize)
             .is_some_and(|tri| tri.contains(&v))
     };
-
+    let covered = |q: usize| capture.object_id[q] != BACKGROUND_ID && capture.depth[q].is_finite();
     world
         .par_iter()
         .enumerate()
@@ -169,41 +218,56 @@ pub fn depth_visibility(
             if point.depth < view.near || point.depth > view.far {
                 return DepthVisibility::Outside;
             }
-            if pixel_index(view, point).is_none() {
+            let Some(own_pixel) = pixel_index(view, point) else {
                 return DepthVisibility::Outside;
+            };
+            if !front_facing[v] {
+                return DepthVisibility::Hidden;
             }
             let (cx, cy) = (point.x.floor() as i64, point.y.floor() as i64);
-            // (rank: own object first, then squared distance; pixel)
+            let tolerance = tol.footprint_px * footprint_per_depth;
+            // Best supporting pixel, ranked (foreign object, squared distance), and the
+            // nearest pixel of the object (for a vertex over an empty pixel).
             let mut best: Option<((bool, f32), usize)> = None;
+            let mut nearest_own: Option<(f32, usize)> = None;
             for y in (cy - radius).max(0)..=(cy + radius).min(height - 1) {
                 for x in (cx - radius).max(0)..=(cx + radius).min(width - 1) {
                     let q = (y * width + x) as usize;
-                    let id = capture.object_id[q];
+                    if !covered(q) {
+                        continue;
+                    }
                     let z_q = capture.depth[q];
-                    if id == BACKGROUND_ID || !z_q.is_finite() {
-                        continue;
-                    }
-                    let own = id == object_id;
-                    let own_pixel = x == cx && y == cy;
-                    let supports = (own && incident(capture.triangle_id[q], v as u32))
-                        || (own_pixel && point.depth <= z_q * (1.0 + tol.relative));
-                    if !supports {
-                        continue;
-                    }
+                    let own = capture.object_id[q] == object_id;
                     let dx = x as f32 + 0.5 - point.x;
                     let dy = y as f32 + 0.5 - point.y;
-                    let rank = (!own, dx * dx + dy * dy);
-                    if best.is_none_or(|(r, _)| rank < r) {
+                    let distance = dx * dx + dy * dy;
+                    if own && nearest_own.is_none_or(|(d, _)| distance < d) {
+                        nearest_own = Some((distance, q));
+                    }
+                    let supports = (own && incident(capture.triangle_id[q], v as u32))
+                        || (q == own_pixel && point.depth <= z_q * (1.0 + tolerance));
+                    let rank = (!own, distance);
+                    if supports && best.is_none_or(|(r, _)| rank < r) {
                         best = Some((rank, q));
                     }
                 }
             }
-            match best {
-                Some(((foreign, _), pixel)) => DepthVisibility::Visible {
+            match (best, covered(own_pixel), nearest_own) {
+                (Some(((foreign, _), pixel)), _, _) => DepthVisibility::Visible {
                     pixel,
                     own_object: !foreign,
                 },
-                None => DepthVisibility::Hidden,
+                // Nothing in front at the vertex's own pixel centre: the paper's
+                // comparison against the background Z passes.
+                (None, false, Some((_, pixel))) => DepthVisibility::Visible {
+                    pixel,
+                    own_object: true,
+                },
+                (None, false, None) => DepthVisibility::Visible {
+                    pixel: own_pixel,
+                    own_object: false,
+                },
+                (None, true, _) => DepthVisibility::Hidden,
             }
         })
         .collect()
@@ -289,10 +353,51 @@ pub fn visible_by_rays(mesh: &Mesh, transform: Mat4, eye: Vec3) -> Vec<bool> {
         .collect()
 }
 
-/// Fraction of the vertices inside the capture (not [`DepthVisibility::Outside`]) on
-/// which [`visible_by_depth`] (default tolerance) and [`visible_by_rays`] from the
-/// capture's eye agree; 1.0 when no vertex is inside.
-pub fn agreement(mesh: &Mesh, transform: Mat4, capture: &Capture, object_id: u32) -> f64 {
+/// How often the two oracles agree, over the vertices inside a capture (not
+/// [`DepthVisibility::Outside`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Agreement {
+    /// Vertices inside the capture.
+    pub inside: usize,
+    /// ... on which both oracles agree.
+    pub agree: usize,
+    /// Vertices inside the capture on the contour generator seen from the eye: with
+    /// both front- and back-facing incident triangles.
+    pub contour: usize,
+    /// ... on which both oracles agree.
+    pub contour_agree: usize,
+}
+
+impl Agreement {
+    /// Agreement over every vertex inside the capture (1.0 when there is none).
+    pub fn overall(&self) -> f64 {
+        ratio(self.agree, self.inside)
+    }
+
+    /// Agreement over the vertices off the contour generator. On the contour the eye
+    /// ray grazes the surface and the ray's answer turns on sub-pixel bumps no depth
+    /// buffer resolves (see the module docs).
+    pub fn away_from_contours(&self) -> f64 {
+        ratio(self.agree - self.contour_agree, self.inside - self.contour)
+    }
+}
+
+fn ratio(part: usize, whole: usize) -> f64 {
+    if whole == 0 {
+        1.0
+    } else {
+        part as f64 / whole as f64
+    }
+}
+
+/// Compares [`visible_by_depth`] (default tolerance) with [`visible_by_rays`] from the
+/// capture's eye on every vertex inside the capture.
+pub fn agreement_report(
+    mesh: &Mesh,
+    transform: Mat4,
+    capture: &Capture,
+    object_id: u32,
+) -> Agreement {
     let by_depth = depth_visibility(
         mesh,
         transform,
@@ -301,22 +406,46 @@ pub fn agreement(mesh: &Mesh, transform: Mat4, capture: &Capture, object_id: u32
         DepthTolerance::default(),
     );
     let by_rays = visible_by_rays(mesh, transform, capture.view.eye);
-    let mut inside = 0usize;
-    let mut agree = 0usize;
-    for (d, &r) in by_depth.iter().zip(&by_rays) {
+    let world = world_positions(mesh, transform);
+    let eye = capture.view.eye.as_dvec3();
+    let mut front = vec![false; world.len()];
+    let mut back = vec![false; world.len()];
+    for (tri, plane) in mesh
+        .triangles
+        .iter()
+        .zip(planes_of(&world, &mesh.triangles))
+    {
+        let Some(plane) = plane else { continue };
+        let facing = if plane.faces(eye) {
+            &mut front
+        } else {
+            &mut back
+        };
+        for &v in tri {
+            facing[v as usize] = true;
+        }
+    }
+    let mut report = Agreement::default();
+    for (v, (d, &r)) in by_depth.iter().zip(&by_rays).enumerate() {
         if *d == DepthVisibility::Outside {
             continue;
         }
-        inside += 1;
-        if d.is_visible() == r {
-            agree += 1;
+        let agree = d.is_visible() == r;
+        report.inside += 1;
+        report.agree += agree as usize;
+        if front[v] && back[v] {
+            report.contour += 1;
+            report.contour_agree += agree as usize;
         }
     }
-    if inside == 0 {
-        1.0
-    } else {
-        agree as f64 / inside as f64
-    }
+    report
+}
+
+/// Fraction of the vertices inside the capture on which [`visible_by_depth`] (default
+/// tolerance) and [`visible_by_rays`] agree ([`Agreement::overall`]); the lead also runs
+/// it on the rasterizer's captures.
+pub fn agreement(mesh: &Mesh, transform: Mat4, capture: &Capture, object_id: u32) -> f64 {
+    agreement_report(mesh, transform, capture, object_id).overall()
 }
 
 /// Colour of pixels no ray hits in [`ray_cast_capture`] (transparent black; the
@@ -387,7 +516,7 @@ pub fn ray_cast_capture(items: &[DrawItem], view: &View, cull: CullMode) -> Capt
         .collect();
     let light = Vec3::new(0.4, 1.0, 0.3).normalize();
 
-    let rows: Vec<Vec<(f32, u32, u32, [u8; 4])>> = (0..height)
+    let rows: Vec<Vec<Sample>> = (0..height)
         .into_par_iter()
         .map(|y| {
             (0..width)
@@ -462,6 +591,9 @@ pub fn ray_cast_capture(items: &[DrawItem], view: &View, cull: CullMode) -> Capt
     }
     capture
 }
+
+/// What one pixel's ray found: eye depth, object id, triangle id, colour.
+type Sample = (f32, u32, u32, [u8; 4]);
 
 /// DESIGN.md shading at a hit point: interpolated albedo × tint ×
 /// (ambient + (1 − ambient)·max(0, n·L)), two-sided, sRGB8.

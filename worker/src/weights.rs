@@ -9,8 +9,9 @@
 //!    ([`BACK_FACING_WEIGHT`]). A vertex no triangle references is back-facing by
 //!    that definition (it never takes part in a collapse anyway).
 //! 2. Every other (front-facing) vertex is projected into the capture and tested
-//!    against the depth buffer ([`crate::visibility`], module docs: 3×3 neighbourhood,
-//!    own triangle IDs, relative tolerance). A visible vertex gets the weight of the
+//!    against the depth buffer ([`crate::visibility`], module docs: the vertex's own
+//!    triangle IDs in its 3×3 neighbourhood, or its own pixel's depth with a
+//!    one-pixel-footprint tolerance, or an empty own pixel). A visible vertex gets the weight of the
 //!    class of the pixel it projects to ([`crate::classify::PixelClass::weight`]:
 //!    0.5 / 0.4 / 0.25 / 0.125) — the supporting pixel nearest to its projection.
 //! 3. An invisible front-facing vertex gets 0.05 ([`INVISIBLE_WEIGHT`]), "smaller than
