@@ -31,7 +31,8 @@
 //!      vertex's own triangles (triangle-ID buffer, pixels of `object_id`), or
 //!    - it is the vertex's own pixel and the vertex is not behind the surface seen
 //!      there: `z_v ≤ z_q + k · footprint(z_q)` (`k =`
-//!      [`DepthTolerance::footprint_px`], default 1 pixel footprint).
+//!      [`DepthTolerance::footprint_px`], default 3 pixel footprints: a sloped
+//!      surface's depth changes by `tan α` footprints per pixel).
 //!
 //!    The supporting pixel nearest to the projection (object pixels before foreign
 //!    ones) is the pixel "that gets projected".
@@ -136,10 +137,15 @@ pub struct DepthTolerance {
 }
 
 impl Default for DepthTolerance {
-    /// 0.1 % of the eye depth and a 3×3 neighbourhood.
+    /// Three pixel footprints and a 3×3 neighbourhood. Measured against the ray oracle
+    /// on the bunny at DESIGN.md's capture resolution (721², 288², 120² from 100, 250,
+    /// 600 units): 1 footprint agrees on 98.0 / 95.5 / 94.3 % of the vertices, 3 on
+    /// 98.1 / 96.5 / 96.3 %, 5 on 98.1 / 96.5 / 96.1 %. Larger tolerances trade
+    /// visible vertices judged hidden (weight 0.05: collapsed early, detail lost) for
+    /// hidden ones judged visible (kept longer: only triangles spent), so we take 3.
     fn default() -> Self {
         DepthTolerance {
-            footprint_px: 1.0,
+            footprint_px: 3.0,
             neighbourhood_px: 1,
         }
     }

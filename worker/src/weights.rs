@@ -11,9 +11,10 @@
 //! 2. Every other (front-facing) vertex is projected into the capture and tested
 //!    against the depth buffer ([`crate::visibility`], module docs: the vertex's own
 //!    triangle IDs in its 3×3 neighbourhood, or its own pixel's depth with a
-//!    one-pixel-footprint tolerance, or an empty own pixel). A visible vertex gets the weight of the
-//!    class of the pixel it projects to ([`crate::classify::PixelClass::weight`]:
-//!    0.5 / 0.4 / 0.25 / 0.125) — the supporting pixel nearest to its projection.
+//!    three-pixel-footprint tolerance, or an empty own pixel). A visible vertex gets
+//!    the weight of the class of the pixel it projects to
+//!    ([`crate::classify::PixelClass::weight`]: 0.5 / 0.4 / 0.25 / 0.125) — the
+//!    supporting pixel nearest to its projection.
 //! 3. An invisible front-facing vertex gets 0.05 ([`INVISIBLE_WEIGHT`]), "smaller than
 //!    vertices corresponding to the pixel category interior". A front-facing vertex
 //!    projecting outside the capture (outside the window, behind the eye, beyond
