@@ -1,8 +1,13 @@
 //! hexbake's bake kernels, one file per algorithm (STYLE.md habit 1), following
 //! paper 000 §3.1 (Chen et al. 2003) and its precursor 003 §4.1.
 
+pub mod backface;
+pub mod classify;
 pub mod grid;
 pub mod picture;
 pub mod raster;
+pub mod selfocc;
 pub mod shade;
 pub mod view;
+pub mod visibility;
+pub mod weights;
