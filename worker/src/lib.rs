@@ -8,6 +8,7 @@ pub mod picture;
 pub mod raster;
 pub mod selfocc;
 pub mod shade;
+pub mod simplify;
 pub mod view;
 pub mod visibility;
 pub mod weights;

@@ -1,0 +1,975 @@
+//! Weighted half-edge collapse: paper 000 §3.1.3.3 (edge collapsing) and §3.1.4
+//! (MVMesh: l′ over the cell, per-vertex view sets, the collapse constraint); its
+//! precursor 003 §4.1.4 ("weight-based edge collapsing").
+//!
+//! The cost of collapsing an edge (v_i, v_j) is
+//!
+//! ```text
+//! cost(v_i, v_j) = (1.5 − n_i·n_j)² · l · (w_i + w_j)
+//! ```
+//!
+//! with n the vertex normals, w the vertex weights (from the depth-image classes of
+//! the capture, given as input) and l the edge's projected length in pixels. l is
+//! the caller's choice ([`ProjectedLength`]): seen from the cell centre for an
+//! SVMesh, the maximum over the cell's corners for an MVMesh (the paper's l′, "the
+//! projected length of the edge with respect to the cell").
+//!
+//! Edges sit in a min-heap by cost; the top edge is collapsed, the vertex of smaller
+//! weight into the other, until the top edge's cost reaches T_l. The collapse is a
+//! *half-edge* collapse: the surviving vertex keeps its original position, so the
+//! output only references original vertex ids and a pack stores plain indices, as
+//! the paper does.
+//!
+//! Choices the paper leaves open, written down here:
+//!
+//! - **Attributes of the survivor.** The survivor keeps its own normal, weight and
+//!   view set. §3.1.4 says "the views associated with a vertex cannot propagate in
+//!   the course of edge collapsing"; we treat weight and normal the same way, so an
+//!   edge's cost depends only on its two (original) vertices and never changes.
+//! - **Stopping rule.** An edge collapses while `cost < T_l` (strictly), so T_l = 0
+//!   leaves every mesh unchanged, even one with zero weights.
+//! - **Equal weights.** §3.1.4 allows u → v when `w_u ≤ w_v`; with equal weights we
+//!   try the lower vertex id into the higher one first, then the reverse.
+//! - **MV constraint (§3.1.4).** With view sets, u may collapse into v only if
+//!   `w_u ≤ w_v` and the two share a view (`set_u & set_v ≠ 0`) or both sets are
+//!   empty. A triangle's view set is the AND of its vertices' sets.
+//! - **Rejected collapses** (the paper only says edge collapsing [14]; these are the
+//!   usual safeguards):
+//!   - the link condition (the common neighbours of u and v are exactly the
+//!     vertices opposite the edge) so the mesh stays manifold;
+//!   - the boundary condition of [14] (Hoppe's progressive meshes, which §3.1.3.3
+//!     cites): two boundary vertices merge only along a boundary edge. A boundary
+//!     vertex may go into an interior one when its weight is lower (the capture
+//!     weights, 0.5 on exterior silhouettes, keep real silhouettes); on equal
+//!     weights the interior vertex goes into the boundary one first;
+//!   - a collapse never deletes a whole connected piece (v keeps a triangle);
+//!   - no directed edge may appear twice around the survivor (edge-manifold and
+//!     consistently oriented even where the input is not manifold elsewhere);
+//!   - no triangle may become degenerate (zero area) or duplicate another;
+//!   - no triangle's normal may turn by 90° or more ([`MIN_NORMAL_TURN_COS`]);
+//!   - a vertex whose neighbourhood is not one disc or half-disc (a non-manifold
+//!     vertex, e.g. a bow-tie where a triangle subset touches itself) is not
+//!     removed while it stays so.
+//! - **Retrying.** A rejected edge leaves the heap and is pushed again when a
+//!   collapse changes the neighbourhood of one of its vertices.
+//! - **Heap.** Since the survivor keeps its attributes, an edge's cost never
+//!   changes: the min-heap is invalidated lazily (an entry whose vertex was removed
+//!   is skipped when popped), edges new to the survivor are pushed after each
+//!   collapse, and edges that can never collapse (weight order, view sets) or cost
+//!   T_l or more are never pushed. Each edge is in the heap at most once.
+//! - **Determinism.** Heap ties are broken by (cost, lower id, higher id); all
+//!   adjacency is index-based; output triangles are the surviving input triangles in
+//!   input order, with their corners renamed.
+//!
+//! [`validate`] checks every output (every test calls it).
+
+use glam::Vec3;
+use std::cmp::Ordering;
+use std::collections::BinaryHeap;
+use std::f32::consts::PI;
+
+/// A triangle's normal may turn by less than 90° in a collapse (`cos 90° = 0`):
+/// a collapse that turns any triangle by more is a fold-over and is rejected.
+pub const MIN_NORMAL_TURN_COS: f32 = 0.0;
+
+/// Most views a view set can name: the cell centre and its 6 neighbours (§3.1.4).
+pub const MAX_VIEWS: u32 = 7;
+
+/// Pixels per radian of a capture whose `image_res` pixels span one 60° side face
+/// (DESIGN.md "Capture resolution").
+pub fn pixels_per_radian(image_res: u32) -> f32 {
+    image_res as f32 / (PI / 3.0)
+}
+
+/// How the edge's projected length l (pixels) is measured.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ProjectedLength {
+    /// SVMesh: the angle the edge subtends seen from `eye` (the cell centre) ×
+    /// pixels per radian.
+    FromPoint { eye: Vec3, pixels_per_radian: f32 },
+    /// MVMesh: the maximum of that over `eyes` (the cell's corners), the paper's l′.
+    MaxOverPoints {
+        eyes: Vec<Vec3>,
+        pixels_per_radian: f32,
+    },
+}
+
+impl ProjectedLength {
+    fn eyes(&self) -> &[Vec3] {
+        match self {
+            ProjectedLength::FromPoint { eye, .. } => std::slice::from_ref(eye),
+            ProjectedLength::MaxOverPoints { eyes, .. } => eyes,
+        }
+    }
+
+    fn pixels_per_radian(&self) -> f32 {
+        match self {
+            ProjectedLength::FromPoint {
+                pixels_per_radian, ..
+            }
+            | ProjectedLength::MaxOverPoints {
+                pixels_per_radian, ..
+            } => *pixels_per_radian,
+        }
+    }
+
+    /// Projected length in pixels of the world-space edge `a`–`b`: the largest angle
+    /// it subtends from any of the eyes × pixels per radian. An endpoint on an eye
+    /// gives `f32::INFINITY` (never collapsed); no eyes gives 0.
+    pub fn pixels(&self, a: Vec3, b: Vec3) -> f32 {
+        let mut chord: f32 = 0.0;
+        for &eye in self.eyes() {
+            match (unit_direction(a - eye), unit_direction(b - eye)) {
+                (Some(da), Some(db)) => chord = chord.max((da - db).length()),
+                _ => return f32::INFINITY,
+            }
+        }
+        chord_to_angle(chord) * self.pixels_per_radian()
+    }
+}
+
+fn unit_direction(d: Vec3) -> Option<Vec3> {
+    let len = d.length();
+    (len > 1e-12 && len.is_finite()).then(|| d / len)
+}
+
+/// The angle between two unit vectors from the length of their difference.
+fn chord_to_angle(chord: f32) -> f32 {
+    2.0 * (0.5 * chord).min(1.0).asin()
+}
+
+/// What [`simplify`] works on: a triangle subset of one model, in world space.
+#[derive(Clone, Copy, Debug)]
+pub struct SimplifyInput<'a> {
+    /// World-space positions of all the model's vertices.
+    pub positions: &'a [Vec3],
+    /// World-space unit vertex normals, one per position.
+    pub normals: &'a [Vec3],
+    /// The triangles to simplify (e.g. the front-facing subset), counter-clockwise,
+    /// indexing `positions`.
+    pub triangles: &'a [[u32; 3]],
+    /// Vertex weights from the capture (§3.1.3.2), one per position.
+    pub weights: &'a [f32],
+    /// MVMesh only: per-vertex view set, bit k = visible from view k (k < 7).
+    pub view_sets: Option<&'a [u8]>,
+}
+
+/// Parameters of one simplification.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SimplifyParams {
+    /// T_l: edges collapse while their cost is below this (pixels).
+    pub edge_length_tolerance: f32,
+    /// How l is measured (SV: from the cell centre; MV: max over the corners).
+    pub length: ProjectedLength,
+}
+
+/// One half-edge collapse, in the order performed.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Collapse {
+    /// The removed vertex (u).
+    pub from: u32,
+    /// The surviving vertex (v); keeps its position, normal, weight and view set.
+    pub into: u32,
+    pub cost: f32,
+}
+
+/// A simplified triangle subset.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Simplified {
+    /// Surviving triangles in input order, referencing original vertex ids.
+    pub triangles: Vec<[u32; 3]>,
+    /// MVMesh: per-triangle view set (AND of its vertices' sets); empty for SVMesh.
+    pub view_masks: Vec<u8>,
+    /// Number of collapses performed (`log.len()`).
+    pub collapses: u32,
+    /// Every collapse in the order performed.
+    pub log: Vec<Collapse>,
+    /// Input triangles dropped before simplifying because they repeat a vertex or
+    /// repeat the vertex set of an earlier input triangle.
+    pub dropped_input_triangles: u32,
+}
+
+/// Bad input to [`simplify`].
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SimplifyError {
+    #[error("{what} has {found} entries, expected {expected} (one per position)")]
+    LengthMismatch {
+        what: &'static str,
+        expected: usize,
+        found: usize,
+    },
+    #[error("triangle {triangle} references vertex {vertex}, but there are {vertex_count}")]
+    IndexOutOfRange {
+        triangle: usize,
+        vertex: u32,
+        vertex_count: usize,
+    },
+    #[error("{what} of vertex {vertex} is not finite")]
+    NonFinite { what: &'static str, vertex: u32 },
+    #[error("view set of vertex {vertex} is {set:#04x}, but only {MAX_VIEWS} views exist")]
+    ViewSetOutOfRange { vertex: u32, set: u8 },
+    #[error("edge-length tolerance {0} is negative or not a number")]
+    BadTolerance(f32),
+    #[error("pixels per radian {0} is not positive and finite")]
+    BadPixelsPerRadian(f32),
+    #[error("too many vertices ({0}) for u32 ids")]
+    TooManyVertices(usize),
+}
+
+/// A broken simplified mesh, found by [`validate`].
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ValidationError {
+    #[error(
+        "output triangle {triangle} references vertex {vertex}, but the model has {vertex_count}"
+    )]
+    IndexOutOfRange {
+        triangle: usize,
+        vertex: u32,
+        vertex_count: usize,
+    },
+    #[error("output triangle {triangle} references vertex {vertex}, which no input triangle uses")]
+    VertexNotInInput { triangle: usize, vertex: u32 },
+    #[error("output triangle {triangle} {corners:?} is degenerate")]
+    Degenerate { triangle: usize, corners: [u32; 3] },
+    #[error("output triangles {first} and {second} have the same vertices {corners:?}")]
+    Duplicate {
+        first: usize,
+        second: usize,
+        corners: [u32; 3],
+    },
+    #[error(
+        "edge {a}-{b} is used {uses} times ({forward} as {a}->{b}); the input was manifold there"
+    )]
+    NonManifoldEdge {
+        a: u32,
+        b: u32,
+        uses: u32,
+        forward: u32,
+    },
+    #[error("{masks} view masks for {triangles} triangles")]
+    MaskCount { masks: usize, triangles: usize },
+    #[error(
+        "triangle {triangle} has view mask {found:#04x}, its vertices' sets AND to {expected:#04x}"
+    )]
+    WrongMask {
+        triangle: usize,
+        expected: u8,
+        found: u8,
+    },
+    #[error("collapse log has {log} entries but `collapses` says {count}")]
+    CollapseCount { log: usize, count: u32 },
+}
+
+/// Simplifies `input` with the cost and stopping rule of 000 §3.1.3.3 (and the MV
+/// constraint of §3.1.4 when `input.view_sets` is given).
+pub fn simplify(
+    input: &SimplifyInput,
+    params: &SimplifyParams,
+) -> Result<Simplified, SimplifyError> {
+    let ppr = params.length.pixels_per_radian();
+    if !(ppr.is_finite() && ppr > 0.0) {
+        return Err(SimplifyError::BadPixelsPerRadian(ppr));
+    }
+    check_input(input, params.edge_length_tolerance)?;
+    // Unit directions from every eye to every vertex, computed once: an edge's l
+    // is then one chord per eye (the same arithmetic as `ProjectedLength::pixels`).
+    let eyes = params.length.eyes();
+    let mut directions = vec![None; input.positions.len() * eyes.len()];
+    for (v, &p) in input.positions.iter().enumerate() {
+        for (k, &eye) in eyes.iter().enumerate() {
+            directions[v * eyes.len() + k] = unit_direction(p - eye);
+        }
+    }
+    let length = |a: u32, b: u32| -> f32 {
+        let (a, b) = (a as usize * eyes.len(), b as usize * eyes.len());
+        let mut chord: f32 = 0.0;
+        for k in 0..eyes.len() {
+            match (directions[a + k], directions[b + k]) {
+                (Some(da), Some(db)) => chord = chord.max((da - db).length()),
+                _ => return f32::INFINITY,
+            }
+        }
+        chord_to_angle(chord) * ppr
+    };
+    Ok(Collapser::new(input).run(params.edge_length_tolerance, length))
+}
+
+/// [`simplify`] with a caller-supplied projected length: `length_px(a, b)` gives l
+/// in pixels for the edge between vertex ids `a` and `b` (symmetric).
+pub fn simplify_with(
+    input: &SimplifyInput,
+    edge_length_tolerance: f32,
+    length_px: impl Fn(u32, u32) -> f32,
+) -> Result<Simplified, SimplifyError> {
+    check_input(input, edge_length_tolerance)?;
+    Ok(Collapser::new(input).run(edge_length_tolerance, length_px))
+}
+
+fn check_input(input: &SimplifyInput, tolerance: f32) -> Result<(), SimplifyError> {
+    let n = input.positions.len();
+    if n > u32::MAX as usize {
+        return Err(SimplifyError::TooManyVertices(n));
+    }
+    if tolerance.is_nan() || tolerance < 0.0 {
+        return Err(SimplifyError::BadTolerance(tolerance));
+    }
+    let lengths = [
+        ("normals", input.normals.len()),
+        ("weights", input.weights.len()),
+        ("view_sets", input.view_sets.map_or(n, <[u8]>::len)),
+    ];
+    for (what, found) in lengths {
+        if found != n {
+            return Err(SimplifyError::LengthMismatch {
+                what,
+                expected: n,
+                found,
+            });
+        }
+    }
+    for (t, tri) in input.triangles.iter().enumerate() {
+        if let Some(&vertex) = tri.iter().find(|&&v| v as usize >= n) {
+            return Err(SimplifyError::IndexOutOfRange {
+                triangle: t,
+                vertex,
+                vertex_count: n,
+            });
+        }
+    }
+    // Only vertices the triangles use matter; check those.
+    for tri in input.triangles {
+        for &v in tri {
+            let i = v as usize;
+            let checks = [
+                ("position", input.positions[i].is_finite()),
+                ("normal", input.normals[i].is_finite()),
+                ("weight", input.weights[i].is_finite()),
+            ];
+            if let Some((what, _)) = checks.iter().find(|(_, ok)| !ok) {
+                return Err(SimplifyError::NonFinite { what, vertex: v });
+            }
+            if let Some(sets) = input.view_sets {
+                if u32::from(sets[i]) >= 1 << MAX_VIEWS {
+                    return Err(SimplifyError::ViewSetOutOfRange {
+                        vertex: v,
+                        set: sets[i],
+                    });
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// A heap entry: the undirected edge `a < b` and its cost. Ordered so that
+/// `BinaryHeap` pops the smallest (cost, a, b).
+#[derive(Clone, Copy, Debug)]
+struct HeapEdge {
+    cost: f32,
+    a: u32,
+    b: u32,
+}
+
+impl HeapEdge {
+    fn key(&self) -> (f32, u32, u32) {
+        (self.cost, self.a, self.b)
+    }
+}
+
+impl PartialEq for HeapEdge {
+    fn eq(&self, other: &Self) -> bool {
+        self.cmp(other) == Ordering::Equal
+    }
+}
+impl Eq for HeapEdge {}
+impl PartialOrd for HeapEdge {
+    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
+        Some(self.cmp(other))
+    }
+}
+impl Ord for HeapEdge {
+    fn cmp(&self, other: &Self) -> Ordering {
+        let (c0, a0, b0) = self.key();
+        let (c1, a1, b1) = other.key();
+        // Reversed: the max-heap pops the smallest key.
+        c1.total_cmp(&c0).then(a1.cmp(&a0)).then(b1.cmp(&b0))
+    }
+}
+
+/// The mutable mesh during simplification: triangles with alive flags and an
+/// index-based vertex → triangle adjacency.
+struct Collapser<'a> {
+    input: &'a SimplifyInput<'a>,
+    triangles: Vec<[u32; 3]>,
+    alive: Vec<bool>,
+    /// Triangles around each vertex (alive ones only).
+    fans: Vec<Vec<u32>>,
+    removed: Vec<bool>,
+    /// Per vertex: the other ends of its rejected edges (waiting for a change).
+    rejected: Vec<Vec<u32>>,
+    dropped: u32,
+    // Scratch buffers, reused across collapses.
+    scratch_u: Vec<u32>,
+    scratch_v: Vec<u32>,
+    scratch_edges: Vec<(u32, u32)>,
+    scratch_fan: Vec<u32>,
+}
+
+impl<'a> Collapser<'a> {
+    fn new(input: &'a SimplifyInput<'a>) -> Self {
+        let n = input.positions.len();
+        // Step 1: keep the input triangles that have three distinct vertices and a
+        // vertex set no earlier triangle had.
+        let mut keys: Vec<([u32; 3], u32)> = input
+            .triangles
+            .iter()
+            .enumerate()
+            .map(|(t, tri)| (sorted(*tri), t as u32))
+            .collect();
+        keys.sort_unstable();
+        let mut alive = vec![true; input.triangles.len()];
+        for (i, (key, t)) in keys.iter().enumerate() {
+            let degenerate = key[0] == key[1] || key[1] == key[2];
+            let repeated = i > 0 && keys[i - 1].0 == *key;
+            if degenerate || repeated {
+                alive[*t as usize] = false;
+            }
+        }
+        let dropped = alive.iter().filter(|a| !**a).count() as u32;
+        // Step 2: vertex → triangle adjacency.
+        let mut fans: Vec<Vec<u32>> = vec![Vec::new(); n];
+        for (t, tri) in input.triangles.iter().enumerate() {
+            if alive[t] {
+                for &v in tri {
+                    fans[v as usize].push(t as u32);
+                }
+            }
+        }
+        Collapser {
+            input,
+            triangles: input.triangles.to_vec(),
+            alive,
+            fans,
+            removed: vec![false; n],
+            rejected: vec![Vec::new(); n],
+            dropped,
+            scratch_u: Vec::new(),
+            scratch_v: Vec::new(),
+            scratch_edges: Vec::new(),
+            scratch_fan: Vec::new(),
+        }
+    }
+
+    fn run(mut self, tolerance: f32, length_px: impl Fn(u32, u32) -> f32) -> Simplified {
+        let weights = self.input.weights;
+        let normals = self.input.normals;
+        let cost_of = |a: u32, b: u32| -> f32 {
+            let (ai, bi) = (a as usize, b as usize);
+            let bend = 1.5 - normals[ai].dot(normals[bi]);
+            bend * bend * length_px(a, b) * (weights[ai] + weights[bi])
+        };
+        // An edge is worth a heap entry only if one direction passes the static
+        // rules: the weight order and, for MV, the view-set constraint (§3.1.4).
+        let view_sets = self.input.view_sets;
+        let may_collapse = |u: u32, v: u32| -> bool {
+            let (ui, vi) = (u as usize, v as usize);
+            weights[ui] <= weights[vi]
+                && view_sets.is_none_or(|sets| {
+                    let (su, sv) = (sets[ui], sets[vi]);
+                    su & sv != 0 || (su == 0 && sv == 0)
+                })
+        };
+        let push = |heap: &mut BinaryHeap<HeapEdge>, a: u32, b: u32| {
+            let (a, b) = (a.min(b), a.max(b));
+            if may_collapse(a, b) || may_collapse(b, a) {
+                let cost = cost_of(a, b);
+                if cost < tolerance {
+                    heap.push(HeapEdge { cost, a, b });
+                }
+            }
+        };
+        let mut heap = BinaryHeap::new();
+        let mut neighbours = Vec::new();
+        let mut neighbours_before = Vec::new();
+        let mut revived = Vec::new();
+        // Step 1: every edge of the input into the heap (those that could collapse).
+        // Costs depend only on the two original vertices, so an entry stays right
+        // until one of its vertices is removed; each edge is at most once in the
+        // heap or in `rejected`.
+        for a in 0..self.fans.len() as u32 {
+            self.neighbours(a, &mut neighbours);
+            for &b in neighbours.iter().filter(|&&b| b > a) {
+                push(&mut heap, a, b);
+            }
+        }
+        // Step 2: collapse the cheapest edge until the cheapest costs T_l or more.
+        let mut log = Vec::new();
+        while let Some(edge) = heap.pop() {
+            let (a, b) = (edge.a, edge.b);
+            if self.removed[a as usize] || self.removed[b as usize] {
+                continue; // stale entry
+            }
+            if edge.cost >= tolerance {
+                break; // (only finite costs below T_l are pushed; kept as a guard)
+            }
+            // The lower weight collapses into the higher (§3.1.3.3); on a tie an
+            // interior vertex goes into a boundary one first, else the lower id
+            // into the higher (a < b) first.
+            let (wa, wb) = (weights[a as usize], weights[b as usize]);
+            let directions: &[(u32, u32)] = match wa.total_cmp(&wb) {
+                Ordering::Less => &[(a, b)],
+                Ordering::Greater => &[(b, a)],
+                Ordering::Equal if self.is_boundary(a) && !self.is_boundary(b) => &[(b, a), (a, b)],
+                Ordering::Equal => &[(a, b), (b, a)],
+            };
+            let Some(&(u, v)) = directions.iter().find(|&&(u, v)| self.can_collapse(u, v)) else {
+                // Rejected: tried again when a collapse changes either vertex's
+                // neighbourhood.
+                self.rejected[a as usize].push(b);
+                self.rejected[b as usize].push(a);
+                continue;
+            };
+            self.neighbours(v, &mut neighbours_before);
+            self.collapse(u, v);
+            log.push(Collapse {
+                from: u,
+                into: v,
+                cost: edge.cost,
+            });
+            // Step 3: edges that are new to v (from u's side) into the heap.
+            self.neighbours(v, &mut neighbours);
+            for &x in &neighbours {
+                if neighbours_before.binary_search(&x).is_err() {
+                    push(&mut heap, v, x);
+                }
+            }
+            // Step 4: v and its neighbours changed neighbourhoods: the edges at them
+            // that were rejected get another chance.
+            revived.clear();
+            for &x in neighbours.iter().chain([&v, &u]) {
+                for y in std::mem::take(&mut self.rejected[x as usize]) {
+                    revived.push((x.min(y), x.max(y)));
+                }
+            }
+            revived.sort_unstable();
+            revived.dedup();
+            for &(x, y) in &revived {
+                for (p, q) in [(x, y), (y, x)] {
+                    self.rejected[p as usize].retain(|&r| r != q);
+                }
+                if !self.removed[x as usize] && !self.removed[y as usize] {
+                    push(&mut heap, x, y);
+                }
+            }
+        }
+        // Step 5: surviving triangles in input order; MV masks as the AND of sets.
+        let mut triangles = Vec::new();
+        for (t, tri) in self.triangles.iter().enumerate() {
+            if self.alive[t] {
+                triangles.push(*tri);
+            }
+        }
+        let view_masks = match self.input.view_sets {
+            Some(sets) => triangles
+                .iter()
+                .map(|t| sets[t[0] as usize] & sets[t[1] as usize] & sets[t[2] as usize])
+                .collect(),
+            None => Vec::new(),
+        };
+        Simplified {
+            triangles,
+            view_masks,
+            collapses: log.len() as u32,
+            log,
+            dropped_input_triangles: self.dropped,
+        }
+    }
+
+    /// Sorted, distinct neighbours of `v` (vertices sharing an alive triangle).
+    fn neighbours(&self, v: u32, out: &mut Vec<u32>) {
+        out.clear();
+        for &t in &self.fans[v as usize] {
+            for &x in &self.triangles[t as usize] {
+                if x != v {
+                    out.push(x);
+                }
+            }
+        }
+        out.sort_unstable();
+        out.dedup();
+    }
+
+    /// Whether the triangles around `v` form one disc (closed fan) or one half-disc
+    /// (open fan), each directed edge at `v` used once.
+    fn fan_is_disc(&mut self, v: u32) -> bool {
+        // For each triangle (v, x, y) in ccw order: the fan steps x → y.
+        let mut steps = std::mem::take(&mut self.scratch_edges);
+        let mut targets = std::mem::take(&mut self.scratch_fan);
+        steps.clear();
+        for &t in &self.fans[v as usize] {
+            steps.push(opposite_edge(&self.triangles[t as usize], v));
+        }
+        targets.clear();
+        targets.extend(steps.iter().map(|s| s.1));
+        let disc = Self::steps_form_one_fan(&mut steps, &mut targets);
+        self.scratch_edges = steps;
+        self.scratch_fan = targets;
+        disc
+    }
+
+    fn steps_form_one_fan(steps: &mut [(u32, u32)], targets: &mut [u32]) -> bool {
+        if steps.is_empty() {
+            return false;
+        }
+        steps.sort_unstable();
+        if steps.windows(2).any(|w| w[0].0 == w[1].0) {
+            return false; // a directed edge v→x used twice
+        }
+        targets.sort_unstable();
+        if targets.windows(2).any(|w| w[0] == w[1]) {
+            return false; // a directed edge y→v used twice
+        }
+        // Start at a step whose source is no step's target (the open end), if any.
+        let start = steps
+            .iter()
+            .find(|s| targets.binary_search(&s.0).is_err())
+            .unwrap_or(&steps[0])
+            .0;
+        let mut at = start;
+        let mut walked = 0;
+        while let Ok(i) = steps.binary_search_by(|s| s.0.cmp(&at)) {
+            walked += 1;
+            at = steps[i].1;
+            if at == start || walked > steps.len() {
+                break;
+            }
+        }
+        walked == steps.len()
+    }
+
+    /// Whether `v` lies on a boundary: some edge at `v` has a triangle on one side only.
+    fn is_boundary(&self, v: u32) -> bool {
+        let fan = &self.fans[v as usize];
+        fan.iter().any(|&t| {
+            let (x, _) = opposite_edge(&self.triangles[t as usize], v);
+            // Edge v→x needs a partner x→v in another triangle of the fan.
+            !fan.iter().any(|&s| {
+                let (_, y) = opposite_edge(&self.triangles[s as usize], v);
+                y == x
+            })
+        }) || fan.iter().any(|&t| {
+            let (_, y) = opposite_edge(&self.triangles[t as usize], v);
+            !fan.iter().any(|&s| {
+                let (x, _) = opposite_edge(&self.triangles[s as usize], v);
+                x == y
+            })
+        })
+    }
+
+    /// All the tests a half-edge collapse u → v must pass (see the module docs).
+    fn can_collapse(&mut self, u: u32, v: u32) -> bool {
+        let (ui, vi) = (u as usize, v as usize);
+        // MV constraint (§3.1.4): a common view, or both sets empty.
+        if let Some(sets) = self.input.view_sets {
+            let (su, sv) = (sets[ui], sets[vi]);
+            if su & sv == 0 && (su != 0 || sv != 0) {
+                return false;
+            }
+        }
+        // Triangles on the edge, and the vertices opposite it.
+        let mut opposite = [0u32; 2];
+        let mut on_edge = 0;
+        for &t in &self.fans[ui] {
+            let tri = &self.triangles[t as usize];
+            if tri.contains(&v) {
+                if on_edge == 2 {
+                    return false; // non-manifold edge
+                }
+                opposite[on_edge] = tri.iter().copied().find(|&x| x != u && x != v).unwrap_or(u);
+                on_edge += 1;
+            }
+        }
+        if on_edge == 0 {
+            return false; // no longer an edge
+        }
+        // [14]: two boundary vertices may only merge along a boundary edge.
+        if on_edge == 2 && self.is_boundary(u) && self.is_boundary(v) {
+            return false;
+        }
+        // The collapse must not delete a whole piece (v keeps some triangle).
+        if self.fans[ui].len() == on_edge && self.fans[vi].len() == on_edge {
+            return false;
+        }
+        // Link condition: common neighbours == vertices opposite the edge.
+        let mut nu = std::mem::take(&mut self.scratch_u);
+        let mut nv = std::mem::take(&mut self.scratch_v);
+        self.neighbours(u, &mut nu);
+        self.neighbours(v, &mut nv);
+        let mut common = 0;
+        let mut link_ok = true;
+        let (mut i, mut j) = (0, 0);
+        while i < nu.len() && j < nv.len() {
+            match nu[i].cmp(&nv[j]) {
+                Ordering::Less => i += 1,
+                Ordering::Greater => j += 1,
+                Ordering::Equal => {
+                    if !opposite[..on_edge].contains(&nu[i]) {
+                        link_ok = false;
+                    }
+                    common += 1;
+                    i += 1;
+                    j += 1;
+                }
+            }
+        }
+        self.scratch_u = nu;
+        self.scratch_v = nv;
+        if !link_ok || common != on_edge {
+            return false;
+        }
+        // u's neighbourhood must be one disc or half-disc (a non-manifold vertex of
+        // the input, e.g. a bow-tie where the subset touches itself, stays).
+        if !self.fan_is_disc(u) {
+            return false;
+        }
+        // Geometry and local topology of the triangles that change (u → v).
+        let positions = self.input.positions;
+        let mut edges = std::mem::take(&mut self.scratch_edges);
+        edges.clear();
+        let mut ok = true;
+        for &t in &self.fans[ui] {
+            let tri = self.triangles[t as usize];
+            if tri.contains(&v) {
+                continue; // removed by the collapse
+            }
+            let moved = tri.map(|x| if x == u { v } else { x });
+            let before = triangle_cross(positions, tri);
+            let after = triangle_cross(positions, moved);
+            let after_len2 = after.length_squared();
+            if after_len2.partial_cmp(&0.0) != Some(Ordering::Greater) {
+                ok = false; // degenerate
+                break;
+            }
+            let before_len2 = before.length_squared();
+            if before_len2 > 0.0
+                && before.dot(after) <= MIN_NORMAL_TURN_COS * (before_len2 * after_len2).sqrt()
+            {
+                ok = false; // fold-over
+                break;
+            }
+            // Duplicate of a triangle already around v?
+            let key = sorted(moved);
+            if self.fans[vi].iter().any(|&s| {
+                let other = self.triangles[s as usize];
+                !other.contains(&u) && sorted(other) == key
+            }) {
+                ok = false;
+                break;
+            }
+            let (x, y) = opposite_edge(&moved, v);
+            edges.push((v, x));
+            edges.push((y, v));
+        }
+        if ok {
+            // Every directed edge at v appears once after the collapse.
+            for &t in &self.fans[vi] {
+                let tri = self.triangles[t as usize];
+                if tri.contains(&u) {
+                    continue;
+                }
+                let (x, y) = opposite_edge(&tri, v);
+                edges.push((v, x));
+                edges.push((y, v));
+            }
+            edges.sort_unstable();
+            ok = edges.windows(2).all(|w| w[0] != w[1]);
+        }
+        self.scratch_edges = edges;
+        ok
+    }
+
+    /// Performs the half-edge collapse u → v (checked by `can_collapse`).
+    fn collapse(&mut self, u: u32, v: u32) {
+        let fan_u = std::mem::take(&mut self.fans[u as usize]);
+        for t in fan_u {
+            let ti = t as usize;
+            let tri = self.triangles[ti];
+            if tri.contains(&v) {
+                // The triangle on the edge disappears from all its vertices' fans.
+                self.alive[ti] = false;
+                for x in tri {
+                    if x != u {
+                        let fan = &mut self.fans[x as usize];
+                        if let Some(k) = fan.iter().position(|&s| s == t) {
+                            fan.swap_remove(k);
+                        }
+                    }
+                }
+            } else {
+                self.triangles[ti] = tri.map(|x| if x == u { v } else { x });
+                self.fans[v as usize].push(t);
+            }
+        }
+        self.removed[u as usize] = true;
+    }
+}
+
+/// The two other corners of `tri` after `v`, in ccw order: `tri` = (v, x, y).
+fn opposite_edge(tri: &[u32; 3], v: u32) -> (u32, u32) {
+    if tri[0] == v {
+        (tri[1], tri[2])
+    } else if tri[1] == v {
+        (tri[2], tri[0])
+    } else {
+        (tri[0], tri[1])
+    }
+}
+
+fn sorted(mut tri: [u32; 3]) -> [u32; 3] {
+    tri.sort_unstable();
+    tri
+}
+
+fn triangle_cross(positions: &[Vec3], tri: [u32; 3]) -> Vec3 {
+    let [a, b, c] = tri.map(|i| positions[i as usize]);
+    (b - a).cross(c - a)
+}
+
+/// Checks a simplified mesh against the model and its input triangles: indices in
+/// range, only vertices the input used, no degenerate or duplicate triangles, every
+/// undirected edge used at most twice and in opposite directions wherever the
+/// input's edge was, a view mask per triangle or none, and a consistent log count.
+pub fn validate(
+    model_vertex_count: usize,
+    input_triangles: &[[u32; 3]],
+    out: &Simplified,
+) -> Result<(), ValidationError> {
+    if out.log.len() != out.collapses as usize {
+        return Err(ValidationError::CollapseCount {
+            log: out.log.len(),
+            count: out.collapses,
+        });
+    }
+    if !out.view_masks.is_empty() && out.view_masks.len() != out.triangles.len() {
+        return Err(ValidationError::MaskCount {
+            masks: out.view_masks.len(),
+            triangles: out.triangles.len(),
+        });
+    }
+    // Indices in range, used by the input, not degenerate.
+    let mut used = vec![false; model_vertex_count];
+    for tri in input_triangles {
+        for &v in tri {
+            if let Some(u) = used.get_mut(v as usize) {
+                *u = true;
+            }
+        }
+    }
+    for (t, tri) in out.triangles.iter().enumerate() {
+        for &vertex in tri {
+            if vertex as usize >= model_vertex_count {
+                return Err(ValidationError::IndexOutOfRange {
+                    triangle: t,
+                    vertex,
+                    vertex_count: model_vertex_count,
+                });
+            }
+            if !used[vertex as usize] {
+                return Err(ValidationError::VertexNotInInput {
+                    triangle: t,
+                    vertex,
+                });
+            }
+        }
+        if tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2] {
+            return Err(ValidationError::Degenerate {
+                triangle: t,
+                corners: *tri,
+            });
+        }
+    }
+    // Duplicates.
+    let mut keys: Vec<([u32; 3], usize)> = out
+        .triangles
+        .iter()
+        .enumerate()
+        .map(|(t, tri)| (sorted(*tri), t))
+        .collect();
+    keys.sort_unstable();
+    for w in keys.windows(2) {
+        if w[0].0 == w[1].0 {
+            return Err(ValidationError::Duplicate {
+                first: w[0].1,
+                second: w[1].1,
+                corners: *out.triangles.get(w[1].1).unwrap_or(&w[1].0),
+            });
+        }
+    }
+    // Manifold edges wherever the input's edge was manifold (or did not exist).
+    let input_edges = edge_uses(input_triangles);
+    for (a, b, uses, forward) in edge_uses(&out.triangles) {
+        let manifold = uses <= 2 && (uses < 2 || forward == 1);
+        if manifold {
+            continue;
+        }
+        let was_broken = input_edges
+            .binary_search_by(|e| (e.0, e.1).cmp(&(a, b)))
+            .ok()
+            .map(|i| input_edges[i])
+            .is_some_and(|(_, _, u, f)| !(u <= 2 && (u < 2 || f == 1)));
+        if !was_broken {
+            return Err(ValidationError::NonManifoldEdge {
+                a,
+                b,
+                uses,
+                forward,
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Checks the MV view masks: one per triangle, each the AND of its vertices' sets.
+pub fn validate_view_masks(view_sets: &[u8], out: &Simplified) -> Result<(), ValidationError> {
+    if out.view_masks.len() != out.triangles.len() {
+        return Err(ValidationError::MaskCount {
+            masks: out.view_masks.len(),
+            triangles: out.triangles.len(),
+        });
+    }
+    for (t, (tri, &found)) in out.triangles.iter().zip(&out.view_masks).enumerate() {
+        let set = |v: u32| view_sets.get(v as usize).copied().unwrap_or(0);
+        let expected = set(tri[0]) & set(tri[1]) & set(tri[2]);
+        if expected != found {
+            return Err(ValidationError::WrongMask {
+                triangle: t,
+                expected,
+                found,
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Undirected edges `(a < b, uses, uses as a→b)`, sorted.
+fn edge_uses(triangles: &[[u32; 3]]) -> Vec<(u32, u32, u32, u32)> {
+    let mut directed: Vec<(u32, u32, bool)> = Vec::with_capacity(triangles.len() * 3);
+    for tri in triangles {
+        for k in 0..3 {
+            let (p, q) = (tri[k], tri[(k + 1) % 3]);
+            directed.push((p.min(q), p.max(q), p < q));
+        }
+    }
+    directed.sort_unstable();
+    let mut out: Vec<(u32, u32, u32, u32)> = Vec::new();
+    for (a, b, forward) in directed {
+        match out.last_mut() {
+            Some(last) if last.0 == a && last.1 == b => {
+                last.2 += 1;
+                last.3 += u32::from(forward);
+            }
+            _ => out.push((a, b, 1, u32::from(forward))),
+        }
+    }
+    out
+}

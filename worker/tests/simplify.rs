@@ -1,0 +1,957 @@
+//! Tests of the weighted half-edge collapse (paper 000 §3.1.3.3, §3.1.4).
+//! Every output goes through `validate()`.
+
+use glam::Vec3;
+use proptest::prelude::*;
+use std::f32::consts::PI;
+use std::path::PathBuf;
+use worker::simplify::{
+    pixels_per_radian, simplify, simplify_with, validate, validate_view_masks, ProjectedLength,
+    Simplified, SimplifyError, SimplifyInput, SimplifyParams, ValidationError,
+};
+
+// ---------------------------------------------------------------- mesh helpers
+
+#[derive(Clone, Debug)]
+struct TestMesh {
+    positions: Vec<Vec3>,
+    normals: Vec<Vec3>,
+    triangles: Vec<[u32; 3]>,
+}
+
+/// Area-weighted smooth vertex normals (unit; +y for vertices without area).
+fn smooth_normals(positions: &[Vec3], triangles: &[[u32; 3]]) -> Vec<Vec3> {
+    let mut normals = vec![Vec3::ZERO; positions.len()];
+    for t in triangles {
+        let [a, b, c] = t.map(|i| positions[i as usize]);
+        let n = (b - a).cross(c - a);
+        for &i in t {
+            normals[i as usize] += n;
+        }
+    }
+    normals
+        .into_iter()
+        .map(|n| n.try_normalize().unwrap_or(Vec3::Y))
+        .collect()
+}
+
+/// A `w`×`h` grid over x–z with height and in-plane jitter, each quad split along a
+/// random diagonal, counter-clockwise seen from +y.
+fn perturbed_grid(w: usize, h: usize, jitter: &[f32], flips: &[bool]) -> TestMesh {
+    let mut positions = Vec::new();
+    for j in 0..=h {
+        for i in 0..=w {
+            let k = j * (w + 1) + i;
+            let r = |o: usize| jitter[(3 * k + o) % jitter.len()];
+            positions.push(Vec3::new(
+                i as f32 + 0.3 * r(0),
+                0.5 * r(1),
+                j as f32 + 0.3 * r(2),
+            ));
+        }
+    }
+    let mut triangles = Vec::new();
+    for j in 0..h {
+        for i in 0..w {
+            let v = |di: usize, dj: usize| ((j + dj) * (w + 1) + i + di) as u32;
+            let (a, b, c, d) = (v(0, 0), v(1, 0), v(1, 1), v(0, 1));
+            // ccw seen from +y: a → d → c → b.
+            if flips[(j * w + i) % flips.len()] {
+                triangles.push([a, d, c]);
+                triangles.push([a, c, b]);
+            } else {
+                triangles.push([a, d, b]);
+                triangles.push([b, d, c]);
+            }
+        }
+    }
+    let normals = smooth_normals(&positions, &triangles);
+    TestMesh {
+        positions,
+        normals,
+        triangles,
+    }
+}
+
+/// An icosphere of radius `radius` at `centre`, `levels` times subdivided, with its
+/// vertices pushed in or out by `bumps` (closed, manifold, outward ccw).
+fn icosphere(levels: u32, centre: Vec3, radius: f32, bumps: &[f32]) -> TestMesh {
+    let t = (1.0 + 5f32.sqrt()) / 2.0;
+    let mut positions: Vec<Vec3> = [
+        (-1.0, t, 0.0),
+        (1.0, t, 0.0),
+        (-1.0, -t, 0.0),
+        (1.0, -t, 0.0),
+        (0.0, -1.0, t),
+        (0.0, 1.0, t),
+        (0.0, -1.0, -t),
+        (0.0, 1.0, -t),
+        (t, 0.0, -1.0),
+        (t, 0.0, 1.0),
+        (-t, 0.0, -1.0),
+        (-t, 0.0, 1.0),
+    ]
+    .iter()
+    .map(|&(x, y, z)| Vec3::new(x, y, z).normalize())
+    .collect();
+    let mut triangles: Vec<[u32; 3]> = vec![
+        [0, 11, 5],
+        [0, 5, 1],
+        [0, 1, 7],
+        [0, 7, 10],
+        [0, 10, 11],
+        [1, 5, 9],
+        [5, 11, 4],
+        [11, 10, 2],
+        [10, 7, 6],
+        [7, 1, 8],
+        [3, 9, 4],
+        [3, 4, 2],
+        [3, 2, 6],
+        [3, 6, 8],
+        [3, 8, 9],
+        [4, 9, 5],
+        [2, 4, 11],
+        [6, 2, 10],
+        [8, 6, 7],
+        [9, 8, 1],
+    ];
+    for _ in 0..levels {
+        let mut midpoints = std::collections::BTreeMap::new();
+        let mut mid = |a: u32, b: u32, positions: &mut Vec<Vec3>| -> u32 {
+            *midpoints.entry((a.min(b), a.max(b))).or_insert_with(|| {
+                let p = (positions[a as usize] + positions[b as usize]).normalize();
+                positions.push(p);
+                positions.len() as u32 - 1
+            })
+        };
+        let mut next = Vec::new();
+        for [a, b, c] in triangles {
+            let ab = mid(a, b, &mut positions);
+            let bc = mid(b, c, &mut positions);
+            let ca = mid(c, a, &mut positions);
+            next.extend([[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
+        }
+        triangles = next;
+    }
+    let positions: Vec<Vec3> = positions
+        .iter()
+        .enumerate()
+        .map(|(i, p)| centre + *p * radius * (1.0 + 0.15 * bumps[i % bumps.len()]))
+        .collect();
+    let normals = smooth_normals(&positions, &triangles);
+    TestMesh {
+        positions,
+        normals,
+        triangles,
+    }
+}
+
+fn sv_params(eye: Vec3, tolerance: f32) -> SimplifyParams {
+    SimplifyParams {
+        edge_length_tolerance: tolerance,
+        length: ProjectedLength::FromPoint {
+            eye,
+            pixels_per_radian: pixels_per_radian(1024),
+        },
+    }
+}
+
+/// Replays the collapse log on the input: every vertex renamed to where its chain
+/// of collapses ends, triangles that lose a corner dropped. Must give the output.
+fn replay(input: &[[u32; 3]], vertex_count: usize, out: &Simplified) -> Vec<[u32; 3]> {
+    let mut into: Vec<u32> = (0..vertex_count as u32).collect();
+    for c in &out.log {
+        into[c.from as usize] = c.into;
+    }
+    let find = |mut v: u32| {
+        let mut steps = 0;
+        while into[v as usize] != v {
+            v = into[v as usize];
+            steps += 1;
+            assert!(steps <= vertex_count, "collapse chain loops");
+        }
+        v
+    };
+    input
+        .iter()
+        .map(|t| t.map(find))
+        .filter(|t| t[0] != t[1] && t[1] != t[2] && t[0] != t[2])
+        .collect()
+}
+
+/// Checks everything the log promises: valid output, the output is the replayed
+/// log, costs below T_l, the lower weight collapses, every
+/// removed vertex is removed once and never used again.
+fn check_log(mesh: &TestMesh, weights: &[f32], tolerance: f32, out: &Simplified) {
+    validate(mesh.positions.len(), &mesh.triangles, out).unwrap();
+    assert_eq!(out.dropped_input_triangles, 0);
+    assert_eq!(
+        replay(&mesh.triangles, mesh.positions.len(), out),
+        out.triangles
+    );
+    let mut removed = vec![false; mesh.positions.len()];
+    for c in &out.log {
+        assert!(c.cost < tolerance, "cost {c:?}");
+        assert!(
+            weights[c.from as usize] <= weights[c.into as usize],
+            "{c:?}"
+        );
+        assert!(
+            !removed[c.from as usize] && !removed[c.into as usize],
+            "{c:?}"
+        );
+        removed[c.from as usize] = true;
+    }
+    for t in &out.triangles {
+        assert!(t.iter().all(|&v| !removed[v as usize]));
+    }
+}
+
+/// Replays the log one collapse at a time: no collapse turns any triangle's normal
+/// by 90° or more, or leaves it with zero area.
+fn check_no_fold(mesh: &TestMesh, out: &Simplified) {
+    let cross = |tri: [u32; 3]| {
+        let [a, b, c] = tri.map(|i| mesh.positions[i as usize]);
+        (b - a).cross(c - a)
+    };
+    let mut current = mesh.triangles.clone();
+    for c in &out.log {
+        current.retain(|t| !(t.contains(&c.from) && t.contains(&c.into)));
+        for t in current.iter_mut().filter(|t| t.contains(&c.from)) {
+            let moved = t.map(|x| if x == c.from { c.into } else { x });
+            let (before, after) = (cross(*t), cross(moved));
+            assert!(after.length_squared() > 0.0, "{c:?} degenerates {t:?}");
+            assert!(before.dot(after) > 0.0, "{c:?} folds {t:?}");
+            *t = moved;
+        }
+    }
+    assert_eq!(current, out.triangles);
+}
+
+// ---------------------------------------------------------------- strategies
+
+/// A random mesh: a perturbed grid (open, with a random subset of its triangles,
+/// so boundaries are ragged and bow-tie vertices appear) or a bumpy icosphere.
+fn arb_mesh() -> impl Strategy<Value = TestMesh> {
+    let grid = (
+        2usize..12,
+        2usize..12,
+        prop::collection::vec(-1.0f32..1.0, 16..64),
+        prop::collection::vec(any::<bool>(), 1..32),
+        prop::collection::vec(any::<bool>(), 1..64),
+    )
+        .prop_map(|(w, h, jitter, flips, keep)| {
+            let mut m = perturbed_grid(w, h, &jitter, &flips);
+            // Drop about one triangle in 8.
+            let mut i = 0;
+            m.triangles.retain(|_| {
+                i += 1;
+                keep[i % keep.len()] || i % 8 != 0
+            });
+            m
+        });
+    let sphere = (0u32..3, prop::collection::vec(-1.0f32..1.0, 8..64))
+        .prop_map(|(l, bumps)| icosphere(l, Vec3::new(0.0, 5.0, 0.0), 4.0, &bumps));
+    prop_oneof![grid, sphere]
+}
+
+fn arb_eye() -> impl Strategy<Value = Vec3> {
+    (0.0f32..2.0 * PI, 10.0f32..60.0, 1.0f32..20.0)
+        .prop_map(|(a, d, y)| Vec3::new(d * a.cos(), y, d * a.sin()))
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(96))]
+
+    /// The output references only vertices of the model (and of the input subset),
+    /// is manifold and the replayed log; costs below T_l.
+    #[test]
+    fn simplified_mesh_stays_inside_model(
+        mesh in arb_mesh(),
+        weights in prop::collection::vec(prop::sample::select(vec![0.05f32, 0.125, 0.25, 0.4, 0.5]), 1..16),
+        eye in arb_eye(),
+        tolerance in prop_oneof![0.0f32..5.0, 5.0f32..500.0],
+    ) {
+        let w: Vec<f32> = (0..mesh.positions.len()).map(|i| weights[i % weights.len()]).collect();
+        let input = SimplifyInput {
+            positions: &mesh.positions,
+            normals: &mesh.normals,
+            triangles: &mesh.triangles,
+            weights: &w,
+            view_sets: None,
+        };
+        let out = simplify(&input, &sv_params(eye, tolerance)).unwrap();
+        check_log(&mesh, &w, tolerance, &out);
+        check_no_fold(&mesh, &out);
+        prop_assert!(out.view_masks.is_empty());
+        prop_assert!(out.triangles.len() <= mesh.triangles.len());
+    }
+
+    /// With T_l = 0 the mesh is exactly the input.
+    #[test]
+    fn zero_tolerance_leaves_mesh_unchanged(
+        mesh in arb_mesh(),
+        weights in prop::collection::vec(0.0f32..1.0, 1..16),
+        eye in arb_eye(),
+    ) {
+        let w: Vec<f32> = (0..mesh.positions.len()).map(|i| weights[i % weights.len()]).collect();
+        let input = SimplifyInput {
+            positions: &mesh.positions,
+            normals: &mesh.normals,
+            triangles: &mesh.triangles,
+            weights: &w,
+            view_sets: None,
+        };
+        let out = simplify(&input, &sv_params(eye, 0.0)).unwrap();
+        validate(mesh.positions.len(), &mesh.triangles, &out).unwrap();
+        prop_assert_eq!(&out.triangles, &mesh.triangles);
+        prop_assert_eq!(out.collapses, 0);
+    }
+
+    /// Same input twice gives the same output, and the closure entry point with the
+    /// same projected length agrees with the built-in one.
+    #[test]
+    fn output_is_deterministic(
+        mesh in arb_mesh(),
+        weights in prop::collection::vec(prop::sample::select(vec![0.05f32, 0.125, 0.5]), 1..8),
+        eye in arb_eye(),
+        tolerance in 0.0f32..200.0,
+    ) {
+        let w: Vec<f32> = (0..mesh.positions.len()).map(|i| weights[i % weights.len()]).collect();
+        let input = SimplifyInput {
+            positions: &mesh.positions,
+            normals: &mesh.normals,
+            triangles: &mesh.triangles,
+            weights: &w,
+            view_sets: None,
+        };
+        let params = sv_params(eye, tolerance);
+        let first = simplify(&input, &params).unwrap();
+        let second = simplify(&input, &params).unwrap();
+        validate(mesh.positions.len(), &mesh.triangles, &first).unwrap();
+        validate(mesh.positions.len(), &mesh.triangles, &second).unwrap();
+        prop_assert_eq!(&first, &second);
+        let length = &params.length;
+        let third = simplify_with(&input, tolerance, |a, b| {
+            length.pixels(mesh.positions[a as usize], mesh.positions[b as usize])
+        })
+        .unwrap();
+        validate(mesh.positions.len(), &mesh.triangles, &third).unwrap();
+        prop_assert_eq!(&first, &third);
+    }
+
+    /// MV: per-triangle masks are the AND of the vertices' view sets, and every
+    /// collapse obeyed §3.1.4 (w_u ≤ w_v, and a common view or both sets empty).
+    #[test]
+    fn mv_masks_and_collapse_constraint(
+        mesh in arb_mesh(),
+        weights in prop::collection::vec(prop::sample::select(vec![0.05f32, 0.125, 0.25, 0.5]), 1..16),
+        sets in prop::collection::vec(prop_oneof![Just(0u8), 0u8..128, Just(127u8)], 1..16),
+        eyes in prop::collection::vec(arb_eye(), 1..12),
+        tolerance in 0.0f32..300.0,
+    ) {
+        let n = mesh.positions.len();
+        let w: Vec<f32> = (0..n).map(|i| weights[i % weights.len()]).collect();
+        let s: Vec<u8> = (0..n).map(|i| sets[(i * 7 + i / 3) % sets.len()]).collect();
+        let input = SimplifyInput {
+            positions: &mesh.positions,
+            normals: &mesh.normals,
+            triangles: &mesh.triangles,
+            weights: &w,
+            view_sets: Some(&s),
+        };
+        let params = SimplifyParams {
+            edge_length_tolerance: tolerance,
+            length: ProjectedLength::MaxOverPoints { eyes, pixels_per_radian: pixels_per_radian(1024) },
+        };
+        let out = simplify(&input, &params).unwrap();
+        check_log(&mesh, &w, tolerance, &out);
+        validate_view_masks(&s, &out).unwrap();
+        for c in &out.log {
+            let (su, sv) = (s[c.from as usize], s[c.into as usize]);
+            prop_assert!(su & sv != 0 || (su == 0 && sv == 0), "{:?} sets {:#x} {:#x}", c, su, sv);
+        }
+    }
+}
+
+// ---------------------------------------------------------------- unit tests
+
+#[test]
+fn projected_length_is_angle_times_pixels_per_radian() {
+    let ppr = pixels_per_radian(1024);
+    assert!((ppr - 1024.0 / (PI / 3.0)).abs() < 1e-3);
+    // An edge of length 1 across the view axis at distance 100: angle 2·atan(0.005).
+    let eye = Vec3::ZERO;
+    let (a, b) = (Vec3::new(-0.5, 0.0, 100.0), Vec3::new(0.5, 0.0, 100.0));
+    let from_point = ProjectedLength::FromPoint {
+        eye,
+        pixels_per_radian: ppr,
+    };
+    let expected = 2.0 * (0.005f32).atan() * ppr;
+    assert!((from_point.pixels(a, b) - expected).abs() < 1e-3 * expected);
+    // Seen end-on it has no length; l′ takes the largest over the eyes.
+    let end_on = ProjectedLength::FromPoint {
+        eye: Vec3::new(-10.0, 0.0, 100.0),
+        pixels_per_radian: ppr,
+    };
+    assert!(end_on.pixels(a, b) < 1e-3);
+    let max = ProjectedLength::MaxOverPoints {
+        eyes: vec![Vec3::new(-10.0, 0.0, 100.0), eye, Vec3::new(0.0, 0.0, 50.0)],
+        pixels_per_radian: ppr,
+    };
+    let near = 2.0 * (0.01f32).atan() * ppr;
+    assert!((max.pixels(a, b) - near).abs() < 1e-3 * near);
+    // An endpoint on an eye: infinitely long.
+    assert_eq!(
+        ProjectedLength::FromPoint {
+            eye: a,
+            pixels_per_radian: ppr
+        }
+        .pixels(a, b),
+        f32::INFINITY
+    );
+}
+
+#[test]
+fn cost_follows_the_paper() {
+    // One edge of a two-triangle strip, everything else locked out by a huge cost:
+    // make a square whose diagonal vertices have different normals and check the
+    // first collapse's recorded cost against (1.5 − n_i·n_j)² · l · (w_i + w_j).
+    let m = perturbed_grid(1, 1, &[0.0], &[false]);
+    let normals = vec![
+        Vec3::Y,
+        Vec3::new(0.0, 1.0, 1.0).normalize(),
+        Vec3::Y,
+        Vec3::Y,
+    ];
+    let weights = [0.125, 0.4, 0.25, 0.5];
+    let eye = Vec3::new(0.5, 30.0, 0.5);
+    let input = SimplifyInput {
+        positions: &m.positions,
+        normals: &normals,
+        triangles: &m.triangles,
+        weights: &weights,
+        view_sets: None,
+    };
+    let params = sv_params(eye, 1e9);
+    let out = simplify(&input, &params).unwrap();
+    validate(4, &m.triangles, &out).unwrap();
+    let first = out.log[0];
+    let (i, j) = (first.from as usize, first.into as usize);
+    let l = params.length.pixels(m.positions[i], m.positions[j]);
+    let bend = 1.5 - normals[i].dot(normals[j]);
+    let expected = bend * bend * l * (weights[i] + weights[j]);
+    assert!(
+        (first.cost - expected).abs() <= 1e-5 * expected,
+        "{first:?} vs {expected}"
+    );
+    assert!(weights[i] <= weights[j]);
+    // The cheapest edge of the square is the one with the lowest cost of all five.
+    let mut costs = Vec::new();
+    for t in &m.triangles {
+        for k in 0..3 {
+            let (a, b) = (t[k] as usize, t[(k + 1) % 3] as usize);
+            let bend = 1.5 - normals[a].dot(normals[b]);
+            costs.push(
+                bend * bend
+                    * params.length.pixels(m.positions[a], m.positions[b])
+                    * (weights[a] + weights[b]),
+            );
+        }
+    }
+    let min = costs.iter().copied().fold(f32::INFINITY, f32::min);
+    assert_eq!(first.cost, min);
+}
+
+#[test]
+fn closed_sphere_simplifies_to_a_valid_closed_mesh() {
+    let mesh = icosphere(3, Vec3::new(0.0, 5.0, 0.0), 4.0, &[0.0]);
+    let weights = vec![0.125; mesh.positions.len()];
+    let input = SimplifyInput {
+        positions: &mesh.positions,
+        normals: &mesh.normals,
+        triangles: &mesh.triangles,
+        weights: &weights,
+        view_sets: None,
+    };
+    let out = simplify(&input, &sv_params(Vec3::new(0.0, 5.0, 40.0), 1e9)).unwrap();
+    check_log(&mesh, &weights, 1e9, &out);
+    // Closed and manifold still: every edge used exactly twice.
+    let mut edges: Vec<(u32, u32)> = out
+        .triangles
+        .iter()
+        .flat_map(|t| (0..3).map(move |k| (t[k], t[(k + 1) % 3])))
+        .collect();
+    edges.sort_unstable();
+    for &(a, b) in &edges {
+        assert!(edges.binary_search(&(b, a)).is_ok(), "open edge {a}-{b}");
+    }
+    assert!(out.triangles.len() >= 4 && out.triangles.len() < mesh.triangles.len() / 10);
+}
+
+/// With the capture's weights (0.5 on the exterior silhouette, here the border of
+/// a grid; 0.125 inside) the border only slides along itself: a lower weight never
+/// goes into a higher one, and two border vertices merge only along a border edge.
+#[test]
+fn heavy_border_vertices_only_slide_along_the_border() {
+    let mesh = perturbed_grid(10, 10, &[0.3, -0.2, 0.5, 0.1, -0.6], &[false, true]);
+    let on_border = |v: u32| {
+        let (i, j) = (v % 11, v / 11);
+        i == 0 || j == 0 || i == 10 || j == 10
+    };
+    let weights: Vec<f32> = (0..mesh.positions.len() as u32)
+        .map(|v| if on_border(v) { 0.5 } else { 0.125 })
+        .collect();
+    let input = SimplifyInput {
+        positions: &mesh.positions,
+        normals: &mesh.normals,
+        triangles: &mesh.triangles,
+        weights: &weights,
+        view_sets: None,
+    };
+    let out = simplify(&input, &sv_params(Vec3::new(5.0, 40.0, 5.0), 1e9)).unwrap();
+    check_log(&mesh, &weights, 1e9, &out);
+    check_no_fold(&mesh, &out);
+    for c in &out.log {
+        if on_border(c.from) {
+            assert!(on_border(c.into), "{c:?} pulled the border inwards");
+        }
+    }
+    // With no limit on the cost everything inside goes.
+    let used: Vec<u32> = out.triangles.iter().flatten().copied().collect();
+    assert!(used.iter().all(|&v| on_border(v)), "{:?}", out.triangles);
+    assert!(!out.triangles.is_empty());
+}
+
+#[test]
+fn bad_input_is_an_error_not_a_panic() {
+    let m = perturbed_grid(2, 2, &[0.0], &[false]);
+    let n = m.positions.len();
+    let w = vec![0.125; n];
+    let ok = SimplifyInput {
+        positions: &m.positions,
+        normals: &m.normals,
+        triangles: &m.triangles,
+        weights: &w,
+        view_sets: None,
+    };
+    let params = sv_params(Vec3::new(0.0, 10.0, 0.0), 4.5);
+    let short = vec![0.125; n - 1];
+    assert!(matches!(
+        simplify(
+            &SimplifyInput {
+                weights: &short,
+                ..ok
+            },
+            &params
+        ),
+        Err(SimplifyError::LengthMismatch {
+            what: "weights",
+            ..
+        })
+    ));
+    let bad_tris = [[0, 1, n as u32]];
+    assert_eq!(
+        simplify(
+            &SimplifyInput {
+                triangles: &bad_tris,
+                ..ok
+            },
+            &params
+        ),
+        Err(SimplifyError::IndexOutOfRange {
+            triangle: 0,
+            vertex: n as u32,
+            vertex_count: n
+        })
+    );
+    let mut nan = w.clone();
+    nan[4] = f32::NAN;
+    assert!(matches!(
+        simplify(
+            &SimplifyInput {
+                weights: &nan,
+                ..ok
+            },
+            &params
+        ),
+        Err(SimplifyError::NonFinite {
+            what: "weight",
+            vertex: 4
+        })
+    ));
+    let sets = vec![0x80u8; n];
+    assert!(matches!(
+        simplify(
+            &SimplifyInput {
+                view_sets: Some(&sets),
+                ..ok
+            },
+            &params
+        ),
+        Err(SimplifyError::ViewSetOutOfRange { .. })
+    ));
+    assert!(matches!(
+        simplify(&ok, &sv_params(Vec3::ZERO, -1.0)),
+        Err(SimplifyError::BadTolerance(_))
+    ));
+}
+
+#[test]
+fn degenerate_and_repeated_input_triangles_are_dropped() {
+    let m = perturbed_grid(3, 3, &[0.2, -0.4, 0.7], &[false]);
+    let mut tris = m.triangles.clone();
+    tris.push([1, 1, 2]);
+    let [a, b, c] = tris[0];
+    tris.push([b, c, a]);
+    let w = vec![0.125; m.positions.len()];
+    let input = SimplifyInput {
+        positions: &m.positions,
+        normals: &m.normals,
+        triangles: &tris,
+        weights: &w,
+        view_sets: None,
+    };
+    let out = simplify(&input, &sv_params(Vec3::new(0.0, 10.0, 0.0), 0.0)).unwrap();
+    validate(m.positions.len(), &tris, &out).unwrap();
+    assert_eq!(out.dropped_input_triangles, 2);
+    assert_eq!(out.triangles, m.triangles);
+}
+
+#[test]
+fn validate_rejects_broken_outputs() {
+    let m = perturbed_grid(2, 2, &[0.0], &[false]);
+    let n = m.positions.len();
+    let out = |triangles: Vec<[u32; 3]>| Simplified {
+        triangles,
+        ..Simplified::default()
+    };
+    assert!(validate(n, &m.triangles, &out(m.triangles.clone())).is_ok());
+    assert!(matches!(
+        validate(n, &m.triangles, &out(vec![[0, 1, n as u32]])),
+        Err(ValidationError::IndexOutOfRange { .. })
+    ));
+    assert!(matches!(
+        validate(n, &m.triangles[..1], &out(vec![m.triangles[1]])),
+        Err(ValidationError::VertexNotInInput { .. })
+    ));
+    assert!(matches!(
+        validate(n, &m.triangles, &out(vec![[0, 0, 1]])),
+        Err(ValidationError::Degenerate { .. })
+    ));
+    let [a, b, c] = m.triangles[0];
+    assert!(matches!(
+        validate(n, &m.triangles, &out(vec![[a, b, c], [c, b, a]])),
+        Err(ValidationError::Duplicate { .. })
+    ));
+    // Edge a-b used by two triangles in the same direction.
+    let d = (0..n as u32).find(|v| ![a, b, c].contains(v)).unwrap();
+    assert!(matches!(
+        validate(n, &m.triangles, &out(vec![[a, b, c], [a, b, d]])),
+        Err(ValidationError::NonManifoldEdge { .. })
+    ));
+    let sets = vec![0b011u8; n];
+    let mut masked = out(vec![[a, b, c]]);
+    masked.view_masks = vec![0b001];
+    assert!(matches!(
+        validate_view_masks(&sets, &masked),
+        Err(ValidationError::WrongMask {
+            expected: 0b011,
+            found: 0b001,
+            ..
+        })
+    ));
+}
+
+// ---------------------------------------------------------------- the bunny
+
+/// `HEXBAKE_MODELS`, else `<repo>/models`; `None` (and a note) when absent.
+fn find_model(name: &str) -> Option<PathBuf> {
+    let dir = std::env::var_os("HEXBAKE_MODELS")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../models"));
+    let path = dir.join(name);
+    if path.is_file() {
+        Some(path)
+    } else {
+        eprintln!(
+            "SKIP: {} not found (set HEXBAKE_MODELS or run scripts/fetch-models.sh)",
+            path.display()
+        );
+        None
+    }
+}
+
+/// `v` and `f` lines of an OBJ (polygons fanned, `a/b/c` corners, negative indices),
+/// until the format crate's loader lands.
+fn parse_obj(text: &str) -> (Vec<Vec3>, Vec<[u32; 3]>) {
+    let mut positions = Vec::new();
+    let mut triangles = Vec::new();
+    for line in text.lines() {
+        let mut words = line.split_whitespace();
+        match words.next() {
+            Some("v") => {
+                let c: Vec<f32> = words.take(3).map(|w| w.parse().unwrap()).collect();
+                positions.push(Vec3::new(c[0], c[1], c[2]));
+            }
+            Some("f") => {
+                let corners: Vec<u32> = words
+                    .map(|w| {
+                        let i: i64 = w.split('/').next().unwrap().parse().unwrap();
+                        if i < 0 {
+                            (positions.len() as i64 + i) as u32
+                        } else {
+                            (i - 1) as u32
+                        }
+                    })
+                    .collect();
+                for k in 1..corners.len() - 1 {
+                    triangles.push([corners[0], corners[k], corners[k + 1]]);
+                }
+            }
+            _ => {}
+        }
+    }
+    (positions, triangles)
+}
+
+/// The bunny at the paper's size: 43 units tall, base on y = 0, centred in x–z.
+fn bunny() -> Option<TestMesh> {
+    let path = find_model("bunny.obj")?;
+    let (mut positions, triangles) = parse_obj(&std::fs::read_to_string(path).unwrap());
+    let (lo, hi) = positions.iter().fold(
+        (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
+        |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+    );
+    let scale = 43.0 / (hi.y - lo.y);
+    let base = Vec3::new((lo.x + hi.x) / 2.0, lo.y, (lo.z + hi.z) / 2.0);
+    for p in &mut positions {
+        *p = (*p - base) * scale;
+    }
+    let normals = smooth_normals(&positions, &triangles);
+    Some(TestMesh {
+        positions,
+        normals,
+        triangles,
+    })
+}
+
+const CELL_SIZE: f32 = 50.0;
+const EYE_HEIGHT: f32 = 10.0;
+const MIN_EYE_HEIGHT: f32 = 5.0;
+const MAX_EYE_HEIGHT: f32 = 15.0;
+
+/// The centre of the cell `k` cells away from the bunny (flat-top hexagons:
+/// neighbouring centres are √3·c apart), on the +z side, at eye height.
+fn cell_centre(k: u32) -> Vec3 {
+    Vec3::new(0.0, EYE_HEIGHT, k as f32 * 3f32.sqrt() * CELL_SIZE)
+}
+
+/// The 12 corners of the cell's view prism.
+fn cell_corners(centre: Vec3) -> Vec<Vec3> {
+    let mut corners = Vec::new();
+    for y in [MIN_EYE_HEIGHT, MAX_EYE_HEIGHT] {
+        for i in 0..6 {
+            let a = i as f32 * PI / 3.0;
+            corners.push(Vec3::new(
+                centre.x + CELL_SIZE * a.cos(),
+                y,
+                centre.z + CELL_SIZE * a.sin(),
+            ));
+        }
+    }
+    corners
+}
+
+/// The centres of the cell and its 6 neighbours: the MV views (bit k = view k).
+fn mv_views(centre: Vec3) -> Vec<Vec3> {
+    let step = 3f32.sqrt() * CELL_SIZE;
+    let mut views = vec![centre];
+    for i in 0..6 {
+        let a = PI / 6.0 + i as f32 * PI / 3.0;
+        views.push(centre + Vec3::new(step * a.cos(), 0.0, step * a.sin()));
+    }
+    views
+}
+
+fn front_facing(mesh: &TestMesh, tri: &[u32; 3], eye: Vec3) -> bool {
+    let [a, b, c] = tri.map(|i| mesh.positions[i as usize]);
+    (b - a).cross(c - a).dot(eye - (a + b + c) / 3.0) > 0.0
+}
+
+fn write_obj(path: &std::path::Path, mesh: &TestMesh, triangles: &[[u32; 3]]) {
+    use std::fmt::Write;
+    let mut s = String::new();
+    for p in &mesh.positions {
+        writeln!(s, "v {} {} {}", p.x, p.y, p.z).unwrap();
+    }
+    for t in triangles {
+        writeln!(s, "f {} {} {}", t[0] + 1, t[1] + 1, t[2] + 1).unwrap();
+    }
+    std::fs::write(path, s).unwrap();
+}
+
+/// The paper's weights for a vertex seen from `eye` with the capture replaced by
+/// a stand-in: 0.5 if back-facing (all its triangles back-facing, §3.1.3.2), else
+/// 0.125 (interior). The real weights come from the capture's pixel classes.
+fn standin_weights(mesh: &TestMesh, eye: Vec3) -> Vec<f32> {
+    let mut front = vec![false; mesh.positions.len()];
+    for t in &mesh.triangles {
+        if front_facing(mesh, t, eye) {
+            for &v in t {
+                front[v as usize] = true;
+            }
+        }
+    }
+    front.iter().map(|&f| if f { 0.125 } else { 0.5 }).collect()
+}
+
+struct BunnyRun {
+    input: usize,
+    output: Vec<[u32; 3]>,
+}
+
+/// SVMesh of the bunny from the centre of the cell `k` cells away. `subset`: the
+/// front-facing triangles with uniform weights 0.125; else the whole mesh with the
+/// stand-in weights, front-facing triangles kept afterwards.
+fn bunny_sv(mesh: &TestMesh, k: u32, subset: bool) -> BunnyRun {
+    let n = mesh.positions.len();
+    let centre = cell_centre(k);
+    let (triangles, weights) = if subset {
+        let tris: Vec<[u32; 3]> = mesh
+            .triangles
+            .iter()
+            .filter(|t| front_facing(mesh, t, centre))
+            .copied()
+            .collect();
+        (tris, vec![0.125f32; n])
+    } else {
+        (mesh.triangles.clone(), standin_weights(mesh, centre))
+    };
+    let input = SimplifyInput {
+        positions: &mesh.positions,
+        normals: &mesh.normals,
+        triangles: &triangles,
+        weights: &weights,
+        view_sets: None,
+    };
+    let out = simplify(&input, &sv_params(centre, 4.5)).unwrap();
+    validate(n, &triangles, &out).unwrap();
+    let output = out
+        .triangles
+        .into_iter()
+        .filter(|t| front_facing(mesh, t, centre))
+        .collect();
+    BunnyRun {
+        input: triangles.len(),
+        output,
+    }
+}
+
+/// MVMesh of the bunny for the cell `k` cells away: l′ over the 12 prism corners,
+/// view k in a vertex's set when the vertex faces view k (centre + 6 neighbours; a
+/// stand-in for the captures' visibility). `subset`: the triangles front-facing to
+/// some corner (not regionally back-facing) with uniform weights 0.125; else the
+/// whole mesh with the stand-in weights maximised over the views (§3.1.4), the
+/// not regionally back-facing triangles kept afterwards.
+fn bunny_mv(mesh: &TestMesh, k: u32, subset: bool) -> BunnyRun {
+    let n = mesh.positions.len();
+    let centre = cell_centre(k);
+    let corners = cell_corners(centre);
+    let views = mv_views(centre);
+    let regionally_front = |t: &[u32; 3]| corners.iter().any(|&c| front_facing(mesh, t, c));
+    let per_view: Vec<Vec<f32>> = views.iter().map(|&e| standin_weights(mesh, e)).collect();
+    let sets: Vec<u8> = (0..n)
+        .map(|v| {
+            (0..views.len())
+                .filter(|&i| per_view[i][v] < 0.5)
+                .fold(0u8, |s, i| s | 1 << i)
+        })
+        .collect();
+    let (triangles, weights) = if subset {
+        let tris: Vec<[u32; 3]> = mesh
+            .triangles
+            .iter()
+            .filter(|t| regionally_front(t))
+            .copied()
+            .collect();
+        (tris, vec![0.125f32; n])
+    } else {
+        let w = (0..n)
+            .map(|v| per_view.iter().map(|w| w[v]).fold(0.0, f32::max))
+            .collect();
+        (mesh.triangles.clone(), w)
+    };
+    let input = SimplifyInput {
+        positions: &mesh.positions,
+        normals: &mesh.normals,
+        triangles: &triangles,
+        weights: &weights,
+        view_sets: Some(&sets),
+    };
+    let params = SimplifyParams {
+        edge_length_tolerance: 4.5,
+        length: ProjectedLength::MaxOverPoints {
+            eyes: corners.clone(),
+            pixels_per_radian: pixels_per_radian(1024),
+        },
+    };
+    let out = simplify(&input, &params).unwrap();
+    validate(n, &triangles, &out).unwrap();
+    validate_view_masks(&sets, &out).unwrap();
+    let output = out
+        .triangles
+        .into_iter()
+        .filter(|t| regionally_front(t))
+        .collect();
+    BunnyRun {
+        input: triangles.len(),
+        output,
+    }
+}
+
+/// The bunny (43 units, T_l = 4.5, 1024 pixels per 60°) next to the paper's
+/// Fig. 6 (MVMesh at 1–6 cells) and Fig. 4 (SVMesh at 7–9 cells), in two stand-ins
+/// for the capture's weights (see `bunny_sv`, `bunny_mv`). Writes OBJs of the SV
+/// mesh at 7 cells and the MV mesh at 1 cell to the temp dir.
+#[test]
+fn bunny_counts_next_to_the_paper() {
+    let Some(mesh) = bunny() else { return };
+    let paper = [1605, 945, 554, 392, 330, 306, 259, 254, 239];
+    eprintln!("cells | kind | paper | subset in → out | whole mesh in → out (front)");
+    let mut whole = Vec::new();
+    for k in 1..=9u32 {
+        let (kind, subset, full) = if k <= 6 {
+            ("MV", bunny_mv(&mesh, k, true), bunny_mv(&mesh, k, false))
+        } else {
+            ("SV", bunny_sv(&mesh, k, true), bunny_sv(&mesh, k, false))
+        };
+        eprintln!(
+            "{k} | {kind} | {} | {} → {} | {} → {}",
+            paper[k as usize - 1],
+            subset.input,
+            subset.output.len(),
+            full.input,
+            full.output.len()
+        );
+        // Real simplification, not a handful of collapses.
+        assert!(subset.output.len() * 10 < subset.input, "k={k}");
+        assert!(full.output.len() * 10 < full.input, "k={k}");
+        if k == 1 {
+            let path = std::env::temp_dir().join("hexbake-bunny-mv-1cell.obj");
+            write_obj(&path, &mesh, &subset.output);
+            eprintln!("wrote {}", path.display());
+        }
+        if k == 7 {
+            let path = std::env::temp_dir().join("hexbake-bunny-sv-7cells.obj");
+            write_obj(&path, &mesh, &subset.output);
+            eprintln!("wrote {}", path.display());
+        }
+        whole.push((kind, full.output.len()));
+    }
+    // Whole-mesh runs of one kind get coarser with distance (l shrinks).
+    for w in whole.windows(2).filter(|w| w[0].0 == w[1].0) {
+        assert!(w[1].1 <= w[0].1, "{whole:?}");
+    }
+}
