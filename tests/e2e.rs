@@ -7,7 +7,10 @@ use std::process::{Command, Output};
 use std::sync::OnceLock;
 
 fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).parent().unwrap().to_path_buf()
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .unwrap()
+        .to_path_buf()
 }
 
 /// Builds the binaries once per test run (a no-op when fresh) and returns the
@@ -19,10 +22,18 @@ fn bin_dir() -> &'static Path {
         let dir = exe.parent().unwrap().parent().unwrap().to_path_buf(); // target/<profile>
         let profile = dir.file_name().unwrap().to_str().unwrap().to_string();
         let mut cmd = Command::new(env!("CARGO"));
-        cmd.current_dir(repo())
-            .args(["build", "--bins", "-p", "worker", "-p", "pipeline", "-p", "player"]);
+        cmd.current_dir(repo()).args([
+            "build", "--bins", "-p", "worker", "-p", "pipeline", "-p", "player",
+        ]);
         if profile != "debug" {
-            cmd.args(["--profile", if profile == "release" { "release" } else { &profile }]);
+            cmd.args([
+                "--profile",
+                if profile == "release" {
+                    "release"
+                } else {
+                    &profile
+                },
+            ]);
         }
         let status = cmd.status().expect("cargo runs");
         assert!(status.success(), "building the binaries failed");
@@ -56,7 +67,11 @@ fn models_present() -> bool {
 
 fn scene_json(manifest: &str) -> serde_json::Value {
     let out = run("pipeline", &["scene", manifest, "--json"], &repo());
-    assert!(out.status.success(), "pipeline scene {manifest}: {}", stderr(&out));
+    assert!(
+        out.status.success(),
+        "pipeline scene {manifest}: {}",
+        stderr(&out)
+    );
     serde_json::from_str(&stdout(&out)).expect("scene --json prints JSON")
 }
 
@@ -69,7 +84,10 @@ fn scene_of_demo_needs_no_download() {
     let cells = grid[0].as_u64().unwrap() * grid[1].as_u64().unwrap();
     assert_eq!(v["cells"].as_u64().unwrap(), cells);
     for m in v["models"].as_array().unwrap() {
-        assert!(m["source"].as_str().unwrap().starts_with("procedural:"), "{m}");
+        assert!(
+            m["source"].as_str().unwrap().starts_with("procedural:"),
+            "{m}"
+        );
     }
 }
 
@@ -115,9 +133,11 @@ fn park_scenes_are_nested() {
         for inst in &small.instances {
             let name = &small.models[inst.model as usize].name;
             assert!(
-                big.instances.iter().any(|b| big.models[b.model as usize].name == *name
-                    && b.transform == inst.transform
-                    && b.tint == inst.tint),
+                big.instances
+                    .iter()
+                    .any(|b| big.models[b.model as usize].name == *name
+                        && b.transform == inst.transform
+                        && b.tint == inst.tint),
                 "instance of {name} at {:?} missing from the larger park",
                 inst.transform.w_axis
             );

@@ -6,7 +6,11 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 #[derive(Parser)]
-#[command(name = "pipeline", version, about = "hexbake: bake huge static scenes into per-cell packs")]
+#[command(
+    name = "pipeline",
+    version,
+    about = "hexbake: bake huge static scenes into per-cell packs"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -74,10 +78,8 @@ fn run(cli: Cli) -> Result<(), Failure> {
         Command::Inspect { pack, json } => {
             // A pack that fails validation is a failure of the data (exit 1), not of
             // the command line; the message names the file and the bad section.
-            let text = pipeline::inspect::inspect(&pack, json).map_err(|error| Failure {
-                code: 1,
-                error,
-            })?;
+            let text = pipeline::inspect::inspect(&pack, json)
+                .map_err(|error| Failure { code: 1, error })?;
             print!("{text}");
             Ok(())
         }

@@ -4,7 +4,11 @@
 use clap::Parser;
 
 #[derive(Parser)]
-#[command(name = "player", version, about = "hexbake player (renderer not built yet: issue 7)")]
+#[command(
+    name = "player",
+    version,
+    about = "hexbake player (renderer not built yet: issue 7)"
+)]
 struct Cli {}
 
 fn main() {

@@ -3,6 +3,7 @@
 
 pub mod backface;
 pub mod classify;
+pub mod diagnostics;
 pub mod grid;
 pub mod picture;
 pub mod raster;

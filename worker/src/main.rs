@@ -11,7 +11,11 @@ use std::process::ExitCode;
 use worker::raster::{render, CullMode, DrawItem};
 
 #[derive(Parser)]
-#[command(name = "worker", version, about = "hexbake bake kernels: one job, or pictures of one cell")]
+#[command(
+    name = "worker",
+    version,
+    about = "hexbake bake kernels: one job, or pictures of one cell"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -19,6 +23,20 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Capture one instance from a cell's centre and write colour, depth, class-map
+    /// and weight-map PNGs (000 §3.1.3.1–3.1.3.2).
+    Capture {
+        manifest: PathBuf,
+        #[arg(long)]
+        cell: u32,
+        #[arg(long)]
+        instance: u32,
+        #[arg(long)]
+        out: PathBuf,
+        /// Print JSON instead of text.
+        #[arg(long)]
+        json: bool,
+    },
     /// Render the whole scene of a manifest from a viewpoint to a PNG (a look at a scene).
     View {
         manifest: PathBuf,
@@ -44,7 +62,9 @@ fn parse_vec3(s: &str) -> Result<Vec3, String> {
         .collect::<Result<_, _>>()?;
     match v[..] {
         [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok(Vec3::new(x, y, z)),
-        _ => Err(format!("expected x,y,z with three finite numbers, got {s:?}")),
+        _ => Err(format!(
+            "expected x,y,z with three finite numbers, got {s:?}"
+        )),
     }
 }
 
@@ -79,6 +99,44 @@ fn main() -> ExitCode {
 
 fn run(cli: Cli) -> Result<(), Failure> {
     match cli.command {
+        Command::Capture {
+            manifest,
+            cell,
+            instance,
+            out,
+            json,
+        } => {
+            let plan = format::manifest::parse_manifest(&manifest).map_err(bad_input)?;
+            let scene = plan.load_scene().map_err(bad_input)?;
+            let s = worker::diagnostics::capture_pictures(&plan, &scene, cell, instance, &out)
+                .map_err(|e| match e {
+                    worker::diagnostics::DiagnosticsError::Picture(_) => failed(e),
+                    _ => bad_input(e),
+                })?;
+            if json {
+                println!(
+                    "{}",
+                    serde_json::to_string_pretty(&s).expect("summary serializes")
+                );
+            } else {
+                println!(
+                    "instance {} ({}) from cell {} at ({:.1}, {:.1}, {:.1}): {}×{} px",
+                    s.instance, s.model, s.cell, s.eye[0], s.eye[1], s.eye[2], s.width, s.height
+                );
+                println!(
+                    "pixel classes: exterior silhouette {:.1}%, interior silhouette {:.1}%, sharp edge {:.1}%, interior {:.1}%",
+                    s.class_percent[0], s.class_percent[1], s.class_percent[2], s.class_percent[3]
+                );
+                println!(
+                    "vertices: {} back-facing (w 0.5), {} visible (class weight), {} hidden (w 0.05)",
+                    s.vertex_states[0], s.vertex_states[1], s.vertex_states[2]
+                );
+                for f in &s.files {
+                    println!("wrote {}", f.display());
+                }
+            }
+            Ok(())
+        }
         Command::View {
             manifest,
             eye,
@@ -102,8 +160,9 @@ fn run(cli: Cli) -> Result<(), Failure> {
                 scene.ground.max[1] + 0.15 * d,
             ));
             let far = 4.0 * (w + d + eye.y);
-            let view = worker::raster::View::look_at_fov(eye, target, Vec3::Y, fov, size, size, 0.5, far)
-                .map_err(bad_input)?;
+            let view =
+                worker::raster::View::look_at_fov(eye, target, Vec3::Y, fov, size, size, 0.5, far)
+                    .map_err(bad_input)?;
             let items: Vec<DrawItem> = scene
                 .instances
                 .iter()
