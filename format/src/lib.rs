@@ -18,6 +18,7 @@
 
 pub mod cleanup;
 mod field_positions;
+pub mod fingerprint;
 pub mod load;
 pub mod manifest;
 pub mod mesh;

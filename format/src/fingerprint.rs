@@ -1,0 +1,134 @@
+//! Fingerprints (DESIGN.md "Fingerprints"; bevy_asset-style cache keys): a job's
+//! fingerprint hashes the pack format version, the bake and cell parameters, the
+//! content of every model and the instance table it reads, and the cells it bakes.
+//! An unchanged fingerprint and a valid pack mean the job is done.
+//!
+//! Every job reads the whole scene (any object can be a proxy for any cell), so the
+//! scene part is shared: `scene_fingerprint` hashes models + instances + ground, and
+//! `job_fingerprint` adds the parameters and the job's cell list. Numbers are hashed
+//! as their little-endian bytes, in a fixed order, with a domain tag per part.
+
+use crate::manifest::{BakeParams, CellParams};
+use crate::pack::FORMAT_VERSION;
+use crate::Scene;
+
+pub type Fingerprint = [u8; 32];
+
+/// Hex form for file names, logs and reports.
+pub fn to_hex(f: &Fingerprint) -> String {
+    f.iter().map(|b| format!("{b:02x}")).collect()
+}
+
+fn f32s(h: &mut blake3::Hasher, values: &[f32]) {
+    for v in values {
+        h.update(&v.to_le_bytes());
+    }
+}
+
+/// Models (content hashes, in order), instances (model, transform, tint) and ground.
+pub fn scene_fingerprint(scene: &Scene) -> Fingerprint {
+    let mut h = blake3::Hasher::new();
+    h.update(b"hexbake scene v1\0");
+    h.update(&(scene.models.len() as u64).to_le_bytes());
+    for m in &scene.models {
+        h.update(&m.content_hash);
+    }
+    h.update(&(scene.instances.len() as u64).to_le_bytes());
+    for i in &scene.instances {
+        h.update(&i.model.to_le_bytes());
+        f32s(&mut h, &i.transform.to_cols_array());
+        f32s(&mut h, &i.tint.to_array());
+    }
+    f32s(&mut h, &scene.ground.min);
+    f32s(&mut h, &scene.ground.max);
+    *h.finalize().as_bytes()
+}
+
+/// Everything that decides a cell's bake except the scene: format version, bake and
+/// cell parameters.
+pub fn params_fingerprint(bake: &BakeParams, cells: &CellParams) -> Fingerprint {
+    let mut h = blake3::Hasher::new();
+    h.update(b"hexbake params v1\0");
+    h.update(&FORMAT_VERSION.to_le_bytes());
+    // Destructure so a new parameter cannot be forgotten here.
+    let BakeParams {
+        image_res,
+        self_occluding_tolerance_px,
+        edge_length_tolerance,
+        t_c0,
+        t_c1,
+        clustering,
+        occlusion_culling,
+    } = bake;
+    h.update(&image_res.to_le_bytes());
+    f32s(
+        &mut h,
+        &[*self_occluding_tolerance_px, *edge_length_tolerance, *t_c0, *t_c1],
+    );
+    h.update(&[*clustering as u8, *occlusion_culling as u8]);
+    let CellParams {
+        cell_size,
+        min_eye_height,
+        max_eye_height,
+    } = cells;
+    f32s(&mut h, &[*cell_size, *min_eye_height, *max_eye_height]);
+    *h.finalize().as_bytes()
+}
+
+/// The fingerprint of the job that bakes `cells` (ascending ids).
+pub fn job_fingerprint(scene: &Fingerprint, params: &Fingerprint, cells: &[u32]) -> Fingerprint {
+    let mut h = blake3::Hasher::new();
+    h.update(b"hexbake job v1\0");
+    h.update(scene);
+    h.update(params);
+    h.update(&(cells.len() as u64).to_le_bytes());
+    for c in cells {
+        h.update(&c.to_le_bytes());
+    }
+    *h.finalize().as_bytes()
+}
+
+/// The fingerprint of a whole build: scene, parameters and every job's fingerprint.
+pub fn build_fingerprint(jobs: &[Fingerprint]) -> Fingerprint {
+    let mut h = blake3::Hasher::new();
+    h.update(b"hexbake build v1\0");
+    for j in jobs {
+        h.update(j);
+    }
+    *h.finalize().as_bytes()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_parameter_changes_the_fingerprint() {
+        let cells = CellParams {
+            cell_size: 50.0,
+            min_eye_height: 4.0,
+            max_eye_height: 12.0,
+        };
+        let base = params_fingerprint(&BakeParams::default(), &cells);
+        let variants: Vec<Box<dyn Fn(&mut BakeParams, &mut CellParams)>> = vec![
+            Box::new(|b, _| b.image_res = 512),
+            Box::new(|b, _| b.self_occluding_tolerance_px = 3.0),
+            Box::new(|b, _| b.edge_length_tolerance = 6.0),
+            Box::new(|b, _| b.t_c0 = 1e-3),
+            Box::new(|b, _| b.t_c1 = 1e-3),
+            Box::new(|b, _| b.clustering = false),
+            Box::new(|b, _| b.occlusion_culling = true),
+            Box::new(|_, c| c.cell_size = 100.0),
+            Box::new(|_, c| c.min_eye_height = 2.0),
+            Box::new(|_, c| c.max_eye_height = 20.0),
+        ];
+        for (k, change) in variants.iter().enumerate() {
+            let (mut b, mut c) = (BakeParams::default(), cells.clone());
+            change(&mut b, &mut c);
+            assert_ne!(params_fingerprint(&b, &c), base, "variant {k}");
+        }
+        let s = [7u8; 32];
+        assert_ne!(job_fingerprint(&s, &base, &[1, 2]), job_fingerprint(&s, &base, &[1, 3]));
+        assert_eq!(job_fingerprint(&s, &base, &[1, 2]), job_fingerprint(&s, &base, &[1, 2]));
+    }
+}
