@@ -138,9 +138,8 @@ impl WindowDepth {
         }
     }
 
-    /// Window depth minus its constant term, `−f/(f−n) · n / z_eye`: differences equal
-    /// window-depth differences. NaN-free for `z_eye > 0`; `+∞` stays `+∞`-like
-    /// (returns 0, callers never read background pixels).
+    /// Window depth minus its constant term, `−f/(f−n) · n / z_eye`: its differences are
+    /// window-depth differences. Finite for `z_eye > 0`; 0 for `z_eye = +∞`.
     pub fn offset_depth(self, z_eye: f32) -> f32 {
         let scale = if self.far.is_finite() && self.far > self.near {
             self.far / (self.far - self.near)

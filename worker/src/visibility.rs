@@ -156,7 +156,8 @@ impl Default for DepthTolerance {
 pub enum DepthVisibility {
     /// Behind the eye, outside the near/far range or outside the image.
     Outside,
-    /// Every covered pixel around it shows a surface in front of it.
+    /// All its incident triangles face away from the eye, or its own pixel shows a
+    /// surface in front of it and no pixel around it shows one of its triangles.
     Hidden,
     /// Visible; `pixel` is the supporting pixel nearest to the projection and
     /// `own_object` says whether that pixel belongs to the queried object.
