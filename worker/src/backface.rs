@@ -101,3 +101,27 @@ pub fn regional_backface_cull(
         .map(|plane| plane.is_some_and(|p| corners.iter().all(|&c| p.faces_away_from(c))))
         .collect()
 }
+
+/// Per vertex: some incident triangle is strictly front-facing from `eye`. The others
+/// are the paper's back-facing vertices (000 §3.1.3.2: "all polygons incident to it
+/// are back-facing"), including vertices no triangle references.
+pub fn front_facing_vertices(mesh: &Mesh, transform: Mat4, eye: Vec3) -> Vec<bool> {
+    front_facing_vertices_of(&world_positions(mesh, transform), &mesh.triangles, eye)
+}
+
+pub(crate) fn front_facing_vertices_of(
+    world: &[Vec3],
+    triangles: &[[u32; 3]],
+    eye: Vec3,
+) -> Vec<bool> {
+    let eye = eye.as_dvec3();
+    let mut front = vec![false; world.len()];
+    for (tri, plane) in triangles.iter().zip(planes_of(world, triangles)) {
+        if plane.is_some_and(|p| p.faces(eye)) {
+            for &v in tri {
+                front[v as usize] = true;
+            }
+        }
+    }
+    front
+}

@@ -7,7 +7,7 @@
 //! |---|---|---|
 //! | exterior silhouette | on the contour of the object's coverage | 0.5 |
 //! | interior silhouette (C0) | `Z[i+1] − Z[i] > T_C0` or `Z[i−1] − Z[i] > T_C0` | 0.4 |
-//! | sharp edge (C1) | `|(Z[i−1] − Z[i]) − (Z[i] − Z[i+1])| ≥ T_C1` | 0.25 |
+//! | sharp edge (C1) | `abs((Z[i−1] − Z[i]) − (Z[i] − Z[i+1])) ≥ T_C1` | 0.25 |
 //! | interior | any other pixel of the object | 0.125 |
 //!
 //! When a pixel meets several tests it gets the class with the highest weight. The 1-D
@@ -38,12 +38,25 @@
 //!    (c = 50) independently of distance — creases, not a smooth bunny's body; C0 marks
 //!    a depth jump larger than T_C0·z²/n between neighbours, e.g. 2.8 units at the
 //!    bunny's SV distance of 7 cells (≈ 600 units), i.e. real gaps and near-grazing
-//!    surfaces only. Measured class percentages on the bunny are in the report of
-//!    issue 3 and in `tests/analysis.rs::bunny_class_percentages`.
+//!    surfaces only.
+//!
+//! Measured on the paper's bunny (43.2 units tall, c = 50, DESIGN.md resolution;
+//! `tests/analysis.rs::bunny_class_percentages`), as % of the bunny's pixels:
+//!
+//! | distance | exterior | interior silhouette | sharp edge | interior |
+//! |---|---|---|---|---|
+//! | 100 (≈ 1 cell) | 1.5 | 54.0 | 1.6 | 42.9 |
+//! | 250 (≈ 3 cells) | 3.8 | 15.4 | 4.3 | 76.5 |
+//! | 600 (≈ 7 cells, SV) | 8.9 | 5.1 | 6.4 | 79.6 |
+//!
+//! The window depth's per-pixel step on a slope of angle α is `n·p·tan α / z`, so C0
+//! also catches steep continuous slopes close to the cell (α > 37° at 100 units, > 62°
+//! at 250, > 78° at 600): the paper's fixed thresholds are tuned for its SV range;
+//! closer objects are MvMeshes, whose weight is the maximum over seven views anyway.
 //!
 //! Only differences of `Z` matter, so we store `−f/(f−n) · n / z_eye` (the window depth
 //! minus its constant term), which keeps full f32 precision far from the near plane.
-//! [`classify`] takes `n` and `f` from the capture's [`View`](crate::raster::View); to
+//! [`classify`] takes `n` and `f` from the capture's [`View`]; to
 //! reproduce the paper, build the capture with `near = √3/2 · c` or pass
 //! [`WindowDepth::paper`] to [`classify_objects`].
 //!
@@ -138,9 +151,8 @@ impl WindowDepth {
         }
     }
 
-    /// Window depth minus its constant term, `−f/(f−n) · n / z_eye`: differences equal
-    /// window-depth differences. NaN-free for `z_eye > 0`; `+∞` stays `+∞`-like
-    /// (returns 0, callers never read background pixels).
+    /// Window depth minus its constant term, `−f/(f−n) · n / z_eye`: its differences are
+    /// window-depth differences. Finite for `z_eye > 0`; 0 for `z_eye = +∞`.
     pub fn offset_depth(self, z_eye: f32) -> f32 {
         let scale = if self.far.is_finite() && self.far > self.near {
             self.far / (self.far - self.near)

@@ -62,7 +62,7 @@
 //! vertex, so they can never occlude it; skipping them removes the numerical noise of
 //! hitting them at the vertex itself).
 
-use crate::backface::{planes_of, world_positions};
+use crate::backface::{front_facing_vertices_of, planes_of, world_positions};
 use crate::raster::{Capture, CullMode, DrawItem, View, BACKGROUND_ID};
 use format::Mesh;
 use glam::{Mat3, Mat4, Vec2, Vec3, Vec3A, Vec4};
@@ -156,7 +156,8 @@ impl Default for DepthTolerance {
 pub enum DepthVisibility {
     /// Behind the eye, outside the near/far range or outside the image.
     Outside,
-    /// Every covered pixel around it shows a surface in front of it.
+    /// All its incident triangles face away from the eye, or its own pixel shows a
+    /// surface in front of it and no pixel around it shows one of its triangles.
     Hidden,
     /// Visible; `pixel` is the supporting pixel nearest to the projection and
     /// `own_object` says whether that pixel belongs to the queried object.
@@ -179,6 +180,21 @@ pub fn depth_visibility(
     tol: DepthTolerance,
 ) -> Vec<DepthVisibility> {
     let world = world_positions(mesh, transform);
+    // Step 1: vertices with some front-facing incident triangle (the others face away
+    // from the eye on every side and are hidden by the object itself).
+    let front_facing = front_facing_vertices_of(&world, &mesh.triangles, capture.view.eye);
+    depth_visibility_of(mesh, &world, &front_facing, capture, object_id, tol)
+}
+
+/// [`depth_visibility`] with the world positions and front-facing flags at hand.
+pub(crate) fn depth_visibility_of(
+    mesh: &Mesh,
+    world: &[Vec3],
+    front_facing: &[bool],
+    capture: &Capture,
+    object_id: u32,
+    tol: DepthTolerance,
+) -> Vec<DepthVisibility> {
     let view = &capture.view;
     let (width, height) = (view.width as i64, view.height as i64);
     let pixel_count = (width * height) as usize;
@@ -187,22 +203,6 @@ pub fn depth_visibility(
         || capture.triangle_id.len() != pixel_count
     {
         return vec![DepthVisibility::Outside; world.len()];
-    }
-
-    // Step 1: vertices with some front-facing incident triangle (the others face away
-    // from the eye on every side and are hidden by the object itself).
-    let eye = view.eye.as_dvec3();
-    let mut front_facing = vec![false; world.len()];
-    for (tri, plane) in mesh
-        .triangles
-        .iter()
-        .zip(planes_of(&world, &mesh.triangles))
-    {
-        if plane.is_some_and(|p| p.faces(eye)) {
-            for &v in tri {
-                front_facing[v as usize] = true;
-            }
-        }
     }
 
     // Step 2: per vertex, the supporting pixels around its projection.

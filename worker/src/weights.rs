@@ -24,10 +24,10 @@
 //! a capture holding foreign objects) is a sub-pixel part of the object on the outline
 //! of its coverage, and gets the exterior-silhouette weight.
 
-use crate::backface::{planes_of, world_positions};
+use crate::backface::{front_facing_vertices_of, world_positions};
 use crate::classify::PixelClass;
 use crate::raster::Capture;
-use crate::visibility::{depth_visibility, DepthTolerance, DepthVisibility};
+use crate::visibility::{depth_visibility_of, DepthTolerance, DepthVisibility};
 use format::Mesh;
 use glam::Mat4;
 
@@ -69,25 +69,19 @@ pub fn vertex_states(
     object_id: u32,
     depth_tolerance: DepthTolerance,
 ) -> Vec<VertexState> {
-    // Step 1: front-facing triangles from the eye, and per vertex "some incident
-    // triangle is front-facing".
+    // Step 1: per vertex, "some incident triangle is front-facing" from the eye.
     let world = world_positions(mesh, transform);
-    let eye = capture.view.eye.as_dvec3();
-    let mut front_facing_vertex = vec![false; world.len()];
-    for (tri, plane) in mesh
-        .triangles
-        .iter()
-        .zip(planes_of(&world, &mesh.triangles))
-    {
-        if plane.is_some_and(|p| p.faces(eye)) {
-            for &v in tri {
-                front_facing_vertex[v as usize] = true;
-            }
-        }
-    }
+    let front_facing_vertex = front_facing_vertices_of(&world, &mesh.triangles, capture.view.eye);
 
     // Step 2: depth-buffer visibility and the pixel each visible vertex projects to.
-    let visibility = depth_visibility(mesh, transform, capture, object_id, depth_tolerance);
+    let visibility = depth_visibility_of(
+        mesh,
+        &world,
+        &front_facing_vertex,
+        capture,
+        object_id,
+        depth_tolerance,
+    );
 
     // Step 3: combine.
     front_facing_vertex

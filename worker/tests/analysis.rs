@@ -12,7 +12,7 @@
 use glam::{DVec3, Mat4, Vec3};
 use proptest::prelude::*;
 use std::path::PathBuf;
-use worker::backface::{front_facing_from, regional_backface_cull};
+use worker::backface::{front_facing_from, front_facing_vertices, regional_backface_cull};
 use worker::classify::{
     classify, classify_objects, ClassCounts, PixelClass, WindowDepth, DEFAULT_T_C0, DEFAULT_T_C1,
 };
@@ -733,6 +733,8 @@ fn cube_vertex_weights() {
         DepthTolerance::default(),
     );
     // Vertex index = x | y<<1 | z<<2 (box_mesh).
+    let front = front_facing_vertices(&mesh, Mat4::IDENTITY, eye);
+    assert_eq!(front, [false, true, true, true, true, true, true, true]);
     assert_eq!(states[0], VertexState::BackFacing);
     assert_eq!(states[7], VertexState::Visible(PixelClass::SharpEdge));
     for (v, &state) in states.iter().enumerate().take(7).skip(1) {
