@@ -115,7 +115,8 @@ impl ProjectedLength {
 
     /// Projected length in pixels of the world-space edge `a`–`b`: the largest angle
     /// it subtends from any of the eyes × pixels per radian. An endpoint on an eye
-    /// gives `f32::INFINITY` (never collapsed); no eyes gives 0.
+    /// gives `f32::INFINITY` (never collapsed); no eyes gives 0 ([`simplify`]
+    /// refuses an empty eye list).
     pub fn pixels(&self, a: Vec3, b: Vec3) -> f32 {
         let mut chord: f32 = 0.0;
         for &eye in self.eyes() {
@@ -212,6 +213,8 @@ pub enum SimplifyError {
     BadTolerance(f32),
     #[error("pixels per radian {0} is not positive and finite")]
     BadPixelsPerRadian(f32),
+    #[error("the projected length has no eyes to measure from")]
+    NoEyes,
     #[error("too many vertices ({0}) for u32 ids")]
     TooManyVertices(usize),
 }
@@ -270,18 +273,28 @@ pub fn simplify(
     if !(ppr.is_finite() && ppr > 0.0) {
         return Err(SimplifyError::BadPixelsPerRadian(ppr));
     }
+    if params.length.eyes().is_empty() {
+        return Err(SimplifyError::NoEyes);
+    }
     check_input(input, params.edge_length_tolerance)?;
-    // Unit directions from every eye to every vertex, computed once: an edge's l
-    // is then one chord per eye (the same arithmetic as `ProjectedLength::pixels`).
+    // Unit directions from every eye to every vertex the triangles use, computed
+    // once: an edge's l is then one chord per eye (the same arithmetic as
+    // `ProjectedLength::pixels`). `slot` maps a vertex id to its row.
     let eyes = params.length.eyes();
-    let mut directions = vec![None; input.positions.len() * eyes.len()];
-    for (v, &p) in input.positions.iter().enumerate() {
-        for (k, &eye) in eyes.iter().enumerate() {
-            directions[v * eyes.len() + k] = unit_direction(p - eye);
+    let mut slot = vec![u32::MAX; input.positions.len()];
+    let mut directions: Vec<Option<Vec3>> = Vec::new();
+    for tri in input.triangles {
+        for &v in tri {
+            if slot[v as usize] == u32::MAX {
+                slot[v as usize] = (directions.len() / eyes.len().max(1)) as u32;
+                let p = input.positions[v as usize];
+                directions.extend(eyes.iter().map(|&eye| unit_direction(p - eye)));
+            }
         }
     }
     let length = |a: u32, b: u32| -> f32 {
-        let (a, b) = (a as usize * eyes.len(), b as usize * eyes.len());
+        let row = |v: u32| slot[v as usize] as usize * eyes.len();
+        let (a, b) = (row(a), row(b));
         let mut chord: f32 = 0.0;
         for k in 0..eyes.len() {
             match (directions[a + k], directions[b + k]) {

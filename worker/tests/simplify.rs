@@ -596,6 +596,14 @@ fn bad_input_is_an_error_not_a_panic() {
         simplify(&ok, &sv_params(Vec3::ZERO, -1.0)),
         Err(SimplifyError::BadTolerance(_))
     ));
+    let no_eyes = SimplifyParams {
+        edge_length_tolerance: 4.5,
+        length: ProjectedLength::MaxOverPoints {
+            eyes: Vec::new(),
+            pixels_per_radian: 100.0,
+        },
+    };
+    assert_eq!(simplify(&ok, &no_eyes), Err(SimplifyError::NoEyes));
 }
 
 #[test]
