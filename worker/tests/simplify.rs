@@ -524,6 +524,48 @@ fn heavy_border_vertices_only_slide_along_the_border() {
     assert!(!out.triangles.is_empty());
 }
 
+/// Non-manifold input (a fin on an interior edge, a flipped triangle, two sheets
+/// touching at a vertex) simplifies without making anything else non-manifold.
+#[test]
+fn non_manifold_input_stays_valid() {
+    let mut mesh = perturbed_grid(8, 8, &[0.1, -0.3, 0.2, 0.4], &[false, true, true]);
+    let n0 = mesh.positions.len() as u32;
+    // A fin: a third triangle on the edge of triangle 40, pointing up.
+    let [a, b, _] = mesh.triangles[40];
+    mesh.positions
+        .push((mesh.positions[a as usize] + mesh.positions[b as usize]) / 2.0 + Vec3::Y);
+    mesh.triangles.push([a, b, n0]);
+    // A flipped triangle: the edges it shares run the same way as its neighbours'.
+    let [p, q, r] = mesh.triangles[70];
+    mesh.triangles[70] = [p, r, q];
+    // A second sheet touching the grid at vertex 0 only.
+    for d in [Vec3::new(-1.0, 0.0, 0.0), Vec3::new(-1.0, 0.0, -1.0)] {
+        mesh.positions.push(mesh.positions[0] + d);
+    }
+    mesh.triangles.push([0, n0 + 2, n0 + 1]);
+    mesh.normals = smooth_normals(&mesh.positions, &mesh.triangles);
+    let weights = vec![0.125; mesh.positions.len()];
+    for tolerance in [4.5, 1e3, 1e9] {
+        let input = SimplifyInput {
+            positions: &mesh.positions,
+            normals: &mesh.normals,
+            triangles: &mesh.triangles,
+            weights: &weights,
+            view_sets: None,
+        };
+        let out = simplify(&input, &sv_params(Vec3::new(4.0, 30.0, 4.0), tolerance)).unwrap();
+        check_log(&mesh, &weights, tolerance, &out);
+        check_no_fold(&mesh, &out);
+        if tolerance > 1e8 {
+            assert!(
+                out.triangles.len() * 4 < mesh.triangles.len(),
+                "{}",
+                out.triangles.len()
+            );
+        }
+    }
+}
+
 #[test]
 fn bad_input_is_an_error_not_a_panic() {
     let m = perturbed_grid(2, 2, &[0.0], &[false]);
