@@ -28,20 +28,20 @@
 //!   edge's cost depends only on its two (original) vertices and never changes.
 //! - **Stopping rule.** An edge collapses while `cost < T_l` (strictly), so T_l = 0
 //!   leaves every mesh unchanged, even one with zero weights.
-//! - **Equal weights.** §3.1.4 allows u → v when `w_u ≤ w_v`; with equal weights we
-//!   try the lower vertex id into the higher one first, then the reverse.
+//! - **Equal weights.** §3.1.4 allows u → v when `w_u ≤ w_v`; with equal weights an
+//!   interior vertex goes into a boundary one first, else the lower vertex id into
+//!   the higher one first; the other direction is tried if the first is rejected.
 //! - **MV constraint (§3.1.4).** With view sets, u may collapse into v only if
 //!   `w_u ≤ w_v` and the two share a view (`set_u & set_v ≠ 0`) or both sets are
 //!   empty. A triangle's view set is the AND of its vertices' sets.
-//! - **Rejected collapses** (the paper only says edge collapsing [14]; these are the
+//! - **Rejected collapses** (the paper only says edge collapsing \[14\]; these are the
 //!   usual safeguards):
 //!   - the link condition (the common neighbours of u and v are exactly the
 //!     vertices opposite the edge) so the mesh stays manifold;
-//!   - the boundary condition of [14] (Hoppe's progressive meshes, which §3.1.3.3
+//!   - the boundary condition of \[14\] (Hoppe's progressive meshes, which §3.1.3.3
 //!     cites): two boundary vertices merge only along a boundary edge. A boundary
 //!     vertex may go into an interior one when its weight is lower (the capture
-//!     weights, 0.5 on exterior silhouettes, keep real silhouettes); on equal
-//!     weights the interior vertex goes into the boundary one first;
+//!     weights, 0.5 on exterior silhouettes, keep real silhouettes);
 //!   - a collapse never deletes a whole connected piece (v keeps a triangle);
 //!   - no directed edge may appear twice around the survivor (edge-manifold and
 //!     consistently oriented even where the input is not manifold elsewhere);
@@ -147,7 +147,12 @@ pub struct SimplifyInput<'a> {
     /// World-space unit vertex normals, one per position.
     pub normals: &'a [Vec3],
     /// The triangles to simplify (e.g. the front-facing subset), counter-clockwise,
-    /// indexing `positions`.
+    /// indexing `positions`. Note: a front-facing subset of a scanned mesh has a
+    /// jagged boundary (single back-facing triangles leave one-triangle holes) that
+    /// the link condition keeps at full resolution; passing the whole mesh with
+    /// back-facing vertices at weight 0.5 (§3.1.3.2) and dropping back faces
+    /// afterwards simplifies much further (see the bunny table in
+    /// `tests/simplify.rs`).
     pub triangles: &'a [[u32; 3]],
     /// Vertex weights from the capture (§3.1.3.2), one per position.
     pub weights: &'a [f32],
