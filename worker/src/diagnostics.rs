@@ -5,7 +5,7 @@
 //! frustum is tight around the object at `image_res` pixels per 60°, and only the
 //! object itself is drawn (its classes and weights do not depend on other objects).
 
-use crate::classify::{classify, ClassCounts, PixelClass};
+use crate::classify::{classify_objects, ClassCounts, PixelClass, WindowDepth};
 use crate::grid::HexGrid;
 use crate::picture::{ramp, write_rgba, PictureError};
 use crate::raster::{render, Capture, CullMode, DrawItem, View};
@@ -114,7 +114,15 @@ pub fn capture_pictures(
         triangles: None,
     };
     let capture = render(&view, &[item], CullMode::Back);
-    let classes = classify(&capture, instance, plan.bake.t_c0, plan.bake.t_c1);
+    // The thresholds are on window depth with the near plane at the cell's side face
+    // (the paper's capture window), not on the tight frustum's own near/far.
+    let classes = classify_objects(
+        &capture,
+        &[instance],
+        plan.bake.t_c0,
+        plan.bake.t_c1,
+        WindowDepth::paper(plan.cells.cell_size),
+    );
     let states = vertex_states(
         &model.mesh,
         inst.transform,

@@ -28,20 +28,20 @@
 //!   edge's cost depends only on its two (original) vertices and never changes.
 //! - **Stopping rule.** An edge collapses while `cost < T_l` (strictly), so T_l = 0
 //!   leaves every mesh unchanged, even one with zero weights.
-//! - **Equal weights.** §3.1.4 allows u → v when `w_u ≤ w_v`; with equal weights we
-//!   try the lower vertex id into the higher one first, then the reverse.
+//! - **Equal weights.** §3.1.4 allows u → v when `w_u ≤ w_v`; with equal weights an
+//!   interior vertex goes into a boundary one first, else the lower vertex id into
+//!   the higher one first; the other direction is tried if the first is rejected.
 //! - **MV constraint (§3.1.4).** With view sets, u may collapse into v only if
 //!   `w_u ≤ w_v` and the two share a view (`set_u & set_v ≠ 0`) or both sets are
 //!   empty. A triangle's view set is the AND of its vertices' sets.
-//! - **Rejected collapses** (the paper only says edge collapsing [14]; these are the
+//! - **Rejected collapses** (the paper only says edge collapsing \[14\]; these are the
 //!   usual safeguards):
 //!   - the link condition (the common neighbours of u and v are exactly the
 //!     vertices opposite the edge) so the mesh stays manifold;
-//!   - the boundary condition of [14] (Hoppe's progressive meshes, which §3.1.3.3
+//!   - the boundary condition of \[14\] (Hoppe's progressive meshes, which §3.1.3.3
 //!     cites): two boundary vertices merge only along a boundary edge. A boundary
 //!     vertex may go into an interior one when its weight is lower (the capture
-//!     weights, 0.5 on exterior silhouettes, keep real silhouettes); on equal
-//!     weights the interior vertex goes into the boundary one first;
+//!     weights, 0.5 on exterior silhouettes, keep real silhouettes);
 //!   - a collapse never deletes a whole connected piece (v keeps a triangle);
 //!   - no directed edge may appear twice around the survivor (edge-manifold and
 //!     consistently oriented even where the input is not manifold elsewhere);
@@ -115,7 +115,8 @@ impl ProjectedLength {
 
     /// Projected length in pixels of the world-space edge `a`–`b`: the largest angle
     /// it subtends from any of the eyes × pixels per radian. An endpoint on an eye
-    /// gives `f32::INFINITY` (never collapsed); no eyes gives 0.
+    /// gives `f32::INFINITY` (never collapsed); no eyes gives 0 ([`simplify`]
+    /// refuses an empty eye list).
     pub fn pixels(&self, a: Vec3, b: Vec3) -> f32 {
         let mut chord: f32 = 0.0;
         for &eye in self.eyes() {
@@ -146,7 +147,12 @@ pub struct SimplifyInput<'a> {
     /// World-space unit vertex normals, one per position.
     pub normals: &'a [Vec3],
     /// The triangles to simplify (e.g. the front-facing subset), counter-clockwise,
-    /// indexing `positions`.
+    /// indexing `positions`. Note: a front-facing subset of a scanned mesh has a
+    /// jagged boundary (single back-facing triangles leave one-triangle holes) that
+    /// the link condition keeps at full resolution; passing the whole mesh with
+    /// back-facing vertices at weight 0.5 (§3.1.3.2) and dropping back faces
+    /// afterwards simplifies much further (see the bunny table in
+    /// `tests/simplify.rs`).
     pub triangles: &'a [[u32; 3]],
     /// Vertex weights from the capture (§3.1.3.2), one per position.
     pub weights: &'a [f32],
@@ -212,6 +218,8 @@ pub enum SimplifyError {
     BadTolerance(f32),
     #[error("pixels per radian {0} is not positive and finite")]
     BadPixelsPerRadian(f32),
+    #[error("the projected length has no eyes to measure from")]
+    NoEyes,
     #[error("too many vertices ({0}) for u32 ids")]
     TooManyVertices(usize),
 }
@@ -270,18 +278,28 @@ pub fn simplify(
     if !(ppr.is_finite() && ppr > 0.0) {
         return Err(SimplifyError::BadPixelsPerRadian(ppr));
     }
+    if params.length.eyes().is_empty() {
+        return Err(SimplifyError::NoEyes);
+    }
     check_input(input, params.edge_length_tolerance)?;
-    // Unit directions from every eye to every vertex, computed once: an edge's l
-    // is then one chord per eye (the same arithmetic as `ProjectedLength::pixels`).
+    // Unit directions from every eye to every vertex the triangles use, computed
+    // once: an edge's l is then one chord per eye (the same arithmetic as
+    // `ProjectedLength::pixels`). `slot` maps a vertex id to its row.
     let eyes = params.length.eyes();
-    let mut directions = vec![None; input.positions.len() * eyes.len()];
-    for (v, &p) in input.positions.iter().enumerate() {
-        for (k, &eye) in eyes.iter().enumerate() {
-            directions[v * eyes.len() + k] = unit_direction(p - eye);
+    let mut slot = vec![u32::MAX; input.positions.len()];
+    let mut directions: Vec<Option<Vec3>> = Vec::new();
+    for tri in input.triangles {
+        for &v in tri {
+            if slot[v as usize] == u32::MAX {
+                slot[v as usize] = (directions.len() / eyes.len().max(1)) as u32;
+                let p = input.positions[v as usize];
+                directions.extend(eyes.iter().map(|&eye| unit_direction(p - eye)));
+            }
         }
     }
     let length = |a: u32, b: u32| -> f32 {
-        let (a, b) = (a as usize * eyes.len(), b as usize * eyes.len());
+        let row = |v: u32| slot[v as usize] as usize * eyes.len();
+        let (a, b) = (row(a), row(b));
         let mut chord: f32 = 0.0;
         for k in 0..eyes.len() {
             match (directions[a + k], directions[b + k]) {

@@ -524,6 +524,48 @@ fn heavy_border_vertices_only_slide_along_the_border() {
     assert!(!out.triangles.is_empty());
 }
 
+/// Non-manifold input (a fin on an interior edge, a flipped triangle, two sheets
+/// touching at a vertex) simplifies without making anything else non-manifold.
+#[test]
+fn non_manifold_input_stays_valid() {
+    let mut mesh = perturbed_grid(8, 8, &[0.1, -0.3, 0.2, 0.4], &[false, true, true]);
+    let n0 = mesh.positions.len() as u32;
+    // A fin: a third triangle on the edge of triangle 40, pointing up.
+    let [a, b, _] = mesh.triangles[40];
+    mesh.positions
+        .push((mesh.positions[a as usize] + mesh.positions[b as usize]) / 2.0 + Vec3::Y);
+    mesh.triangles.push([a, b, n0]);
+    // A flipped triangle: the edges it shares run the same way as its neighbours'.
+    let [p, q, r] = mesh.triangles[70];
+    mesh.triangles[70] = [p, r, q];
+    // A second sheet touching the grid at vertex 0 only.
+    for d in [Vec3::new(-1.0, 0.0, 0.0), Vec3::new(-1.0, 0.0, -1.0)] {
+        mesh.positions.push(mesh.positions[0] + d);
+    }
+    mesh.triangles.push([0, n0 + 2, n0 + 1]);
+    mesh.normals = smooth_normals(&mesh.positions, &mesh.triangles);
+    let weights = vec![0.125; mesh.positions.len()];
+    for tolerance in [4.5, 1e3, 1e9] {
+        let input = SimplifyInput {
+            positions: &mesh.positions,
+            normals: &mesh.normals,
+            triangles: &mesh.triangles,
+            weights: &weights,
+            view_sets: None,
+        };
+        let out = simplify(&input, &sv_params(Vec3::new(4.0, 30.0, 4.0), tolerance)).unwrap();
+        check_log(&mesh, &weights, tolerance, &out);
+        check_no_fold(&mesh, &out);
+        if tolerance > 1e8 {
+            assert!(
+                out.triangles.len() * 4 < mesh.triangles.len(),
+                "{}",
+                out.triangles.len()
+            );
+        }
+    }
+}
+
 #[test]
 fn bad_input_is_an_error_not_a_panic() {
     let m = perturbed_grid(2, 2, &[0.0], &[false]);
@@ -596,6 +638,14 @@ fn bad_input_is_an_error_not_a_panic() {
         simplify(&ok, &sv_params(Vec3::ZERO, -1.0)),
         Err(SimplifyError::BadTolerance(_))
     ));
+    let no_eyes = SimplifyParams {
+        edge_length_tolerance: 4.5,
+        length: ProjectedLength::MaxOverPoints {
+            eyes: Vec::new(),
+            pixels_per_radian: 100.0,
+        },
+    };
+    assert_eq!(simplify(&ok, &no_eyes), Err(SimplifyError::NoEyes));
 }
 
 #[test]
@@ -793,18 +843,49 @@ fn write_obj(path: &std::path::Path, mesh: &TestMesh, triangles: &[[u32; 3]]) {
 }
 
 /// The paper's weights for a vertex seen from `eye` with the capture replaced by
-/// a stand-in: 0.5 if back-facing (all its triangles back-facing, §3.1.3.2), else
-/// 0.125 (interior). The real weights come from the capture's pixel classes.
-fn standin_weights(mesh: &TestMesh, eye: Vec3) -> Vec<f32> {
+/// a geometric stand-in (§3.1.3.2): 0.5 if back-facing (all its triangles
+/// back-facing); 0.5 on the contour (front- and back-facing triangles meet there:
+/// where the exterior and interior silhouettes lie); else 0.125 (interior). The
+/// real weights come from the capture's pixel classes (no occlusion test here).
+/// Vertices with a triangle front-facing to `eye` (not back-facing, §3.1.3.2).
+fn front_vertices(mesh: &TestMesh, eye: Vec3) -> Vec<bool> {
     let mut front = vec![false; mesh.positions.len()];
-    for t in &mesh.triangles {
-        if front_facing(mesh, t, eye) {
-            for &v in t {
-                front[v as usize] = true;
-            }
+    for t in mesh.triangles.iter().filter(|t| front_facing(mesh, t, eye)) {
+        for &v in t {
+            front[v as usize] = true;
         }
     }
-    front.iter().map(|&f| if f { 0.125 } else { 0.5 }).collect()
+    front
+}
+
+fn standin_weights(mesh: &TestMesh, eye: Vec3) -> Vec<f32> {
+    let mut front = vec![false; mesh.positions.len()];
+    let mut back = vec![false; mesh.positions.len()];
+    for t in &mesh.triangles {
+        let side = if front_facing(mesh, t, eye) {
+            &mut front
+        } else {
+            &mut back
+        };
+        for &v in t {
+            side[v as usize] = true;
+        }
+    }
+    front
+        .iter()
+        .zip(&back)
+        .map(|(&f, &b)| if f && !b { 0.125 } else { 0.5 })
+        .collect()
+}
+
+/// How the bunny runs pick their triangles and weights.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Variant {
+    /// The front-facing (SV) / not regionally back-facing (MV) triangles, uniform
+    /// weights 0.125.
+    SubsetUniform,
+    /// The whole mesh with `standin_weights`, back faces dropped afterwards.
+    WholeStandin,
 }
 
 struct BunnyRun {
@@ -812,22 +893,24 @@ struct BunnyRun {
     output: Vec<[u32; 3]>,
 }
 
-/// SVMesh of the bunny from the centre of the cell `k` cells away. `subset`: the
-/// front-facing triangles with uniform weights 0.125; else the whole mesh with the
-/// stand-in weights, front-facing triangles kept afterwards.
-fn bunny_sv(mesh: &TestMesh, k: u32, subset: bool) -> BunnyRun {
+/// SVMesh of the bunny from the centre of the cell `k` cells away, its
+/// front-facing triangles kept at the end.
+fn bunny_sv(mesh: &TestMesh, k: u32, variant: Variant) -> BunnyRun {
     let n = mesh.positions.len();
     let centre = cell_centre(k);
-    let (triangles, weights) = if subset {
-        let tris: Vec<[u32; 3]> = mesh
-            .triangles
+    let triangles: Vec<[u32; 3]> = if variant == Variant::WholeStandin {
+        mesh.triangles.clone()
+    } else {
+        mesh.triangles
             .iter()
             .filter(|t| front_facing(mesh, t, centre))
             .copied()
-            .collect();
-        (tris, vec![0.125f32; n])
+            .collect()
+    };
+    let weights = if variant == Variant::SubsetUniform {
+        vec![0.125f32; n]
     } else {
-        (mesh.triangles.clone(), standin_weights(mesh, centre))
+        standin_weights(mesh, centre)
     };
     let input = SimplifyInput {
         positions: &mesh.positions,
@@ -851,37 +934,38 @@ fn bunny_sv(mesh: &TestMesh, k: u32, subset: bool) -> BunnyRun {
 
 /// MVMesh of the bunny for the cell `k` cells away: l′ over the 12 prism corners,
 /// view k in a vertex's set when the vertex faces view k (centre + 6 neighbours; a
-/// stand-in for the captures' visibility). `subset`: the triangles front-facing to
-/// some corner (not regionally back-facing) with uniform weights 0.125; else the
-/// whole mesh with the stand-in weights maximised over the views (§3.1.4), the
-/// not regionally back-facing triangles kept afterwards.
-fn bunny_mv(mesh: &TestMesh, k: u32, subset: bool) -> BunnyRun {
+/// stand-in for the captures' visibility), stand-in weights maximised over the
+/// views (§3.1.4); the not regionally back-facing triangles kept at the end.
+fn bunny_mv(mesh: &TestMesh, k: u32, variant: Variant) -> BunnyRun {
     let n = mesh.positions.len();
     let centre = cell_centre(k);
     let corners = cell_corners(centre);
     let views = mv_views(centre);
     let regionally_front = |t: &[u32; 3]| corners.iter().any(|&c| front_facing(mesh, t, c));
     let per_view: Vec<Vec<f32>> = views.iter().map(|&e| standin_weights(mesh, e)).collect();
+    let faces: Vec<Vec<bool>> = views.iter().map(|&e| front_vertices(mesh, e)).collect();
     let sets: Vec<u8> = (0..n)
         .map(|v| {
             (0..views.len())
-                .filter(|&i| per_view[i][v] < 0.5)
+                .filter(|&i| faces[i][v])
                 .fold(0u8, |s, i| s | 1 << i)
         })
         .collect();
-    let (triangles, weights) = if subset {
-        let tris: Vec<[u32; 3]> = mesh
-            .triangles
+    let triangles: Vec<[u32; 3]> = if variant == Variant::WholeStandin {
+        mesh.triangles.clone()
+    } else {
+        mesh.triangles
             .iter()
             .filter(|t| regionally_front(t))
             .copied()
-            .collect();
-        (tris, vec![0.125f32; n])
+            .collect()
+    };
+    let weights = if variant == Variant::SubsetUniform {
+        vec![0.125f32; n]
     } else {
-        let w = (0..n)
+        (0..n)
             .map(|v| per_view.iter().map(|w| w[v]).fold(0.0, f32::max))
-            .collect();
-        (mesh.triangles.clone(), w)
+            .collect()
     };
     let input = SimplifyInput {
         positions: &mesh.positions,
@@ -912,43 +996,50 @@ fn bunny_mv(mesh: &TestMesh, k: u32, subset: bool) -> BunnyRun {
 }
 
 /// The bunny (43 units, T_l = 4.5, 1024 pixels per 60°) next to the paper's
-/// Fig. 6 (MVMesh at 1–6 cells) and Fig. 4 (SVMesh at 7–9 cells), in two stand-ins
-/// for the capture's weights (see `bunny_sv`, `bunny_mv`). Writes OBJs of the SV
-/// mesh at 7 cells and the MV mesh at 1 cell to the temp dir.
+/// Fig. 6 (MVMesh at 1–6 cells) and Fig. 4 (SVMesh at 7–9 cells), in two
+/// stand-ins for the capture's weights and triangle sets (`Variant`). Writes OBJs
+/// of the MV meshes at 1 cell and the SV meshes at 7 cells to the temp dir.
 #[test]
 fn bunny_counts_next_to_the_paper() {
     let Some(mesh) = bunny() else { return };
     let paper = [1605, 945, 554, 392, 330, 306, 259, 254, 239];
-    eprintln!("cells | kind | paper | subset in → out | whole mesh in → out (front)");
+    eprintln!(
+        "cells | kind | paper | subset, uniform 0.125: in → out | whole, stand-in: in → out (front)"
+    );
     let mut whole = Vec::new();
     for k in 1..=9u32 {
-        let (kind, subset, full) = if k <= 6 {
-            ("MV", bunny_mv(&mesh, k, true), bunny_mv(&mesh, k, false))
-        } else {
-            ("SV", bunny_sv(&mesh, k, true), bunny_sv(&mesh, k, false))
+        let run = |variant| {
+            if k <= 6 {
+                bunny_mv(&mesh, k, variant)
+            } else {
+                bunny_sv(&mesh, k, variant)
+            }
         };
+        let kind = if k <= 6 { "MV" } else { "SV" };
+        let runs = [run(Variant::SubsetUniform), run(Variant::WholeStandin)];
         eprintln!(
             "{k} | {kind} | {} | {} → {} | {} → {}",
             paper[k as usize - 1],
-            subset.input,
-            subset.output.len(),
-            full.input,
-            full.output.len()
+            runs[0].input,
+            runs[0].output.len(),
+            runs[1].input,
+            runs[1].output.len(),
         );
         // Real simplification, not a handful of collapses.
-        assert!(subset.output.len() * 10 < subset.input, "k={k}");
-        assert!(full.output.len() * 10 < full.input, "k={k}");
-        if k == 1 {
-            let path = std::env::temp_dir().join("hexbake-bunny-mv-1cell.obj");
-            write_obj(&path, &mesh, &subset.output);
-            eprintln!("wrote {}", path.display());
+        for r in &runs {
+            assert!(r.output.len() * 10 < r.input, "k={k}");
         }
-        if k == 7 {
-            let path = std::env::temp_dir().join("hexbake-bunny-sv-7cells.obj");
-            write_obj(&path, &mesh, &subset.output);
-            eprintln!("wrote {}", path.display());
+        if k == 1 || k == 7 {
+            for (r, name) in runs.iter().zip(["subset-uniform", "whole-standin"]) {
+                let path = std::env::temp_dir().join(format!(
+                    "hexbake-bunny-{}-{k}cells-{name}.obj",
+                    kind.to_lowercase()
+                ));
+                write_obj(&path, &mesh, &r.output);
+                eprintln!("wrote {}", path.display());
+            }
         }
-        whole.push((kind, full.output.len()));
+        whole.push((kind, runs[1].output.len()));
     }
     // Whole-mesh runs of one kind get coarser with distance (l shrinks).
     for w in whole.windows(2).filter(|w| w[0].0 == w[1].0) {

@@ -1,0 +1,193 @@
+//! Weighted half-edge collapse (000 §3.1.3.3, §3.1.4) on the Stanford bunny scaled
+//! to the paper's 43 units, T_l = 4.5, 1024 pixels per 60°, uniform weights 0.125
+//! (a stand-in for the capture's weights):
+//!
+//! - `sv_front_7cells`: SVMesh input, the triangles front-facing to the centre of
+//!   the cell 7 cells away;
+//! - `mv_front_1cell`: MVMesh input, the triangles front-facing to some corner of
+//!   the cell 1 cell away, l′ over its 12 corners, view sets over 7 views;
+//! - `sv_whole_7cells`: the whole 69,666-triangle mesh from 7 cells.
+//!
+//! `cargo bench -p worker --bench simplify -- --warm-up-time 1 --measurement-time 3`
+//! (the bunny comes from `HEXBAKE_MODELS` or `<repo>/models`; skipped when absent).
+
+use criterion::{criterion_group, criterion_main, Criterion};
+use glam::Vec3;
+use std::f32::consts::PI;
+use std::hint::black_box;
+use std::path::PathBuf;
+use worker::simplify::{
+    pixels_per_radian, simplify, ProjectedLength, SimplifyInput, SimplifyParams,
+};
+
+const CELL_SIZE: f32 = 50.0;
+
+struct Bunny {
+    positions: Vec<Vec3>,
+    normals: Vec<Vec3>,
+    triangles: Vec<[u32; 3]>,
+}
+
+fn load_bunny() -> Option<Bunny> {
+    let dir = std::env::var_os("HEXBAKE_MODELS")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../models"));
+    let text = std::fs::read_to_string(dir.join("bunny.obj")).ok()?;
+    let mut positions = Vec::new();
+    let mut triangles = Vec::new();
+    for line in text.lines() {
+        let mut words = line.split_whitespace();
+        match words.next() {
+            Some("v") => {
+                let c: Vec<f32> = words.take(3).filter_map(|w| w.parse().ok()).collect();
+                positions.push(Vec3::new(c[0], c[1], c[2]));
+            }
+            Some("f") => {
+                let c: Vec<u32> = words
+                    .filter_map(|w| w.split('/').next()?.parse::<u32>().ok())
+                    .map(|i| i - 1)
+                    .collect();
+                for k in 1..c.len() - 1 {
+                    triangles.push([c[0], c[k], c[k + 1]]);
+                }
+            }
+            _ => {}
+        }
+    }
+    let (lo, hi) = positions.iter().fold(
+        (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
+        |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+    );
+    let scale = 43.0 / (hi.y - lo.y);
+    let base = Vec3::new((lo.x + hi.x) / 2.0, lo.y, (lo.z + hi.z) / 2.0);
+    for p in &mut positions {
+        *p = (*p - base) * scale;
+    }
+    let mut normals = vec![Vec3::ZERO; positions.len()];
+    for t in &triangles {
+        let [a, b, c] = t.map(|i| positions[i as usize]);
+        let n = (b - a).cross(c - a);
+        for &i in t {
+            normals[i as usize] += n;
+        }
+    }
+    let normals = normals
+        .into_iter()
+        .map(|n| n.try_normalize().unwrap_or(Vec3::Y))
+        .collect();
+    Some(Bunny {
+        positions,
+        normals,
+        triangles,
+    })
+}
+
+fn front_facing(b: &Bunny, t: &[u32; 3], eye: Vec3) -> bool {
+    let [p, q, r] = t.map(|i| b.positions[i as usize]);
+    (q - p).cross(r - p).dot(eye - (p + q + r) / 3.0) > 0.0
+}
+
+fn cell_centre(k: u32) -> Vec3 {
+    Vec3::new(0.0, 10.0, k as f32 * 3f32.sqrt() * CELL_SIZE)
+}
+
+fn bench_simplify(c: &mut Criterion) {
+    let Some(bunny) = load_bunny() else {
+        eprintln!("SKIP: bunny.obj not found (set HEXBAKE_MODELS)");
+        return;
+    };
+    let n = bunny.positions.len();
+    let weights = vec![0.125f32; n];
+    let ppr = pixels_per_radian(1024);
+
+    // SV, 7 cells: front-facing triangles, l from the centre.
+    let centre = cell_centre(7);
+    let sv_tris: Vec<[u32; 3]> = bunny
+        .triangles
+        .iter()
+        .filter(|t| front_facing(&bunny, t, centre))
+        .copied()
+        .collect();
+    let sv_params = SimplifyParams {
+        edge_length_tolerance: 4.5,
+        length: ProjectedLength::FromPoint {
+            eye: centre,
+            pixels_per_radian: ppr,
+        },
+    };
+    let sv = SimplifyInput {
+        positions: &bunny.positions,
+        normals: &bunny.normals,
+        triangles: &sv_tris,
+        weights: &weights,
+        view_sets: None,
+    };
+    c.bench_function("sv_front_7cells", |b| {
+        b.iter(|| simplify(black_box(&sv), &sv_params).unwrap())
+    });
+    let whole = SimplifyInput {
+        triangles: &bunny.triangles,
+        ..sv
+    };
+    c.bench_function("sv_whole_7cells", |b| {
+        b.iter(|| simplify(black_box(&whole), &sv_params).unwrap())
+    });
+
+    // MV, 1 cell: triangles front-facing to some prism corner, l′ over 12 corners,
+    // vertex view sets = the views (centre + 6 neighbours) it faces.
+    let centre = cell_centre(1);
+    let corners: Vec<Vec3> = [5.0f32, 15.0]
+        .iter()
+        .flat_map(|&y| {
+            (0..6).map(move |i| {
+                let a = i as f32 * PI / 3.0;
+                Vec3::new(
+                    centre.x + CELL_SIZE * a.cos(),
+                    y,
+                    centre.z + CELL_SIZE * a.sin(),
+                )
+            })
+        })
+        .collect();
+    let mut views = vec![centre];
+    for i in 0..6 {
+        let a = PI / 6.0 + i as f32 * PI / 3.0;
+        views.push(centre + 3f32.sqrt() * CELL_SIZE * Vec3::new(a.cos(), 0.0, a.sin()));
+    }
+    let sets: Vec<u8> = (0..n)
+        .map(|v| {
+            let (p, nrm) = (bunny.positions[v], bunny.normals[v]);
+            views
+                .iter()
+                .enumerate()
+                .filter(|(_, &e)| nrm.dot(e - p) > 0.0)
+                .fold(0u8, |s, (i, _)| s | 1 << i)
+        })
+        .collect();
+    let mv_tris: Vec<[u32; 3]> = bunny
+        .triangles
+        .iter()
+        .filter(|t| corners.iter().any(|&e| front_facing(&bunny, t, e)))
+        .copied()
+        .collect();
+    let mv_params = SimplifyParams {
+        edge_length_tolerance: 4.5,
+        length: ProjectedLength::MaxOverPoints {
+            eyes: corners,
+            pixels_per_radian: ppr,
+        },
+    };
+    let mv = SimplifyInput {
+        positions: &bunny.positions,
+        normals: &bunny.normals,
+        triangles: &mv_tris,
+        weights: &weights,
+        view_sets: Some(&sets),
+    };
+    c.bench_function("mv_front_1cell", |b| {
+        b.iter(|| simplify(black_box(&mv), &mv_params).unwrap())
+    });
+}
+
+criterion_group!(benches, bench_simplify);
+criterion_main!(benches);
