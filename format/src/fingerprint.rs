@@ -63,7 +63,12 @@ pub fn params_fingerprint(bake: &BakeParams, cells: &CellParams) -> Fingerprint 
     h.update(&image_res.to_le_bytes());
     f32s(
         &mut h,
-        &[*self_occluding_tolerance_px, *edge_length_tolerance, *t_c0, *t_c1],
+        &[
+            *self_occluding_tolerance_px,
+            *edge_length_tolerance,
+            *t_c0,
+            *t_c1,
+        ],
     );
     h.update(&[*clustering as u8, *occlusion_culling as u8]);
     let CellParams {
@@ -128,7 +133,13 @@ mod tests {
             assert_ne!(params_fingerprint(&b, &c), base, "variant {k}");
         }
         let s = [7u8; 32];
-        assert_ne!(job_fingerprint(&s, &base, &[1, 2]), job_fingerprint(&s, &base, &[1, 3]));
-        assert_eq!(job_fingerprint(&s, &base, &[1, 2]), job_fingerprint(&s, &base, &[1, 2]));
+        assert_ne!(
+            job_fingerprint(&s, &base, &[1, 2]),
+            job_fingerprint(&s, &base, &[1, 3])
+        );
+        assert_eq!(
+            job_fingerprint(&s, &base, &[1, 2]),
+            job_fingerprint(&s, &base, &[1, 2])
+        );
     }
 }

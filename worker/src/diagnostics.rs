@@ -224,9 +224,9 @@ fn depth_picture(capture: &Capture) -> Vec<[u8; 4]> {
         .collect()
 }
 
-/// Each vertex as a dot at its pixel, coloured by its weight on the ramp
-/// (0.05 invisible … 0.5 silhouette / back-facing); back-facing vertices are drawn
-/// first so the visible surface stays readable.
+/// Each front-facing vertex as a dot at its pixel, coloured by its weight on the
+/// ramp (0.05 hidden … 0.5 exterior silhouette); back-facing vertices (all 0.5) are
+/// left out so the visible surface stays readable, hidden ones are drawn first.
 fn weight_picture(
     capture: &Capture,
     mesh: &format::Mesh,
@@ -235,12 +235,10 @@ fn weight_picture(
 ) -> Vec<[u8; 4]> {
     let (w, h) = (capture.view.width, capture.view.height);
     let mut out = vec![[16, 16, 16, 255]; (w * h) as usize];
-    let mut order: Vec<usize> = (0..states.len()).collect();
-    order.sort_by_key(|&i| match states[i] {
-        VertexState::BackFacing => 0,
-        VertexState::Invisible => 1,
-        VertexState::Visible(_) => 2,
-    });
+    let mut order: Vec<usize> = (0..states.len())
+        .filter(|&i| states[i] != VertexState::BackFacing)
+        .collect();
+    order.sort_by_key(|&i| matches!(states[i], VertexState::Visible(_)));
     for i in order {
         let p = transform.transform_point3(Vec3::from(mesh.positions[i]));
         if let Some((px, _)) = capture.view.project(p) {
