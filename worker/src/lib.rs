@@ -5,6 +5,7 @@ pub mod backface;
 pub mod classify;
 pub mod diagnostics;
 pub mod grid;
+pub mod job;
 pub mod picture;
 pub mod raster;
 pub mod selfocc;

@@ -1,0 +1,173 @@
+//! `report.png`: the hex grid drawn three times as heat maps — polygons per cell
+//! (inside + proxies), pack bytes, bake time — each with a colour bar whose ends are
+//! labelled with the minimum and maximum (a tiny built-in digit font: tiny-skia draws
+//! no text).
+
+use crate::report::CellLine;
+use format::pack::GridParams;
+use format::Ground;
+use tiny_skia::{Color, FillRule, Paint, PathBuilder, Pixmap, Rect, Stroke, Transform};
+use worker::grid::HexGrid;
+use worker::picture::ramp;
+
+const PANEL: f32 = 360.0;
+const MARGIN: f32 = 16.0;
+const BAR_H: f32 = 14.0;
+const LABEL_H: f32 = 24.0;
+
+/// Renders the three panels; returns PNG bytes.
+pub fn render(grid_params: &GridParams, lines: &[CellLine]) -> anyhow::Result<Vec<u8>> {
+    let grid = HexGrid::new(
+        Ground {
+            min: grid_params.ground_min,
+            max: grid_params.ground_max,
+        },
+        grid_params.cell_size,
+    );
+    let [gw, gd] = [
+        grid_params.ground_max[0] - grid_params.ground_min[0],
+        grid_params.ground_max[1] - grid_params.ground_min[1],
+    ];
+    let scale = PANEL / gw.max(gd).max(1e-6);
+    let panel_h = gd * scale;
+    let width = (3.0 * PANEL + 4.0 * MARGIN) as u32;
+    let height = (panel_h + 2.0 * MARGIN + BAR_H + LABEL_H + 8.0) as u32;
+    let mut pm = Pixmap::new(width, height).ok_or_else(|| anyhow::anyhow!("bad image size"))?;
+    pm.fill(Color::WHITE);
+    let metrics: [(&str, Box<dyn Fn(&CellLine) -> f64>); 3] = [
+        (
+            "polygons",
+            Box::new(|l: &CellLine| l.polygons_inside + l.sv_polygons + l.mv_polygons + l.cluster_polygons),
+        ),
+        ("bytes", Box::new(|l: &CellLine| l.pack_bytes as f64)),
+        ("ms", Box::new(|l: &CellLine| l.bake_ms)),
+    ];
+    for (k, (_name, metric)) in metrics.iter().enumerate() {
+        let x0 = MARGIN + k as f32 * (PANEL + MARGIN);
+        let values: Vec<f64> = lines.iter().map(|l| metric(l)).collect();
+        let lo = values.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let span = if hi > lo { hi - lo } else { 1.0 };
+        // Cells without a record stay grey.
+        for cell in 0..grid.cell_count() {
+            let value = lines.iter().position(|l| l.cell == cell).map(|i| values[i]);
+            let colour = match value {
+                Some(v) => ramp(((v - lo) / span) as f32),
+                None => [200, 200, 200, 255],
+            };
+            let corners = grid.corners(cell);
+            let mut pb = PathBuilder::new();
+            for (i, c) in corners.iter().enumerate() {
+                let px = x0 + (c.x - grid_params.ground_min[0]) * scale;
+                let py = MARGIN + (c.y - grid_params.ground_min[1]) * scale;
+                if i == 0 {
+                    pb.move_to(px, py);
+                } else {
+                    pb.line_to(px, py);
+                }
+            }
+            pb.close();
+            if let Some(path) = pb.finish() {
+                let mut paint = Paint::default();
+                paint.set_color_rgba8(colour[0], colour[1], colour[2], 255);
+                paint.anti_alias = true;
+                pm.fill_path(&path, &paint, FillRule::Winding, Transform::identity(), None);
+                paint.set_color_rgba8(255, 255, 255, 255);
+                let stroke = Stroke {
+                    width: 0.5,
+                    ..Stroke::default()
+                };
+                pm.stroke_path(&path, &paint, &stroke, Transform::identity(), None);
+            }
+        }
+        // Colour bar and its labels.
+        let bar_y = MARGIN + panel_h + 8.0;
+        let steps = 64;
+        for s in 0..steps {
+            let c = ramp(s as f32 / (steps - 1) as f32);
+            let mut paint = Paint::default();
+            paint.set_color_rgba8(c[0], c[1], c[2], 255);
+            let w = PANEL / steps as f32;
+            if let Some(r) = Rect::from_xywh(x0 + s as f32 * w, bar_y, w + 0.5, BAR_H) {
+                pm.fill_rect(r, &paint, Transform::identity(), None);
+            }
+        }
+        let label_y = bar_y + BAR_H + 4.0;
+        let (lo_t, hi_t) = if lo.is_finite() {
+            (format_value(lo), format_value(hi))
+        } else {
+            ("-".to_string(), "-".to_string())
+        };
+        draw_text(&mut pm, x0, label_y, &lo_t);
+        draw_text(&mut pm, x0 + PANEL - text_width(&hi_t), label_y, &hi_t);
+        let name = metrics[k].0;
+        draw_text(&mut pm, x0 + PANEL / 2.0 - text_width(name) / 2.0, label_y, name);
+    }
+    Ok(pm.encode_png()?)
+}
+
+fn format_value(v: f64) -> String {
+    if v >= 1e6 {
+        format!("{:.1}m", v / 1e6)
+    } else if v >= 1e4 {
+        format!("{:.0}k", v / 1e3)
+    } else {
+        format!("{v:.0}")
+    }
+}
+
+/// 3×5 glyphs for digits and the few letters the labels use.
+fn glyph(c: char) -> [u8; 5] {
+    match c {
+        '0' => [7, 5, 5, 5, 7],
+        '1' => [2, 6, 2, 2, 7],
+        '2' => [7, 1, 7, 4, 7],
+        '3' => [7, 1, 7, 1, 7],
+        '4' => [5, 5, 7, 1, 1],
+        '5' => [7, 4, 7, 1, 7],
+        '6' => [7, 4, 7, 5, 7],
+        '7' => [7, 1, 1, 1, 1],
+        '8' => [7, 5, 7, 5, 7],
+        '9' => [7, 5, 7, 1, 7],
+        '.' => [0, 0, 0, 0, 2],
+        '-' => [0, 0, 7, 0, 0],
+        'k' => [4, 5, 6, 5, 5],
+        'm' => [0, 7, 7, 5, 5],
+        'b' => [4, 4, 7, 5, 7],
+        'y' => [5, 5, 7, 1, 7],
+        't' => [2, 7, 2, 2, 3],
+        'e' => [7, 5, 7, 4, 7],
+        's' => [7, 4, 7, 1, 7],
+        'p' => [7, 5, 7, 4, 4],
+        'o' => [0, 7, 5, 5, 7],
+        'l' => [2, 2, 2, 2, 3],
+        'g' => [7, 5, 7, 1, 7],
+        'n' => [0, 6, 5, 5, 5],
+        _ => [0, 0, 0, 0, 0],
+    }
+}
+
+const PX: f32 = 3.0;
+
+fn text_width(s: &str) -> f32 {
+    s.chars().count() as f32 * 4.0 * PX
+}
+
+fn draw_text(pm: &mut Pixmap, x: f32, y: f32, s: &str) {
+    let mut paint = Paint::default();
+    paint.set_color_rgba8(30, 30, 30, 255);
+    for (i, ch) in s.chars().enumerate() {
+        let g = glyph(ch);
+        for (row, bits) in g.iter().enumerate() {
+            for col in 0..3 {
+                if bits & (4 >> col) != 0 {
+                    let px = x + (i as f32 * 4.0 + col as f32) * PX;
+                    let py = y + row as f32 * PX;
+                    if let Some(r) = Rect::from_xywh(px, py, PX, PX) {
+                        pm.fill_rect(r, &paint, Transform::identity(), None);
+                    }
+                }
+            }
+        }
+    }
+}

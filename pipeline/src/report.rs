@@ -1,0 +1,256 @@
+//! Reports of a bake (issue 6 item 5): `report.json`, `report.md` and `report.png`
+//! in the output directory, with the per-cell averages in the form of the paper's
+//! Tables 3–8 (000 §4.3) and heat maps of the hex grid (tiny-skia).
+//!
+//! Everything is read back from the output directory (plan, job records, packs), so
+//! `pipeline report <out>` works on any finished bake, local or Slurm.
+
+use crate::run::PlanFile;
+use format::pack::{BasePack, PackFile, SectionKind};
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::path::Path;
+use worker::job::{record_path, JobRecord};
+
+/// Numbers of one cell (from its job record and pack).
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct CellLine {
+    pub cell: u32,
+    /// Triangles of the original instances inside the cell.
+    pub polygons_inside: f64,
+    /// Triangles of the SV, MV and cluster proxies.
+    pub sv_polygons: f64,
+    pub mv_polygons: f64,
+    pub cluster_polygons: f64,
+    /// Objects outside the cell by representation.
+    pub sv_objects: f64,
+    pub mv_objects: f64,
+    pub cluster_objects: f64,
+    pub culled_objects: f64,
+    /// Triangles the outside objects had before simplification.
+    pub outside_original_polygons: f64,
+    pub texture_bytes: f64,
+    pub pack_bytes: u64,
+    pub bake_ms: f64,
+    /// Per-stage bake time in ms.
+    pub stage_ms: BTreeMap<String, f64>,
+}
+
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct Storage {
+    pub base_bytes: u64,
+    pub index_bytes: u64,
+    /// Cell-pack bytes holding textures (stored, i.e. after compression).
+    pub texture_bytes: u64,
+    /// Cell-pack bytes holding everything else (proxy indices, view masks, tables).
+    pub mesh_bytes: u64,
+    pub cell_bytes: u64,
+    pub total_bytes: u64,
+    pub per_cell_bytes: f64,
+}
+
+/// Per-cell averages, the rows of the paper's Tables 3–8.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct PaperTable {
+    pub polygons_inside_a_cell: f64,
+    pub sv_single_percent: f64,
+    pub sv_clustered_percent: f64,
+    pub mv_percent: f64,
+    pub culled_percent: f64,
+    pub polygons_sv_and_mv: f64,
+    pub polygons_for_a_cell: f64,
+    /// Simplified : original, as "1 : x".
+    pub simplified_to_original: f64,
+    pub texture_kb: f64,
+}
+
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct Report {
+    pub scene: String,
+    pub cells: usize,
+    pub jobs: usize,
+    pub instances: usize,
+    pub scene_triangles: u64,
+    /// Sum over jobs of their wall time (s): the bake's cost on one worker.
+    pub job_wall_s: f64,
+    /// Sum over jobs of their process CPU time (s).
+    pub job_cpu_s: f64,
+    /// Per-stage bake time summed over cells (s).
+    pub stage_s: BTreeMap<String, f64>,
+    pub storage: Storage,
+    pub per_cell: PaperTable,
+    pub cell_lines: Vec<CellLine>,
+}
+
+fn num(v: &serde_json::Value, key: &str) -> f64 {
+    v.get(key).and_then(|x| x.as_f64()).unwrap_or(0.0)
+}
+
+/// Builds the report of a finished (or partly finished) bake from its files.
+pub fn build_report(out: &Path) -> anyhow::Result<Report> {
+    use anyhow::Context;
+    let plan: PlanFile = serde_json::from_slice(
+        &std::fs::read(out.join("plan.json")).with_context(|| format!("{}: no plan.json: is this a bake output?", out.display()))?,
+    )
+    .with_context(|| format!("{}/plan.json", out.display()))?;
+    let base_path = out.join("base.pack");
+    let base = BasePack::read(&base_path).with_context(|| base_path.display().to_string())?;
+    let scene_triangles = base
+        .instances
+        .iter()
+        .map(|i| base.models[i.model as usize].mesh.triangle_count() as u64)
+        .sum();
+    let mut report = Report {
+        scene: plan.name.clone(),
+        jobs: plan.jobs.len(),
+        instances: base.instances.len(),
+        scene_triangles,
+        ..Report::default()
+    };
+    report.storage.base_bytes = std::fs::metadata(&base_path)?.len();
+    report.storage.index_bytes = std::fs::metadata(out.join("index.pack")).map(|m| m.len()).unwrap_or(0);
+    for job in &plan.jobs {
+        let Ok(text) = std::fs::read(record_path(out, job.id)) else {
+            continue;
+        };
+        let record: JobRecord = serde_json::from_slice(&text)?;
+        report.job_wall_s += record.wall_s;
+        report.job_cpu_s += record.cpu_s;
+        for c in &record.cells {
+            let r = &c.report;
+            let mut line = CellLine {
+                cell: c.cell,
+                polygons_inside: num(r, "polygons_inside"),
+                sv_polygons: num(r, "sv_polygons"),
+                mv_polygons: num(r, "mv_polygons"),
+                cluster_polygons: num(r, "cluster_polygons"),
+                sv_objects: num(r, "sv_objects"),
+                mv_objects: num(r, "mv_objects"),
+                cluster_objects: num(r, "cluster_objects"),
+                culled_objects: num(r, "culled_objects"),
+                outside_original_polygons: num(r, "outside_original_polygons"),
+                texture_bytes: num(r, "texture_bytes"),
+                pack_bytes: c.bytes,
+                ..CellLine::default()
+            };
+            if let Some(stages) = r.get("stage_ms").and_then(|s| s.as_object()) {
+                for (k, v) in stages {
+                    let ms = v.as_f64().unwrap_or(0.0);
+                    line.stage_ms.insert(k.clone(), ms);
+                    line.bake_ms += ms;
+                    *report.stage_s.entry(k.clone()).or_default() += ms / 1000.0;
+                }
+            }
+            // Storage by kind, from the pack's own section table.
+            if let Ok(pack) = PackFile::read(&out.join(&c.file)) {
+                for s in pack.sections() {
+                    if s.kind == SectionKind::TEXTURES {
+                        report.storage.texture_bytes += s.stored_len;
+                    }
+                }
+            }
+            report.storage.cell_bytes += c.bytes;
+            report.cell_lines.push(line);
+        }
+    }
+    report.cell_lines.sort_by_key(|l| l.cell);
+    report.cells = report.cell_lines.len();
+    let s = &mut report.storage;
+    s.mesh_bytes = s.cell_bytes - s.texture_bytes.min(s.cell_bytes);
+    s.total_bytes = s.base_bytes + s.index_bytes + s.cell_bytes;
+    s.per_cell_bytes = s.cell_bytes as f64 / report.cells.max(1) as f64;
+    report.per_cell = paper_table(&report.cell_lines);
+    Ok(report)
+}
+
+fn paper_table(lines: &[CellLine]) -> PaperTable {
+    let n = lines.len().max(1) as f64;
+    let avg = |f: &dyn Fn(&CellLine) -> f64| lines.iter().map(f).sum::<f64>() / n;
+    let outside = |l: &CellLine| l.sv_objects + l.mv_objects + l.cluster_objects + l.culled_objects;
+    let pct = |f: &dyn Fn(&CellLine) -> f64| {
+        avg(&|l| {
+            let o = outside(l);
+            if o > 0.0 {
+                100.0 * f(l) / o
+            } else {
+                0.0
+            }
+        })
+    };
+    let simplified = avg(&|l| l.sv_polygons + l.mv_polygons + l.cluster_polygons);
+    let original = avg(&|l| l.outside_original_polygons);
+    PaperTable {
+        polygons_inside_a_cell: avg(&|l| l.polygons_inside),
+        sv_single_percent: pct(&|l| l.sv_objects),
+        sv_clustered_percent: pct(&|l| l.cluster_objects),
+        mv_percent: pct(&|l| l.mv_objects),
+        culled_percent: pct(&|l| l.culled_objects),
+        polygons_sv_and_mv: simplified,
+        polygons_for_a_cell: simplified + avg(&|l| l.polygons_inside),
+        simplified_to_original: if simplified > 0.0 { original / simplified } else { 0.0 },
+        texture_kb: avg(&|l| l.texture_bytes) / 1024.0,
+    }
+}
+
+/// The report as Markdown.
+pub fn to_markdown(r: &Report) -> String {
+    use std::fmt::Write;
+    let mut m = String::new();
+    let t = &r.per_cell;
+    let s = &r.storage;
+    let _ = writeln!(m, "# Bake report: {}\n", r.scene);
+    let _ = writeln!(
+        m,
+        "{} cells in {} jobs; {} instances, {} triangles.\n",
+        r.cells, r.jobs, r.instances, r.scene_triangles
+    );
+    let _ = writeln!(m, "## Per-cell averages (paper 000, Tables 3–8)\n");
+    let _ = writeln!(m, "| statistic | value |\n|---|---|");
+    let rows = [
+        ("Avg. polygon no. inside a viewcell", format!("{:.0}", t.polygons_inside_a_cell)),
+        ("Avg. percentage of SVMeshes from clustered objects (%)", format!("{:.1}", t.sv_clustered_percent)),
+        ("Avg. percentage of SVMeshes from single objects (%)", format!("{:.1}", t.sv_single_percent)),
+        ("Avg. percentage of MVMeshes (%)", format!("{:.1}", t.mv_percent)),
+        ("Avg. percentage of culled objects (%)", format!("{:.1}", t.culled_percent)),
+        ("Avg. polygon no. for SVMesh & MVMesh", format!("{:.0}", t.polygons_sv_and_mv)),
+        ("Avg. polygon no. for a viewcell", format!("{:.0}", t.polygons_for_a_cell)),
+        ("Simplified:original", format!("1:{:.1}", t.simplified_to_original)),
+        ("Avg. texture size per cell (KB)", format!("{:.1}", t.texture_kb)),
+    ];
+    for (k, v) in rows {
+        let _ = writeln!(m, "| {k} | {v} |");
+    }
+    let _ = writeln!(m, "\n## Storage\n\n| kind | bytes |\n|---|---|");
+    for (k, v) in [
+        ("base (models, instances)", s.base_bytes),
+        ("cell meshes (indices, masks, tables)", s.mesh_bytes),
+        ("cell textures", s.texture_bytes),
+        ("index", s.index_bytes),
+        ("total", s.total_bytes),
+    ] {
+        let _ = writeln!(m, "| {k} | {v} |");
+    }
+    let _ = writeln!(m, "| per cell (average) | {:.0} |", s.per_cell_bytes);
+    let _ = writeln!(m, "\n## Time\n");
+    let _ = writeln!(
+        m,
+        "Jobs: {:.1} s wall, {:.1} s CPU (summed over jobs).\n\n| stage | seconds (summed over cells) |\n|---|---|",
+        r.job_wall_s, r.job_cpu_s
+    );
+    for (k, v) in &r.stage_s {
+        let _ = writeln!(m, "| {k} | {v:.2} |");
+    }
+    let _ = writeln!(m, "\n![heat maps: polygons, bytes, bake time per cell](report.png)");
+    m
+}
+
+/// Writes `report.json`, `report.md` and `report.png` into `out`.
+pub fn write_report(out: &Path) -> anyhow::Result<Report> {
+    let r = build_report(out)?;
+    format::pack::write_atomic(&out.join("report.json"), &serde_json::to_vec_pretty(&r)?)?;
+    format::pack::write_atomic(&out.join("report.md"), to_markdown(&r).as_bytes())?;
+    let base = BasePack::read(&out.join("base.pack"))?;
+    let png = crate::heatmap::render(&base.grid, &r.cell_lines)?;
+    format::pack::write_atomic(&out.join("report.png"), &png)?;
+    Ok(r)
+}

@@ -1,0 +1,279 @@
+//! Jobs: a few neighbouring cells baked together (DESIGN.md "Data flow"), the unit
+//! the pipeline schedules locally (rayon) or as one Slurm array task.
+//!
+//! Output directory layout (format/README.md describes the files):
+//!
+//! ```text
+//! <out>/base.pack            models + instances + grid (written by the pipeline)
+//! <out>/cells/<id>.pack      one per cell, written atomically by its job
+//! <out>/jobs/<job>.json      the job's record: fingerprint, cells, per-cell stats;
+//!                            written atomically AFTER all its packs (the journal's "end")
+//! <out>/index.pack           assembled once every job is done
+//! ```
+//!
+//! A job is done when its record exists with the job's current fingerprint and every
+//! cell pack it lists decodes, carries that fingerprint and matches the checksum in
+//! the record. Anything else (a crash at any moment, a changed model or parameter,
+//! a corrupt pack) means the job is run again, from scratch. Since packs are written
+//! with temp-file + rename and the record last, a SIGKILL at any moment leaves either
+//! a done job or one that will be redone, and the bytes of a redone job are the same.
+
+use crate::grid::HexGrid;
+use format::fingerprint::{job_fingerprint, params_fingerprint, scene_fingerprint, Fingerprint};
+use format::manifest::Plan;
+use format::pack::CellPack;
+use format::Scene;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// One job of a build.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Job {
+    pub id: u32,
+    /// Ascending cell ids.
+    pub cells: Vec<u32>,
+    #[serde(with = "hex32")]
+    pub fingerprint: Fingerprint,
+}
+
+/// The jobs of a manifest and the fingerprints they depend on.
+#[derive(Clone, Debug)]
+pub struct BuildPlan {
+    pub grid: HexGrid,
+    pub scene_fingerprint: Fingerprint,
+    pub params_fingerprint: Fingerprint,
+    pub jobs: Vec<Job>,
+}
+
+/// Groups the grid's cells into jobs of `plan.cells_per_job` neighbouring cells:
+/// cells are taken in blocks of `cells_per_job` consecutive columns of one row
+/// (each cell's left/right neighbours share its job), so a job's captures and
+/// model loads stay local.
+pub fn plan_jobs(plan: &Plan, scene: &Scene) -> BuildPlan {
+    let grid = HexGrid::new(scene.ground, plan.cells.cell_size);
+    let scene_fp = scene_fingerprint(scene);
+    let params_fp = params_fingerprint(&plan.bake, &plan.cells);
+    let per_job = plan.cells_per_job.max(1);
+    let mut jobs = Vec::new();
+    for row in 0..grid.n_rows() {
+        let mut col = 0;
+        while col < grid.n_cols() {
+            let end = (col + per_job).min(grid.n_cols());
+            let cells: Vec<u32> = (col..end).map(|c| row * grid.n_cols() + c).collect();
+            jobs.push(Job {
+                id: jobs.len() as u32,
+                fingerprint: job_fingerprint(&scene_fp, &params_fp, &cells),
+                cells,
+            });
+            col = end;
+        }
+    }
+    BuildPlan {
+        grid,
+        scene_fingerprint: scene_fp,
+        params_fingerprint: params_fp,
+        jobs,
+    }
+}
+
+/// What one cell's bake reports besides its pack (statistics, times): it goes into
+/// the job record, never into pack bytes (times differ from run to run).
+pub type CellReport = serde_json::Value;
+
+/// One cell's entry in a job record.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct CellRecord {
+    pub cell: u32,
+    pub file: String,
+    pub bytes: u64,
+    #[serde(with = "hex32")]
+    pub checksum: [u8; 32],
+    pub report: CellReport,
+}
+
+/// `jobs/<id>.json`.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct JobRecord {
+    pub job: u32,
+    #[serde(with = "hex32")]
+    pub fingerprint: Fingerprint,
+    pub cells: Vec<CellRecord>,
+    /// Wall time of the job in seconds.
+    pub wall_s: f64,
+    /// CPU time of the whole process while the job ran, in seconds (all threads: only
+    /// the job's own when one job runs per process, as in a Slurm task).
+    pub cpu_s: f64,
+    /// Where it ran.
+    pub host: String,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum JobError {
+    #[error("cell {cell}: {message}")]
+    Cell { cell: u32, message: String },
+    #[error("{path}: {message}")]
+    Io { path: PathBuf, message: String },
+}
+
+pub fn cell_file(cell: u32) -> String {
+    format!("cells/{cell}.pack")
+}
+
+pub fn record_path(out: &Path, job: u32) -> PathBuf {
+    out.join("jobs").join(format!("{job}.json"))
+}
+
+/// Reads a job's record if the job is done (see the module docs), else `None`.
+pub fn done_record(out: &Path, job: &Job) -> Option<JobRecord> {
+    let text = std::fs::read_to_string(record_path(out, job.id)).ok()?;
+    let record: JobRecord = serde_json::from_str(&text).ok()?;
+    if record.fingerprint != job.fingerprint
+        || record.cells.iter().map(|c| c.cell).ne(job.cells.iter().copied())
+    {
+        return None;
+    }
+    for c in &record.cells {
+        let bytes = std::fs::read(out.join(&c.file)).ok()?;
+        if bytes.len() as u64 != c.bytes || *blake3::hash(&bytes).as_bytes() != c.checksum {
+            return None;
+        }
+        let pack = CellPack::from_bytes(&bytes).ok()?;
+        if pack.cell_id != c.cell || pack.fingerprint != job.fingerprint {
+            return None;
+        }
+    }
+    Some(record)
+}
+
+/// Runs one job: bakes each cell with `bake` (which returns the cell's pack content
+/// and its report), writes the packs atomically, then the record. Stops at the first
+/// failing cell, naming it.
+pub fn run_job<F>(out: &Path, job: &Job, mut bake: F) -> Result<JobRecord, JobError>
+where
+    F: FnMut(u32, &Fingerprint) -> Result<(CellPack, CellReport), String>,
+{
+    let start = std::time::Instant::now();
+    let cpu_start = process_cpu_seconds();
+    let io = |path: &Path, e: &dyn std::fmt::Display| JobError::Io {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    };
+    let cells_dir = out.join("cells");
+    std::fs::create_dir_all(&cells_dir).map_err(|e| io(&cells_dir, &e))?;
+    let mut cells = Vec::with_capacity(job.cells.len());
+    for &cell in &job.cells {
+        let (pack, report) =
+            bake(cell, &job.fingerprint).map_err(|message| JobError::Cell { cell, message })?;
+        if pack.cell_id != cell || pack.fingerprint != job.fingerprint {
+            return Err(JobError::Cell {
+                cell,
+                message: "the bake returned a pack for another cell or job".into(),
+            });
+        }
+        let bytes = pack.encode().map_err(|e| JobError::Cell {
+            cell,
+            message: e.to_string(),
+        })?;
+        let file = cell_file(cell);
+        let path = out.join(&file);
+        format::pack::write_atomic(&path, &bytes).map_err(|e| io(&path, &e))?;
+        cells.push(CellRecord {
+            cell,
+            file,
+            bytes: bytes.len() as u64,
+            checksum: *blake3::hash(&bytes).as_bytes(),
+            report,
+        });
+    }
+    let record = JobRecord {
+        job: job.id,
+        fingerprint: job.fingerprint,
+        cells,
+        wall_s: start.elapsed().as_secs_f64(),
+        cpu_s: (process_cpu_seconds() - cpu_start).max(0.0),
+        host: hostname(),
+    };
+    let path = record_path(out, job.id);
+    std::fs::create_dir_all(path.parent().unwrap()).map_err(|e| io(&path, &e))?;
+    let text = serde_json::to_vec_pretty(&record).expect("a job record serializes");
+    format::pack::write_atomic(&path, &text).map_err(|e| io(&path, &e))?;
+    Ok(record)
+}
+
+/// User + system CPU time of this process in seconds (Linux `/proc/self/stat`,
+/// clock ticks of 1/100 s); 0 where that is not available.
+pub fn process_cpu_seconds() -> f64 {
+    let Ok(stat) = std::fs::read_to_string("/proc/self/stat") else {
+        return 0.0;
+    };
+    // Fields after the command name (which may contain spaces) start at ") ".
+    let Some(rest) = stat.rsplit_once(") ").map(|(_, r)| r) else {
+        return 0.0;
+    };
+    let fields: Vec<&str> = rest.split_whitespace().collect();
+    let ticks = |i: usize| fields.get(i).and_then(|f| f.parse::<f64>().ok()).unwrap_or(0.0);
+    // utime and stime are fields 14 and 15 of stat, i.e. 11 and 12 after the name.
+    (ticks(11) + ticks(12)) / 100.0
+}
+
+/// The machine's short host name (for records and lock files).
+pub fn hostname() -> String {
+    std::fs::read_to_string("/proc/sys/kernel/hostname")
+        .map(|s| s.trim().to_string())
+        .ok()
+        .filter(|s| !s.is_empty())
+        .or_else(|| std::env::var("HOSTNAME").ok())
+        .unwrap_or_else(|| "unknown".into())
+}
+
+mod hex32 {
+    use serde::{Deserialize, Deserializer, Serializer};
+
+    pub fn serialize<S: Serializer>(v: &[u8; 32], s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(&format::fingerprint::to_hex(v))
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<[u8; 32], D::Error> {
+        let text = String::deserialize(d)?;
+        let mut out = [0u8; 32];
+        if text.len() != 64 || !text.is_ascii() {
+            return Err(serde::de::Error::custom("expected 64 hex digits"));
+        }
+        for (i, b) in out.iter_mut().enumerate() {
+            *b = u8::from_str_radix(&text[2 * i..2 * i + 2], 16)
+                .map_err(|_| serde::de::Error::custom("expected 64 hex digits"))?;
+        }
+        Ok(out)
+    }
+}
+
+/// Bakes one cell of `job` into its pack and report (the function every executor
+/// runs for each cell).
+pub fn bake_cell_pack(
+    plan: &Plan,
+    scene: &Scene,
+    grid: &HexGrid,
+    cell: u32,
+    fingerprint: &Fingerprint,
+) -> Result<(CellPack, CellReport), String> {
+    // TEMPORARY until bake_cell lands: originals only (instances intersecting the
+    // cell's prism), every other instance culled.
+    let prism = grid.prism(cell, plan.cells.min_eye_height, plan.cells.max_eye_height);
+    let originals = (0..scene.instances.len())
+        .filter(|&i| {
+            let (lo, hi) = scene.instance_bounds(i);
+            prism.intersects_aabb(lo, hi)
+        })
+        .map(|i| i as u32)
+        .collect::<Vec<_>>();
+    let report = serde_json::json!({ "originals": originals.len() });
+    Ok((
+        CellPack {
+            cell_id: cell,
+            fingerprint: *fingerprint,
+            originals,
+            proxies: Vec::new(),
+        },
+        report,
+    ))
+}
