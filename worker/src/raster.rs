@@ -17,9 +17,12 @@
 //! 3. **Rasterize** bands in parallel; each band owns its rows. Coverage uses exact
 //!    integer edge functions with a top-left fill rule (equivalent to nudging the
 //!    sample point by (ε, ε²)), so shared edges and vertices are covered exactly
-//!    once. The depth test keeps the largest 1/w; exactly equal 1/w goes to the
-//!    lower (item index, triangle id). That is a total order, so the result does not
-//!    depend on the order fragments arrive in, hence not on the thread count.
+//!    once. 1/w is interpolated linearly in screen space (exact for a plane) and the
+//!    depth test keeps the smallest eye depth 1/(1/w); exactly equal depth goes to
+//!    the lower (item index, triangle id). That is a total order, so the result does
+//!    not depend on the order fragments arrive in, hence not on the thread count.
+//!    The bands write straight into the capture's depth / id buffers (the item index
+//!    stands in for the object id until step 4).
 //! 4. **Resolve** (deferred shading): per visible pixel, perspective-correct
 //!    barycentrics of the visible triangle at the pixel centre by 2D homogeneous
 //!    rasterization (Olano & Greer 1997), then [`Shading`] — DESIGN.md's Lambert
@@ -148,7 +151,8 @@ impl Shading {
                     }
                 }
                 let mut n = *s.normal_matrix * normal;
-                if !(n.length_squared() > 1e-20) || !n.is_finite() {
+                let usable = n.is_finite() && n.length_squared() > 1e-20;
+                if !usable {
                     // No usable vertex normals: the geometric normal.
                     let p = t.map(|v| {
                         s.item
@@ -215,7 +219,8 @@ struct TriSetup {
 struct Fragment {
     x: u32,
     y: u32,
-    key: f32,
+    /// Eye-space depth.
+    depth: f32,
     id: u64,
 }
 
@@ -282,11 +287,13 @@ impl Viewport {
         if c.z > c.w {
             f |= OUT_FAR;
         }
-        // `!(a >= b)` so that NaN coordinates count as outside.
-        if !(c.z >= -c.w) || !(c.w > 0.0) {
+        // Written so that NaN coordinates count as outside.
+        let inside_near = c.z >= -c.w && c.w > 0.0;
+        if !inside_near {
             f |= OUT_NEAR | NEEDS_CLIP;
         }
-        if !(c.x.abs() <= self.guard_x * c.w) || !(c.y.abs() <= self.guard_y * c.w) {
+        let inside_guard = c.x.abs() <= self.guard_x * c.w && c.y.abs() <= self.guard_y * c.w;
+        if !inside_guard {
             f |= NEEDS_CLIP;
         }
         f
@@ -295,17 +302,25 @@ impl Viewport {
     /// Fixed-point screen position of a clip-space point inside the near plane and
     /// the guard band.
     #[inline]
-    fn to_screen(&self, c: Vec4) -> ScreenVert {
+    fn screen_vert(&self, c: Vec4) -> ScreenVert {
         let inv_w = 1.0 / c.w;
         let sx = (c.x * inv_w + 1.0) * self.half_w;
         let sy = (1.0 - c.y * inv_w) * self.half_h;
         ScreenVert {
-            x: (sx * SUB as f32).round() as i32,
-            y: (sy * SUB as f32).round() as i32,
+            x: round_to_i32(sx * SUB as f32),
+            y: round_to_i32(sy * SUB as f32),
             inv_w,
             flags: 0,
         }
     }
+}
+
+/// Round to nearest (ties to even) for |v| < 2^31, without a libm call: adding and
+/// subtracting 1.5·2^52 in f64 leaves the nearest integer.
+#[inline(always)]
+fn round_to_i32(v: f32) -> i32 {
+    const MAGIC: f64 = 6_755_399_441_055_744.0;
+    ((v as f64 + MAGIC) - MAGIC) as i32
 }
 
 /// Renders `items` from `view` with DESIGN.md's lighting ([`Shading::Lit`]).
@@ -319,8 +334,31 @@ pub fn render(view: &View, items: &[DrawItem], cull: CullMode) -> Capture {
 /// out-of-range vertex indices (and subset entries out of range) are skipped.
 /// The result is bit-identical for any rayon thread count.
 pub fn render_with(view: &View, items: &[DrawItem], cull: CullMode, shading: Shading) -> Capture {
+    let mut capture = Capture {
+        view: *view,
+        depth: Vec::new(),
+        color: Vec::new(),
+        object_id: Vec::new(),
+        triangle_id: Vec::new(),
+    };
+    render_into(view, items, cull, shading, &mut capture);
+    capture
+}
+
+/// [`render_with`] into an existing capture, reusing its buffers' memory (for
+/// callers that make many captures). Every buffer and the view are overwritten.
+pub fn render_into(
+    view: &View,
+    items: &[DrawItem],
+    cull: CullMode,
+    shading: Shading,
+    capture: &mut Capture,
+) {
     let vp = Viewport::new(view);
     let (w, h) = (vp.width as usize, vp.height as usize);
+    // Item indices stand in for object ids during rasterization; `BACKGROUND_ID`
+    // marks "none", so at most `u32::MAX` items are drawn.
+    let items = &items[..items.len().min(BACKGROUND_ID as usize)];
 
     // Step 1: transform every vertex once per item.
     let view_proj = view.proj * view.view;
@@ -348,57 +386,87 @@ pub fn render_with(view: &View, items: &[DrawItem], cull: CullMode, shading: Sha
         .map(|&(i, start, end)| setup_chunk(&vp, cull, items, &item_data, i, start, end))
         .collect();
 
-    // Step 3: rasterize bands; each band owns `BAND_ROWS` full rows.
-    let mut key = vec![0.0f32; w * h];
-    let mut ids = vec![u64::MAX; w * h];
-    let far_key = 1.0 / view.far;
+    // Step 3: rasterize bands; each band owns `BAND_ROWS` full rows. The capture's
+    // buffers are the targets: depth, the item index (mapped to the object id in
+    // step 4) and the triangle id.
+    let Capture {
+        depth,
+        color,
+        object_id,
+        triangle_id,
+        ..
+    } = capture;
+    for (buffer, value) in [
+        (&mut *object_id, BACKGROUND_ID),
+        (&mut *triangle_id, BACKGROUND_ID),
+    ] {
+        buffer.clear();
+        buffer.resize(w * h, value);
+    }
+    depth.clear();
+    depth.resize(w * h, f32::INFINITY);
+    color.clear();
+    color.resize(w * h, SKY);
+    let far = view.far;
     let band_len = w * BAND_ROWS as usize;
     if w > 0 && h > 0 {
-        key.par_chunks_mut(band_len)
-            .zip(ids.par_chunks_mut(band_len))
+        depth
+            .par_chunks_mut(band_len)
+            .zip(object_id.par_chunks_mut(band_len))
+            .zip(triangle_id.par_chunks_mut(band_len))
             .enumerate()
-            .for_each(|(band, (key, ids))| {
-                key.fill(if far_key.is_finite() { far_key } else { 0.0 });
+            .for_each(|(band, ((depth, item), tri))| {
                 let y0 = band as i32 * BAND_ROWS as i32;
-                let y1 = y0 + (key.len() / w) as i32;
+                let y1 = y0 + (depth.len() / w) as i32;
+                let mut target = Band {
+                    depth,
+                    item,
+                    tri,
+                    width: w,
+                    y0,
+                    y1,
+                    far,
+                };
                 for chunk in &chunks {
                     for &f in &chunk.frag_bins[band] {
                         let f = &chunk.frags[f as usize];
                         let o = (f.y as usize - y0 as usize) * w + f.x as usize;
-                        depth_test(&mut key[o], &mut ids[o], f.key, f.id);
+                        target.test(o, f.depth, f.id);
                     }
                     for &t in &chunk.tri_bins[band] {
-                        raster_triangle(&chunk.tris[t as usize], w, y0, y1, key, ids);
+                        raster_triangle(&chunk.tris[t as usize], &mut target);
                     }
                 }
             });
     }
 
-    // Step 4: resolve depth, ids and colour per pixel.
-    let mut depth = vec![f32::INFINITY; w * h];
-    let mut color = vec![SKY; w * h];
-    let mut object_id = vec![BACKGROUND_ID; w * h];
-    let mut triangle_id = vec![BACKGROUND_ID; w * h];
+    // Step 4: resolve object ids and colour per visible pixel; rows of bands nothing
+    // reached stay background.
+    let touched: Vec<bool> = (0..vp.bands)
+        .map(|b| {
+            chunks
+                .iter()
+                .any(|c| !c.frag_bins[b].is_empty() || !c.tri_bins[b].is_empty())
+        })
+        .collect();
     if w > 0 && h > 0 {
-        depth
+        color
             .par_chunks_mut(w)
-            .zip(color.par_chunks_mut(w))
             .zip(object_id.par_chunks_mut(w))
-            .zip(triangle_id.par_chunks_mut(w))
+            .zip(triangle_id.par_chunks(w))
             .enumerate()
-            .for_each(|(y, (((depth, color), object_id), triangle_id))| {
+            .for_each(|(y, ((color, object_id), triangle_id))| {
+                if !touched[y / BAND_ROWS as usize] {
+                    return;
+                }
                 for x in 0..w {
-                    let o = y * w + x;
-                    let id = ids[o];
-                    if id == u64::MAX {
+                    if object_id[x] == BACKGROUND_ID {
                         continue;
                     }
-                    let item_index = (id >> 32) as usize;
-                    let tri = id as u32;
+                    let item_index = object_id[x] as usize;
+                    let tri = triangle_id[x];
                     let item = &items[item_index];
-                    depth[x] = 1.0 / key[o];
                     object_id[x] = item.object_id;
-                    triangle_id[x] = tri;
                     let data = &item_data[item_index];
                     let t = item.mesh.triangles[tri as usize];
                     let ndc = Vec2::new(
@@ -423,16 +491,9 @@ pub fn render_with(view: &View, items: &[DrawItem], cull: CullMode, shading: Sha
             });
     }
 
-    let mut view_out = *view;
-    view_out.width = vp.width;
-    view_out.height = vp.height;
-    Capture {
-        view: view_out,
-        depth,
-        color,
-        object_id,
-        triangle_id,
-    }
+    capture.view = *view;
+    capture.view.width = vp.width;
+    capture.view.height = vp.height;
 }
 
 fn transform_item(vp: &Viewport, view_proj: Mat4, item: &DrawItem) -> ItemData {
@@ -450,7 +511,7 @@ fn transform_item(vp: &Viewport, view_proj: Mat4, item: &DrawItem) -> ItemData {
                 *c = cp;
                 let flags = vp.flags(cp);
                 *s = if flags & NEEDS_CLIP == 0 {
-                    vp.to_screen(cp)
+                    vp.screen_vert(cp)
                 } else {
                     ScreenVert::default()
                 };
@@ -490,11 +551,34 @@ fn edge_bias(ax: i32, ay: i32, bx: i32, by: i32) -> i64 {
     }
 }
 
-#[inline(always)]
-fn depth_test(key: &mut f32, id: &mut u64, k: f32, new_id: u64) {
-    if k > *key || (k == *key && new_id < *id) {
-        *key = k;
-        *id = new_id;
+/// The rows `[y0, y1)` of the capture one band owns.
+struct Band<'a> {
+    depth: &'a mut [f32],
+    /// Item index of the visible surface (`BACKGROUND_ID` for none).
+    item: &'a mut [u32],
+    tri: &'a mut [u32],
+    width: usize,
+    y0: i32,
+    y1: i32,
+    far: f32,
+}
+
+impl Band<'_> {
+    /// Depth test of a fragment at offset `o` with eye depth `d` and id
+    /// `item << 32 | triangle`: the nearer wins; on exactly equal depth the lower id.
+    #[inline(always)]
+    fn test(&mut self, o: usize, d: f32, id: u64) {
+        let cur = self.depth[o];
+        if d <= self.far && (d < cur || (d == cur && id < self.id(o))) {
+            self.depth[o] = d;
+            self.item[o] = (id >> 32) as u32;
+            self.tri[o] = id as u32;
+        }
+    }
+
+    #[inline(always)]
+    fn id(&self, o: usize) -> u64 {
+        ((self.item[o] as u64) << 32) | self.tri[o] as u64
     }
 }
 
@@ -607,7 +691,7 @@ fn setup_triangle(
             out.frags.push(Fragment {
                 x: x_min as u32,
                 y: y_min as u32,
-                key: k,
+                depth: 1.0 / k,
                 id,
             });
         }
@@ -644,9 +728,10 @@ fn sample(t: &TriSetup, x: i32, y: i32) -> Option<f32> {
 
 /// Rasterizes a set-up triangle into the rows `[y0, y1)` a band owns.
 #[inline]
-fn raster_triangle(t: &TriSetup, w: usize, y0: i32, y1: i32, key: &mut [f32], ids: &mut [u64]) {
+fn raster_triangle(t: &TriSetup, band: &mut Band) {
+    let (w, y0) = (band.width, band.y0);
     let ys = t.y_min.max(y0);
-    let ye = t.y_max.min(y1 - 1);
+    let ye = t.y_max.min(band.y1 - 1);
     if ys > ye {
         return;
     }
@@ -675,8 +760,7 @@ fn raster_triangle(t: &TriSetup, w: usize, y0: i32, y1: i32, key: &mut [f32], id
             if (e0 | e1 | e2) >= 0 {
                 inside_seen = true;
                 let k = e0 as f32 * a0 + e1 as f32 * a1 + e2 as f32 * a2;
-                let o = row + x as usize;
-                depth_test(&mut key[o], &mut ids[o], k, t.id);
+                band.test(row + x as usize, 1.0 / k, t.id);
             } else if inside_seen {
                 break; // a triangle's span on a row is contiguous
             }
@@ -726,12 +810,12 @@ fn setup_clipped(vp: &Viewport, cull: CullMode, c: [Vec4; 3], id: u64, out: &mut
             return;
         }
     }
-    if poly[..n].iter().any(|p| !(p.w > 0.0) || !p.is_finite()) {
+    if poly[..n].iter().any(|p| !(p.w > 0.0 && p.is_finite())) {
         return;
     }
     let s: [ScreenVert; 9] = std::array::from_fn(|i| {
         if i < n {
-            vp.to_screen(poly[i])
+            vp.screen_vert(poly[i])
         } else {
             ScreenVert::default()
         }
@@ -770,7 +854,8 @@ pub fn homogeneous_barycentrics(c: [Vec4; 3], ndc: Vec2) -> Vec3 {
         col[0].cross(col[1]).dot(q),
     );
     let sum = l.x + l.y + l.z;
-    if !(sum.abs() > 0.0) || !sum.is_finite() {
+    let usable = sum.is_finite() && sum.abs() > 0.0;
+    if !usable {
         return Vec3::splat(1.0 / 3.0);
     }
     let l = (l / sum).max(Vec3::ZERO);

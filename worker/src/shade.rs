@@ -39,16 +39,49 @@ static SRGB_TO_LINEAR: LazyLock<[f32; 256]> = LazyLock::new(|| {
 });
 
 /// sRGB transfer function, encoded: linear (clamped to [0, 1]) → 8-bit channel,
-/// rounded to nearest.
+/// rounded to nearest: the code c with decode((c − ½)/255) ≤ l < decode((c + ½)/255),
+/// found from a table of those 255 thresholds (computed in f64) rather than `powf`.
 pub fn linear_to_srgb(l: f32) -> u8 {
-    let l = if l.is_nan() { 0.0 } else { l.clamp(0.0, 1.0) };
-    let c = if l <= 0.003_130_8 {
-        l * 12.92
-    } else {
-        1.055 * l.powf(1.0 / 2.4) - 0.055
-    };
-    (c * 255.0 + 0.5).clamp(0.0, 255.0) as u8
+    let t = &*ENCODE;
+    if l.is_nan() || l <= 0.0 {
+        return 0;
+    }
+    let bucket = ((l.min(1.0) * ENCODE_BUCKETS as f32) as usize).min(ENCODE_BUCKETS - 1);
+    let mut c = t.bucket_start[bucket] as usize;
+    while c < 255 && l >= t.threshold[c] {
+        c += 1;
+    }
+    c as u8
 }
+
+const ENCODE_BUCKETS: usize = 4096;
+
+struct EncodeTable {
+    /// `threshold[c]`: the smallest linear value that encodes to at least c + 1.
+    threshold: [f32; 255],
+    /// The code of the bucket's lower end `b / ENCODE_BUCKETS`.
+    bucket_start: [u8; ENCODE_BUCKETS],
+}
+
+static ENCODE: LazyLock<EncodeTable> = LazyLock::new(|| {
+    let threshold: [f32; 255] = std::array::from_fn(|c| {
+        let s = (c as f64 + 0.5) / 255.0;
+        let l = if s <= 0.04045 {
+            s / 12.92
+        } else {
+            ((s + 0.055) / 1.055).powf(2.4)
+        };
+        l as f32
+    });
+    let bucket_start = std::array::from_fn(|b| {
+        let l = b as f32 / ENCODE_BUCKETS as f32;
+        threshold.iter().filter(|&&t| t <= l).count() as u8
+    });
+    EncodeTable {
+        threshold,
+        bucket_start,
+    }
+});
 
 /// A linear colour → opaque sRGB8.
 pub fn linear_to_srgb8(rgb: Vec3) -> [u8; 4] {
@@ -84,6 +117,24 @@ mod tests {
         for c in 0..=255u8 {
             assert_eq!(linear_to_srgb(srgb_to_linear(c)), c);
         }
+    }
+
+    #[test]
+    fn encoding_matches_the_formula_away_from_ties() {
+        for i in 0..=100_000 {
+            let l = i as f32 / 100_000.0;
+            let exact = if l <= 0.003_130_8 {
+                l as f64 * 12.92
+            } else {
+                1.055 * (l as f64).powf(1.0 / 2.4) - 0.055
+            } * 255.0;
+            if (exact - exact.floor() - 0.5).abs() > 1e-4 {
+                assert_eq!(linear_to_srgb(l), (exact + 0.5).floor() as u8, "{l}");
+            }
+        }
+        assert_eq!(linear_to_srgb(-1.0), 0);
+        assert_eq!(linear_to_srgb(f32::NAN), 0);
+        assert_eq!(linear_to_srgb(2.0), 255);
     }
 
     #[test]

@@ -168,7 +168,7 @@ proptest! {
             }
             None => {
                 // Off the grid: off the ground and in no cell's hexagon.
-                prop_assert!(x < 0.0 || x > 1650.0 || z < 0.0 || z > 2035.0);
+                prop_assert!(!(0.0..=1650.0).contains(&x) || !(0.0..=2035.0).contains(&z));
                 prop_assert!((0..g.cell_count()).all(|id| !g.in_hexagon(id, p)));
             }
         }
