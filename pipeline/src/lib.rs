@@ -6,3 +6,5 @@ pub mod lock;
 pub mod report;
 pub mod run;
 pub mod scene_cmd;
+pub mod slurm;
+pub mod status;

@@ -25,6 +25,50 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Bake a manifest: plan, bake the missing jobs (locally or on Slurm), assemble
+    /// the index, write the report. Resumable: a rerun redoes only missing jobs.
+    Run {
+        manifest: PathBuf,
+        /// Output directory (default: the manifest's `output`).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Worker threads for the local executor (default: all cores).
+        #[arg(long)]
+        threads: Option<usize>,
+        /// Rebake every job, even those already done.
+        #[arg(long)]
+        force: bool,
+        /// `local` (rayon in this process) or `slurm` (a job array + a finalize job).
+        #[arg(long, value_enum, default_value_t = ExecutorArg::Local)]
+        executor: ExecutorArg,
+        /// No progress bar, only the summary line.
+        #[arg(long)]
+        quiet: bool,
+        /// Print the summary as JSON (implies --quiet).
+        #[arg(long)]
+        json: bool,
+        #[command(flatten)]
+        slurm: pipeline::slurm::SlurmArgs,
+    },
+    /// Show which jobs of a bake output are done, failed or pending.
+    Status {
+        out: PathBuf,
+        #[arg(long)]
+        json: bool,
+    },
+    /// Rebuild and print the report of a bake output (also writes report.md/json/png).
+    Report {
+        out: PathBuf,
+        #[arg(long)]
+        json: bool,
+    },
+    /// Assemble the index and report once every job is done (the Slurm finalize job).
+    #[command(hide = true)]
+    Finalize {
+        manifest: PathBuf,
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
     /// Print a pack's header and sections and check every checksum.
     Inspect {
         /// A `base.pack`, `cells/<id>.pack` or `index.pack`.
@@ -33,6 +77,12 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+enum ExecutorArg {
+    Local,
+    Slurm,
 }
 
 /// An error with the exit code it maps to.
@@ -45,6 +95,13 @@ fn bad_input(error: impl Into<anyhow::Error>) -> Failure {
     Failure {
         code: 2,
         error: error.into(),
+    }
+}
+
+fn from_run(e: pipeline::run::RunError) -> Failure {
+    match e {
+        pipeline::run::RunError::BadInput(error) => Failure { code: 2, error },
+        pipeline::run::RunError::Failed(error) => Failure { code: 1, error },
     }
 }
 
@@ -73,6 +130,72 @@ fn run(cli: Cli) -> Result<(), Failure> {
             } else {
                 print!("{}", pipeline::scene_cmd::render_text(&summary));
             }
+            Ok(())
+        }
+        Command::Run {
+            manifest,
+            out,
+            threads,
+            force,
+            executor,
+            quiet,
+            json,
+            slurm,
+        } => {
+            let loaded = pipeline::run::load(&manifest, out.as_deref()).map_err(from_run)?;
+            let summary = match executor {
+                ExecutorArg::Local => pipeline::run::run_local(
+                    &loaded,
+                    force,
+                    &pipeline::run::LocalOptions {
+                        threads,
+                        progress: !quiet && !json,
+                    },
+                ),
+                ExecutorArg::Slurm => pipeline::slurm::run_slurm(&loaded, force, &slurm, !json),
+            }
+            .map_err(from_run)?;
+            if json {
+                println!("{}", serde_json::to_string_pretty(&summary).expect("summary serializes"));
+            } else {
+                println!("{}", summary.line());
+            }
+            if summary.complete {
+                Ok(())
+            } else {
+                Err(Failure {
+                    code: 1,
+                    error: anyhow::anyhow!(
+                        "{} job(s) failed or pending; `pipeline status {}` lists them",
+                        summary.jobs_failed.len().max(1),
+                        summary.out.display()
+                    ),
+                })
+            }
+        }
+        Command::Status { out, json } => {
+            let status = pipeline::status::status(&out).map_err(bad_input)?;
+            if json {
+                println!("{}", serde_json::to_string_pretty(&status).expect("status serializes"));
+            } else {
+                print!("{}", status.to_text());
+            }
+            Ok(())
+        }
+        Command::Report { out, json } => {
+            let r = pipeline::report::write_report(&out).map_err(|error| Failure { code: 1, error })?;
+            if json {
+                println!("{}", serde_json::to_string_pretty(&r).expect("report serializes"));
+            } else {
+                print!("{}", pipeline::report::to_markdown(&r));
+            }
+            Ok(())
+        }
+        Command::Finalize { manifest, out } => {
+            let loaded = pipeline::run::load(&manifest, out.as_deref()).map_err(from_run)?;
+            pipeline::run::assemble(&loaded).map_err(from_run)?;
+            pipeline::report::write_report(&loaded.out).map_err(|error| Failure { code: 1, error })?;
+            println!("assembled {}", loaded.out.join("index.pack").display());
             Ok(())
         }
         Command::Inspect { pack, json } => {

@@ -216,6 +216,23 @@ pub struct RunSummary {
     pub complete: bool,
 }
 
+impl RunSummary {
+    /// One line for people.
+    pub fn line(&self) -> String {
+        format!(
+            "{}: {} cells in {} jobs — {} already done, {} baked, {} failed — {:.1} s{}",
+            self.out.display(),
+            self.cells,
+            self.jobs,
+            self.jobs_skipped,
+            self.jobs_baked,
+            self.jobs_failed.len(),
+            self.wall_s,
+            if self.complete { "; index and report written" } else { "" }
+        )
+    }
+}
+
 /// Takes the output lock, (re)writes plan and base, removes job records when
 /// `force`, and returns the lock and the jobs still to bake.
 pub fn prepare(l: &Loaded, force: bool) -> Result<(OutputLock, Vec<Job>), RunError> {

@@ -23,6 +23,18 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Bake one job of a manifest into `<out>` (what a Slurm array task runs; the
+    /// job id defaults to $SLURM_ARRAY_TASK_ID). Skips a job that is already done.
+    Job {
+        manifest: PathBuf,
+        #[arg(long)]
+        out: PathBuf,
+        #[arg(long)]
+        job: Option<u32>,
+        /// Threads for this job's bake (default: all cores).
+        #[arg(long)]
+        threads: Option<usize>,
+    },
     /// Capture one instance from a cell's centre and write colour, depth, class-map
     /// and weight-map PNGs (000 §3.1.3.1–3.1.3.2).
     Capture {
@@ -99,6 +111,53 @@ fn main() -> ExitCode {
 
 fn run(cli: Cli) -> Result<(), Failure> {
     match cli.command {
+        Command::Job {
+            manifest,
+            out,
+            job,
+            threads,
+        } => {
+            let id = match job {
+                Some(id) => id,
+                None => std::env::var("SLURM_ARRAY_TASK_ID")
+                    .ok()
+                    .and_then(|v| v.parse().ok())
+                    .ok_or_else(|| bad_input(anyhow::anyhow!("--job not given and SLURM_ARRAY_TASK_ID not set")))?,
+            };
+            let plan = format::manifest::parse_manifest(&manifest).map_err(bad_input)?;
+            let scene = plan.load_scene().map_err(bad_input)?;
+            let build = worker::job::plan_jobs(&plan, &scene);
+            let job = build.jobs.get(id as usize).ok_or_else(|| {
+                bad_input(anyhow::anyhow!("job {id} does not exist ({} jobs)", build.jobs.len()))
+            })?;
+            if worker::job::done_record(&out, job).is_some() {
+                println!("job {id}: already done");
+                return Ok(());
+            }
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads.unwrap_or(0))
+                .build()
+                .map_err(failed)?;
+            let error_file = out.join("jobs").join(format!("{id}.error"));
+            let _ = std::fs::remove_file(&error_file);
+            let result = pool.install(|| {
+                worker::job::run_job(&out, job, |cell, fp| {
+                    worker::job::bake_cell_pack(&plan, &scene, &build.grid, cell, fp)
+                })
+            });
+            match result {
+                Ok(record) => {
+                    println!("job {id}: {} cells in {:.1} s", record.cells.len(), record.wall_s);
+                    Ok(())
+                }
+                Err(e) => {
+                    let message = format!("job {id}: {e}");
+                    let _ = std::fs::create_dir_all(out.join("jobs"));
+                    let _ = std::fs::write(&error_file, format!("{message}\n"));
+                    Err(failed(anyhow::anyhow!(message)))
+                }
+            }
+        }
         Command::Capture {
             manifest,
             cell,
