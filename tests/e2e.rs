@@ -180,3 +180,217 @@ fn player_prints_its_version() {
     assert!(out.status.success());
     assert!(stdout(&out).contains(env!("CARGO_PKG_VERSION")));
 }
+
+// ---------------------------------------------------------------------------
+// Issue 6: pipeline run — determinism, resume, lock, Slurm.
+
+/// Every file of a bake that must be byte-identical across runs, executors and
+/// thread counts: base, index and cell packs (the report and job records hold
+/// times and are excluded).
+fn bake_files(out: &Path) -> Vec<(String, Vec<u8>)> {
+    let mut files = vec![
+        ("base.pack".to_string(), std::fs::read(out.join("base.pack")).unwrap()),
+        ("index.pack".to_string(), std::fs::read(out.join("index.pack")).unwrap()),
+    ];
+    let mut cells: Vec<_> = std::fs::read_dir(out.join("cells"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    cells.sort();
+    for c in cells {
+        let name = format!("cells/{}", c.file_name().unwrap().to_string_lossy());
+        files.push((name, std::fs::read(&c).unwrap()));
+    }
+    files
+}
+
+fn assert_same_bake(a: &Path, b: &Path) {
+    let (fa, fb) = (bake_files(a), bake_files(b));
+    assert_eq!(
+        fa.iter().map(|f| &f.0).collect::<Vec<_>>(),
+        fb.iter().map(|f| &f.0).collect::<Vec<_>>(),
+        "same files"
+    );
+    for ((name, x), (_, y)) in fa.iter().zip(&fb) {
+        assert!(x == y, "{name} differs between {} and {}", a.display(), b.display());
+    }
+}
+
+fn run_demo(out: &Path, extra: &[&str]) -> Output {
+    let mut args = vec!["run", "manifests/demo.ron", "--quiet", "--out", out.to_str().unwrap()];
+    args.extend_from_slice(extra);
+    run("pipeline", &args, &repo())
+}
+
+#[test]
+fn run_is_identical_for_one_and_two_threads() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = (dir.path().join("t1"), dir.path().join("t2"));
+    let o = run_demo(&a, &["--threads", "1"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = run_demo(&b, &["--threads", "2"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_same_bake(&a, &b);
+    for f in ["report.md", "report.json", "report.png"] {
+        assert!(a.join(f).exists(), "{f} written");
+    }
+    // A second run skips every job and changes nothing.
+    let o = run_demo(&a, &["--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["jobs_baked"], 0, "{v}");
+    assert_same_bake(&a, &b);
+}
+
+/// SIGKILL at several moments, then a normal run: the output is byte-identical to
+/// an uninterrupted bake.
+#[test]
+fn killed_runs_resume_to_identical_output() {
+    let dir = tempfile::tempdir().unwrap();
+    let reference = dir.path().join("ref");
+    let o = run_demo(&reference, &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = dir.path().join("killed");
+    let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+    for _ in 0..6 {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        let delay_ms = 20 + seed % 400;
+        let mut child = Command::new(bin_dir().join("pipeline"))
+            .args(["run", "manifests/demo.ron", "--quiet", "--threads", "2", "--out"])
+            .arg(&out)
+            .current_dir(repo())
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::null())
+            .spawn()
+            .unwrap();
+        std::thread::sleep(std::time::Duration::from_millis(delay_ms));
+        let _ = child.kill(); // SIGKILL
+        let _ = child.wait();
+    }
+    let o = run_demo(&out, &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_same_bake(&reference, &out);
+}
+
+#[test]
+fn a_second_run_on_the_same_output_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("o");
+    std::fs::create_dir_all(&out).unwrap();
+    // This test process is alive: its pid in the lock means "held".
+    let host = std::fs::read_to_string("/proc/sys/kernel/hostname").unwrap();
+    std::fs::write(out.join(".lock"), format!("{} {}\n", std::process::id(), host.trim())).unwrap();
+    let o = run_demo(&out, &[]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("holds this output"), "{}", stderr(&o));
+    // A lock left by a dead process is taken over.
+    std::fs::write(out.join(".lock"), format!("999999999 {}\n", host.trim())).unwrap();
+    let o = run_demo(&out, &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!out.join(".lock").exists(), "lock released");
+}
+
+#[test]
+fn corrupt_cell_pack_is_rebaked() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("o");
+    assert!(run_demo(&out, &[]).status.success());
+    let reference = bake_files(&out);
+    let cell = out.join("cells/5.pack");
+    let mut bytes = std::fs::read(&cell).unwrap();
+    let last = bytes.len() - 1;
+    bytes[last] ^= 0x40;
+    std::fs::write(&cell, bytes).unwrap();
+    let o = run_demo(&out, &["--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["jobs_baked"], 1, "only the corrupt cell's job: {v}");
+    assert!(bake_files(&out) == reference);
+    // inspect names the bad section of a corrupted copy.
+    let copy = dir.path().join("bad.pack");
+    let mut bytes = std::fs::read(&cell).unwrap();
+    bytes[last] ^= 0x40;
+    std::fs::write(&copy, bytes).unwrap();
+    let o = run("pipeline", &["inspect", copy.to_str().unwrap()], &repo());
+    assert_eq!(o.status.code(), Some(1));
+}
+
+/// The Slurm tests need a running Slurm (`scripts/slurm-local.sh start`, which CI
+/// runs) and SLURM_CONF; they skip otherwise unless HEXBAKE_REQUIRE_SLURM=1.
+fn slurm_available() -> bool {
+    let ok = std::env::var_os("SLURM_CONF").is_some()
+        && Command::new("sinfo").arg("-h").output().map(|o| o.status.success()).unwrap_or(false);
+    if !ok {
+        assert!(
+            std::env::var_os("HEXBAKE_REQUIRE_SLURM").is_none(),
+            "HEXBAKE_REQUIRE_SLURM is set but Slurm does not answer"
+        );
+        eprintln!("SKIP: no Slurm (scripts/slurm-local.sh start; export SLURM_CONF=...)");
+    }
+    ok
+}
+
+/// Slurm tests share one one-node cluster: run them one at a time.
+static SLURM: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+#[test]
+fn slurm_bake_equals_local_bake() {
+    if !slurm_available() {
+        return;
+    }
+    let _one = SLURM.lock().unwrap_or_else(|e| e.into_inner());
+    let dir = tempfile::tempdir().unwrap();
+    let (local, slurm) = (dir.path().join("local"), dir.path().join("slurm"));
+    assert!(run_demo(&local, &[]).status.success());
+    let o = run_demo(&slurm, &["--executor", "slurm", "--wait-timeout-s", "600"]);
+    assert!(o.status.success(), "{}{}", stdout(&o), stderr(&o));
+    assert_same_bake(&local, &slurm);
+}
+
+#[test]
+fn slurm_resubmits_only_the_cancelled_task() {
+    if !slurm_available() {
+        return;
+    }
+    let _one = SLURM.lock().unwrap_or_else(|e| e.into_inner());
+    let dir = tempfile::tempdir().unwrap();
+    let (local, out) = (dir.path().join("local"), dir.path().join("slurm"));
+    assert!(run_demo(&local, &[]).status.success());
+    // Submit held, cancel task 2, release the rest.
+    let o = run_demo(&out, &["--executor", "slurm", "--hold"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let sub: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("slurm/submitted.json")).unwrap()).unwrap();
+    let array = sub["array_job"].as_str().unwrap().to_string();
+    let fin = sub["finalize_job"].as_str().unwrap().to_string();
+    let jobs = sub["jobs"].as_array().unwrap().len();
+    assert!(jobs >= 3, "{sub}");
+    assert!(Command::new("scancel").arg(format!("{array}_2")).status().unwrap().success());
+    assert!(Command::new("scontrol").args(["release", &array]).status().unwrap().success());
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(300);
+    loop {
+        let q = Command::new("squeue")
+            .args(["-h", "-o", "%i", "-j", &format!("{array},{fin}")])
+            .output()
+            .unwrap();
+        if String::from_utf8_lossy(&q.stdout).trim().is_empty() {
+            break;
+        }
+        assert!(std::time::Instant::now() < deadline, "Slurm jobs did not finish");
+        std::thread::sleep(std::time::Duration::from_millis(300));
+    }
+    let st = run("pipeline", &["status", out.to_str().unwrap(), "--json"], &repo());
+    let st: serde_json::Value = serde_json::from_slice(&st.stdout).unwrap();
+    assert_eq!(st["pending"], serde_json::json!([2]), "{st}");
+    assert_eq!(st["done"].as_array().unwrap().len(), jobs - 1, "{st}");
+    assert_eq!(st["index_written"], false, "finalize must not run after a cancelled task: {st}");
+    // Running again submits only job 2 and completes the bake.
+    let o = run_demo(&out, &["--executor", "slurm", "--wait-timeout-s", "600"]);
+    assert!(o.status.success(), "{}{}", stdout(&o), stderr(&o));
+    let sub: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("slurm/submitted.json")).unwrap()).unwrap();
+    assert_eq!(sub["jobs"], serde_json::json!([2]), "{sub}");
+    assert_same_bake(&local, &out);
+}
