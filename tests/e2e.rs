@@ -189,8 +189,14 @@ fn player_prints_its_version() {
 /// times and are excluded).
 fn bake_files(out: &Path) -> Vec<(String, Vec<u8>)> {
     let mut files = vec![
-        ("base.pack".to_string(), std::fs::read(out.join("base.pack")).unwrap()),
-        ("index.pack".to_string(), std::fs::read(out.join("index.pack")).unwrap()),
+        (
+            "base.pack".to_string(),
+            std::fs::read(out.join("base.pack")).unwrap(),
+        ),
+        (
+            "index.pack".to_string(),
+            std::fs::read(out.join("index.pack")).unwrap(),
+        ),
     ];
     let mut cells: Vec<_> = std::fs::read_dir(out.join("cells"))
         .unwrap()
@@ -212,12 +218,23 @@ fn assert_same_bake(a: &Path, b: &Path) {
         "same files"
     );
     for ((name, x), (_, y)) in fa.iter().zip(&fb) {
-        assert!(x == y, "{name} differs between {} and {}", a.display(), b.display());
+        assert!(
+            x == y,
+            "{name} differs between {} and {}",
+            a.display(),
+            b.display()
+        );
     }
 }
 
 fn run_demo(out: &Path, extra: &[&str]) -> Output {
-    let mut args = vec!["run", "manifests/demo.ron", "--quiet", "--out", out.to_str().unwrap()];
+    let mut args = vec![
+        "run",
+        "manifests/demo.ron",
+        "--quiet",
+        "--out",
+        out.to_str().unwrap(),
+    ];
     args.extend_from_slice(extra);
     run("pipeline", &args, &repo())
 }
@@ -258,7 +275,14 @@ fn killed_runs_resume_to_identical_output() {
         seed ^= seed << 17;
         let delay_ms = 20 + seed % 400;
         let mut child = Command::new(bin_dir().join("pipeline"))
-            .args(["run", "manifests/demo.ron", "--quiet", "--threads", "2", "--out"])
+            .args([
+                "run",
+                "manifests/demo.ron",
+                "--quiet",
+                "--threads",
+                "2",
+                "--out",
+            ])
             .arg(&out)
             .current_dir(repo())
             .stdout(std::process::Stdio::null())
@@ -281,7 +305,11 @@ fn a_second_run_on_the_same_output_is_refused() {
     std::fs::create_dir_all(&out).unwrap();
     // This test process is alive: its pid in the lock means "held".
     let host = std::fs::read_to_string("/proc/sys/kernel/hostname").unwrap();
-    std::fs::write(out.join(".lock"), format!("{} {}\n", std::process::id(), host.trim())).unwrap();
+    std::fs::write(
+        out.join(".lock"),
+        format!("{} {}\n", std::process::id(), host.trim()),
+    )
+    .unwrap();
     let o = run_demo(&out, &[]);
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
     assert!(stderr(&o).contains("holds this output"), "{}", stderr(&o));
@@ -321,7 +349,11 @@ fn corrupt_cell_pack_is_rebaked() {
 /// runs) and SLURM_CONF; they skip otherwise unless HEXBAKE_REQUIRE_SLURM=1.
 fn slurm_available() -> bool {
     let ok = std::env::var_os("SLURM_CONF").is_some()
-        && Command::new("sinfo").arg("-h").output().map(|o| o.status.success()).unwrap_or(false);
+        && Command::new("sinfo")
+            .arg("-h")
+            .output()
+            .map(|o| o.status.success())
+            .unwrap_or(false);
     if !ok {
         assert!(
             std::env::var_os("HEXBAKE_REQUIRE_SLURM").is_none(),
@@ -367,8 +399,16 @@ fn slurm_resubmits_only_the_cancelled_task() {
     let fin = sub["finalize_job"].as_str().unwrap().to_string();
     let jobs = sub["jobs"].as_array().unwrap().len();
     assert!(jobs >= 3, "{sub}");
-    assert!(Command::new("scancel").arg(format!("{array}_2")).status().unwrap().success());
-    assert!(Command::new("scontrol").args(["release", &array]).status().unwrap().success());
+    assert!(Command::new("scancel")
+        .arg(format!("{array}_2"))
+        .status()
+        .unwrap()
+        .success());
+    assert!(Command::new("scontrol")
+        .args(["release", &array])
+        .status()
+        .unwrap()
+        .success());
     let deadline = std::time::Instant::now() + std::time::Duration::from_secs(300);
     loop {
         let q = Command::new("squeue")
@@ -378,14 +418,24 @@ fn slurm_resubmits_only_the_cancelled_task() {
         if String::from_utf8_lossy(&q.stdout).trim().is_empty() {
             break;
         }
-        assert!(std::time::Instant::now() < deadline, "Slurm jobs did not finish");
+        assert!(
+            std::time::Instant::now() < deadline,
+            "Slurm jobs did not finish"
+        );
         std::thread::sleep(std::time::Duration::from_millis(300));
     }
-    let st = run("pipeline", &["status", out.to_str().unwrap(), "--json"], &repo());
+    let st = run(
+        "pipeline",
+        &["status", out.to_str().unwrap(), "--json"],
+        &repo(),
+    );
     let st: serde_json::Value = serde_json::from_slice(&st.stdout).unwrap();
     assert_eq!(st["pending"], serde_json::json!([2]), "{st}");
     assert_eq!(st["done"].as_array().unwrap().len(), jobs - 1, "{st}");
-    assert_eq!(st["index_written"], false, "finalize must not run after a cancelled task: {st}");
+    assert_eq!(
+        st["index_written"], false,
+        "finalize must not run after a cancelled task: {st}"
+    );
     // Running again submits only job 2 and completes the bake.
     let o = run_demo(&out, &["--executor", "slurm", "--wait-timeout-s", "600"]);
     assert!(o.status.success(), "{}{}", stdout(&o), stderr(&o));

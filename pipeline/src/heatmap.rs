@@ -37,7 +37,9 @@ pub fn render(grid_params: &GridParams, lines: &[CellLine]) -> anyhow::Result<Ve
     let metrics: [(&str, Box<dyn Fn(&CellLine) -> f64>); 3] = [
         (
             "polygons",
-            Box::new(|l: &CellLine| l.polygons_inside + l.sv_polygons + l.mv_polygons + l.cluster_polygons),
+            Box::new(|l: &CellLine| {
+                l.polygons_inside + l.sv_polygons + l.mv_polygons + l.cluster_polygons
+            }),
         ),
         ("bytes", Box::new(|l: &CellLine| l.pack_bytes as f64)),
         ("ms", Box::new(|l: &CellLine| l.bake_ms)),
@@ -71,7 +73,13 @@ pub fn render(grid_params: &GridParams, lines: &[CellLine]) -> anyhow::Result<Ve
                 let mut paint = Paint::default();
                 paint.set_color_rgba8(colour[0], colour[1], colour[2], 255);
                 paint.anti_alias = true;
-                pm.fill_path(&path, &paint, FillRule::Winding, Transform::identity(), None);
+                pm.fill_path(
+                    &path,
+                    &paint,
+                    FillRule::Winding,
+                    Transform::identity(),
+                    None,
+                );
                 paint.set_color_rgba8(255, 255, 255, 255);
                 let stroke = Stroke {
                     width: 0.5,
@@ -101,7 +109,12 @@ pub fn render(grid_params: &GridParams, lines: &[CellLine]) -> anyhow::Result<Ve
         draw_text(&mut pm, x0, label_y, &lo_t);
         draw_text(&mut pm, x0 + PANEL - text_width(&hi_t), label_y, &hi_t);
         let name = metrics[k].0;
-        draw_text(&mut pm, x0 + PANEL / 2.0 - text_width(name) / 2.0, label_y, name);
+        draw_text(
+            &mut pm,
+            x0 + PANEL / 2.0 - text_width(name) / 2.0,
+            label_y,
+            name,
+        );
     }
     Ok(pm.encode_png()?)
 }

@@ -156,7 +156,10 @@ fn run(cli: Cli) -> Result<(), Failure> {
             }
             .map_err(from_run)?;
             if json {
-                println!("{}", serde_json::to_string_pretty(&summary).expect("summary serializes"));
+                println!(
+                    "{}",
+                    serde_json::to_string_pretty(&summary).expect("summary serializes")
+                );
             } else {
                 println!("{}", summary.line());
             }
@@ -176,16 +179,23 @@ fn run(cli: Cli) -> Result<(), Failure> {
         Command::Status { out, json } => {
             let status = pipeline::status::status(&out).map_err(bad_input)?;
             if json {
-                println!("{}", serde_json::to_string_pretty(&status).expect("status serializes"));
+                println!(
+                    "{}",
+                    serde_json::to_string_pretty(&status).expect("status serializes")
+                );
             } else {
                 print!("{}", status.to_text());
             }
             Ok(())
         }
         Command::Report { out, json } => {
-            let r = pipeline::report::write_report(&out).map_err(|error| Failure { code: 1, error })?;
+            let r =
+                pipeline::report::write_report(&out).map_err(|error| Failure { code: 1, error })?;
             if json {
-                println!("{}", serde_json::to_string_pretty(&r).expect("report serializes"));
+                println!(
+                    "{}",
+                    serde_json::to_string_pretty(&r).expect("report serializes")
+                );
             } else {
                 print!("{}", pipeline::report::to_markdown(&r));
             }
@@ -194,7 +204,8 @@ fn run(cli: Cli) -> Result<(), Failure> {
         Command::Finalize { manifest, out } => {
             let loaded = pipeline::run::load(&manifest, out.as_deref()).map_err(from_run)?;
             pipeline::run::assemble(&loaded).map_err(from_run)?;
-            pipeline::report::write_report(&loaded.out).map_err(|error| Failure { code: 1, error })?;
+            pipeline::report::write_report(&loaded.out)
+                .map_err(|error| Failure { code: 1, error })?;
             println!("assembled {}", loaded.out.join("index.pack").display());
             Ok(())
         }

@@ -90,7 +90,8 @@ fn num(v: &serde_json::Value, key: &str) -> f64 {
 pub fn build_report(out: &Path) -> anyhow::Result<Report> {
     use anyhow::Context;
     let plan: PlanFile = serde_json::from_slice(
-        &std::fs::read(out.join("plan.json")).with_context(|| format!("{}: no plan.json: is this a bake output?", out.display()))?,
+        &std::fs::read(out.join("plan.json"))
+            .with_context(|| format!("{}: no plan.json: is this a bake output?", out.display()))?,
     )
     .with_context(|| format!("{}/plan.json", out.display()))?;
     let base_path = out.join("base.pack");
@@ -108,7 +109,9 @@ pub fn build_report(out: &Path) -> anyhow::Result<Report> {
         ..Report::default()
     };
     report.storage.base_bytes = std::fs::metadata(&base_path)?.len();
-    report.storage.index_bytes = std::fs::metadata(out.join("index.pack")).map(|m| m.len()).unwrap_or(0);
+    report.storage.index_bytes = std::fs::metadata(out.join("index.pack"))
+        .map(|m| m.len())
+        .unwrap_or(0);
     for job in &plan.jobs {
         let Ok(text) = std::fs::read(record_path(out, job.id)) else {
             continue;
@@ -187,7 +190,11 @@ fn paper_table(lines: &[CellLine]) -> PaperTable {
         culled_percent: pct(&|l| l.culled_objects),
         polygons_sv_and_mv: simplified,
         polygons_for_a_cell: simplified + avg(&|l| l.polygons_inside),
-        simplified_to_original: if simplified > 0.0 { original / simplified } else { 0.0 },
+        simplified_to_original: if simplified > 0.0 {
+            original / simplified
+        } else {
+            0.0
+        },
         texture_kb: avg(&|l| l.texture_bytes) / 1024.0,
     }
 }
@@ -207,15 +214,42 @@ pub fn to_markdown(r: &Report) -> String {
     let _ = writeln!(m, "## Per-cell averages (paper 000, Tables 3–8)\n");
     let _ = writeln!(m, "| statistic | value |\n|---|---|");
     let rows = [
-        ("Avg. polygon no. inside a viewcell", format!("{:.0}", t.polygons_inside_a_cell)),
-        ("Avg. percentage of SVMeshes from clustered objects (%)", format!("{:.1}", t.sv_clustered_percent)),
-        ("Avg. percentage of SVMeshes from single objects (%)", format!("{:.1}", t.sv_single_percent)),
-        ("Avg. percentage of MVMeshes (%)", format!("{:.1}", t.mv_percent)),
-        ("Avg. percentage of culled objects (%)", format!("{:.1}", t.culled_percent)),
-        ("Avg. polygon no. for SVMesh & MVMesh", format!("{:.0}", t.polygons_sv_and_mv)),
-        ("Avg. polygon no. for a viewcell", format!("{:.0}", t.polygons_for_a_cell)),
-        ("Simplified:original", format!("1:{:.1}", t.simplified_to_original)),
-        ("Avg. texture size per cell (KB)", format!("{:.1}", t.texture_kb)),
+        (
+            "Avg. polygon no. inside a viewcell",
+            format!("{:.0}", t.polygons_inside_a_cell),
+        ),
+        (
+            "Avg. percentage of SVMeshes from clustered objects (%)",
+            format!("{:.1}", t.sv_clustered_percent),
+        ),
+        (
+            "Avg. percentage of SVMeshes from single objects (%)",
+            format!("{:.1}", t.sv_single_percent),
+        ),
+        (
+            "Avg. percentage of MVMeshes (%)",
+            format!("{:.1}", t.mv_percent),
+        ),
+        (
+            "Avg. percentage of culled objects (%)",
+            format!("{:.1}", t.culled_percent),
+        ),
+        (
+            "Avg. polygon no. for SVMesh & MVMesh",
+            format!("{:.0}", t.polygons_sv_and_mv),
+        ),
+        (
+            "Avg. polygon no. for a viewcell",
+            format!("{:.0}", t.polygons_for_a_cell),
+        ),
+        (
+            "Simplified:original",
+            format!("1:{:.1}", t.simplified_to_original),
+        ),
+        (
+            "Avg. texture size per cell (KB)",
+            format!("{:.1}", t.texture_kb),
+        ),
     ];
     for (k, v) in rows {
         let _ = writeln!(m, "| {k} | {v} |");
@@ -240,7 +274,10 @@ pub fn to_markdown(r: &Report) -> String {
     for (k, v) in &r.stage_s {
         let _ = writeln!(m, "| {k} | {v:.2} |");
     }
-    let _ = writeln!(m, "\n![heat maps: polygons, bytes, bake time per cell](report.png)");
+    let _ = writeln!(
+        m,
+        "\n![heat maps: polygons, bytes, bake time per cell](report.png)"
+    );
     m
 }
 

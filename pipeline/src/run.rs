@@ -51,10 +51,15 @@ pub struct Loaded {
 /// Parses the manifest, loads the scene and plans the jobs. `out` overrides the
 /// manifest's output directory.
 pub fn load(manifest: &Path, out: Option<&Path>) -> Result<Loaded, RunError> {
-    let plan = format::manifest::parse_manifest(manifest).map_err(|e| RunError::BadInput(e.into()))?;
-    let scene = plan.load_scene().map_err(|e| RunError::BadInput(e.into()))?;
+    let plan =
+        format::manifest::parse_manifest(manifest).map_err(|e| RunError::BadInput(e.into()))?;
+    let scene = plan
+        .load_scene()
+        .map_err(|e| RunError::BadInput(e.into()))?;
     let build = plan_jobs(&plan, &scene);
-    let out = out.map(Path::to_path_buf).unwrap_or_else(|| plan.output.clone());
+    let out = out
+        .map(Path::to_path_buf)
+        .unwrap_or_else(|| plan.output.clone());
     Ok(Loaded {
         plan,
         scene,
@@ -79,7 +84,8 @@ pub fn grid_params(l: &Loaded) -> GridParams {
 pub fn write_plan_and_base(l: &Loaded) -> Result<(), RunError> {
     std::fs::create_dir_all(l.out.join("jobs")).map_err(failed)?;
     let plan_file = PlanFile {
-        manifest: std::fs::canonicalize(&l.plan.manifest_path).unwrap_or(l.plan.manifest_path.clone()),
+        manifest: std::fs::canonicalize(&l.plan.manifest_path)
+            .unwrap_or(l.plan.manifest_path.clone()),
         name: l.plan.name.clone(),
         jobs: l.build.jobs.clone(),
     };
@@ -228,7 +234,11 @@ impl RunSummary {
             self.jobs_baked,
             self.jobs_failed.len(),
             self.wall_s,
-            if self.complete { "; index and report written" } else { "" }
+            if self.complete {
+                "; index and report written"
+            } else {
+                ""
+            }
         )
     }
 }

@@ -89,10 +89,11 @@ fn sbatch_header(args: &SlurmArgs, name: &str, log: &Path) -> String {
 }
 
 fn sbatch(args: &[&str]) -> Result<String, RunError> {
-    let out = Command::new("sbatch")
-        .args(args)
-        .output()
-        .map_err(|e| failed(anyhow::anyhow!("cannot run sbatch ({e}): is Slurm installed and SLURM_CONF set?")))?;
+    let out = Command::new("sbatch").args(args).output().map_err(|e| {
+        failed(anyhow::anyhow!(
+            "cannot run sbatch ({e}): is Slurm installed and SLURM_CONF set?"
+        ))
+    })?;
     if !out.status.success() {
         return Err(failed(anyhow::anyhow!(
             "sbatch {}: {}",
@@ -240,7 +241,13 @@ pub fn run_slurm(
         .map(|j| {
             let msg = std::fs::read_to_string(error_path(&l.out, j.id))
                 .map(|s| s.trim().to_string())
-                .unwrap_or_else(|_| format!("job {}: the Slurm task did not finish (see {})", j.id, dir.join(format!("job-{}.log", j.id)).display()));
+                .unwrap_or_else(|_| {
+                    format!(
+                        "job {}: the Slurm task did not finish (see {})",
+                        j.id,
+                        dir.join(format!("job-{}.log", j.id)).display()
+                    )
+                });
             (j.id, msg)
         })
         .collect();

@@ -34,7 +34,11 @@ impl Status {
             self.done.len(),
             self.failed.len(),
             self.pending.len(),
-            if self.index_written { "written" } else { "not written" }
+            if self.index_written {
+                "written"
+            } else {
+                "not written"
+            }
         );
         if !self.failed.is_empty() {
             s += "failed:\n";
@@ -78,8 +82,7 @@ pub fn status(out: &Path) -> anyhow::Result<Status> {
     }
     if let Ok(text) = std::fs::read(out.join("slurm/submitted.json")) {
         if let Ok(sub) = serde_json::from_slice::<Submission>(&text) {
-            status.slurm_queued =
-                queued(&[&sub.array_job, &sub.finalize_job]).unwrap_or_default();
+            status.slurm_queued = queued(&[&sub.array_job, &sub.finalize_job]).unwrap_or_default();
         }
     }
     Ok(status)

@@ -128,7 +128,11 @@ pub fn done_record(out: &Path, job: &Job) -> Option<JobRecord> {
     let text = std::fs::read_to_string(record_path(out, job.id)).ok()?;
     let record: JobRecord = serde_json::from_str(&text).ok()?;
     if record.fingerprint != job.fingerprint
-        || record.cells.iter().map(|c| c.cell).ne(job.cells.iter().copied())
+        || record
+            .cells
+            .iter()
+            .map(|c| c.cell)
+            .ne(job.cells.iter().copied())
     {
         return None;
     }
@@ -211,7 +215,12 @@ pub fn process_cpu_seconds() -> f64 {
         return 0.0;
     };
     let fields: Vec<&str> = rest.split_whitespace().collect();
-    let ticks = |i: usize| fields.get(i).and_then(|f| f.parse::<f64>().ok()).unwrap_or(0.0);
+    let ticks = |i: usize| {
+        fields
+            .get(i)
+            .and_then(|f| f.parse::<f64>().ok())
+            .unwrap_or(0.0)
+    };
     // utime and stime are fields 14 and 15 of stat, i.e. 11 and 12 after the name.
     (ticks(11) + ticks(12)) / 100.0
 }

@@ -122,13 +122,20 @@ fn run(cli: Cli) -> Result<(), Failure> {
                 None => std::env::var("SLURM_ARRAY_TASK_ID")
                     .ok()
                     .and_then(|v| v.parse().ok())
-                    .ok_or_else(|| bad_input(anyhow::anyhow!("--job not given and SLURM_ARRAY_TASK_ID not set")))?,
+                    .ok_or_else(|| {
+                        bad_input(anyhow::anyhow!(
+                            "--job not given and SLURM_ARRAY_TASK_ID not set"
+                        ))
+                    })?,
             };
             let plan = format::manifest::parse_manifest(&manifest).map_err(bad_input)?;
             let scene = plan.load_scene().map_err(bad_input)?;
             let build = worker::job::plan_jobs(&plan, &scene);
             let job = build.jobs.get(id as usize).ok_or_else(|| {
-                bad_input(anyhow::anyhow!("job {id} does not exist ({} jobs)", build.jobs.len()))
+                bad_input(anyhow::anyhow!(
+                    "job {id} does not exist ({} jobs)",
+                    build.jobs.len()
+                ))
             })?;
             if worker::job::done_record(&out, job).is_some() {
                 println!("job {id}: already done");
@@ -147,7 +154,11 @@ fn run(cli: Cli) -> Result<(), Failure> {
             });
             match result {
                 Ok(record) => {
-                    println!("job {id}: {} cells in {:.1} s", record.cells.len(), record.wall_s);
+                    println!(
+                        "job {id}: {} cells in {:.1} s",
+                        record.cells.len(),
+                        record.wall_s
+                    );
                     Ok(())
                 }
                 Err(e) => {
