@@ -46,7 +46,7 @@ pub fn precode_delta_u32(bytes: &[u8]) -> Vec<u8> {
 
 /// Inverse of [`precode_delta_u32`]; `None` if the length is not a multiple of 4.
 pub fn postdecode_delta_u32(planes: &[u8]) -> Option<Vec<u8>> {
-    if planes.len() % 4 != 0 {
+    if !planes.len().is_multiple_of(4) {
         return None;
     }
     let n = planes.len() / 4;
@@ -82,7 +82,7 @@ pub fn encode_best_with(raw: &[u8], candidates: &[Codec], prefer_raw: bool) -> (
             Codec::Raw => continue,
             Codec::Zstd => zstd_compress(raw),
             Codec::ZstdDeltaU32 => {
-                if raw.len() % 4 != 0 {
+                if !raw.len().is_multiple_of(4) {
                     continue;
                 }
                 zstd_compress(&precode_delta_u32(raw))
@@ -109,7 +109,7 @@ pub fn decode(codec: Codec, stored: &[u8], raw_len: u64) -> Result<Vec<u8>, Stri
         }
         Codec::Zstd => zstd_decompress(stored, raw_len),
         Codec::ZstdDeltaU32 => {
-            if raw_len % 4 != 0 {
+            if !raw_len.is_multiple_of(4) {
                 return Err(format!(
                     "delta-u32 section raw length {raw_len} is not a multiple of 4"
                 ));
