@@ -34,9 +34,18 @@ impl SplitMix {
 }
 
 /// A `cols × rows` height-field grid mesh (2 · cols · rows triangles), a stand-in
-/// for a scanned model with a realistic vertex order.
+/// for a scanned model. Vertex ids are shuffled within blocks of 64, so index
+/// buffers have the local-but-irregular order of real meshes rather than the
+/// perfectly regular order of a generated grid (which zstd would shrink 60×).
 pub fn grid_mesh(cols: u32, rows: u32, seed: u64) -> Mesh {
     let mut rng = SplitMix(seed);
+    let vertex_count = (cols + 1) * (rows + 1);
+    let mut perm: Vec<u32> = (0..vertex_count).collect();
+    for block in perm.chunks_mut(64) {
+        for i in (1..block.len()).rev() {
+            block.swap(i, rng.below(i as u64 + 1) as usize);
+        }
+    }
     let mut mesh = Mesh::default();
     for r in 0..=rows {
         for c in 0..=cols {
@@ -56,12 +65,24 @@ pub fn grid_mesh(cols: u32, rows: u32, seed: u64) -> Mesh {
             mesh.triangles.push([v + 1, v + w, v + w + 1]);
         }
     }
+    // Renumber: vertex v moves to slot perm[v].
+    let mut positions = vec![[0.0; 3]; mesh.positions.len()];
+    let mut albedo = vec![[0; 4]; mesh.albedo.len()];
+    for (v, &p) in perm.iter().enumerate() {
+        positions[p as usize] = mesh.positions[v];
+        albedo[p as usize] = mesh.albedo[v];
+    }
+    mesh.positions = positions;
+    mesh.albedo = albedo;
+    for t in &mut mesh.triangles {
+        *t = t.map(|v| perm[v as usize]);
+    }
     mesh
 }
 
 /// An image that looks like a capture (DESIGN.md "Shading"): fixed sky colour
 /// around a Lambert-shaded (ambient 0.3, L = normalize(0.4, 1, 0.3)) ellipsoid whose
-/// albedo is a fine procedural stripe pattern, sRGB8.
+/// albedo is a procedural stripe pattern with texel-scale detail, sRGB8.
 pub fn capture_like_rgba(width: u32, height: u32, seed: u64) -> Vec<u8> {
     let mut rng = SplitMix(seed);
     let (cx, cy) = (
@@ -107,6 +128,10 @@ pub fn capture_like_rgba(width: u32, height: u32, seed: u64) -> Vec<u8> {
             } else {
                 0.6
             };
+            // Texel-scale procedural detail (DESIGN.md: an albedo pattern fine enough
+            // that simplified geometry needs the capture): ±8% value noise.
+            let h = SplitMix(seed ^ ((x as u64) << 32) ^ y as u64).next_u64();
+            let stripe = stripe * (0.92 + 0.16 * ((h >> 40) as f32 / (1u64 << 24) as f32));
             out.extend_from_slice(&[
                 srgb(base[0] * stripe * shade),
                 srgb(base[1] * stripe * shade),
@@ -343,12 +368,17 @@ pub fn synthetic_cell(
         let views = (0..n_views)
             .map(|v| {
                 let side = texture_side + (rng.below(texture_side as u64 + 1) as u32 & !15);
-                view(
+                let seed = p as u64 * 8 + v as u64;
+                let mut pv = view(
                     [p as f32, 1.7, v as f32],
                     side,
-                    p as u64 * 8 + v as u64,
-                    TextureEncoding::Rgba8Left,
-                )
+                    seed,
+                    TextureEncoding::Rgba8,
+                );
+                pv.texture =
+                    Texture::from_rgba8_smallest(side, side, &capture_like_rgba(side, side, seed))
+                        .expect("valid texture");
+                pv
             })
             .collect();
         proxies.push(Proxy {
