@@ -126,7 +126,14 @@ fn zstd_decompress(stored: &[u8], raw_len: u64) -> Result<Vec<u8>, String> {
     let mut decoder = zstd::stream::read::Decoder::with_buffer(stored)
         .map_err(|e| e.to_string())?
         .single_frame();
-    let mut out = Vec::new();
+    // Reserve what a typical section needs up front (no regrowth), but never more
+    // than 64x the stored bytes + 1 MiB before the output is actually produced.
+    let reserve = raw_len.min(
+        (stored.len() as u64)
+            .saturating_mul(64)
+            .saturating_add(1 << 20),
+    );
+    let mut out = Vec::with_capacity(reserve as usize);
     (&mut decoder)
         .take(raw_len.saturating_add(1))
         .read_to_end(&mut out)
