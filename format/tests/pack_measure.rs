@@ -369,8 +369,7 @@ fn texture_encodings() {
             left_z as f64 / texels,
             bc1_z as f64 / texels
         );
-        // The writer's per-image choice is never worse than either encoding alone
-        // (within the difference between trial level 3 and the section's level).
+        // The writer's per-image choice is never worse than either encoding alone.
         let chosen = Texture::from_rgba8_smallest(side as u32, side as u32, &rgba).unwrap();
         let chosen_z = zstd(&chosen.data);
         println!(

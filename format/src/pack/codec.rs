@@ -46,7 +46,7 @@ pub fn precode_delta_u32(bytes: &[u8]) -> Vec<u8> {
 
 /// Inverse of [`precode_delta_u32`]; `None` if the length is not a multiple of 4.
 pub fn postdecode_delta_u32(planes: &[u8]) -> Option<Vec<u8>> {
-    if planes.len() % 4 != 0 {
+    if !planes.len().is_multiple_of(4) {
         return None;
     }
     let n = planes.len() / 4;
@@ -82,7 +82,7 @@ pub fn encode_best_with(raw: &[u8], candidates: &[Codec], prefer_raw: bool) -> (
             Codec::Raw => continue,
             Codec::Zstd => zstd_compress(raw),
             Codec::ZstdDeltaU32 => {
-                if raw.len() % 4 != 0 {
+                if !raw.len().is_multiple_of(4) {
                     continue;
                 }
                 zstd_compress(&precode_delta_u32(raw))
@@ -109,7 +109,7 @@ pub fn decode(codec: Codec, stored: &[u8], raw_len: u64) -> Result<Vec<u8>, Stri
         }
         Codec::Zstd => zstd_decompress(stored, raw_len),
         Codec::ZstdDeltaU32 => {
-            if raw_len % 4 != 0 {
+            if !raw_len.is_multiple_of(4) {
                 return Err(format!(
                     "delta-u32 section raw length {raw_len} is not a multiple of 4"
                 ));
@@ -126,7 +126,14 @@ fn zstd_decompress(stored: &[u8], raw_len: u64) -> Result<Vec<u8>, String> {
     let mut decoder = zstd::stream::read::Decoder::with_buffer(stored)
         .map_err(|e| e.to_string())?
         .single_frame();
-    let mut out = Vec::new();
+    // Reserve what a typical section needs up front (no regrowth), but never more
+    // than 64x the stored bytes + 1 MiB before the output is actually produced.
+    let reserve = raw_len.min(
+        (stored.len() as u64)
+            .saturating_mul(64)
+            .saturating_add(1 << 20),
+    );
+    let mut out = Vec::with_capacity(reserve as usize);
     (&mut decoder)
         .take(raw_len.saturating_add(1))
         .read_to_end(&mut out)

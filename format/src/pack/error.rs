@@ -54,6 +54,12 @@ pub enum PackError {
         expected: String,
         found: String,
     },
+    #[error("{}: file checksum mismatch (the index records {expected}, the file has {found})", file.display())]
+    FileChecksum {
+        file: PathBuf,
+        expected: String,
+        found: String,
+    },
     #[error("{}: file length is {found} bytes but the header says {expected}", file.display())]
     LengthMismatch {
         file: PathBuf,

@@ -120,7 +120,7 @@ impl IndexEntry {
         }
         let found = blake3::hash(&data);
         if *found.as_bytes() != self.checksum {
-            return Err(PackError::HeaderChecksum {
+            return Err(PackError::FileChecksum {
                 file: path,
                 expected: hex(&self.checksum),
                 found: hex(found.as_bytes()),

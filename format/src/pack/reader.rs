@@ -519,7 +519,7 @@ pub(crate) fn pod_vec<T: Pod>(
     section: SectionKind,
 ) -> Result<Vec<T>, PackError> {
     let size = std::mem::size_of::<T>();
-    if size == 0 || bytes.len() % size != 0 {
+    if size == 0 || !bytes.len().is_multiple_of(size) {
         return Err(PackError::Malformed {
             file: file.to_path_buf(),
             section,

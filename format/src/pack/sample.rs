@@ -34,9 +34,18 @@ impl SplitMix {
 }
 
 /// A `cols × rows` height-field grid mesh (2 · cols · rows triangles), a stand-in
-/// for a scanned model with a realistic vertex order.
+/// for a scanned model. Vertex ids are shuffled within blocks of 64, so index
+/// buffers have the local-but-irregular order of real meshes rather than the
+/// perfectly regular order of a generated grid (which zstd would shrink 60×).
 pub fn grid_mesh(cols: u32, rows: u32, seed: u64) -> Mesh {
     let mut rng = SplitMix(seed);
+    let vertex_count = (cols + 1) * (rows + 1);
+    let mut perm: Vec<u32> = (0..vertex_count).collect();
+    for block in perm.chunks_mut(64) {
+        for i in (1..block.len()).rev() {
+            block.swap(i, rng.below(i as u64 + 1) as usize);
+        }
+    }
     let mut mesh = Mesh::default();
     for r in 0..=rows {
         for c in 0..=cols {
@@ -56,12 +65,24 @@ pub fn grid_mesh(cols: u32, rows: u32, seed: u64) -> Mesh {
             mesh.triangles.push([v + 1, v + w, v + w + 1]);
         }
     }
+    // Renumber: vertex v moves to slot perm[v].
+    let mut positions = vec![[0.0; 3]; mesh.positions.len()];
+    let mut albedo = vec![[0; 4]; mesh.albedo.len()];
+    for (v, &p) in perm.iter().enumerate() {
+        positions[p as usize] = mesh.positions[v];
+        albedo[p as usize] = mesh.albedo[v];
+    }
+    mesh.positions = positions;
+    mesh.albedo = albedo;
+    for t in &mut mesh.triangles {
+        *t = t.map(|v| perm[v as usize]);
+    }
     mesh
 }
 
 /// An image that looks like a capture (DESIGN.md "Shading"): fixed sky colour
 /// around a Lambert-shaded (ambient 0.3, L = normalize(0.4, 1, 0.3)) ellipsoid whose
-/// albedo is a fine procedural stripe pattern, sRGB8.
+/// albedo is a procedural stripe pattern with texel-scale detail, sRGB8.
 pub fn capture_like_rgba(width: u32, height: u32, seed: u64) -> Vec<u8> {
     let mut rng = SplitMix(seed);
     let (cx, cy) = (
@@ -107,6 +128,10 @@ pub fn capture_like_rgba(width: u32, height: u32, seed: u64) -> Vec<u8> {
             } else {
                 0.6
             };
+            // Texel-scale procedural detail (DESIGN.md: an albedo pattern fine enough
+            // that simplified geometry needs the capture): ±8% value noise.
+            let h = SplitMix(seed ^ ((x as u64) << 32) ^ y as u64).next_u64();
+            let stripe = stripe * (0.92 + 0.16 * ((h >> 40) as f32 / (1u64 << 24) as f32));
             out.extend_from_slice(&[
                 srgb(base[0] * stripe * shade),
                 srgb(base[1] * stripe * shade),
@@ -343,12 +368,17 @@ pub fn synthetic_cell(
         let views = (0..n_views)
             .map(|v| {
                 let side = texture_side + (rng.below(texture_side as u64 + 1) as u32 & !15);
-                view(
+                let seed = p as u64 * 8 + v as u64;
+                let mut pv = view(
                     [p as f32, 1.7, v as f32],
                     side,
-                    p as u64 * 8 + v as u64,
-                    TextureEncoding::Rgba8Left,
-                )
+                    seed,
+                    TextureEncoding::Rgba8,
+                );
+                pv.texture =
+                    Texture::from_rgba8_smallest(side, side, &capture_like_rgba(side, side, seed))
+                        .expect("valid texture");
+                pv
             })
             .collect();
         proxies.push(Proxy {
@@ -367,4 +397,60 @@ pub fn synthetic_cell(
         originals: (0..proxy_count).step_by(5).collect(),
         proxies,
     }
+}
+
+/// Recomputes, in place, every section checksum and the header checksum of `bytes`
+/// wherever the header and table are readable enough to locate them; returns whether
+/// anything could be resealed. For fuzzers and tests only: it lets a mutated pack get
+/// past the checksums so the *content* validation of the decoders is exercised too.
+pub fn reseal(bytes: &mut [u8]) -> bool {
+    use super::layout::{
+        header_checksum, ENTRY_SIZE, HEADER_CHECKED_LEN, HEADER_SIZE, MAX_SECTIONS,
+    };
+    if bytes.len() < HEADER_SIZE {
+        return false;
+    }
+    let count = u32::from_le_bytes([bytes[20], bytes[21], bytes[22], bytes[23]]);
+    if count > MAX_SECTIONS {
+        return false;
+    }
+    let table_end = HEADER_SIZE + count as usize * ENTRY_SIZE;
+    if bytes.len() < table_end {
+        return false;
+    }
+    for i in 0..count as usize {
+        let e = HEADER_SIZE + i * ENTRY_SIZE;
+        let field =
+            |b: &[u8], at: usize| u64::from_le_bytes(b[at..at + 8].try_into().unwrap_or([0; 8]));
+        let (offset, stored) = (field(bytes, e + 8), field(bytes, e + 16));
+        let Some(end) = offset.checked_add(stored) else {
+            continue;
+        };
+        if end > bytes.len() as u64 {
+            continue;
+        }
+        let sum = *blake3::hash(&bytes[offset as usize..end as usize]).as_bytes();
+        bytes[e + 32..e + 64].copy_from_slice(&sum);
+    }
+    let sum = header_checksum(&bytes[..HEADER_CHECKED_LEN], &bytes[HEADER_SIZE..table_end]);
+    bytes[HEADER_CHECKED_LEN..HEADER_SIZE].copy_from_slice(&sum);
+    true
+}
+
+/// Runs every reader on `bytes` (and, when the input parses, every section's lazy
+/// decoding): what the fuzz targets and the stable fuzz driver call. Returns how many
+/// readers accepted the input. Must never panic.
+pub fn exercise_readers(bytes: &[u8]) -> usize {
+    use super::reader::PackFile;
+    let mut accepted = 0;
+    accepted += BasePack::from_bytes(bytes).is_ok() as usize;
+    accepted += CellPack::from_bytes(bytes).is_ok() as usize;
+    accepted += Index::from_bytes(bytes).is_ok() as usize;
+    if let Ok(pack) = PackFile::from_bytes(bytes) {
+        for s in pack.sections() {
+            let _ = pack.section(s.kind);
+            let _ = pack.raw_slice::<[f32; 3]>(s.kind);
+        }
+    }
+    accepted
 }

@@ -81,14 +81,14 @@ impl Texture {
     }
 
     /// Encodes `rgba` with whichever lossless encoding zstd compresses smaller for this
-    /// image (trial compression at level 3; ties keep [`TextureEncoding::Rgba8`]).
+    /// image (trial compression at the writer's level; ties keep [`TextureEncoding::Rgba8`]).
     /// Neither wins everywhere: the left predictor helps smooth shading, plain RGBA8
     /// keeps long matches of hard procedural patterns (README "Textures").
     pub fn from_rgba8_smallest(width: u32, height: u32, rgba: &[u8]) -> Result<Texture, String> {
         let plain = Texture::from_rgba8(width, height, rgba, TextureEncoding::Rgba8)?;
         let left = Texture::from_rgba8(width, height, rgba, TextureEncoding::Rgba8Left)?;
         let size = |t: &Texture| {
-            zstd::bulk::compress(&t.data, 3)
+            zstd::bulk::compress(&t.data, super::codec::ZSTD_LEVEL)
                 .map(|c| c.len())
                 .unwrap_or(usize::MAX)
         };
