@@ -115,17 +115,18 @@ mod tests {
             max_eye_height: 12.0,
         };
         let base = params_fingerprint(&BakeParams::default(), &cells);
-        let variants: Vec<Box<dyn Fn(&mut BakeParams, &mut CellParams)>> = vec![
-            Box::new(|b, _| b.image_res = 512),
-            Box::new(|b, _| b.self_occluding_tolerance_px = 3.0),
-            Box::new(|b, _| b.edge_length_tolerance = 6.0),
-            Box::new(|b, _| b.t_c0 = 1e-3),
-            Box::new(|b, _| b.t_c1 = 1e-3),
-            Box::new(|b, _| b.clustering = false),
-            Box::new(|b, _| b.occlusion_culling = true),
-            Box::new(|_, c| c.cell_size = 100.0),
-            Box::new(|_, c| c.min_eye_height = 2.0),
-            Box::new(|_, c| c.max_eye_height = 20.0),
+        type Change = fn(&mut BakeParams, &mut CellParams);
+        let variants: Vec<Change> = vec![
+            |b, _| b.image_res = 512,
+            |b, _| b.self_occluding_tolerance_px = 3.0,
+            |b, _| b.edge_length_tolerance = 6.0,
+            |b, _| b.t_c0 = 1e-3,
+            |b, _| b.t_c1 = 1e-3,
+            |b, _| b.clustering = false,
+            |b, _| b.occlusion_culling = true,
+            |_, c| c.cell_size = 100.0,
+            |_, c| c.min_eye_height = 2.0,
+            |_, c| c.max_eye_height = 20.0,
         ];
         for (k, change) in variants.iter().enumerate() {
             let (mut b, mut c) = (BakeParams::default(), cells.clone());

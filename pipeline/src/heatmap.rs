@@ -15,6 +15,9 @@ const MARGIN: f32 = 16.0;
 const BAR_H: f32 = 14.0;
 const LABEL_H: f32 = 24.0;
 
+/// A panel: its label and the value it maps per cell.
+type Metric = (&'static str, fn(&CellLine) -> f64);
+
 /// Renders the three panels; returns PNG bytes.
 pub fn render(grid_params: &GridParams, lines: &[CellLine]) -> anyhow::Result<Vec<u8>> {
     let grid = HexGrid::new(
@@ -34,19 +37,16 @@ pub fn render(grid_params: &GridParams, lines: &[CellLine]) -> anyhow::Result<Ve
     let height = (panel_h + 2.0 * MARGIN + BAR_H + LABEL_H + 8.0) as u32;
     let mut pm = Pixmap::new(width, height).ok_or_else(|| anyhow::anyhow!("bad image size"))?;
     pm.fill(Color::WHITE);
-    let metrics: [(&str, Box<dyn Fn(&CellLine) -> f64>); 3] = [
-        (
-            "polygons",
-            Box::new(|l: &CellLine| {
-                l.polygons_inside + l.sv_polygons + l.mv_polygons + l.cluster_polygons
-            }),
-        ),
-        ("bytes", Box::new(|l: &CellLine| l.pack_bytes as f64)),
-        ("ms", Box::new(|l: &CellLine| l.bake_ms)),
+    let metrics: [Metric; 3] = [
+        ("polygons", |l| {
+            l.polygons_inside + l.sv_polygons + l.mv_polygons + l.cluster_polygons
+        }),
+        ("bytes", |l| l.pack_bytes as f64),
+        ("ms", |l| l.bake_ms),
     ];
     for (k, (_name, metric)) in metrics.iter().enumerate() {
         let x0 = MARGIN + k as f32 * (PANEL + MARGIN);
-        let values: Vec<f64> = lines.iter().map(|l| metric(l)).collect();
+        let values: Vec<f64> = lines.iter().map(metric).collect();
         let lo = values.iter().copied().fold(f64::INFINITY, f64::min);
         let hi = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
         let span = if hi > lo { hi - lo } else { 1.0 };
