@@ -246,11 +246,11 @@ fn dilate(rgba: &mut [u8], filled: &mut [bool], w: usize, h: usize) {
                         n += 1;
                     }
                 }
-                if n > 0 {
-                    for k in 0..3 {
-                        rgba[o * 4 + k] = ((sum[k] + n / 2) / n) as u8;
+                for (k, total) in sum.iter().enumerate() {
+                    if let Some(mean) = (total + n / 2).checked_div(n) {
+                        rgba[o * 4 + k] = mean as u8;
+                        filled[o] = true;
                     }
-                    filled[o] = true;
                 }
             }
         }

@@ -78,7 +78,7 @@ fn cluster_able(settings: &ClusterSettings, m: &Group, c: &Group) -> Option<Grou
         lo,
         hi,
     );
-    if !(error < settings.self_occluding_tolerance_px) {
+    if error.is_nan() || error >= settings.self_occluding_tolerance_px {
         return None;
     }
     let mut members = m.members.clone();

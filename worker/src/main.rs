@@ -11,11 +11,7 @@ use std::process::ExitCode;
 use worker::raster::{render, CullMode, DrawItem};
 
 #[derive(Parser)]
-#[command(
-    name = "worker",
-    version,
-    about = "hexbake bake kernels: one job, or pictures of one cell"
-)]
+#[command(name = "worker", version, about = "hexbake bake kernels: one job, or pictures of one cell")]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -48,9 +44,7 @@ fn parse_vec3(s: &str) -> Result<Vec3, String> {
         .collect::<Result<_, _>>()?;
     match v[..] {
         [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok(Vec3::new(x, y, z)),
-        _ => Err(format!(
-            "expected x,y,z with three finite numbers, got {s:?}"
-        )),
+        _ => Err(format!("expected x,y,z with three finite numbers, got {s:?}")),
     }
 }
 
@@ -108,9 +102,8 @@ fn run(cli: Cli) -> Result<(), Failure> {
                 scene.ground.max[1] + 0.15 * d,
             ));
             let far = 4.0 * (w + d + eye.y);
-            let view =
-                worker::raster::View::look_at_fov(eye, target, Vec3::Y, fov, size, size, 0.5, far)
-                    .map_err(bad_input)?;
+            let view = worker::raster::View::look_at_fov(eye, target, Vec3::Y, fov, size, size, 0.5, far)
+                .map_err(bad_input)?;
             let items: Vec<DrawItem> = scene
                 .instances
                 .iter()

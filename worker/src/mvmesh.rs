@@ -4,7 +4,8 @@
 //! Steps:
 //!
 //! 1. The polygons *not* regionally back-facing for the cell's prism (§3.1.5,
-//!    [`regional_backface_cull`]): "front-facing with respect to the cell".
+//!    [`regional_backface_cull`]): "front-facing with respect to the cell", tidied
+//!    like the SVMesh's selection ([`crate::svmesh::tidy_selection`]).
 //! 2. Capture the object alone from the cell centre (view 0) and from the centres of
 //!    the up to 6 neighbouring cells (views 1..), all at mid eye height. A neighbour
 //!    whose centre lies inside the object's box (the object stands in that cell)
@@ -33,7 +34,8 @@ use crate::simplify::{
     pixels_per_radian, simplify, ProjectedLength, SimplifyInput, SimplifyParams, MAX_VIEWS,
 };
 use crate::svmesh::{
-    draw_item, ms_since, world_vertices, MemberMesh, ProxyError, ProxySettings, StageTimes,
+    draw_item, ms_since, tidy_selection, world_vertices, MemberMesh, ProxyError, ProxySettings,
+    StageTimes,
 };
 use crate::weights::{vertex_states, VertexState, BACK_FACING_WEIGHT};
 use format::Scene;
@@ -71,12 +73,16 @@ pub fn derive_mvmesh(
 
     // Step 1: polygons not back-facing for the whole cell.
     let t = Instant::now();
-    let culled = regional_backface_cull(mesh, item.transform, prism_corners);
+    let mut kept: Vec<bool> = regional_backface_cull(mesh, item.transform, prism_corners)
+        .into_iter()
+        .map(|culled| !culled)
+        .collect();
+    tidy_selection(&mesh.triangles, &mut kept, settings.speck_triangles);
     let input_triangles: Vec<[u32; 3]> = mesh
         .triangles
         .iter()
-        .zip(&culled)
-        .filter(|(_, &c)| !c)
+        .zip(&kept)
+        .filter(|(_, &k)| k)
         .map(|(t, _)| *t)
         .collect();
     times.weights_ms += ms_since(t);

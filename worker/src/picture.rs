@@ -26,12 +26,7 @@ pub enum PictureError {
 }
 
 /// Writes row-major RGBA8 pixels (row 0 at the top) as a PNG.
-pub fn write_rgba(
-    path: &Path,
-    width: u32,
-    height: u32,
-    pixels: &[[u8; 4]],
-) -> Result<(), PictureError> {
+pub fn write_rgba(path: &Path, width: u32, height: u32, pixels: &[[u8; 4]]) -> Result<(), PictureError> {
     let name = path.display().to_string();
     let expected = width as usize * height as usize;
     if pixels.len() != expected {
@@ -74,11 +69,7 @@ pub fn ramp(t: f32) -> [u8; 4] {
         [0.98, 0.55, 0.15],
         [0.99, 0.95, 0.35],
     ];
-    let t = if t.is_finite() {
-        t.clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
+    let t = if t.is_finite() { t.clamp(0.0, 1.0) } else { 0.0 };
     let x = t * (STOPS.len() - 1) as f32;
     let i = (x.floor() as usize).min(STOPS.len() - 2);
     let f = x - i as f32;

@@ -141,7 +141,7 @@ impl ProjectedTexture {
             return None;
         }
         let c = self.matrix * p.extend(1.0);
-        if !(c.w > 0.0) || !c.is_finite() {
+        if c.w <= 0.0 || !c.is_finite() {
             return None;
         }
         // Texel centres at +0.5.
@@ -193,8 +193,8 @@ impl ProjectiveTextures {
         let mesh = s.item.mesh;
         let t = mesh.triangles.get(s.triangle as usize)?;
         let mut local = Vec3::ZERO;
-        for k in 0..3 {
-            local += s.barycentric[k] * Vec3::from_array(*mesh.positions.get(t[k] as usize)?);
+        for (k, &v) in t.iter().enumerate() {
+            local += s.barycentric[k] * Vec3::from_array(*mesh.positions.get(v as usize)?);
         }
         let p = s.item.transform.transform_point3(local);
         let mask = match &surface.triangle_masks {

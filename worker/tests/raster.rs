@@ -250,10 +250,7 @@ fn load_obj_positions(path: &std::path::Path) -> Mesh {
             normals[i as usize] += n;
         }
     }
-    let normals = normals
-        .iter()
-        .map(|n| n.normalize_or_zero().to_array())
-        .collect();
+    let normals = normals.iter().map(|n| n.normalize_or_zero().to_array()).collect();
     finish(positions, normals, triangles)
 }
 
@@ -377,11 +374,7 @@ fn fan_around_a_pixel_centre_vertex_covers_it_once() {
     let count = coverage_per_pixel(&view, &mesh);
     assert!(count.iter().all(|&n| n <= 1), "a pixel written twice");
     assert_eq!(count[15 * 32 + 16], 1);
-    assert_eq!(
-        count.iter().sum::<u32>(),
-        12 * 12,
-        "the 12×12 square of centres it spans"
-    );
+    assert_eq!(count.iter().sum::<u32>(), 12 * 12, "the 12×12 square of centres it spans");
 }
 
 // ---------------------------------------------------------------- clipping, culling
@@ -406,11 +399,7 @@ fn triangle_through_the_eye_plane_is_clipped_not_dropped() {
         let d = view.ray_dir(x as f32 + 0.5, y as f32 + 0.5);
         let t = -1.0 / d.y;
         let expected = t * -d.z;
-        assert!(
-            (c.depth[i] - expected).abs() < 1e-3 * expected,
-            "({x},{y}): {} vs {expected}",
-            c.depth[i]
-        );
+        assert!((c.depth[i] - expected).abs() < 1e-3 * expected, "({x},{y}): {} vs {expected}", c.depth[i]);
     }
     // Entirely behind the eye: nothing.
     let behind = finish(
@@ -418,10 +407,7 @@ fn triangle_through_the_eye_plane_is_clipped_not_dropped() {
         vec![[0.0, 0.0, 1.0]; 3],
         vec![[0, 1, 2]],
     );
-    assert_eq!(
-        render(&view, &[item(&behind, 1)], CullMode::None).covered_pixels(),
-        0
-    );
+    assert_eq!(render(&view, &[item(&behind, 1)], CullMode::None).covered_pixels(), 0);
 }
 
 #[test]
@@ -436,10 +422,7 @@ fn back_faces_are_culled_only_when_asked() {
     let mut back = front.clone();
     back.triangles = vec![[0, 2, 1]];
     assert!(render(&view, &[item(&front, 0)], CullMode::Back).covered_pixels() > 50);
-    assert_eq!(
-        render(&view, &[item(&back, 0)], CullMode::Back).covered_pixels(),
-        0
-    );
+    assert_eq!(render(&view, &[item(&back, 0)], CullMode::Back).covered_pixels(), 0);
     let a = render(&view, &[item(&front, 0)], CullMode::None);
     let b = render(&view, &[item(&back, 0)], CullMode::None);
     assert_eq!(a.object_id, b.object_id);
@@ -458,16 +441,9 @@ fn nearer_surface_wins_and_equal_depth_goes_to_the_first_item() {
     // Two copies at exactly the same place: the lower item index wins everywhere.
     let s = sphere_mesh(Vec3::new(0.0, 0.0, -20.0), 10.0, 12, 16);
     for order in [[5, 9], [9, 5]] {
-        let c = render(
-            &view,
-            &[item(&s, order[0]), item(&s, order[1])],
-            CullMode::Back,
-        );
+        let c = render(&view, &[item(&s, order[0]), item(&s, order[1])], CullMode::Back);
         assert!(c.covered_pixels() > 100);
-        assert!(c
-            .object_id
-            .iter()
-            .all(|&o| o == order[0] || o == BACKGROUND_ID));
+        assert!(c.object_id.iter().all(|&o| o == order[0] || o == BACKGROUND_ID));
     }
 }
 
@@ -479,34 +455,14 @@ fn perspective_correct_albedo_on_a_grazing_quad() {
     // edge and white at the far edge; normals towards the light so the shading
     // factor is exactly 1 and the pixel colour is the interpolated albedo.
     let (z0, z1) = (-2.0f32, -60.0f32);
-    let positions = vec![
-        [-30.0, -1.0, z0],
-        [30.0, -1.0, z0],
-        [30.0, -1.0, z1],
-        [-30.0, -1.0, z1],
-    ];
+    let positions = vec![[-30.0, -1.0, z0], [30.0, -1.0, z0], [30.0, -1.0, z1], [-30.0, -1.0, z1]];
     let mesh = Mesh {
         positions,
         normals: vec![LIGHT_DIR.to_array(); 4],
-        albedo: vec![
-            [0, 0, 0, 255],
-            [0, 0, 0, 255],
-            [255, 255, 255, 255],
-            [255, 255, 255, 255],
-        ],
+        albedo: vec![[0, 0, 0, 255], [0, 0, 0, 255], [255, 255, 255, 255], [255, 255, 255, 255]],
         triangles: vec![[0, 1, 2], [0, 2, 3]],
     };
-    let view = View::look_at_fov(
-        Vec3::ZERO,
-        Vec3::new(0.0, -0.3, -1.0),
-        Vec3::Y,
-        60.0,
-        96,
-        96,
-        0.1,
-        100.0,
-    )
-    .unwrap();
+    let view = View::look_at_fov(Vec3::ZERO, Vec3::new(0.0, -0.3, -1.0), Vec3::Y, 60.0, 96, 96, 0.1, 100.0).unwrap();
     let c = render(&view, &[item(&mesh, 0)], CullMode::Back);
     let mut checked = 0;
     let mut affine_would_fail = false;
@@ -521,10 +477,7 @@ fn perspective_correct_albedo_on_a_grazing_quad() {
             let s = (hit.z - z0) / (z1 - z0); // linear albedo at the hit point
             let expected = linear_to_srgb(s);
             let got = c.color[i][0];
-            assert!(
-                (got as i32 - expected as i32).abs() <= 1,
-                "({x},{y}): {got} vs {expected}"
-            );
+            assert!((got as i32 - expected as i32).abs() <= 1, "({x},{y}): {got} vs {expected}");
             // Screen-space (affine) interpolation along the quad would give the
             // fraction of the screen distance between the near and far edges.
             let sy = |z: f32| view.project(Vec3::new(hit.x, -1.0, z)).unwrap().0.y;
@@ -536,10 +489,7 @@ fn perspective_correct_albedo_on_a_grazing_quad() {
         }
     }
     assert!(checked > 30, "only {checked} pixels checked");
-    assert!(
-        affine_would_fail,
-        "the scene does not tell perspective from affine"
-    );
+    assert!(affine_would_fail, "the scene does not tell perspective from affine");
 }
 
 #[test]
@@ -553,14 +503,7 @@ fn lit_colour_follows_the_design_formula() {
     );
     mesh.albedo = vec![[188, 188, 188, 255]; 3];
     let tint = Vec3::new(1.0, 0.5, 0.25);
-    let c = render(
-        &view,
-        &[DrawItem {
-            tint,
-            ..item(&mesh, 0)
-        }],
-        CullMode::Back,
-    );
+    let c = render(&view, &[DrawItem { tint, ..item(&mesh, 0) }], CullMode::Back);
     let lin = worker::shade::srgb_to_linear(188);
     let f = 0.3 + 0.7 * LIGHT_DIR.z;
     let expected = [lin * f, lin * 0.5 * f, lin * 0.25 * f].map(linear_to_srgb);
@@ -591,11 +534,7 @@ fn off_axis_window_maps_to_the_image_corners() {
     seen.sort();
     assert_eq!(seen, vec![(0, 0), (0, 80), (100, 0), (100, 80)]);
     // The window's own quad fills the whole image.
-    let mesh = finish(
-        window.iter().map(|p| p.to_array()).collect(),
-        vec![[-1.0, 0.0, 0.0]; 4],
-        vec![[0, 1, 2], [0, 2, 3]],
-    );
+    let mesh = finish(window.iter().map(|p| p.to_array()).collect(), vec![[-1.0, 0.0, 0.0]; 4], vec![[0, 1, 2], [0, 2, 3]]);
     let c = render(&view, &[item(&mesh, 3)], CullMode::None);
     assert_eq!(c.covered_pixels(), 100 * 80);
 }
@@ -622,9 +561,7 @@ fn tight_view_has_the_capture_resolution_and_holds_the_box() {
         hi_px = hi_px.max(s);
     }
     assert!(lo_px.x.abs() < 1e-2 && lo_px.y.abs() < 1e-2);
-    assert!(
-        (hi_px.x - view.width as f32).abs() < 1e-2 && (hi_px.y - view.height as f32).abs() < 1e-2
-    );
+    assert!((hi_px.x - view.width as f32).abs() < 1e-2 && (hi_px.y - view.height as f32).abs() < 1e-2);
     // A box around the eye cannot be captured this way.
     assert!(View::tight_around(Vec3::ZERO, Vec3::splat(-1.0), Vec3::ONE, 1024).is_err());
 }
@@ -640,34 +577,16 @@ fn golden_scenes() -> Vec<(&'static str, Capture)> {
     vec![
         ("cube", render(&view, &[item(&cube, 1)], CullMode::Back)),
         ("sphere", render(&view, &[item(&sphere, 2)], CullMode::Back)),
-        (
-            "two-boxes",
-            render(&view, &[item(&a, 3), item(&b, 4)], CullMode::Back),
-        ),
+        ("two-boxes", render(&view, &[item(&a, 3), item(&b, 4)], CullMode::Back)),
     ]
 }
 
 /// Exact hashes (FNV-1a 64) of depth, ids and colour of the 64² golden captures,
 /// recorded after looking at their PNGs.
 const GOLDEN: [(&str, u64, u64, u64); 3] = [
-    (
-        "cube",
-        0x8e8e29b5bfd4c5f8,
-        0x5ef09a41ecbd375f,
-        0x9c46a39870a54b7e,
-    ),
-    (
-        "sphere",
-        0xf1cf485cfc754f48,
-        0x57bdae5cdf37cbc2,
-        0x363fc7f3fd10cbb0,
-    ),
-    (
-        "two-boxes",
-        0x7db7dd8876bcb7c5,
-        0x77ef3d0b5fbf3f51,
-        0x252a2e1dd16e433c,
-    ),
+    ("cube", 0x8e8e29b5bfd4c5f8, 0x5ef09a41ecbd375f, 0x9c46a39870a54b7e),
+    ("sphere", 0xf1cf485cfc754f48, 0x57bdae5cdf37cbc2, 0x363fc7f3fd10cbb0),
+    ("two-boxes", 0x7db7dd8876bcb7c5, 0x77ef3d0b5fbf3f51, 0x252a2e1dd16e433c),
 ];
 
 #[test]
@@ -678,17 +597,10 @@ fn golden_captures_hash_exactly() {
         maybe_write_pngs(name, c);
         let got = (hash_depth(c), hash_ids(c), hash_color(c));
         if got != (gd, gi, gc) {
-            mismatches.push(format!(
-                "(\"{name}\", {:#018x}, {:#018x}, {:#018x}),",
-                got.0, got.1, got.2
-            ));
+            mismatches.push(format!("(\"{name}\", {:#018x}, {:#018x}, {:#018x}),", got.0, got.1, got.2));
         }
     }
-    assert!(
-        mismatches.is_empty(),
-        "golden hashes changed:\n{}",
-        mismatches.join("\n")
-    );
+    assert!(mismatches.is_empty(), "golden hashes changed:\n{}", mismatches.join("\n"));
 }
 
 #[test]
@@ -741,50 +653,25 @@ fn output_is_identical_for_any_thread_count() {
     // depth, a near-clipped floor and triangles larger than a band.
     let sphere = sphere_mesh(Vec3::new(0.0, 1.0, 0.0), 1.0, 120, 160);
     let floor = finish(
-        vec![
-            [-40.0, 0.0, 40.0],
-            [40.0, 0.0, 40.0],
-            [40.0, 0.0, -40.0],
-            [-40.0, 0.0, -40.0],
-        ],
+        vec![[-40.0, 0.0, 40.0], [40.0, 0.0, 40.0], [40.0, 0.0, -40.0], [-40.0, 0.0, -40.0]],
         vec![[0.0, 1.0, 0.0]; 4],
         vec![[0, 1, 2], [0, 2, 3]],
     );
     let items = [
         item(&floor, 0),
         item(&sphere, 1),
-        DrawItem {
-            transform: Mat4::from_translation(Vec3::new(1.2, 0.0, -1.0)),
-            tint: Vec3::new(1.0, 0.6, 0.6),
-            ..item(&sphere, 2)
-        },
+        DrawItem { transform: Mat4::from_translation(Vec3::new(1.2, 0.0, -1.0)), tint: Vec3::new(1.0, 0.6, 0.6), ..item(&sphere, 2) },
         item(&sphere, 3), // exactly coincides with object 1
     ];
-    let view = View::look_at_fov(
-        Vec3::new(0.3, 1.2, 3.0),
-        Vec3::new(0.3, 0.8, 0.0),
-        Vec3::Y,
-        60.0,
-        200,
-        150,
-        0.05,
-        100.0,
-    )
-    .unwrap();
+    let view = View::look_at_fov(Vec3::new(0.3, 1.2, 3.0), Vec3::new(0.3, 0.8, 0.0), Vec3::Y, 60.0, 200, 150, 0.05, 100.0).unwrap();
     let one = in_pool(1, || render(&view, &items, CullMode::Back));
     let two = in_pool(2, || render(&view, &items, CullMode::Back));
     let three = in_pool(3, || render(&view, &items, CullMode::None));
     let three_back = in_pool(3, || render(&view, &items, CullMode::Back));
     assert!(one == two, "1 vs 2 threads differ");
     assert!(one == three_back, "1 vs 3 threads differ");
-    assert_eq!(
-        one.object_id, three.object_id,
-        "closed meshes: culling changes nothing visible"
-    );
-    assert!(
-        one.object_id.iter().all(|&o| o != 3),
-        "the later coincident copy never wins"
-    );
+    assert_eq!(one.object_id, three.object_id, "closed meshes: culling changes nothing visible");
+    assert!(one.object_id.iter().all(|&o| o != 3), "the later coincident copy never wins");
     assert!(one.covered_pixels() > 200 * 75);
 }
 
@@ -812,19 +699,10 @@ fn real_bunny_renders_deterministically() {
     maybe_write_pngs("bunny", &one);
     assert!(one == two);
     let covered = one.covered_pixels();
-    assert!(
-        covered > one.depth.len() / 4,
-        "bunny covers {covered} of {}",
-        one.depth.len()
-    );
+    assert!(covered > one.depth.len() / 4, "bunny covers {covered} of {}", one.depth.len());
     // Culling back faces of a closed-ish mesh barely changes what is visible.
     let none = render(&view, &items, CullMode::None);
-    let differ = none
-        .object_id
-        .iter()
-        .zip(&one.object_id)
-        .filter(|(a, b)| a != b)
-        .count();
+    let differ = none.object_id.iter().zip(&one.object_id).filter(|(a, b)| a != b).count();
     assert!(differ * 100 < covered, "{differ} pixels differ");
 }
 
@@ -838,14 +716,7 @@ fn bad_indices_are_skipped_not_a_panic() {
     );
     mesh.albedo.clear(); // missing albedo: white
     let subset = [1u32, 0, 1234];
-    let c = render(
-        &view,
-        &[DrawItem {
-            triangles: Some(&subset),
-            ..item(&mesh, 0)
-        }],
-        CullMode::Back,
-    );
+    let c = render(&view, &[DrawItem { triangles: Some(&subset), ..item(&mesh, 0) }], CullMode::Back);
     assert!(c.covered_pixels() > 20);
     assert!(c.triangle_id.iter().all(|&t| t == 0 || t == BACKGROUND_ID));
     // NaN vertices do not poison anything.
