@@ -52,7 +52,13 @@ pub struct CheckImages {
 pub struct CheckReport {
     pub eyes: Vec<Vec3>,
     pub per_view_psnr_y: Vec<f64>,
+    /// Arithmetic mean of `per_view_psnr_y` (views showing no geometry count as
+    /// [`MAX_PSNR_DB`]).
     pub mean: f64,
+    /// PSNR of the mean squared error over all views' pixels (robust to empty views).
+    pub pooled_psnr_y: f64,
+    /// Views whose reference frame shows no geometry at all (sky only).
+    pub empty_views: usize,
     pub worst_view: usize,
     pub worst: CheckImages,
 }
@@ -91,24 +97,35 @@ pub fn luminance(c: [u8; 4]) -> f64 {
     0.299 * c[0] as f64 + 0.587 * c[1] as f64 + 0.114 * c[2] as f64
 }
 
-/// PSNR (dB) on luminance between two images of equal size, capped at [`MAX_PSNR_DB`].
-pub fn psnr_y(a: &[[u8; 4]], b: &[[u8; 4]]) -> f64 {
+/// Mean squared luminance difference of two images of equal size (`None` when the
+/// sizes differ or are zero).
+pub fn mse_y(a: &[[u8; 4]], b: &[[u8; 4]]) -> Option<f64> {
     if a.is_empty() || a.len() != b.len() {
-        return 0.0;
+        return None;
     }
-    let mse = a
+    let sum = a
         .iter()
         .zip(b)
         .map(|(&p, &q)| {
             let d = luminance(p) - luminance(q);
             d * d
         })
-        .sum::<f64>()
-        / a.len() as f64;
+        .sum::<f64>();
+    Some(sum / a.len() as f64)
+}
+
+/// PSNR (dB) of a mean squared error on 8-bit values, capped at [`MAX_PSNR_DB`].
+pub fn psnr_of_mse(mse: f64) -> f64 {
     if mse <= 0.0 {
         return MAX_PSNR_DB;
     }
     (10.0 * (255.0 * 255.0 / mse).log10()).min(MAX_PSNR_DB)
+}
+
+/// PSNR (dB) on luminance between two images of equal size, capped at
+/// [`MAX_PSNR_DB`]; 0 for images of different or zero size.
+pub fn psnr_y(a: &[[u8; 4]], b: &[[u8; 4]]) -> f64 {
+    mse_y(a, b).map_or(0.0, psnr_of_mse)
 }
 
 /// The proxy meshes of a bake as standalone meshes (model vertices, simplified
@@ -214,6 +231,8 @@ pub fn check_cell(
         (g[0] * g[0] + g[1] * g[1]).sqrt().max(1.0) * 2.0
     };
     let mut per_view = Vec::with_capacity(views);
+    let mut mse_sum = 0.0;
+    let mut empty_views = 0;
     let mut worst: Option<(f64, usize, Capture, Capture)> = None;
     for (k, (eye, dir)) in check_views(grid, cell, cells, views)
         .into_iter()
@@ -234,7 +253,12 @@ pub fn check_cell(
             CullMode::Back,
             Shading::Projective(&textures),
         );
-        let psnr = psnr_y(&reference.color, &hybrid.color);
+        let mse = mse_y(&reference.color, &hybrid.color).unwrap_or(0.0);
+        mse_sum += mse;
+        if reference.covered_pixels() == 0 {
+            empty_views += 1;
+        }
+        let psnr = psnr_of_mse(mse);
         per_view.push(psnr);
         if worst.as_ref().is_none_or(|w| psnr < w.0) {
             worst = Some((psnr, k, reference, hybrid));
@@ -258,6 +282,8 @@ pub fn check_cell(
             .collect(),
         per_view_psnr_y: per_view,
         mean,
+        pooled_psnr_y: psnr_of_mse(mse_sum / views as f64),
+        empty_views,
         worst_view,
         worst: CheckImages {
             view: worst_view,

@@ -387,3 +387,140 @@ fn write_bunny_picture(
     }
     worker::picture::write_rgba(path, 2 * res, res, &out).unwrap();
 }
+
+// ---- Captures, projective texturing, clustering ----
+
+fn demo_item(scene: &Scene, i: u32) -> DrawItem<'_> {
+    let inst = &scene.instances[i as usize];
+    DrawItem {
+        mesh: &scene.models[inst.model as usize].mesh,
+        transform: inst.transform,
+        tint: inst.tint,
+        object_id: i,
+        triangles: None,
+    }
+}
+
+#[test]
+fn capture_texture_matrix_maps_vertices_onto_their_capture_pixels() {
+    let (scene, _, _, _) = demo();
+    let item = demo_item(&scene, 0);
+    let (lo, hi) = scene.instance_bounds(0);
+    let eye = (lo + hi) * 0.5 + Vec3::new(60.0, 25.0, -40.0);
+    let cap = worker::capture::capture_objects(eye, &[item], 512).unwrap();
+    let tex = &cap.texture;
+    assert!(cap.covered_pixels > 100);
+    assert!(tex.width <= cap.capture.view.width + 2 * worker::capture::TEXTURE_PAD_PX);
+    let mut offsets = Vec::new();
+    for p in &item.mesh.positions {
+        let w = item.transform.transform_point3(Vec3::from(*p));
+        let (px, _) = cap.capture.view.project(w).unwrap();
+        let c = tex.matrix * w.extend(1.0);
+        let (u, v) = (c.x / c.w * tex.width as f32, c.y / c.w * tex.height as f32);
+        offsets.push((px.x - u, px.y - v));
+    }
+    // One crop offset for every vertex: the matrix is the capture's projection,
+    // shifted by the crop and flipped in y like the capture's rows.
+    let (ox, oy) = offsets[0];
+    assert!(offsets
+        .iter()
+        .all(|&(x, y)| (x - ox).abs() < 1e-2 && (y - oy).abs() < 1e-2));
+    assert!((ox - ox.round()).abs() < 1e-2 && (oy - oy.round()).abs() < 1e-2);
+    // Covered texels hold the capture's colours.
+    let view = &cap.capture.view;
+    let mut checked = 0;
+    for y in 0..view.height as i64 {
+        for x in 0..view.width as i64 {
+            let q = cap.capture.index(x as u32, y as u32);
+            if cap.capture.object_id[q] != 0 {
+                continue;
+            }
+            let (tx, ty) = (x - ox.round() as i64, y - oy.round() as i64);
+            let o = ((ty * tex.width as i64 + tx) * 4) as usize;
+            assert_eq!(&tex.rgba[o..o + 3], &cap.capture.color[q][..3]);
+            assert_eq!(tex.rgba[o + 3], 255);
+            checked += 1;
+        }
+    }
+    assert_eq!(checked, cap.covered_pixels);
+}
+
+#[test]
+fn projective_texturing_from_the_capture_eye_reproduces_the_lit_render() {
+    let (scene, _, _, _) = demo();
+    let item = demo_item(&scene, 1);
+    let (lo, hi) = scene.instance_bounds(1);
+    let target = (lo + hi) * 0.5;
+    let eye = target + Vec3::new(-50.0, 15.0, 45.0);
+    let cap = worker::capture::capture_objects(eye, &[item], 1024).unwrap();
+    let view = View::look_at_fov(eye, target, Vec3::Y, 30.0, 256, 256, 1.0, 500.0).unwrap();
+    let lit = render(&view, &[item], CullMode::Back);
+    let textures = ProjectiveTextures {
+        viewer: eye,
+        by_object: vec![
+            None,
+            Some(ProjectiveSurface {
+                views: vec![cap.texture.clone()],
+                triangle_masks: None,
+            }),
+        ],
+    };
+    let textured = render_with(
+        &view,
+        &[item],
+        CullMode::Back,
+        Shading::Projective(&textures),
+    );
+    let psnr = psnr_y(&lit.color, &textured.color);
+    assert!(psnr > 35.0, "{psnr}");
+    assert!(psnr < 100.0, "textured render is not the lit one");
+    // An object without a surface in the table stays lit.
+    let other = ProjectiveTextures {
+        viewer: eye,
+        by_object: vec![],
+    };
+    let unlit = render_with(&view, &[item], CullMode::Back, Shading::Projective(&other));
+    assert_eq!(unlit.color, lit.color);
+}
+
+#[test]
+fn greedy_clustering_follows_the_paper_conditions() {
+    use worker::cluster::{greedy_clusters, ClusterCandidate, ClusterSettings};
+    let settings = ClusterSettings {
+        centre: Vec3::new(0.0, 10.0, 0.0),
+        cell_size: 50.0,
+        image_res: 1024,
+        self_occluding_tolerance_px: 5.0,
+    };
+    let boxed = |instance: u32, x: f32, z: f32, size: f32| ClusterCandidate {
+        instance,
+        aabb_min: Vec3::new(x - size / 2.0, 0.0, z - size / 2.0),
+        aabb_max: Vec3::new(x + size / 2.0, size, z + size / 2.0),
+    };
+    // Far away, overlapping in view: one cluster. Opposite directions: apart.
+    let far = [
+        boxed(0, 1500.0, 0.0, 20.0),
+        boxed(1, 1505.0, 8.0, 20.0),
+        boxed(2, -1500.0, 0.0, 20.0),
+    ];
+    let clusters = greedy_clusters(&far, &settings);
+    assert_eq!(clusters, vec![vec![0, 1], vec![2]]);
+    // Overlapping in view (the union's texture is barely larger than one of them)
+    // but one 100 units behind the other: the union's self-occluding error
+    // (≈ 12.7 px) exceeds T_s.
+    let deep = [boxed(0, 600.0, 0.0, 20.0), boxed(1, 700.0, 0.0, 20.0)];
+    let clusters = greedy_clusters(&deep, &settings);
+    assert_eq!(clusters, vec![vec![0], vec![1]]);
+    // Every candidate exactly once, whatever the input order.
+    let mut many: Vec<ClusterCandidate> = (0..12)
+        .map(|i| boxed(i, 1200.0 + 7.0 * i as f32, 13.0 * (i % 3) as f32, 15.0))
+        .collect();
+    let a = greedy_clusters(&many, &settings);
+    many.reverse();
+    let b = greedy_clusters(&many, &settings);
+    assert_eq!(a, b);
+    let mut all: Vec<u32> = a.iter().flatten().copied().collect();
+    all.sort_unstable();
+    assert_eq!(all, (0..12).collect::<Vec<_>>());
+    assert!(a.len() < 12, "{a:?}");
+}
