@@ -18,7 +18,8 @@
 //! [`TEXTURE_DILATE_PX`] of the object carry the colour of their covered neighbours
 //! (texture padding), so that a bilinear lookup at the object's rim, or on a simplified
 //! silhouette that pokes slightly past the original one, never blends in a foreign
-//! colour; the player's lookup and [`crate::raster::ProjectedTexture::sample`] use the
+//! colour; the remaining background texels (e.g. in gaps of the object) carry the
+//! object's mean colour; the player's lookup and [`crate::raster::ProjectedTexture::sample`] use the
 //! colour whatever the alpha. An object covering no pixel centre at all (smaller than
 //! a pixel) gets a 1 × 1 texture of its lit mean albedo.
 //!
@@ -195,7 +196,24 @@ pub fn texture_of(
             }
         }
     }
+    // The object's mean colour, for texels beyond the dilation.
+    let mut sum = [0u64; 3];
+    let mut n = 0u64;
+    for (texel, &f) in rgba.chunks_exact(4).zip(&filled) {
+        if f {
+            for k in 0..3 {
+                sum[k] += texel[k] as u64;
+            }
+            n += 1;
+        }
+    }
+    let mean = sum.map(|s| (s + n / 2).checked_div(n).unwrap_or(0) as u8);
     dilate(&mut rgba, &mut filled, cw as usize, ch as usize);
+    for (texel, &f) in rgba.chunks_exact_mut(4).zip(&filled) {
+        if !f {
+            texel[..3].copy_from_slice(&mean);
+        }
+    }
     let texture = ProjectedTexture {
         eye: view.eye,
         matrix: crop_matrix(

@@ -524,3 +524,49 @@ fn greedy_clustering_follows_the_paper_conditions() {
     assert_eq!(all, (0..12).collect::<Vec<_>>());
     assert!(a.len() < 12, "{a:?}");
 }
+
+#[test]
+fn tidy_selection_fills_small_holes_and_drops_small_specks() {
+    use worker::svmesh::tidy_selection;
+    // A 10 × 10 grid of quads (200 triangles), vertex (x, y) = y·11 + x.
+    let mut triangles = Vec::new();
+    for y in 0..10u32 {
+        for x in 0..10u32 {
+            let v = y * 11 + x;
+            triangles.push([v, v + 1, v + 12]);
+            triangles.push([v, v + 12, v + 11]);
+        }
+    }
+    let quad = |x: usize, y: usize| [2 * (y * 10 + x), 2 * (y * 10 + x) + 1];
+    // Selected: the left half (x < 5) except one quad (a 2-triangle hole) at (2, 5);
+    // plus one isolated quad at (8, 8) (a 2-triangle speck).
+    let mut selected = vec![false; triangles.len()];
+    for y in 0..10 {
+        for x in 0..5 {
+            for t in quad(x, y) {
+                selected[t] = true;
+            }
+        }
+    }
+    for t in quad(2, 5) {
+        selected[t] = false;
+    }
+    for t in quad(8, 8) {
+        selected[t] = true;
+    }
+    let before = selected.clone();
+    let changed = tidy_selection(&triangles, &mut selected, 4);
+    assert_eq!(changed, 4);
+    for t in quad(2, 5) {
+        assert!(selected[t], "hole filled");
+    }
+    for t in quad(8, 8) {
+        assert!(!selected[t], "speck dropped");
+    }
+    // Nothing else moved; with 0 nothing moves at all.
+    let moved = before.iter().zip(&selected).filter(|(a, b)| a != b).count();
+    assert_eq!(moved, 4);
+    let mut again = before.clone();
+    assert_eq!(tidy_selection(&triangles, &mut again, 0), 0);
+    assert_eq!(again, before);
+}
