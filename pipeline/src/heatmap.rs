@@ -27,10 +27,18 @@ pub fn render(grid_params: &GridParams, lines: &[CellLine]) -> anyhow::Result<Ve
         },
         grid_params.cell_size,
     );
-    let [gw, gd] = [
-        grid_params.ground_max[0] - grid_params.ground_min[0],
-        grid_params.ground_max[1] - grid_params.ground_min[1],
-    ];
+    // Fit the cells themselves (they reach past the ground rectangle).
+    let (mut cmin, mut cmax) = (
+        glam::Vec2::splat(f32::INFINITY),
+        glam::Vec2::splat(f32::NEG_INFINITY),
+    );
+    for cell in 0..grid.cell_count() {
+        for c in grid.corners(cell) {
+            cmin = cmin.min(c);
+            cmax = cmax.max(c);
+        }
+    }
+    let [gw, gd] = [cmax.x - cmin.x, cmax.y - cmin.y];
     let scale = PANEL / gw.max(gd).max(1e-6);
     let panel_h = gd * scale;
     let width = (3.0 * PANEL + 4.0 * MARGIN) as u32;
@@ -60,8 +68,8 @@ pub fn render(grid_params: &GridParams, lines: &[CellLine]) -> anyhow::Result<Ve
             let corners = grid.corners(cell);
             let mut pb = PathBuilder::new();
             for (i, c) in corners.iter().enumerate() {
-                let px = x0 + (c.x - grid_params.ground_min[0]) * scale;
-                let py = MARGIN + (c.y - grid_params.ground_min[1]) * scale;
+                let px = x0 + (c.x - cmin.x) * scale;
+                let py = MARGIN + (c.y - cmin.y) * scale;
                 if i == 0 {
                     pb.move_to(px, py);
                 } else {

@@ -265,24 +265,36 @@ pub fn bake_cell_pack(
     cell: u32,
     fingerprint: &Fingerprint,
 ) -> Result<(CellPack, CellReport), String> {
-    // TEMPORARY until bake_cell lands: originals only (instances intersecting the
-    // cell's prism), every other instance culled.
-    let prism = grid.prism(cell, plan.cells.min_eye_height, plan.cells.max_eye_height);
-    let originals = (0..scene.instances.len())
-        .filter(|&i| {
-            let (lo, hi) = scene.instance_bounds(i);
-            prism.intersects_aabb(lo, hi)
-        })
-        .map(|i| i as u32)
-        .collect::<Vec<_>>();
-    let report = serde_json::json!({ "originals": originals.len() });
-    Ok((
-        CellPack {
-            cell_id: cell,
-            fingerprint: *fingerprint,
-            originals,
-            proxies: Vec::new(),
+    let bake = crate::bake::bake_cell(scene, grid, cell, &plan.cells, &plan.bake)
+        .map_err(|e| e.to_string())?;
+    let pack = bake.to_pack(*fingerprint).map_err(|e| e.to_string())?;
+    let s = &bake.stats;
+    let t = &s.times;
+    // The keys `pipeline report` reads (the paper's Tables 3–8 per cell).
+    let report = serde_json::json!({
+        "instances": s.instances,
+        "originals": s.originals,
+        "polygons_inside": s.polygons_inside,
+        "sv_objects": s.sv_count,
+        "sv_polygons": s.sv_polygons,
+        "mv_objects": s.mv_count,
+        "mv_polygons": s.mv_polygons,
+        "clusters": s.cluster_count,
+        "cluster_objects": s.cluster_members,
+        "cluster_polygons": s.cluster_polygons,
+        "culled_objects": s.culled,
+        "outside_original_polygons": s.proxied_original_polygons,
+        "simplified_ratio": s.simplified_ratio,
+        "texture_bytes": s.texture_bytes,
+        "views": s.views,
+        "total_ms": t.total_ms,
+        "stage_ms": {
+            "split": t.split_ms,
+            "cluster": t.cluster_ms,
+            "capture": t.capture_ms,
+            "weights": t.weights_ms,
+            "simplify": t.simplify_ms,
         },
-        report,
-    ))
+    });
+    Ok((pack, report))
 }

@@ -35,6 +35,27 @@ enum Command {
         #[arg(long)]
         threads: Option<usize>,
     },
+    /// Bake one cell and compare its proxies with the original geometry from
+    /// viewpoints spread over the cell's prism: PSNR on luminance per view, their
+    /// mean, and the worst view's reference / proxy / difference PNGs.
+    Check {
+        manifest: PathBuf,
+        #[arg(long)]
+        cell: u32,
+        #[arg(long, default_value_t = 16)]
+        views: usize,
+        /// Square image side of each view (60° FOV).
+        #[arg(long, default_value_t = 1024)]
+        res: u32,
+        /// Where the worst view's PNGs go (default: no pictures).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Override T_l (edge-length tolerance) of the manifest.
+        #[arg(long)]
+        edge_length_tolerance: Option<f32>,
+        #[arg(long)]
+        json: bool,
+    },
     /// Capture one instance from a cell's centre and write colour, depth, class-map
     /// and weight-map PNGs (000 §3.1.3.1–3.1.3.2).
     Capture {
@@ -168,6 +189,77 @@ fn run(cli: Cli) -> Result<(), Failure> {
                     Err(failed(anyhow::anyhow!(message)))
                 }
             }
+        }
+        Command::Check {
+            manifest,
+            cell,
+            views,
+            res,
+            out,
+            edge_length_tolerance,
+            json,
+        } => {
+            let mut plan = format::manifest::parse_manifest(&manifest).map_err(bad_input)?;
+            if let Some(t) = edge_length_tolerance {
+                plan.bake.edge_length_tolerance = t;
+            }
+            let scene = plan.load_scene().map_err(bad_input)?;
+            let grid = worker::grid::HexGrid::new(scene.ground, plan.cells.cell_size);
+            let bake = worker::bake::bake_cell(&scene, &grid, cell, &plan.cells, &plan.bake)
+                .map_err(bad_input)?;
+            let r = worker::check::check_cell(
+                &scene,
+                &grid,
+                cell,
+                &plan.cells,
+                &plan.bake,
+                &bake,
+                views,
+                res,
+            )
+            .map_err(failed)?;
+            if let Some(dir) = &out {
+                std::fs::create_dir_all(dir).map_err(failed)?;
+                let w = &r.worst;
+                for (name, px) in [
+                    ("reference", &w.reference),
+                    ("proxy", &w.proxy),
+                    ("diff", &w.diff),
+                ] {
+                    let path = dir.join(format!("cell{cell}-view{}-{name}.png", w.view));
+                    worker::picture::write_rgba(&path, w.width, w.height, px).map_err(failed)?;
+                }
+            }
+            let s = &bake.stats;
+            if json {
+                let v = serde_json::json!({
+                    "cell": cell,
+                    "per_view_psnr_y": r.per_view_psnr_y,
+                    "mean_psnr_y": r.mean,
+                    "pooled_psnr_y": r.pooled_psnr_y,
+                    "empty_views": r.empty_views,
+                    "worst_view": r.worst_view,
+                    "originals": s.originals, "sv": s.sv_count, "mv": s.mv_count,
+                    "clusters": s.cluster_count, "culled": s.culled,
+                    "proxy_triangles": s.sv_polygons + s.mv_polygons + s.cluster_polygons,
+                    "proxied_original_triangles": s.proxied_original_polygons,
+                });
+                println!("{}", serde_json::to_string_pretty(&v).expect("serializes"));
+            } else {
+                println!(
+                    "cell {cell}: {} originals, {} SV, {} MV, {} clusters, {} culled; proxies {} of {} triangles",
+                    s.originals, s.sv_count, s.mv_count, s.cluster_count, s.culled,
+                    s.sv_polygons + s.mv_polygons + s.cluster_polygons, s.proxied_original_polygons
+                );
+                for (i, p) in r.per_view_psnr_y.iter().enumerate() {
+                    println!("view {i:2}: PSNR(Y) {p:6.2} dB");
+                }
+                println!(
+                    "mean {:.2} dB, pooled {:.2} dB ({} views show only sky), worst view {}",
+                    r.mean, r.pooled_psnr_y, r.empty_views, r.worst_view
+                );
+            }
+            Ok(())
         }
         Command::Capture {
             manifest,

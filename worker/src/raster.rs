@@ -106,15 +106,143 @@ impl Capture {
     }
 }
 
-/// How a visible pixel is coloured. A later issue adds projective texturing from a
-/// capture (`Projective { .. }`); the rasterizer calls [`Shading::shade_pixel`] per
+/// How a visible pixel is coloured; the rasterizer calls [`Shading::shade_pixel`] per
 /// visible pixel and nothing else depends on the variant.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub enum Shading {
+pub enum Shading<'a> {
     /// DESIGN.md "Shading": per-pixel Lambert of the interpolated vertex albedo
     /// (sRGB8 → linear) × tint and the interpolated, renormalised world normal.
     #[default]
     Lit,
+    /// Proxies drawn with projective texturing from their captures (paper 000 §3.2):
+    /// items whose `object_id` has a [`ProjectiveSurface`] in the table are textured
+    /// from its views, every other item is [`Shading::Lit`].
+    Projective(&'a ProjectiveTextures),
+}
+
+/// One capture used as a projective texture: the RGBA8 image (row 0 at the top) and
+/// the world → texture matrix (`(s, t, _, q) = M · (p, 1)`, texel coordinates
+/// `(s/q · width, t/q · height)`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ProjectedTexture {
+    /// Where the capture was taken from.
+    pub eye: Vec3,
+    pub matrix: Mat4,
+    pub width: u32,
+    pub height: u32,
+    /// Row-major RGBA8 sRGB, `width · height · 4` bytes. The colour is used whatever
+    /// the alpha (background texels next to the object carry padded colours).
+    pub rgba: Vec<u8>,
+}
+
+impl ProjectedTexture {
+    /// Bilinear sRGB8 lookup of the world point `p`; `None` behind the capture's eye
+    /// or with a malformed image. Coordinates outside the image clamp to its edge.
+    pub fn sample(&self, p: Vec3) -> Option<Vec3> {
+        let (w, h) = (self.width as usize, self.height as usize);
+        if w == 0 || h == 0 || self.rgba.len() != w * h * 4 {
+            return None;
+        }
+        let c = self.matrix * p.extend(1.0);
+        if c.w <= 0.0 || !c.is_finite() {
+            return None;
+        }
+        // Texel centres at +0.5.
+        let x = (c.x / c.w * w as f32 - 0.5).clamp(0.0, (w - 1) as f32);
+        let y = (c.y / c.w * h as f32 - 0.5).clamp(0.0, (h - 1) as f32);
+        let (x0, y0) = (x.floor() as usize, y.floor() as usize);
+        let (x1, y1) = ((x0 + 1).min(w - 1), (y0 + 1).min(h - 1));
+        let (fx, fy) = (x - x0 as f32, y - y0 as f32);
+        let texel = |x: usize, y: usize| {
+            let o = (y * w + x) * 4;
+            Vec3::new(
+                self.rgba[o] as f32,
+                self.rgba[o + 1] as f32,
+                self.rgba[o + 2] as f32,
+            )
+        };
+        let top = texel(x0, y0).lerp(texel(x1, y0), fx);
+        let bottom = texel(x0, y1).lerp(texel(x1, y1), fx);
+        Some(top.lerp(bottom, fy))
+    }
+}
+
+/// The textures of one proxy item (one member mesh of an SvMesh, Cluster or MvMesh).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ProjectiveSurface {
+    pub views: Vec<ProjectedTexture>,
+    /// MvMesh: per triangle of the item's mesh, bit i = view i sees it; `None` = every
+    /// view may texture every triangle (SvMesh, Cluster).
+    pub triangle_masks: Option<Vec<u8>>,
+}
+
+/// Projective texturing of proxies for one frame (paper 000 §3.2): SvMesh and Cluster
+/// triangles take their single capture; an MvMesh triangle takes the views in its
+/// mask — none: lit vertex colour (the paper's "normal map approach" stand-in), one:
+/// that view, more: the two whose directions from the surface point are closest to
+/// the viewer's, blended by angle (weight of a view ∝ the other's angle).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ProjectiveTextures {
+    /// The eye of the frame being rendered.
+    pub viewer: Vec3,
+    /// Indexed by `DrawItem::object_id`; `None` or out of range = lit.
+    pub by_object: Vec<Option<ProjectiveSurface>>,
+}
+
+impl ProjectiveTextures {
+    /// Colour of a pixel of a proxy, sRGB8 values as f32 (`None`: shade it lit).
+    fn shade(&self, s: &PixelSurface<'_>) -> Option<[u8; 4]> {
+        let surface = self.by_object.get(s.item.object_id as usize)?.as_ref()?;
+        let mesh = s.item.mesh;
+        let t = mesh.triangles.get(s.triangle as usize)?;
+        let mut local = Vec3::ZERO;
+        for (k, &v) in t.iter().enumerate() {
+            local += s.barycentric[k] * Vec3::from_array(*mesh.positions.get(v as usize)?);
+        }
+        let p = s.item.transform.transform_point3(local);
+        let mask = match &surface.triangle_masks {
+            Some(masks) => *masks.get(s.triangle as usize)? as u32,
+            None => u32::MAX,
+        };
+        let to_viewer = (self.viewer - p).normalize_or_zero();
+        // The (up to) two usable views closest in angle to the viewer's direction.
+        let mut best: [Option<(f32, usize)>; 2] = [None, None];
+        for (i, view) in surface.views.iter().enumerate() {
+            if i >= 32 || mask & (1 << i) == 0 {
+                continue;
+            }
+            let angle = to_viewer
+                .dot((view.eye - p).normalize_or_zero())
+                .clamp(-1.0, 1.0)
+                .acos();
+            let candidate = Some((angle, i));
+            if best[0].is_none_or(|b| angle < b.0) {
+                best[1] = best[0];
+                best[0] = candidate;
+            } else if best[1].is_none_or(|b| angle < b.0) {
+                best[1] = candidate;
+            }
+        }
+        let rgb = match best {
+            [None, _] => return None,
+            [Some((_, i)), None] => surface.views[i].sample(p)?,
+            [Some((a0, i0)), Some((a1, i1))] => {
+                let c0 = surface.views[i0].sample(p)?;
+                let Some(c1) = surface.views[i1].sample(p) else {
+                    return Some(to_srgb8(c0));
+                };
+                let sum = a0 + a1;
+                let w0 = if sum > 1e-9 { a1 / sum } else { 0.5 };
+                c0 * w0 + c1 * (1.0 - w0)
+            }
+        };
+        Some(to_srgb8(rgb))
+    }
+}
+
+fn to_srgb8(rgb: Vec3) -> [u8; 4] {
+    let c = |v: f32| (v + 0.5).clamp(0.0, 255.0) as u8;
+    [c(rgb.x), c(rgb.y), c(rgb.z), 255]
 }
 
 /// What the resolve pass knows about a visible pixel.
@@ -129,11 +257,16 @@ pub struct PixelSurface<'a> {
     pub normal_matrix: &'a Mat3,
 }
 
-impl Shading {
+impl Shading<'_> {
     /// sRGB8 colour of one visible pixel.
     pub fn shade_pixel(&self, s: &PixelSurface<'_>) -> [u8; 4] {
+        if let Shading::Projective(textures) = self {
+            if let Some(c) = textures.shade(s) {
+                return c;
+            }
+        }
         match self {
-            Shading::Lit => {
+            Shading::Lit | Shading::Projective(_) => {
                 let mesh = s.item.mesh;
                 let t = mesh.triangles[s.triangle as usize];
                 let b = s.barycentric;

@@ -1,0 +1,448 @@
+//! `bake_cell`: the preprocessing of one view cell (paper 000 §3.1, Fig. 3; DESIGN.md
+//! "Data flow", "Representations").
+//!
+//! Steps:
+//!
+//! 1. **Split.** An instance whose world box intersects the cell's prism is inside:
+//!    Original. Every other instance is outside and gets a proxy or is Culled.
+//! 2. **Regional back-face culling** (§3.1.5): an outside instance all of whose
+//!    triangles face away from the whole prism is Culled (an instance without
+//!    triangles too).
+//! 3. **Self-occluding error** (§3.1.2) of the instance's world box from the cell
+//!    centre: below T_s → SV candidate, else MvMesh.
+//! 4. **Clustering** (§3.1.6, when `params.clustering`) of the SV candidates; a
+//!    cluster of one is a plain SvMesh.
+//! 5. **Derivation** (§3.1.3, §3.1.4) of every SvMesh / Cluster / MvMesh, in parallel
+//!    over proxies (rayon), collected in order of each proxy's first instance, so the
+//!    result does not depend on the thread count.
+//!
+//! Every outside object gets a proxy, however far or small: the paper has no far
+//! plane, and an object projecting below a pixel simply simplifies to the few
+//! triangles the collapse constraints leave, with a 1 × 1 texture
+//! ([`crate::capture`]).
+//!
+//! The cell centre is the hexagon's centre at mid eye height; neighbours' centres
+//! (MvMesh views) are at the same height. Stage times are measured per proxy and
+//! summed (CPU time, not wall time) and are never written to packs.
+
+use crate::backface::regional_backface_cull;
+use crate::capture::{matrix_array, pack_texture};
+use crate::cluster::{greedy_clusters, ClusterCandidate, ClusterSettings};
+use crate::grid::HexGrid;
+use crate::mvmesh::derive_mvmesh;
+use crate::raster::ProjectedTexture;
+use crate::selfocc::{choose_representation, object_self_occluding_error, Representation};
+use crate::svmesh::{derive_svmesh, ms_since, ProxyError, ProxySettings, StageTimes};
+use format::manifest::{BakeParams, CellParams};
+use format::pack::{CellPack, Proxy, ProxyKind, ProxyMember, ProxyView};
+use format::Scene;
+use glam::Vec3;
+use rayon::prelude::*;
+use std::time::Instant;
+use thiserror::Error;
+
+/// Why a cell cannot be baked.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum BakeError {
+    #[error("cell {cell} does not exist (the grid has {cells} cells)")]
+    NoCell { cell: u32, cells: u32 },
+    #[error("cell {cell}: {source}")]
+    Proxy {
+        cell: u32,
+        #[source]
+        source: ProxyError,
+    },
+    #[error("cell {cell}: texture of a proxy of instance {instance}: {what}")]
+    Texture {
+        cell: u32,
+        instance: u32,
+        what: String,
+    },
+}
+
+/// What became of one instance in this cell.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Assignment {
+    Original,
+    Culled,
+    /// Index into [`CellBake::proxies`].
+    Proxy(u32),
+}
+
+/// One member of a baked proxy.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BakedMember {
+    pub instance: u32,
+    /// Triangles given to the simplifier (for `simplify::validate`).
+    pub input_triangles: Vec<[u32; 3]>,
+    /// Simplified triangles (original vertex ids of the instance's model).
+    pub triangles: Vec<[u32; 3]>,
+    /// MvMesh: per triangle, bit i = `views[i]` sees it; empty otherwise.
+    pub view_masks: Vec<u8>,
+    /// MvMesh: per model vertex, the views it is visible in (same bits); empty
+    /// otherwise (for `simplify::validate_view_masks`).
+    pub vertex_view_sets: Vec<u8>,
+}
+
+/// One proxy of the cell.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BakedProxy {
+    pub kind: ProxyKind,
+    pub members: Vec<BakedMember>,
+    pub views: Vec<ProjectedTexture>,
+}
+
+impl BakedProxy {
+    pub fn triangle_count(&self) -> u64 {
+        self.members.iter().map(|m| m.triangles.len() as u64).sum()
+    }
+}
+
+/// Time per stage (milliseconds; proxy stages summed over proxies).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct CellTimes {
+    /// Split, regional back-face culling and self-occluding error.
+    pub split_ms: f64,
+    pub cluster_ms: f64,
+    pub capture_ms: f64,
+    /// Classes, weights, view sets, triangle selection.
+    pub weights_ms: f64,
+    pub simplify_ms: f64,
+    /// Wall time of the whole `bake_cell`.
+    pub total_ms: f64,
+}
+
+/// Per-cell statistics (DESIGN.md reports).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct CellStats {
+    pub instances: u32,
+    pub originals: u32,
+    /// Triangles of the Original instances.
+    pub polygons_inside: u64,
+    pub culled: u32,
+    pub sv_count: u32,
+    pub sv_polygons: u64,
+    pub mv_count: u32,
+    pub mv_polygons: u64,
+    /// Clusters of two or more objects, their members and polygons.
+    pub cluster_count: u32,
+    pub cluster_members: u32,
+    pub cluster_polygons: u64,
+    /// Triangles of the full models of the proxied instances.
+    pub proxied_original_polygons: u64,
+    /// (SV + MV + cluster polygons) / `proxied_original_polygons`.
+    pub simplified_ratio: f64,
+    /// Decoded RGBA8 bytes of all proxy textures.
+    pub texture_bytes: u64,
+    pub views: u32,
+    pub times: CellTimes,
+}
+
+/// The result of baking one cell.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CellBake {
+    pub cell: u32,
+    /// Per instance of the scene.
+    pub assignment: Vec<Assignment>,
+    /// Original instances, ascending.
+    pub originals: Vec<u32>,
+    /// Ordered by first member instance.
+    pub proxies: Vec<BakedProxy>,
+    pub stats: CellStats,
+}
+
+/// The cell centre at mid eye height.
+pub fn cell_eye(grid: &HexGrid, cell: u32, cells: &CellParams) -> Vec3 {
+    let c = grid.centre(cell);
+    Vec3::new(
+        c.x,
+        0.5 * (cells.min_eye_height + cells.max_eye_height),
+        c.y,
+    )
+}
+
+enum Job {
+    Sv(Vec<u32>),
+    Mv(u32),
+}
+
+/// Bakes one cell (module docs).
+pub fn bake_cell(
+    scene: &Scene,
+    grid: &HexGrid,
+    cell: u32,
+    cells: &CellParams,
+    params: &BakeParams,
+) -> Result<CellBake, BakeError> {
+    let start = Instant::now();
+    if cell >= grid.cell_count() {
+        return Err(BakeError::NoCell {
+            cell,
+            cells: grid.cell_count(),
+        });
+    }
+    let mut times = CellTimes::default();
+    let prism = grid.prism(cell, cells.min_eye_height, cells.max_eye_height);
+    let corners = prism.corners();
+    let centre = cell_eye(grid, cell, cells);
+    let settings = ProxySettings::new(params, grid.cell_size());
+
+    // Steps 1–3: split, cull, self-occluding error (parallel, collected in order).
+    let t = Instant::now();
+    let kinds: Vec<(Option<Representation>, bool)> = (0..scene.instances.len())
+        .into_par_iter()
+        .map(|i| {
+            let inst = &scene.instances[i];
+            let Some(model) = scene.models.get(inst.model as usize) else {
+                return (None, false);
+            };
+            if model.mesh.triangles.is_empty() {
+                return (None, false);
+            }
+            let (lo, hi) = scene.instance_bounds(i);
+            if prism.intersects_aabb(lo, hi) {
+                return (None, true);
+            }
+            let culled = regional_backface_cull(&model.mesh, inst.transform, &corners);
+            if culled.iter().all(|&c| c) {
+                return (None, false);
+            }
+            let error =
+                object_self_occluding_error(grid.cell_size(), params.image_res, centre, lo, hi);
+            (
+                Some(choose_representation(
+                    error,
+                    params.self_occluding_tolerance_px,
+                )),
+                false,
+            )
+        })
+        .collect();
+    times.split_ms = ms_since(t);
+    let mut assignment: Vec<Assignment> = kinds
+        .iter()
+        .map(|&(_, inside)| {
+            if inside {
+                Assignment::Original
+            } else {
+                Assignment::Culled
+            }
+        })
+        .collect();
+    let originals: Vec<u32> = (0..scene.instances.len() as u32)
+        .filter(|&i| assignment[i as usize] == Assignment::Original)
+        .collect();
+
+    // Step 4: clustering of the SV candidates.
+    let t = Instant::now();
+    let sv: Vec<u32> = (0..kinds.len() as u32)
+        .filter(|&i| kinds[i as usize].0 == Some(Representation::Sv))
+        .collect();
+    let sv_groups: Vec<Vec<u32>> = if params.clustering {
+        let candidates: Vec<ClusterCandidate> = sv
+            .iter()
+            .map(|&i| {
+                let (lo, hi) = scene.instance_bounds(i as usize);
+                ClusterCandidate {
+                    instance: i,
+                    aabb_min: lo,
+                    aabb_max: hi,
+                }
+            })
+            .collect();
+        greedy_clusters(
+            &candidates,
+            &ClusterSettings {
+                centre,
+                cell_size: grid.cell_size(),
+                image_res: params.image_res,
+                self_occluding_tolerance_px: params.self_occluding_tolerance_px,
+            },
+        )
+    } else {
+        sv.iter().map(|&i| vec![i]).collect()
+    };
+    times.cluster_ms = ms_since(t);
+
+    // Step 5: derive every proxy, ordered by first instance.
+    let mut jobs: Vec<(u32, Job)> = sv_groups
+        .into_iter()
+        .map(|g| (g[0], Job::Sv(g)))
+        .chain(
+            (0..kinds.len() as u32)
+                .filter(|&i| kinds[i as usize].0 == Some(Representation::Mv))
+                .map(|i| (i, Job::Mv(i))),
+        )
+        .collect();
+    jobs.sort_by_key(|j| j.0);
+    let mut eyes = vec![centre];
+    eyes.extend(
+        grid.neighbours(cell)
+            .into_iter()
+            .map(|n| cell_eye(grid, n, cells)),
+    );
+    let built: Vec<Result<(BakedProxy, StageTimes), BakeError>> = jobs
+        .par_iter()
+        .map(|(_, job)| {
+            let wrap = |source| BakeError::Proxy { cell, source };
+            match job {
+                Job::Sv(group) => {
+                    let sv = derive_svmesh(scene, group, centre, &settings).map_err(wrap)?;
+                    let kind = if group.len() > 1 {
+                        ProxyKind::Cluster
+                    } else {
+                        ProxyKind::SvMesh
+                    };
+                    let members = sv
+                        .members
+                        .into_iter()
+                        .map(|m| BakedMember {
+                            instance: m.instance,
+                            input_triangles: m.input_triangles,
+                            triangles: m.simplified.triangles,
+                            view_masks: Vec::new(),
+                            vertex_view_sets: Vec::new(),
+                        })
+                        .collect();
+                    Ok((
+                        BakedProxy {
+                            kind,
+                            members,
+                            views: vec![sv.view],
+                        },
+                        sv.times,
+                    ))
+                }
+                Job::Mv(i) => {
+                    let mv = derive_mvmesh(scene, *i, &eyes, &corners, &settings).map_err(wrap)?;
+                    Ok((
+                        BakedProxy {
+                            kind: ProxyKind::MvMesh,
+                            members: vec![BakedMember {
+                                instance: *i,
+                                input_triangles: mv.member.input_triangles,
+                                triangles: mv.member.simplified.triangles,
+                                view_masks: mv.member.simplified.view_masks,
+                                vertex_view_sets: mv.vertex_view_sets,
+                            }],
+                            views: mv.views,
+                        },
+                        mv.times,
+                    ))
+                }
+            }
+        })
+        .collect();
+    let mut proxies = Vec::with_capacity(built.len());
+    let mut stage = StageTimes::default();
+    for result in built {
+        let (proxy, t) = result?;
+        stage.add(&t);
+        for m in &proxy.members {
+            assignment[m.instance as usize] = Assignment::Proxy(proxies.len() as u32);
+        }
+        proxies.push(proxy);
+    }
+    times.capture_ms = stage.capture_ms;
+    times.weights_ms = stage.weights_ms;
+    times.simplify_ms = stage.simplify_ms;
+
+    // Statistics.
+    let tris_of = |i: u32| {
+        let inst = &scene.instances[i as usize];
+        scene.models[inst.model as usize].mesh.triangles.len() as u64
+    };
+    let mut stats = CellStats {
+        instances: scene.instances.len() as u32,
+        originals: originals.len() as u32,
+        polygons_inside: originals.iter().map(|&i| tris_of(i)).sum(),
+        culled: assignment
+            .iter()
+            .filter(|&&a| a == Assignment::Culled)
+            .count() as u32,
+        ..CellStats::default()
+    };
+    for p in &proxies {
+        let tris = p.triangle_count();
+        match p.kind {
+            ProxyKind::SvMesh => {
+                stats.sv_count += 1;
+                stats.sv_polygons += tris;
+            }
+            ProxyKind::MvMesh => {
+                stats.mv_count += 1;
+                stats.mv_polygons += tris;
+            }
+            _ => {
+                stats.cluster_count += 1;
+                stats.cluster_members += p.members.len() as u32;
+                stats.cluster_polygons += tris;
+            }
+        }
+        stats.proxied_original_polygons +=
+            p.members.iter().map(|m| tris_of(m.instance)).sum::<u64>();
+        stats.views += p.views.len() as u32;
+        stats.texture_bytes += p.views.iter().map(|v| v.rgba.len() as u64).sum::<u64>();
+    }
+    let proxy_polygons = stats.sv_polygons + stats.mv_polygons + stats.cluster_polygons;
+    stats.simplified_ratio = if stats.proxied_original_polygons > 0 {
+        proxy_polygons as f64 / stats.proxied_original_polygons as f64
+    } else {
+        0.0
+    };
+    times.total_ms = ms_since(start);
+    stats.times = times;
+    Ok(CellBake {
+        cell,
+        assignment,
+        originals,
+        proxies,
+        stats,
+    })
+}
+
+impl CellBake {
+    /// The cell pack (no times or other run-dependent data reach it).
+    pub fn to_pack(&self, fingerprint: [u8; 32]) -> Result<CellPack, BakeError> {
+        let proxies = self
+            .proxies
+            .iter()
+            .map(|p| {
+                let views = p
+                    .views
+                    .iter()
+                    .map(|v| {
+                        Ok(ProxyView {
+                            eye: v.eye.into(),
+                            matrix: matrix_array(&v.matrix),
+                            texture: pack_texture(v).map_err(|what| BakeError::Texture {
+                                cell: self.cell,
+                                instance: p.members.first().map_or(u32::MAX, |m| m.instance),
+                                what,
+                            })?,
+                        })
+                    })
+                    .collect::<Result<Vec<_>, BakeError>>()?;
+                Ok(Proxy {
+                    kind: p.kind,
+                    members: p
+                        .members
+                        .iter()
+                        .map(|m| ProxyMember {
+                            instance: m.instance,
+                            triangles: m.triangles.clone(),
+                            view_masks: m.view_masks.clone(),
+                        })
+                        .collect(),
+                    views,
+                })
+            })
+            .collect::<Result<Vec<_>, BakeError>>()?;
+        Ok(CellPack {
+            cell_id: self.cell,
+            fingerprint,
+            originals: self.originals.clone(),
+            proxies,
+        })
+    }
+}

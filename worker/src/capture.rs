@@ -1,0 +1,286 @@
+//! Object captures and their projective textures (paper 000 §3.1.3 step (1): "capture
+//! the image and depth image of O ... cell's center as the center of projection";
+//! §3.1.4: the same from the centres of the neighbouring cells; §3.2: the textures are
+//! mapped by projective texturing; DESIGN.md "Capture resolution").
+//!
+//! A capture renders **only** the object (or the members of a cluster) from an eye,
+//! through a tight frustum around its world box at DESIGN.md's angular resolution
+//! ([`View::tight_around`]: `image_res` pixels per 60°). Other objects of the scene do
+//! not occlude it: the proxy texture must show the object's own surface wherever the
+//! proxy is drawn, and the occlusion between objects is resolved at run time by the
+//! depth buffer (the paper's object-based LOD meshes "avoid the holes due to occlusion
+//! among objects", §3). The classes and weights (§3.1.3.1–2) are computed on the same
+//! capture, as `classify.rs` asks.
+//!
+//! From the capture we keep a texture: the colour buffer cropped to the rectangle the
+//! object covers, widened by [`TEXTURE_PAD_PX`] on every side; texels of the object
+//! have alpha 255, the others alpha 0. Background texels within
+//! [`TEXTURE_DILATE_PX`] of the object carry the colour of their covered neighbours
+//! (texture padding), so that a bilinear lookup at the object's rim, or on a simplified
+//! silhouette that pokes slightly past the original one, never blends in a foreign
+//! colour; the remaining background texels (e.g. in gaps of the object) carry the
+//! object's mean colour; the player's lookup and [`crate::raster::ProjectedTexture::sample`] use the
+//! colour whatever the alpha. An object covering no pixel centre at all (smaller than
+//! a pixel) gets a 1 × 1 texture of its lit mean albedo.
+//!
+//! The world → texture matrix `M` maps a world point `p` to `(s, t, z, q) = M·(p, 1)`
+//! with `(s/q, t/q) ∈ [0, 1]²` over the texture, `t` growing downwards (texture row 0
+//! is the top row of the capture): `M = T · proj · view`, where `T` takes clip space
+//! to the pixel grid of the capture (NDC → pixels, y flipped) and then to the crop.
+
+use crate::raster::View;
+use crate::raster::{render, Capture, CullMode, DrawItem, ProjectedTexture, BACKGROUND_ID};
+use crate::shade::{linear_to_srgb8, shade, srgb8_to_linear};
+use crate::view::ViewError;
+use glam::{Mat4, Vec3, Vec4};
+use thiserror::Error;
+
+/// Texels added around the covered rectangle on every side.
+pub const TEXTURE_PAD_PX: u32 = 2;
+/// Background texels within this many texels (4-neighbour steps) of the object take
+/// the mean colour of their covered neighbours.
+pub const TEXTURE_DILATE_PX: u32 = 3;
+
+/// Why a capture cannot be made.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum CaptureError {
+    #[error("nothing to capture (no triangle with valid vertices)")]
+    Empty,
+    #[error("capture view from {eye:?}: {source}")]
+    View {
+        eye: [f32; 3],
+        #[source]
+        source: ViewError,
+    },
+}
+
+/// One capture of an object (or a cluster) and its texture.
+#[derive(Clone, Debug)]
+pub struct ObjectCapture {
+    /// The raw buffers (depth, colour, ids), for classes and weights.
+    pub capture: Capture,
+    /// The cropped, padded texture and its world → texture matrix.
+    pub texture: ProjectedTexture,
+    /// Pixels of the capture covered by the object.
+    pub covered_pixels: usize,
+}
+
+/// World box of the items' referenced vertices (`None` when no triangle is valid).
+pub fn items_aabb(items: &[DrawItem]) -> Option<(Vec3, Vec3)> {
+    let mut lo = Vec3::splat(f32::INFINITY);
+    let mut hi = Vec3::splat(f32::NEG_INFINITY);
+    let mut any = false;
+    for item in items {
+        let mesh = item.mesh;
+        let mut used = vec![false; mesh.positions.len()];
+        let mut mark = |t: &[u32; 3]| {
+            if t.iter().all(|&v| (v as usize) < used.len()) {
+                for &v in t {
+                    used[v as usize] = true;
+                }
+            }
+        };
+        match item.triangles {
+            Some(subset) => subset
+                .iter()
+                .filter_map(|&t| mesh.triangles.get(t as usize))
+                .for_each(&mut mark),
+            None => mesh.triangles.iter().for_each(&mut mark),
+        }
+        for (p, _) in mesh.positions.iter().zip(&used).filter(|(_, &u)| u) {
+            let w = item.transform.transform_point3(Vec3::from_array(*p));
+            if w.is_finite() {
+                lo = lo.min(w);
+                hi = hi.max(w);
+                any = true;
+            }
+        }
+    }
+    any.then_some((lo, hi))
+}
+
+/// The tight capture view from `eye` around `[lo, hi]` at `image_res` pixels per 60°.
+pub fn capture_view(eye: Vec3, lo: Vec3, hi: Vec3, image_res: u32) -> Result<View, CaptureError> {
+    View::tight_around(eye, lo, hi, image_res).map_err(|source| CaptureError::View {
+        eye: eye.into(),
+        source,
+    })
+}
+
+/// Captures `items` (one object, or the members of a cluster, each with its own
+/// `object_id`) alone from `eye` (module docs) and builds the texture.
+pub fn capture_objects(
+    eye: Vec3,
+    items: &[DrawItem],
+    image_res: u32,
+) -> Result<ObjectCapture, CaptureError> {
+    let (lo, hi) = items_aabb(items).ok_or(CaptureError::Empty)?;
+    let view = capture_view(eye, lo, hi, image_res)?;
+    let capture = render(&view, items, CullMode::Back);
+    let member = |id: u32| id != BACKGROUND_ID && items.iter().any(|i| i.object_id == id);
+    let (texture, covered_pixels) = texture_of(&capture, &member, || fallback_colour(items));
+    Ok(ObjectCapture {
+        capture,
+        texture,
+        covered_pixels,
+    })
+}
+
+/// The lit mean albedo of the items seen from straight on (for sub-pixel objects).
+fn fallback_colour(items: &[DrawItem]) -> [u8; 4] {
+    let mut sum = Vec3::ZERO;
+    let mut n = 0.0f32;
+    for item in items {
+        for c in &item.mesh.albedo {
+            sum += srgb8_to_linear(*c) * item.tint;
+            n += 1.0;
+        }
+    }
+    let albedo = if n > 0.0 { sum / n } else { Vec3::ONE };
+    linear_to_srgb8(shade(albedo, Vec3::Y))
+}
+
+/// Crops, pads and dilates the colour buffer of `capture` around the pixels whose
+/// object id satisfies `member`; returns the texture and the covered pixel count.
+pub fn texture_of(
+    capture: &Capture,
+    member: &dyn Fn(u32) -> bool,
+    fallback: impl FnOnce() -> [u8; 4],
+) -> (ProjectedTexture, usize) {
+    let view = &capture.view;
+    let (w, h) = (view.width as i64, view.height as i64);
+    let (mut x0, mut y0, mut x1, mut y1) = (i64::MAX, i64::MAX, i64::MIN, i64::MIN);
+    let mut covered = 0usize;
+    for y in 0..h {
+        for x in 0..w {
+            if member(capture.object_id[(y * w + x) as usize]) {
+                covered += 1;
+                x0 = x0.min(x);
+                y0 = y0.min(y);
+                x1 = x1.max(x);
+                y1 = y1.max(y);
+            }
+        }
+    }
+    let view_proj = view.view_proj();
+    if covered == 0 {
+        // Sub-pixel object: one texel over the whole capture window.
+        let c = fallback();
+        let texture = ProjectedTexture {
+            eye: view.eye,
+            matrix: crop_matrix(w as f32, h as f32, 0.0, 0.0, w as f32, h as f32) * view_proj,
+            width: 1,
+            height: 1,
+            rgba: vec![c[0], c[1], c[2], 255],
+        };
+        return (texture, 0);
+    }
+    let pad = TEXTURE_PAD_PX as i64;
+    let (cx0, cy0) = (x0 - pad, y0 - pad);
+    let (cw, ch) = (x1 - x0 + 1 + 2 * pad, y1 - y0 + 1 + 2 * pad);
+    let mut rgba = vec![0u8; (cw * ch * 4) as usize];
+    let mut filled = vec![false; (cw * ch) as usize];
+    for ty in 0..ch {
+        for tx in 0..cw {
+            let (x, y) = (cx0 + tx, cy0 + ty);
+            if x < 0 || y < 0 || x >= w || y >= h {
+                continue;
+            }
+            let q = (y * w + x) as usize;
+            if member(capture.object_id[q]) {
+                let o = (ty * cw + tx) as usize;
+                let c = capture.color[q];
+                rgba[o * 4..o * 4 + 3].copy_from_slice(&c[..3]);
+                rgba[o * 4 + 3] = 255;
+                filled[o] = true;
+            }
+        }
+    }
+    // The object's mean colour, for texels beyond the dilation.
+    let mut sum = [0u64; 3];
+    let mut n = 0u64;
+    for (texel, &f) in rgba.chunks_exact(4).zip(&filled) {
+        if f {
+            for k in 0..3 {
+                sum[k] += texel[k] as u64;
+            }
+            n += 1;
+        }
+    }
+    let mean = sum.map(|s| (s + n / 2).checked_div(n).unwrap_or(0) as u8);
+    dilate(&mut rgba, &mut filled, cw as usize, ch as usize);
+    for (texel, &f) in rgba.chunks_exact_mut(4).zip(&filled) {
+        if !f {
+            texel[..3].copy_from_slice(&mean);
+        }
+    }
+    let texture = ProjectedTexture {
+        eye: view.eye,
+        matrix: crop_matrix(
+            w as f32, h as f32, cx0 as f32, cy0 as f32, cw as f32, ch as f32,
+        ) * view_proj,
+        width: cw as u32,
+        height: ch as u32,
+        rgba,
+    };
+    (texture, covered)
+}
+
+/// Clip space → texture coordinates of the crop `[x0, x0 + cw) × [y0, y0 + ch)` of a
+/// `width × height` image (module docs).
+fn crop_matrix(width: f32, height: f32, x0: f32, y0: f32, cw: f32, ch: f32) -> Mat4 {
+    Mat4::from_cols(
+        Vec4::new(width / (2.0 * cw), 0.0, 0.0, 0.0),
+        Vec4::new(0.0, -height / (2.0 * ch), 0.0, 0.0),
+        Vec4::new(0.0, 0.0, 1.0, 0.0),
+        Vec4::new((width / 2.0 - x0) / cw, (height / 2.0 - y0) / ch, 0.0, 1.0),
+    )
+}
+
+/// [`TEXTURE_DILATE_PX`] passes: every unfilled texel with filled 4-neighbours takes
+/// their mean colour (alpha stays 0).
+fn dilate(rgba: &mut [u8], filled: &mut [bool], w: usize, h: usize) {
+    for _ in 0..TEXTURE_DILATE_PX {
+        let before = filled.to_vec();
+        for y in 0..h {
+            for x in 0..w {
+                let o = y * w + x;
+                if before[o] {
+                    continue;
+                }
+                let mut sum = [0u32; 3];
+                let mut n = 0;
+                let neighbours = [
+                    (x > 0).then(|| o - 1),
+                    (x + 1 < w).then(|| o + 1),
+                    (y > 0).then(|| o - w),
+                    (y + 1 < h).then(|| o + w),
+                ];
+                for q in neighbours.into_iter().flatten() {
+                    if before[q] {
+                        for k in 0..3 {
+                            sum[k] += rgba[q * 4 + k] as u32;
+                        }
+                        n += 1;
+                    }
+                }
+                for (k, total) in sum.iter().enumerate() {
+                    if let Some(mean) = (total + n / 2).checked_div(n) {
+                        rgba[o * 4 + k] = mean as u8;
+                        filled[o] = true;
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Encodes a capture texture for a pack (the smaller lossless encoding after zstd).
+pub fn pack_texture(texture: &ProjectedTexture) -> Result<format::pack::Texture, String> {
+    format::pack::Texture::from_rgba8_smallest(texture.width, texture.height, &texture.rgba)
+}
+
+/// The column-major matrix as stored in a pack.
+pub fn matrix_array(m: &Mat4) -> [f32; 16] {
+    m.to_cols_array()
+}

@@ -1,0 +1,220 @@
+//! MVMesh derivation (paper 000 §3.1.4; 003 §4.1.4) for objects that fail the
+//! self-occluding-error test (§3.1.2).
+//!
+//! Steps:
+//!
+//! 1. The polygons *not* regionally back-facing for the cell's prism (§3.1.5,
+//!    [`regional_backface_cull`]): "front-facing with respect to the cell", tidied
+//!    like the SVMesh's selection ([`crate::svmesh::tidy_selection`]).
+//! 2. Capture the object alone from the cell centre (view 0) and from the centres of
+//!    the up to 6 neighbouring cells (views 1..), all at mid eye height. A neighbour
+//!    whose centre lies inside the object's box (the object stands in that cell)
+//!    gives no capture: its view set bit stays clear everywhere.
+//! 3. Per view: classes and vertex states as for the SVMesh (§3.1.3.1–2). The vertex's
+//!    view set has bit i when the vertex is visible in view i (depth-buffer test).
+//! 4. Weight = the maximum over the views (§3.1.4), with one reading written down: a
+//!    vertex's back-facing weight (0.5, §3.1.3.2) counts only when it faces away from
+//!    *every* view. From a neighbour's centre most of the object's far side is
+//!    back-facing; taking its 0.5 there would pin every vertex the centre sees on the
+//!    far side of some neighbour, which the paper's polygon counts (Fig. 6) rule out.
+//!    The back-facing weight marks the rim of what a view sees; with several views
+//!    the rim of the union is where no view sees the vertex from the front.
+//! 5. Weighted edge collapse with l′ = the maximum projected length over the prism's
+//!    12 corners ([`ProjectedLength::MaxOverPoints`]) and the view-set constraint of
+//!    §3.1.4 (`simplify` with `view_sets`); each triangle's view mask is the AND of its
+//!    vertices' sets.
+//! 6. Keep only the views some triangle's mask names, renumbering the mask bits in
+//!    view order (the centre stays first when it is used).
+
+use crate::backface::regional_backface_cull;
+use crate::capture::{capture_objects, CaptureError};
+use crate::classify::{classify_objects, WindowDepth};
+use crate::raster::ProjectedTexture;
+use crate::simplify::{
+    pixels_per_radian, simplify, ProjectedLength, SimplifyInput, SimplifyParams, MAX_VIEWS,
+};
+use crate::svmesh::{
+    draw_item, ms_since, tidy_selection, world_vertices, MemberMesh, ProxyError, ProxySettings,
+    StageTimes,
+};
+use crate::weights::{vertex_states, VertexState, BACK_FACING_WEIGHT};
+use format::Scene;
+use glam::Vec3;
+use std::time::Instant;
+
+/// An MVMesh: one object, its simplified triangles with per-triangle view masks (in
+/// `member.simplified.view_masks`, bits renumbered to `views`), and the captures used.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MvMesh {
+    pub member: MemberMesh,
+    /// The captures some triangle uses, in the order of the eyes given.
+    pub views: Vec<ProjectedTexture>,
+    /// For each kept view, its index in the eyes given to [`derive_mvmesh`].
+    pub view_sources: Vec<u32>,
+    /// Per model vertex: the views (renumbered like the masks) it is visible in.
+    pub vertex_view_sets: Vec<u8>,
+    pub times: StageTimes,
+}
+
+/// Derives the MVMesh of `instance` for a cell whose prism corners are
+/// `prism_corners`, with captures from `eyes` (the cell centre first, then the
+/// neighbours' centres; at most [`MAX_VIEWS`] are used).
+pub fn derive_mvmesh(
+    scene: &Scene,
+    instance: u32,
+    eyes: &[Vec3],
+    prism_corners: &[Vec3; 12],
+    settings: &ProxySettings,
+) -> Result<MvMesh, ProxyError> {
+    let mut times = StageTimes::default();
+    let item = draw_item(scene, instance)?;
+    let mesh = item.mesh;
+    let eyes = &eyes[..eyes.len().min(MAX_VIEWS as usize)];
+
+    // Step 1: polygons not back-facing for the whole cell.
+    let t = Instant::now();
+    let mut kept: Vec<bool> = regional_backface_cull(mesh, item.transform, prism_corners)
+        .into_iter()
+        .map(|culled| !culled)
+        .collect();
+    tidy_selection(&mesh.triangles, &mut kept, settings.speck_triangles);
+    let input_triangles: Vec<[u32; 3]> = mesh
+        .triangles
+        .iter()
+        .zip(&kept)
+        .filter(|(_, &k)| k)
+        .map(|(t, _)| *t)
+        .collect();
+    times.weights_ms += ms_since(t);
+
+    // Steps 2–4: captures, per-view states, max weight and view sets.
+    let n = mesh.positions.len();
+    let mut weight = vec![f32::NEG_INFINITY; n];
+    let mut back_everywhere = vec![true; n];
+    let mut view_sets = vec![0u8; n];
+    let mut textures = Vec::with_capacity(eyes.len());
+    for (i, &eye) in eyes.iter().enumerate() {
+        let t = Instant::now();
+        let capture = match capture_objects(eye, std::slice::from_ref(&item), settings.image_res) {
+            Ok(c) => c,
+            // A neighbour's centre inside the object's box: no capture from there.
+            Err(CaptureError::View { .. }) if i > 0 => {
+                textures.push(None);
+                times.capture_ms += ms_since(t);
+                continue;
+            }
+            Err(source) => {
+                return Err(ProxyError::Capture {
+                    instances: vec![instance],
+                    source,
+                })
+            }
+        };
+        times.capture_ms += ms_since(t);
+        let t = Instant::now();
+        let classes = classify_objects(
+            &capture.capture,
+            &[instance],
+            settings.t_c0,
+            settings.t_c1,
+            WindowDepth::paper(settings.cell_size),
+        );
+        let states = vertex_states(
+            mesh,
+            item.transform,
+            &capture.capture,
+            &classes,
+            instance,
+            settings.depth_tolerance,
+        );
+        for (v, state) in states.iter().enumerate() {
+            match state {
+                VertexState::BackFacing => {}
+                VertexState::Visible(_) => {
+                    back_everywhere[v] = false;
+                    view_sets[v] |= 1 << i;
+                    weight[v] = weight[v].max(state.weight());
+                }
+                VertexState::Invisible => {
+                    back_everywhere[v] = false;
+                    weight[v] = weight[v].max(state.weight());
+                }
+            }
+        }
+        textures.push(Some(capture.texture));
+        times.weights_ms += ms_since(t);
+    }
+    for (w, &back) in weight.iter_mut().zip(&back_everywhere) {
+        if back {
+            *w = BACK_FACING_WEIGHT;
+        }
+    }
+
+    // Step 5: weighted edge collapse with l′ and the view-set constraint.
+    let t = Instant::now();
+    let (positions, normals) = world_vertices(mesh, item.transform);
+    let mut simplified = simplify(
+        &SimplifyInput {
+            positions: &positions,
+            normals: &normals,
+            triangles: &input_triangles,
+            weights: &weight,
+            view_sets: Some(&view_sets),
+        },
+        &SimplifyParams {
+            edge_length_tolerance: settings.edge_length_tolerance,
+            length: ProjectedLength::MaxOverPoints {
+                eyes: prism_corners.to_vec(),
+                pixels_per_radian: pixels_per_radian(settings.image_res),
+            },
+        },
+    )
+    .map_err(|source| ProxyError::Simplify { instance, source })?;
+    times.simplify_ms += ms_since(t);
+
+    // Step 6: keep the views some triangle uses; renumber the mask bits.
+    let used = simplified.view_masks.iter().fold(0u8, |a, &m| a | m);
+    let mut remap = [0u8; 8];
+    let mut views = Vec::new();
+    let mut view_sources = Vec::new();
+    for (i, texture) in textures.into_iter().enumerate() {
+        if let (true, Some(texture)) = (used & (1 << i) != 0, texture) {
+            remap[i] = 1 << views.len();
+            views.push(texture);
+            view_sources.push(i as u32);
+        }
+    }
+    for m in &mut simplified.view_masks {
+        *m = (0..8)
+            .filter(|&i| *m & (1 << i) != 0)
+            .fold(0, |a, i| a | remap[i]);
+    }
+    let vertex_view_sets = renumber_view_sets(&view_sets, &view_sources);
+    Ok(MvMesh {
+        vertex_view_sets,
+        member: MemberMesh {
+            instance,
+            input_triangles,
+            simplified,
+        },
+        views,
+        view_sources,
+        times,
+    })
+}
+
+/// The per-vertex view sets renumbered like [`derive_mvmesh`]'s masks (for checking
+/// masks against `simplify::validate_view_masks`): `sources` are the kept views'
+/// original indices.
+pub fn renumber_view_sets(view_sets: &[u8], sources: &[u32]) -> Vec<u8> {
+    view_sets
+        .iter()
+        .map(|&s| {
+            sources
+                .iter()
+                .enumerate()
+                .filter(|(_, &src)| src < 8 && s & (1 << src) != 0)
+                .fold(0u8, |a, (k, _)| a | (1 << k))
+        })
+        .collect()
+}

@@ -1,0 +1,389 @@
+//! SVMesh derivation (paper 000 §3.1.3; 003 §4.1.4), also for clusters (§3.1.6).
+//!
+//! Steps, for one object (or the members of a cluster, treated as one object):
+//!
+//! 1. The polygons front-facing to the cell's centre ([`front_facing_from`]), tidied
+//!    ([`tidy_selection`]): on a scanned mesh the front-facing set is ragged near the
+//!    rim, with specks of a few front-facing triangles beyond it (each would survive
+//!    the collapse as its own piece) and back-facing specks inside it (holes whose
+//!    boundaries block collapses). Pieces of at most [`SPECK_TRIANGLES`] triangles
+//!    are flipped; both are near edge-on and sub-pixel at proxy distances.
+//! 2. Capture the object(s) alone from the centre ([`crate::capture`]).
+//! 3. Classify the capture's pixels (§3.1.3.1, [`classify_objects`], thresholds on
+//!    the paper's window depth with the near plane at the side face,
+//!    [`WindowDepth::paper`]) and weight the vertices (§3.1.3.2, [`vertex_states`]).
+//! 4. Cluster only: drop a member's triangle that no pixel of the cluster capture
+//!    shows (triangle-ID buffer) and none of whose vertices is visible — surfaces
+//!    "occluded by others in the cluster" (§3.1.6). The paper lets the low weights of
+//!    invisible vertices (0.05) collapse them; a hidden triangle can still survive
+//!    when it borders visible ones, and a single SV object keeps all its front-facing
+//!    triangles (dropping sub-pixel ones there would only open boundaries that block
+//!    collapses).
+//! 5. Weighted edge collapse with l from the centre ([`ProjectedLength::FromPoint`]),
+//!    per member (half-edge collapses never join different meshes).
+//! 6. The texture is the centre capture (its covered rectangle) with its world →
+//!    texture matrix.
+
+use crate::backface::front_facing_from;
+use crate::capture::{capture_objects, CaptureError};
+use crate::classify::{classify_objects, WindowDepth};
+use crate::raster::{DrawItem, ProjectedTexture, BACKGROUND_ID};
+use crate::simplify::{
+    pixels_per_radian, simplify, ProjectedLength, Simplified, SimplifyError, SimplifyInput,
+    SimplifyParams,
+};
+use crate::visibility::DepthTolerance;
+use crate::weights::{vertex_states, VertexState};
+use format::manifest::BakeParams;
+use format::Scene;
+use glam::{Mat3, Mat4, Vec3};
+use std::time::Instant;
+use thiserror::Error;
+
+/// Parameters shared by SVMesh and MVMesh derivation.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ProxySettings {
+    /// Pixels per 60° of the captures (DESIGN.md).
+    pub image_res: u32,
+    /// T_l (pixels).
+    pub edge_length_tolerance: f32,
+    pub t_c0: f32,
+    pub t_c1: f32,
+    /// Cell size c (the window-depth range of the class thresholds).
+    pub cell_size: f32,
+    pub depth_tolerance: DepthTolerance,
+    /// Pieces of at most this many triangles are tidied away from the selection
+    /// before simplifying ([`tidy_selection`]; 0 = off).
+    pub speck_triangles: usize,
+}
+
+impl ProxySettings {
+    pub fn new(params: &BakeParams, cell_size: f32) -> ProxySettings {
+        ProxySettings {
+            image_res: params.image_res,
+            edge_length_tolerance: params.edge_length_tolerance,
+            t_c0: params.t_c0,
+            t_c1: params.t_c1,
+            cell_size,
+            depth_tolerance: DepthTolerance::default(),
+            speck_triangles: SPECK_TRIANGLES,
+        }
+    }
+}
+
+/// Why a proxy cannot be derived.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum ProxyError {
+    #[error("instance {instance}: model {model} does not exist")]
+    NoModel { instance: u32, model: u32 },
+    #[error("instance {instance} does not exist")]
+    NoInstance { instance: u32 },
+    #[error("capture of instances {instances:?}: {source}")]
+    Capture {
+        instances: Vec<u32>,
+        #[source]
+        source: CaptureError,
+    },
+    #[error("simplifying instance {instance}: {source}")]
+    Simplify {
+        instance: u32,
+        #[source]
+        source: SimplifyError,
+    },
+}
+
+/// Time spent per stage, in milliseconds (never written to packs).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct StageTimes {
+    pub capture_ms: f64,
+    pub weights_ms: f64,
+    pub simplify_ms: f64,
+}
+
+impl StageTimes {
+    pub fn add(&mut self, other: &StageTimes) {
+        self.capture_ms += other.capture_ms;
+        self.weights_ms += other.weights_ms;
+        self.simplify_ms += other.simplify_ms;
+    }
+}
+
+pub(crate) fn ms_since(t: Instant) -> f64 {
+    t.elapsed().as_secs_f64() * 1e3
+}
+
+/// One instance's simplified triangles.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MemberMesh {
+    pub instance: u32,
+    /// Triangles given to the simplifier (after culling / front-facing selection).
+    pub input_triangles: Vec<[u32; 3]>,
+    pub simplified: Simplified,
+}
+
+/// An SVMesh: one object or a cluster, one capture from the cell centre.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SvMesh {
+    pub members: Vec<MemberMesh>,
+    pub view: ProjectedTexture,
+    pub covered_pixels: usize,
+    pub times: StageTimes,
+}
+
+/// World positions and unit normals of an instance's vertices.
+pub(crate) fn world_vertices(mesh: &format::Mesh, transform: Mat4) -> (Vec<Vec3>, Vec<Vec3>) {
+    let positions: Vec<Vec3> = mesh
+        .positions
+        .iter()
+        .map(|&p| transform.transform_point3(Vec3::from_array(p)))
+        .collect();
+    let linear = Mat3::from_mat4(transform);
+    let normal_matrix = if linear.determinant().abs() > 1e-30 {
+        linear.inverse().transpose()
+    } else {
+        linear
+    };
+    let normals = (0..positions.len())
+        .map(|v| {
+            let n = mesh
+                .normals
+                .get(v)
+                .map_or(Vec3::ZERO, |&n| Vec3::from_array(n));
+            let n = (normal_matrix * n).normalize_or_zero();
+            if n.is_finite() && n != Vec3::ZERO {
+                n
+            } else {
+                Vec3::Y
+            }
+        })
+        .collect();
+    (positions, normals)
+}
+
+pub(crate) fn draw_item(scene: &Scene, instance: u32) -> Result<DrawItem<'_>, ProxyError> {
+    let inst = scene
+        .instances
+        .get(instance as usize)
+        .ok_or(ProxyError::NoInstance { instance })?;
+    let model = scene
+        .models
+        .get(inst.model as usize)
+        .ok_or(ProxyError::NoModel {
+            instance,
+            model: inst.model,
+        })?;
+    Ok(DrawItem {
+        mesh: &model.mesh,
+        transform: inst.transform,
+        tint: inst.tint,
+        object_id: instance,
+        triangles: None,
+    })
+}
+
+/// Derives the SVMesh of `instances` (one object, or a cluster) seen from the cell
+/// centre `centre` (module docs). Members come out in the order given.
+pub fn derive_svmesh(
+    scene: &Scene,
+    instances: &[u32],
+    centre: Vec3,
+    settings: &ProxySettings,
+) -> Result<SvMesh, ProxyError> {
+    let mut times = StageTimes::default();
+    let items = instances
+        .iter()
+        .map(|&i| draw_item(scene, i))
+        .collect::<Result<Vec<_>, _>>()?;
+
+    // Step 2: the capture of the object(s) alone from the centre.
+    let t = Instant::now();
+    let capture = capture_objects(centre, &items, settings.image_res).map_err(|source| {
+        ProxyError::Capture {
+            instances: instances.to_vec(),
+            source,
+        }
+    })?;
+    times.capture_ms += ms_since(t);
+
+    // Step 3: classes of the union's pixels.
+    let t = Instant::now();
+    let classes = classify_objects(
+        &capture.capture,
+        instances,
+        settings.t_c0,
+        settings.t_c1,
+        WindowDepth::paper(settings.cell_size),
+    );
+    times.weights_ms += ms_since(t);
+
+    let length = ProjectedLength::FromPoint {
+        eye: centre,
+        pixels_per_radian: pixels_per_radian(settings.image_res),
+    };
+    let mut members = Vec::with_capacity(items.len());
+    for item in &items {
+        let t = Instant::now();
+        let mesh = item.mesh;
+        let states = vertex_states(
+            mesh,
+            item.transform,
+            &capture.capture,
+            &classes,
+            item.object_id,
+            settings.depth_tolerance,
+        );
+        let weights: Vec<f32> = states.iter().map(|s| s.weight()).collect();
+        // Step 1 (and 4 for clusters): the triangles to simplify.
+        let mut front = front_facing_from(mesh, item.transform, centre);
+        tidy_selection(&mesh.triangles, &mut front, settings.speck_triangles);
+        let seen = (items.len() > 1).then(|| seen_triangles(&capture.capture, item));
+        let input_triangles: Vec<[u32; 3]> = mesh
+            .triangles
+            .iter()
+            .enumerate()
+            .filter(|&(t, tri)| {
+                front[t]
+                    && seen.as_ref().is_none_or(|seen| {
+                        seen[t]
+                            || tri.iter().any(|&v| {
+                                matches!(states.get(v as usize), Some(VertexState::Visible(_)))
+                            })
+                    })
+            })
+            .map(|(_, tri)| *tri)
+            .collect();
+        times.weights_ms += ms_since(t);
+
+        // Step 5: weighted edge collapse.
+        let t = Instant::now();
+        let (positions, normals) = world_vertices(mesh, item.transform);
+        let simplified = simplify(
+            &SimplifyInput {
+                positions: &positions,
+                normals: &normals,
+                triangles: &input_triangles,
+                weights: &weights,
+                view_sets: None,
+            },
+            &SimplifyParams {
+                edge_length_tolerance: settings.edge_length_tolerance,
+                length: length.clone(),
+            },
+        )
+        .map_err(|source| ProxyError::Simplify {
+            instance: item.object_id,
+            source,
+        })?;
+        times.simplify_ms += ms_since(t);
+        members.push(MemberMesh {
+            instance: item.object_id,
+            input_triangles,
+            simplified,
+        });
+    }
+    Ok(SvMesh {
+        members,
+        view: capture.texture,
+        covered_pixels: capture.covered_pixels,
+        times,
+    })
+}
+
+/// Per triangle of `item`'s mesh: some pixel of `capture` shows it.
+pub(crate) fn seen_triangles(capture: &crate::raster::Capture, item: &DrawItem) -> Vec<bool> {
+    let mut seen = vec![false; item.mesh.triangles.len()];
+    for (&id, &tri) in capture.object_id.iter().zip(&capture.triangle_id) {
+        if id == item.object_id && tri != BACKGROUND_ID {
+            if let Some(s) = seen.get_mut(tri as usize) {
+                *s = true;
+            }
+        }
+    }
+    seen
+}
+
+/// Default most triangles of a "speck" piece of a triangle selection
+/// ([`tidy_selection`]). Measured on the bunny at the paper's size (tests/bake.rs,
+/// MV at 1–6 cells / SV at 7–9 cells, paper 1,605 … 306 / 259 … 239): without tidying
+/// 3,632 / 1,591 / 1,310 / 1,217 / 1,214 / 1,110 and 830 / 791 / 806 (rim specks
+/// each survive as their own piece); speck 1: 3,220 … 802 / 546 … 528; speck 4:
+/// 2,905 / 816 / 587 / 492 / 476 / 443 and 137 / 128 / 127; speck 8: … 382 / 79 …;
+/// speck 16: … 370 / 60 / 61 / 55. 4 is the only setting within a factor 2 of every
+/// figure of the paper.
+pub const SPECK_TRIANGLES: usize = 4;
+
+/// Tidies a per-triangle selection (front-facing to the centre, or not regionally
+/// back-facing) of a scanned mesh before simplification: connected pieces (through
+/// shared edges) of *unselected* triangles with at most `max_triangles` triangles are
+/// selected (back-facing specks inside the front-facing region: on noisy scans they
+/// punch holes whose boundaries block edge collapses), then pieces of *selected*
+/// triangles with at most `max_triangles` are unselected (front-facing specks beyond
+/// the rim: each would survive as its own piece). Both kinds are sub-pixel, near
+/// edge-on, at proxy distances. Returns how many triangles changed.
+pub fn tidy_selection(
+    triangles: &[[u32; 3]],
+    selected: &mut [bool],
+    max_triangles: usize,
+) -> usize {
+    let n = triangles.len().min(selected.len());
+    // Edge adjacency by sorting (a, b, triangle).
+    let mut edges: Vec<(u32, u32, u32)> = Vec::with_capacity(n * 3);
+    for (t, tri) in triangles[..n].iter().enumerate() {
+        for k in 0..3 {
+            let (a, b) = (tri[k], tri[(k + 1) % 3]);
+            edges.push((a.min(b), a.max(b), t as u32));
+        }
+    }
+    edges.sort_unstable();
+    let mut parent: Vec<u32> = (0..n as u32).collect();
+    fn find(parent: &mut [u32], mut x: u32) -> u32 {
+        while parent[x as usize] != x {
+            parent[x as usize] = parent[parent[x as usize] as usize];
+            x = parent[x as usize];
+        }
+        x
+    }
+    let mut changed = 0;
+    for pass in [false, true] {
+        // Components of triangles whose selection equals `pass`.
+        for (k, p) in parent.iter_mut().enumerate() {
+            *p = k as u32;
+        }
+        let mut i = 0;
+        while i < edges.len() {
+            let mut j = i + 1;
+            while j < edges.len() && edges[j].0 == edges[i].0 && edges[j].1 == edges[i].1 {
+                j += 1;
+            }
+            for a in i..j {
+                for b in a + 1..j {
+                    let (ta, tb) = (edges[a].2, edges[b].2);
+                    if selected[ta as usize] == pass && selected[tb as usize] == pass {
+                        let (ra, rb) = (find(&mut parent, ta), find(&mut parent, tb));
+                        if ra != rb {
+                            parent[ra.max(rb) as usize] = ra.min(rb);
+                        }
+                    }
+                }
+            }
+            i = j;
+        }
+        let mut size = vec![0usize; n];
+        for t in 0..n as u32 {
+            if selected[t as usize] == pass {
+                let r = find(&mut parent, t);
+                size[r as usize] += 1;
+            }
+        }
+        for t in 0..n as u32 {
+            if selected[t as usize] == pass {
+                let r = find(&mut parent, t);
+                if size[r as usize] <= max_triangles {
+                    selected[t as usize] = !pass;
+                    changed += 1;
+                }
+            }
+        }
+    }
+    changed
+}
