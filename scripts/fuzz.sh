@@ -36,7 +36,7 @@ if have_cargo_fuzz && have_nightly; then
         cp tests/data/*.pack "$corpus"/
         echo "fuzz.sh: $t for $arg s"
         (cd fuzz && cargo +nightly fuzz run "$t" "corpus/$t" -- -max_total_time="$arg" -max_len=65536 2>&1) |
-            tee "/tmp/hexbake-fuzz-$t.log" | grep -E '^(#[0-9]+ *(DONE|INITED)|Done|==[0-9]+==|SUMMARY|artifact)' || true
+            tee "/tmp/hexbake-fuzz-$t.log" | grep -E '^(#[0-9]+[[:space:]]+(DONE|INITED)|Done|==[0-9]+==|SUMMARY|artifact)' || true
         # libFuzzer's final line: "Done N runs in S second(s)".
         grep -E '^Done [0-9]+ runs' "/tmp/hexbake-fuzz-$t.log" || { echo "fuzz.sh: $t did not finish cleanly"; exit 1; }
     done
