@@ -227,16 +227,17 @@ fn assert_same_bake(a: &Path, b: &Path) {
     }
 }
 
-fn run_tiny(out: &Path, extra: &[&str]) -> Output {
-    let mut args = vec![
-        "run",
-        "manifests/demo.ron",
-        "--quiet",
-        "--out",
-        out.to_str().unwrap(),
-    ];
+fn run_manifest(manifest: &str, out: &Path, extra: &[&str]) -> Output {
+    let mut args = vec!["run", manifest, "--quiet", "--out", out.to_str().unwrap()];
     args.extend_from_slice(extra);
     run("pipeline", &args, &repo())
+}
+
+/// `tests/data/tiny.ron`: 9 cells in 6 jobs, baked in seconds (tests that bake often).
+const TINY: &str = "tests/data/tiny.ron";
+
+fn run_tiny(out: &Path, extra: &[&str]) -> Output {
+    run_manifest(TINY, out, extra)
 }
 
 #[test]
@@ -275,14 +276,7 @@ fn killed_runs_resume_to_identical_output() {
         seed ^= seed << 17;
         let delay_ms = 20 + seed % 1500;
         let mut child = Command::new(bin_dir().join("pipeline"))
-            .args([
-                "run",
-                "manifests/demo.ron",
-                "--quiet",
-                "--threads",
-                "2",
-                "--out",
-            ])
+            .args(["run", TINY, "--quiet", "--threads", "2", "--out"])
             .arg(&out)
             .current_dir(repo())
             .stdout(std::process::Stdio::null())
