@@ -6,20 +6,33 @@
 //! every checksum) + decode of the whole cell, as time and MB/s of file.
 //!
 //!     cargo bench -p format --bench pack
+//!
+//! `HEXBAKE_BENCH_PACK=out/park-2m/cells/<id>.pack` benches a real baked cell pack
+//! instead of the synthetic one.
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use format::pack::{sample, CellPack, PackFile};
 use std::time::Duration;
 
 fn bench(c: &mut Criterion) {
-    let cell = sample::synthetic_cell(20, 60_000, 10, 128);
     let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("42.pack");
-    cell.write(&path).unwrap();
+    let (cell, path) = match std::env::var_os("HEXBAKE_BENCH_PACK") {
+        Some(p) => {
+            let path = std::path::PathBuf::from(p);
+            (CellPack::read(&path).unwrap(), path)
+        }
+        None => {
+            let cell = sample::synthetic_cell(20, 60_000, 10, 128);
+            let path = dir.path().join("42.pack");
+            cell.write(&path).unwrap();
+            (cell, path)
+        }
+    };
     let bytes = std::fs::read(&path).unwrap();
     let textures: usize = cell.proxies.iter().map(|p| p.views.len()).sum();
     eprintln!(
-        "synthetic cell: {} proxies, {} triangles, {textures} textures, file {} bytes",
+        "cell {}: {} proxies, {} triangles, {textures} textures, file {} bytes",
+        path.display(),
         cell.proxies.len(),
         cell.triangle_count(),
         bytes.len()
