@@ -78,6 +78,9 @@ enum Command {
         #[command(flatten)]
         stream: StreamArgs,
     },
+    /// Write a synthetic bake of manifests/demo.ron (hand-made proxies, flat
+    /// textures) for trying the player without a bake.
+    Synth { out: PathBuf },
     /// Compare the hybrid with full geometry along a camera path.
     Compare {
         out: PathBuf,
@@ -136,6 +139,20 @@ fn main() -> ExitCode {
                     c.in_cell_median_ms,
                     frames.join("frames.csv").display()
                 );
+            }),
+        Command::Synth { out } => player::testdata::write_synthetic_bake(&out)
+            .map(|b| {
+                println!(
+                    "{}: {} cells, {} instances, {} triangles",
+                    out.display(),
+                    b.cells,
+                    b.instances,
+                    b.triangles
+                )
+            })
+            .map_err(|e| player::run::RunError::Write {
+                path: out.clone(),
+                what: e.to_string(),
             }),
         Command::Compare {
             out,

@@ -321,6 +321,24 @@ pub fn write_quad_bake(
     capture: &Camera,
     texture: Texture,
 ) -> Result<GridParams, TestDataError> {
+    write_quad_bake_views(
+        dir,
+        centre,
+        ProxyKind::SvMesh,
+        vec![(*capture, texture)],
+        Vec::new(),
+    )
+}
+
+/// [`write_quad_bake`] with any proxy kind, views and (MvMesh) per-triangle masks of
+/// the quad's two triangles.
+pub fn write_quad_bake_views(
+    dir: &Path,
+    centre: Vec3,
+    kind: ProxyKind,
+    views: Vec<(Camera, Texture)>,
+    view_masks: Vec<u8>,
+) -> Result<GridParams, TestDataError> {
     let h = 5.0;
     let positions = vec![
         [centre.x - h, centre.y - h, centre.z],
@@ -369,17 +387,20 @@ pub fn write_quad_bake(
             fingerprint,
             originals: Vec::new(),
             proxies: vec![Proxy {
-                kind: ProxyKind::SvMesh,
+                kind,
                 members: vec![ProxyMember {
                     instance: 0,
                     triangles: mesh.triangles.clone(),
-                    view_masks: Vec::new(),
+                    view_masks: view_masks.clone(),
                 }],
-                views: vec![ProxyView {
-                    eye: capture.eye.to_array(),
-                    matrix: texture_matrix(capture),
-                    texture: texture.clone(),
-                }],
+                views: views
+                    .iter()
+                    .map(|(cam, tex)| ProxyView {
+                        eye: cam.eye.to_array(),
+                        matrix: texture_matrix(cam),
+                        texture: tex.clone(),
+                    })
+                    .collect(),
             }],
         }
         .write(&dir.join(format!("cells/{id}.pack")))?;

@@ -357,3 +357,115 @@ fn a_missing_or_corrupt_cell_pack_is_drawn_as_originals() {
     let (_, tris2, _, _) = p.draw(&cam, Mode::Hybrid, Some(&mut s2));
     assert_eq!(tris2, tris_b);
 }
+
+fn solid(rgb: [u8; 3]) -> Texture {
+    let rgba: Vec<u8> = (0..16 * 16)
+        .flat_map(|_| [rgb[0], rgb[1], rgb[2], 255])
+        .collect();
+    Texture::from_rgba8(16, 16, &rgba, TextureEncoding::Rgba8).unwrap()
+}
+
+#[test]
+fn mv_mesh_blends_the_two_views_closest_to_the_viewer_direction() {
+    // Three captures of the quad from the left, the front and the right; red, green,
+    // blue. Triangle 0 sees all three views, triangle 1 none (lit fallback).
+    let dir = tempfile::tempdir().unwrap();
+    let centre = Vec3::new(50.0, 6.0, 50.0);
+    let cap = |dx: f32| {
+        capture_camera(
+            Vec3::new(50.0 + dx, 6.0, 70.0),
+            centre - Vec3::splat(6.0),
+            centre + Vec3::splat(6.0),
+            16,
+        )
+    };
+    player::testdata::write_quad_bake_views(
+        dir.path(),
+        centre,
+        format::pack::ProxyKind::MvMesh,
+        vec![
+            (cap(-20.0), solid([255, 0, 0])),
+            (cap(0.0), solid([0, 255, 0])),
+            (cap(20.0), solid([0, 0, 255])),
+        ],
+        vec![0b111, 0],
+    )
+    .unwrap();
+    let Some(mut p) = open(dir.path(), (64, 64)) else {
+        return;
+    };
+    let mut s = Streamer::new(&p.bake, StreamConfig::default());
+    // Triangle 0 = (-h,-h), (h,-h), (h,h): its lower-right half; sample near (3, -3).
+    let probe = Vec3::new(3.0, -3.0, 0.0);
+    let centroid = centre + Vec3::new(5.0 / 3.0, -5.0 / 3.0, 0.0);
+    let mut last = None;
+    for eye_dx in [-20.0f32, -10.0, 0.0, 10.0, 20.0] {
+        let eye = Vec3::new(50.0 + eye_dx, 6.0, 70.0);
+        let cam = Camera {
+            eye,
+            dir: centre - eye,
+            fov_y_deg: 40.0,
+            width: 64,
+            height: 64,
+            near: 0.5,
+            far: 200.0,
+        };
+        p.draw(&cam, Mode::Hybrid, Some(&mut s));
+        let px = p.renderer.read_pixels().unwrap();
+        let c = cam.clip_from_world_gl() * (centre + probe).extend(1.0);
+        let (x, y) = (
+            ((c.x / c.w + 1.0) * 32.0) as usize,
+            ((1.0 - c.y / c.w) * 32.0) as usize,
+        );
+        let i = (y * 64 + x) * 4;
+        let got = [px[i], px[i + 1], px[i + 2]];
+        // Expected: the two views with the smallest angle at the triangle centroid,
+        // weights inversely proportional to the angles, blended in linear space.
+        let to_poly = centroid - eye;
+        let mut angles: Vec<(f32, usize)> = [-20.0f32, 0.0, 20.0]
+            .iter()
+            .enumerate()
+            .map(|(k, dx)| {
+                let ve = Vec3::new(50.0 + dx, 6.0, 70.0);
+                ((centroid - ve).angle_between(to_poly), k)
+            })
+            .collect();
+        angles.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let (a0, a1) = (angles[0].0 as f64, angles[1].0 as f64);
+        let (w0, w1) = if a0 + a1 > 1e-6 {
+            (a1 / (a0 + a1), a0 / (a0 + a1))
+        } else {
+            (0.5, 0.5)
+        };
+        let mut lin = [0f64; 3];
+        lin[angles[0].1] += w0;
+        lin[angles[1].1] += w1;
+        let enc = |l: f64| {
+            let v = if l <= 0.0031308 {
+                l * 12.92
+            } else {
+                1.055 * l.powf(1.0 / 2.4) - 0.055
+            };
+            (v * 255.0).round() as i32
+        };
+        for k in 0..3 {
+            assert!(
+                (got[k] as i32 - enc(lin[k])).abs() <= 3,
+                "eye dx {eye_dx}: {got:?} vs expected linear {lin:?}"
+            );
+        }
+        // Triangle 1 has an empty mask: lit grey, the same from every viewpoint.
+        let q = cam.clip_from_world_gl() * (centre + Vec3::new(-3.0, 3.0, 0.0)).extend(1.0);
+        let (x, y) = (
+            ((q.x / q.w + 1.0) * 32.0) as usize,
+            ((1.0 - q.y / q.w) * 32.0) as usize,
+        );
+        let j = (y * 64 + x) * 4;
+        let lit = [px[j], px[j + 1], px[j + 2]];
+        assert!(lit[0] == lit[1] && lit[1] == lit[2], "{lit:?}");
+        if let Some(prev) = last {
+            assert_eq!(prev, lit);
+        }
+        last = Some(lit);
+    }
+}
