@@ -630,6 +630,19 @@ impl Renderer {
         if view >= proxy.textures.len() {
             return;
         }
+        let max = self.device.limits().max_texture_dimension_2d;
+        let expected = width as usize * height as usize * 4;
+        if width == 0 || height == 0 || width > max || height > max || rgba.len() != expected {
+            // Not uploadable here: the view samples as "no data" (alpha 0), so its
+            // triangles fall back to the other view or the lit vertex colour.
+            eprintln!(
+                "player: warning: capture texture {width}x{height} ({} bytes) not uploadable (max side {max}); drawing it lit",
+                rgba.len()
+            );
+            proxy.textures[view] = Some(self.dummy_view.clone());
+            self.try_bind(proxy);
+            return;
+        }
         let tex = self.device.create_texture_with_data(
             &self.queue,
             &wgpu::TextureDescriptor {
