@@ -295,6 +295,10 @@ pub fn crossing_stats(records: &[FrameRecord]) -> CrossingStats {
     }
 }
 
+/// PSNR reported for identical frames (and the cap of every PSNR in reports, so
+/// JSON never holds infinity).
+pub const PSNR_CAP: f64 = 100.0;
+
 /// One frame of `player compare`.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct CompareFrame {
@@ -384,7 +388,7 @@ pub fn compare(
         per_frame.push(CompareFrame {
             frame: i,
             cell: stats.cell,
-            psnr_y: psnr,
+            psnr_y: psnr.min(PSNR_CAP),
             ssim,
             triangles: tris,
             reference_triangles: ref_tris,
@@ -468,8 +472,8 @@ pub fn compare(
         .fold(f64::INFINITY, f64::min);
     Ok(CompareReport {
         frames: n,
-        mean_psnr_y: mean(per_frame.iter().map(|f| f.psnr_y.min(100.0))),
-        min_psnr_y: finite_min.min(100.0),
+        mean_psnr_y: mean(per_frame.iter().map(|f| f.psnr_y)),
+        min_psnr_y: finite_min.min(PSNR_CAP),
         mean_ssim: mean(per_frame.iter().map(|f| f.ssim)),
         mean_triangles: mean(per_frame.iter().map(|f| f.triangles as f64)),
         reference_triangles: mean(per_frame.iter().map(|f| f.reference_triangles as f64)),

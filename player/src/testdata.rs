@@ -195,6 +195,15 @@ fn mean_colour(mesh: &Mesh, tint: [f32; 3]) -> [u8; 4] {
 /// and the first neighbour's centre; triangle masks cycle through {0}, {1}, {0,1}, ∅),
 /// the last two form a Cluster, and the rest are SvMeshes with all their triangles.
 pub fn write_synthetic_bake(dir: &Path) -> Result<SyntheticBake, TestDataError> {
+    write_synthetic_bake_with(dir, false)
+}
+
+/// [`write_synthetic_bake`]; with `all_originals` every cell lists every instance as
+/// an original (no proxies), so the hybrid must equal the full-geometry frame.
+pub fn write_synthetic_bake_with(
+    dir: &Path,
+    all_originals: bool,
+) -> Result<SyntheticBake, TestDataError> {
     let manifest = repo_root().join("manifests/demo.ron");
     let plan = parse_manifest(&manifest).map_err(|e| TestDataError::Manifest(e.to_string()))?;
     let scene = plan
@@ -224,7 +233,7 @@ pub fn write_synthetic_bake(dir: &Path) -> Result<SyntheticBake, TestDataError> 
         let mut outside = Vec::new();
         for (i, (lo, hi)) in bounds.iter().enumerate() {
             let m = (*lo + *hi) * 0.5;
-            if Vec2::new(m.x, m.z).distance(c) < 1.2 * grid.cell_size {
+            if all_originals || Vec2::new(m.x, m.z).distance(c) < 1.2 * grid.cell_size {
                 originals.push(i as u32);
             } else {
                 outside.push(i as u32);

@@ -469,3 +469,32 @@ fn mv_mesh_blends_the_two_views_closest_to_the_viewer_direction() {
         last = Some(lit);
     }
 }
+
+#[test]
+fn compare_of_a_bake_without_proxies_is_perfect() {
+    let dir = tempfile::tempdir().unwrap();
+    player::testdata::write_synthetic_bake_with(dir.path(), true).unwrap();
+    let path_file = write_path(dir.path(), 32);
+    let path = format::path::CameraPath::load(&path_file).unwrap();
+    if Renderer::new(8, 8).is_err() {
+        eprintln!("SKIP: no graphics adapter");
+        return;
+    }
+    let report = compare(
+        dir.path(),
+        &path,
+        &CompareOptions {
+            size: Some((32, 32)),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert_eq!(report.mean_psnr_y, player::run::PSNR_CAP);
+    assert_eq!(report.min_psnr_y, player::run::PSNR_CAP);
+    assert!(
+        (report.mean_ssim - 1.0).abs() < 1e-9,
+        "{}",
+        report.mean_ssim
+    );
+    assert!(report.mean_triangles <= report.reference_triangles);
+}
