@@ -228,10 +228,18 @@ fn srgb_to_linear(c: u8) -> f64 {
 pub fn open_device() -> Result<(wgpu::Device, wgpu::Queue, AdapterSummary), GpuError> {
     let instance =
         wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+    open_device_for(&instance, None).map(|(d, q, s, _)| (d, q, s))
+}
+
+/// Opens an adapter of `instance` (compatible with `surface` if given) and its device.
+pub fn open_device_for(
+    instance: &wgpu::Instance,
+    surface: Option<&wgpu::Surface<'_>>,
+) -> Result<(wgpu::Device, wgpu::Queue, AdapterSummary, wgpu::Adapter), GpuError> {
     let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
         power_preference: wgpu::PowerPreference::HighPerformance,
         force_fallback_adapter: false,
-        compatible_surface: None,
+        compatible_surface: surface,
         ..Default::default()
     }))
     .map_err(|e| GpuError::NoAdapter(e.to_string()))?;
@@ -251,13 +259,24 @@ pub fn open_device() -> Result<(wgpu::Device, wgpu::Queue, AdapterSummary), GpuE
         ..Default::default()
     }))
     .map_err(|e| GpuError::Device(e.to_string()))?;
-    Ok((device, queue, summary))
+    Ok((device, queue, summary, adapter))
 }
 
 impl Renderer {
     /// A renderer with a `width × height` offscreen target.
     pub fn new(width: u32, height: u32) -> Result<Renderer, GpuError> {
         let (device, queue, adapter) = open_device()?;
+        Renderer::with_device(device, queue, adapter, width, height)
+    }
+
+    /// A renderer on an already opened device (e.g. one that presents to a window).
+    pub fn with_device(
+        device: wgpu::Device,
+        queue: wgpu::Queue,
+        adapter: AdapterSummary,
+        width: u32,
+        height: u32,
+    ) -> Result<Renderer, GpuError> {
         let max = device.limits().max_texture_dimension_2d;
         if width == 0 || height == 0 || width > max || height > max {
             return Err(GpuError::BadSize { width, height, max });

@@ -40,3 +40,5 @@ pub mod metrics;
 pub mod run;
 pub mod stream;
 pub mod testdata;
+#[cfg(feature = "view")]
+pub mod view;

@@ -60,6 +60,20 @@ fn parse_size(s: &str) -> Result<(u32, u32), String> {
     Ok((p(w)?, p(h)?))
 }
 
+fn parse_xz(s: &str) -> Result<(f32, f32), String> {
+    let (x, z) = s
+        .split_once(',')
+        .ok_or_else(|| format!("{s:?}: expected X,Z"))?;
+    let p = |v: &str| {
+        v.trim()
+            .parse::<f32>()
+            .ok()
+            .filter(|f| f.is_finite())
+            .ok_or_else(|| format!("{s:?}: bad coordinate"))
+    };
+    Ok((p(x)?, p(z)?))
+}
+
 #[derive(Subcommand)]
 enum Command {
     /// Render a camera path headless; writes frames.csv (and PNGs) into --frames.
@@ -75,6 +89,23 @@ enum Command {
         /// Also write one PNG per frame.
         #[arg(long)]
         png: bool,
+        #[command(flatten)]
+        stream: StreamArgs,
+    },
+    /// Walk through a bake in a window (WASD, arrows or left-drag to turn, Q/E eye
+    /// height, Esc quits).
+    #[cfg(feature = "view")]
+    View {
+        out: PathBuf,
+        /// Start at (x, z), e.g. 150,120; default: the ground's centre.
+        #[arg(long, value_parser = parse_xz)]
+        start: Option<(f32, f32)>,
+        /// Quit after this many frames.
+        #[arg(long)]
+        exit_after: Option<u64>,
+        /// Save the last frame as PNG on exit.
+        #[arg(long)]
+        screenshot: Option<PathBuf>,
         #[command(flatten)]
         stream: StreamArgs,
     },
@@ -140,6 +171,22 @@ fn main() -> ExitCode {
                     frames.join("frames.csv").display()
                 );
             }),
+        #[cfg(feature = "view")]
+        Command::View {
+            out,
+            start,
+            exit_after,
+            screenshot,
+            stream,
+        } => player::view::run_view(player::view::ViewOptions {
+            out: out.clone(),
+            size: stream.size.unwrap_or((1024, 768)),
+            stream: stream.config(),
+            start,
+            exit_after,
+            screenshot,
+        })
+        .map_err(|what| player::run::RunError::Write { path: out, what }),
         Command::Synth { out } => player::testdata::write_synthetic_bake(&out)
             .map(|b| {
                 println!(
