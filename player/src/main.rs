@@ -60,6 +60,7 @@ fn parse_size(s: &str) -> Result<(u32, u32), String> {
     Ok((p(w)?, p(h)?))
 }
 
+#[cfg(feature = "view")]
 fn parse_xz(s: &str) -> Result<(f32, f32), String> {
     let (x, z) = s
         .split_once(',')
