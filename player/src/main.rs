@@ -1,17 +1,279 @@
-//! `player`: walks through a bake (paper 000 §3.2). The renderer is issue 7; for
-//! now the binary only answers `--version` / `--help`.
+//! `player`: walks through a bake (paper 000 §3.2) — `render` a camera path headless
+//! in one configuration (A full, B frustum, C hybrid), `compare` the hybrid with the
+//! full-geometry reference (PSNR on luminance, SSIM, triangle and frame-time ratios).
 
-use clap::Parser;
+use clap::{Parser, Subcommand};
+use player::frame::Mode;
+use player::run::{compare, crossing_stats, render, CompareOptions, RenderOptions};
+use player::stream::StreamConfig;
+use std::path::PathBuf;
+use std::process::ExitCode;
 
 #[derive(Parser)]
 #[command(
     name = "player",
     version,
-    about = "hexbake player (renderer not built yet: issue 7)"
+    about = "hexbake player: renders baked cell packs with wgpu"
 )]
-struct Cli {}
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
 
-fn main() {
-    let _cli = Cli::parse();
-    println!("player {}", env!("CARGO_PKG_VERSION"));
+#[derive(clap::Args, Clone)]
+struct StreamArgs {
+    /// Turn the prefetch thread off (cells load on demand; paper Fig. 14).
+    #[arg(long)]
+    no_prefetch: bool,
+    /// Texture bytes uploaded per frame from the FIFO queue.
+    #[arg(long, default_value_t = 4 << 20)]
+    upload_budget: u64,
+    /// Resident cell data kept before LRU eviction, in MiB.
+    #[arg(long, default_value_t = 512)]
+    memory_budget_mib: u64,
+    /// Override the path's resolution, e.g. 256x256.
+    #[arg(long, value_parser = parse_size)]
+    size: Option<(u32, u32)>,
+}
+
+impl StreamArgs {
+    fn config(&self) -> StreamConfig {
+        StreamConfig {
+            prefetch: !self.no_prefetch,
+            upload_budget_bytes: self.upload_budget,
+            memory_budget_bytes: self.memory_budget_mib << 20,
+            ..Default::default()
+        }
+    }
+}
+
+fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s
+        .split_once('x')
+        .ok_or_else(|| format!("{s:?}: expected WIDTHxHEIGHT"))?;
+    let p = |v: &str| {
+        v.parse::<u32>()
+            .ok()
+            .filter(|&n| n > 0)
+            .ok_or_else(|| format!("{s:?}: bad size"))
+    };
+    Ok((p(w)?, p(h)?))
+}
+
+#[cfg(feature = "view")]
+fn parse_xz(s: &str) -> Result<(f32, f32), String> {
+    let (x, z) = s
+        .split_once(',')
+        .ok_or_else(|| format!("{s:?}: expected X,Z"))?;
+    let p = |v: &str| {
+        v.trim()
+            .parse::<f32>()
+            .ok()
+            .filter(|f| f.is_finite())
+            .ok_or_else(|| format!("{s:?}: bad coordinate"))
+    };
+    Ok((p(x)?, p(z)?))
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render a camera path headless; writes frames.csv (and PNGs) into --frames.
+    Render {
+        /// Bake output directory (base.pack, index.pack, cells/).
+        out: PathBuf,
+        #[arg(long)]
+        path: PathBuf,
+        #[arg(long)]
+        frames: PathBuf,
+        #[arg(long, default_value = "hybrid")]
+        mode: Mode,
+        /// Also write one PNG per frame.
+        #[arg(long)]
+        png: bool,
+        #[command(flatten)]
+        stream: StreamArgs,
+    },
+    /// Walk through a bake in a window (WASD, arrows or left-drag to turn, Q/E eye
+    /// height, Esc quits).
+    #[cfg(feature = "view")]
+    View {
+        out: PathBuf,
+        /// Start at (x, z), e.g. 150,120; default: the ground's centre.
+        #[arg(long, value_parser = parse_xz)]
+        start: Option<(f32, f32)>,
+        /// Quit after this many frames.
+        #[arg(long)]
+        exit_after: Option<u64>,
+        /// Save the last frame as PNG on exit.
+        #[arg(long)]
+        screenshot: Option<PathBuf>,
+        #[command(flatten)]
+        stream: StreamArgs,
+    },
+    /// Write a synthetic bake of manifests/demo.ron (hand-made proxies, flat
+    /// textures) for trying the player without a bake.
+    Synth { out: PathBuf },
+    /// Compare the hybrid with full geometry along a camera path.
+    Compare {
+        out: PathBuf,
+        #[arg(long)]
+        path: PathBuf,
+        /// Print the report as JSON on stdout.
+        #[arg(long)]
+        json: bool,
+        /// Write the worst frames (reference, hybrid, difference) here.
+        #[arg(long)]
+        worst: Option<PathBuf>,
+        /// How many worst frames to write.
+        #[arg(long, default_value_t = 3)]
+        worst_count: usize,
+        /// Skip the extra no-prefetch pass (crossing frame times).
+        #[arg(long)]
+        no_crossings: bool,
+        #[command(flatten)]
+        stream: StreamArgs,
+    },
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Render {
+            out,
+            path,
+            frames,
+            mode,
+            png,
+            stream,
+        } => format::path::CameraPath::load(&path)
+            .map_err(player::run::RunError::from)
+            .and_then(|p| {
+                let opts = RenderOptions {
+                    mode,
+                    frames_dir: frames.clone(),
+                    png,
+                    stream: stream.config(),
+                    size: stream.size,
+                };
+                render(&out, &p, &opts)
+            })
+            .map(|(records, _)| {
+                let n = records.len().max(1) as f64;
+                let ms: f64 = records.iter().map(|r| r.frame_ms).sum::<f64>() / n;
+                let tris: f64 = records.iter().map(|r| r.triangles as f64).sum::<f64>() / n;
+                let c = crossing_stats(&records);
+                println!(
+                    "{} frames ({}): mean {ms:.2} ms, {tris:.0} triangles; {} crossings, max after crossing {:.2} ms vs in-cell median {:.2} ms; {}",
+                    records.len(),
+                    mode.name(),
+                    c.crossings,
+                    c.max_after_crossing_ms,
+                    c.in_cell_median_ms,
+                    frames.join("frames.csv").display()
+                );
+            }),
+        #[cfg(feature = "view")]
+        Command::View {
+            out,
+            start,
+            exit_after,
+            screenshot,
+            stream,
+        } => player::view::run_view(player::view::ViewOptions {
+            out: out.clone(),
+            size: stream.size.unwrap_or((1024, 768)),
+            stream: stream.config(),
+            start,
+            exit_after,
+            screenshot,
+        })
+        .map_err(|what| player::run::RunError::Write { path: out, what }),
+        Command::Synth { out } => player::testdata::write_synthetic_bake(&out)
+            .map(|b| {
+                println!(
+                    "{}: {} cells, {} instances, {} triangles",
+                    out.display(),
+                    b.cells,
+                    b.instances,
+                    b.triangles
+                )
+            })
+            .map_err(|e| player::run::RunError::Write {
+                path: out.clone(),
+                what: e.to_string(),
+            }),
+        Command::Compare {
+            out,
+            path,
+            json,
+            worst,
+            worst_count,
+            no_crossings,
+            stream,
+        } => format::path::CameraPath::load(&path)
+            .map_err(player::run::RunError::from)
+            .and_then(|p| {
+                compare(
+                    &out,
+                    &p,
+                    &CompareOptions {
+                        worst_dir: worst,
+                        worst_count,
+                        size: stream.size,
+                        crossings: !no_crossings,
+                        stream: stream.config(),
+                    },
+                )
+            })
+            .map(|r| {
+                if json {
+                    println!(
+                        "{}",
+                        serde_json::to_string_pretty(&r).unwrap_or_else(|e| e.to_string())
+                    );
+                } else {
+                    for f in &r.per_frame {
+                        println!(
+                            "frame {:4} cell {:>4} psnr_y {:7.2} dB ssim {:.4} triangles {} / {}",
+                            f.frame,
+                            f.cell.map_or(-1, |c| c as i64),
+                            f.psnr_y,
+                            f.ssim,
+                            f.triangles,
+                            f.reference_triangles
+                        );
+                    }
+                    println!(
+                        "{} frames: mean PSNR(Y) {:.2} dB (min {:.2}), mean SSIM {:.4}, triangles {:.0} / {:.0} ({:.3}), frame time ratio {:.3} vs full, {:.3} vs frustum",
+                        r.frames,
+                        r.mean_psnr_y,
+                        r.min_psnr_y,
+                        r.mean_ssim,
+                        r.mean_triangles,
+                        r.reference_triangles,
+                        r.mean_triangles / r.reference_triangles.max(1.0),
+                        r.frame_time_ratio,
+                        r.frame_time_ratio_frustum
+                    );
+                    for (name, c) in [
+                        ("prefetch on", &r.crossing_prefetch),
+                        ("prefetch off", &r.crossing_no_prefetch),
+                    ] {
+                        if let Some(c) = c {
+                            println!(
+                                "crossings ({name}): {} — max frame time in the 10 frames after a crossing {:.2} ms = {:.2} × in-cell median {:.2} ms",
+                                c.crossings, c.max_after_crossing_ms, c.ratio, c.in_cell_median_ms
+                            );
+                        }
+                    }
+                }
+            }),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("player: error: {e}");
+            ExitCode::FAILURE
+        }
+    }
 }

@@ -1,0 +1,305 @@
+//! A bake output directory as the player reads it (DESIGN.md "Data flow"; paper 000
+//! §3.2: "the original meshes are loaded into main memory before the navigation", cell
+//! data is loaded per cell as object ids and vertex ids).
+//!
+//! `base.pack` is read once; cell packs are memory-mapped through
+//! [`format::pack::PackFile::open`], validated against the base pack and turned into a
+//! [`PreparedCell`]: de-indexed world-space proxy triangles with their view masks and
+//! the decoded capture texels, ready for upload.
+
+use crate::camera::Aabb;
+use crate::gpu::{normal_matrix, InstanceRaw, ProxyVertex, MAX_VIEWS};
+use crate::grid::CellGrid;
+use format::pack::{BasePack, CellPack, Index, PackError, PackFile, ProxyKind};
+use glam::{Mat4, Vec3};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// Why a bake or one of its cells cannot be used.
+#[derive(Debug, thiserror::Error)]
+pub enum BakeError {
+    #[error("{path}: cannot read the base pack: {source}")]
+    Base { path: PathBuf, source: PackError },
+    #[error("{path}: cannot read the index: {source}")]
+    Index { path: PathBuf, source: PackError },
+    #[error("cell {cell}: not in the index")]
+    NotIndexed { cell: u32 },
+    #[error("cell {cell}: {path}: {source}")]
+    CellPack {
+        cell: u32,
+        path: PathBuf,
+        source: PackError,
+    },
+    #[error("cell {cell}: {path}: holds cell {found}")]
+    WrongCell {
+        cell: u32,
+        path: PathBuf,
+        found: u32,
+    },
+    #[error("cell {cell}: proxy {proxy}: {what}")]
+    BadProxy {
+        cell: u32,
+        proxy: usize,
+        what: String,
+    },
+}
+
+/// The base data of a bake, shared by the render thread and the prefetch thread.
+pub struct Bake {
+    pub dir: PathBuf,
+    pub base: Arc<BasePack>,
+    /// `None` when `index.pack` is missing or corrupt (every cell is then drawn as
+    /// originals; the error was logged).
+    pub index: Option<Arc<Index>>,
+    pub grid: CellGrid,
+    /// Per instance: GPU instance data and world bounds.
+    pub instances: Vec<InstanceRaw>,
+    pub instance_bounds: Vec<Aabb>,
+    /// Distance that covers the whole ground (far plane).
+    pub extent: f32,
+}
+
+impl Bake {
+    /// Reads `<dir>/base.pack` (required) and `<dir>/index.pack` (logged if bad).
+    pub fn open(dir: &Path) -> Result<Bake, BakeError> {
+        let base_path = dir.join("base.pack");
+        let base = BasePack::read(&base_path).map_err(|source| BakeError::Base {
+            path: base_path,
+            source,
+        })?;
+        let index_path = dir.join("index.pack");
+        let index = match Index::read(&index_path) {
+            Ok(i) => Some(Arc::new(i)),
+            Err(source) => {
+                let e = BakeError::Index {
+                    path: index_path,
+                    source,
+                };
+                eprintln!("player: error: {e}; drawing every cell as original geometry");
+                None
+            }
+        };
+        Ok(Bake::from_parts(dir, base, index))
+    }
+
+    pub fn from_parts(dir: &Path, base: BasePack, index: Option<Arc<Index>>) -> Bake {
+        let model_bounds: Vec<Aabb> = base
+            .models
+            .iter()
+            .map(|m| {
+                let mut b = Aabb::EMPTY;
+                for p in &m.mesh.positions {
+                    b.add(Vec3::from_array(*p));
+                }
+                b
+            })
+            .collect();
+        let mut instances = Vec::with_capacity(base.instances.len());
+        let mut instance_bounds = Vec::with_capacity(base.instances.len());
+        for inst in &base.instances {
+            let t = Mat4::from_cols_array(&inst.transform);
+            instances.push(InstanceRaw::new(t, Vec3::from_array(inst.tint)));
+            instance_bounds.push(model_bounds[inst.model as usize].transformed(&t));
+        }
+        let g = &base.grid;
+        let diag = Vec3::new(
+            g.ground_max[0] - g.ground_min[0],
+            g.max_eye_height.max(1.0),
+            g.ground_max[1] - g.ground_min[1],
+        )
+        .length();
+        let scene = instance_bounds.iter().fold(Aabb::EMPTY, |a, b| a.union(b));
+        let scene_diag = if scene.is_empty() {
+            0.0
+        } else {
+            (scene.max - scene.min).length()
+        };
+        Bake {
+            dir: dir.to_path_buf(),
+            grid: CellGrid::new(base.grid),
+            base: Arc::new(base),
+            index,
+            instances,
+            instance_bounds,
+            extent: diag.max(scene_diag) * 2.0 + 100.0,
+        }
+    }
+
+    /// Maps, validates and prepares one cell pack.
+    pub fn load_cell(&self, cell: u32) -> Result<PreparedCell, BakeError> {
+        load_cell(&self.dir, self.index.as_deref(), &self.base, cell)
+    }
+}
+
+/// Loads cell `cell` of the bake in `dir` (usable from any thread).
+pub fn load_cell(
+    dir: &Path,
+    index: Option<&Index>,
+    base: &BasePack,
+    cell: u32,
+) -> Result<PreparedCell, BakeError> {
+    let entry = index
+        .and_then(|i| i.cell(cell))
+        .ok_or(BakeError::NotIndexed { cell })?;
+    let path = dir.join(&entry.file);
+    let pack = PackFile::open(&path)
+        .and_then(|f| CellPack::decode(&f))
+        .map_err(|source| BakeError::CellPack {
+            cell,
+            path: path.clone(),
+            source,
+        })?;
+    if pack.cell_id != cell {
+        return Err(BakeError::WrongCell {
+            cell,
+            path,
+            found: pack.cell_id,
+        });
+    }
+    pack.check_against(base)
+        .map_err(|source| BakeError::CellPack {
+            cell,
+            path: path.clone(),
+            source,
+        })?;
+    prepare_cell(base, &pack)
+}
+
+/// One capture ready for upload.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PreparedView {
+    pub matrix: [f32; 16],
+    pub eye: [f32; 3],
+    pub width: u32,
+    pub height: u32,
+    /// Decoded RGBA8 sRGB texels.
+    pub rgba: Vec<u8>,
+}
+
+/// One proxy ready for upload.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PreparedProxy {
+    pub kind: ProxyKind,
+    pub vertices: Vec<ProxyVertex>,
+    pub bounds: Aabb,
+    pub views: Vec<PreparedView>,
+}
+
+/// One cell ready for upload.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PreparedCell {
+    pub cell_id: u32,
+    pub originals: Vec<u32>,
+    pub proxies: Vec<PreparedProxy>,
+}
+
+impl PreparedCell {
+    /// Bytes the cell occupies once uploaded (vertices and texels).
+    pub fn bytes(&self) -> u64 {
+        self.proxies
+            .iter()
+            .map(|p| {
+                (p.vertices.len() * std::mem::size_of::<ProxyVertex>()) as u64
+                    + p.views.iter().map(|v| v.rgba.len() as u64).sum::<u64>()
+            })
+            .sum()
+    }
+}
+
+/// Turns a validated cell pack into world-space proxy triangle lists. Members'
+/// triangles index their model's vertices placed by the member instance's transform.
+/// View masks: MvMesh per triangle from the pack; SvMesh and Cluster use view 0 for
+/// every triangle; a proxy without views is drawn lit.
+pub fn prepare_cell(base: &BasePack, pack: &CellPack) -> Result<PreparedCell, BakeError> {
+    let cell = pack.cell_id;
+    let mut proxies = Vec::with_capacity(pack.proxies.len());
+    for (pi, proxy) in pack.proxies.iter().enumerate() {
+        if proxy.kind == ProxyKind::LayeredImpostor {
+            // Not drawable by this player; its members fall back to nothing (the
+            // bake never writes this kind yet).
+            eprintln!("player: warning: cell {cell} proxy {pi}: layered impostors are not drawn");
+            continue;
+        }
+        if proxy.views.len() > MAX_VIEWS {
+            return Err(BakeError::BadProxy {
+                cell,
+                proxy: pi,
+                what: format!("{} views, at most {MAX_VIEWS}", proxy.views.len()),
+            });
+        }
+        let mut views = Vec::with_capacity(proxy.views.len());
+        for (vi, v) in proxy.views.iter().enumerate() {
+            let rgba = v.texture.to_rgba8().map_err(|what| BakeError::BadProxy {
+                cell,
+                proxy: pi,
+                what: format!("view {vi}: {what}"),
+            })?;
+            views.push(PreparedView {
+                matrix: v.matrix,
+                eye: v.eye,
+                width: v.texture.width,
+                height: v.texture.height,
+                rgba,
+            });
+        }
+        let default_mask: u32 = if views.is_empty() { 0 } else { 1 };
+        let mut vertices = Vec::new();
+        let mut bounds = Aabb::EMPTY;
+        for m in &proxy.members {
+            let inst =
+                base.instances
+                    .get(m.instance as usize)
+                    .ok_or_else(|| BakeError::BadProxy {
+                        cell,
+                        proxy: pi,
+                        what: format!("instance {} out of range", m.instance),
+                    })?;
+            let mesh = &base.models[inst.model as usize].mesh;
+            let t = Mat4::from_cols_array(&inst.transform);
+            let nm = normal_matrix(&t);
+            for (k, tri) in m.triangles.iter().enumerate() {
+                let mask = if proxy.kind == ProxyKind::MvMesh {
+                    m.view_masks.get(k).copied().unwrap_or(0) as u32
+                } else {
+                    default_mask
+                };
+                let mut world = [Vec3::ZERO; 3];
+                for (j, &v) in tri.iter().enumerate() {
+                    let p = mesh
+                        .positions
+                        .get(v as usize)
+                        .ok_or_else(|| BakeError::BadProxy {
+                            cell,
+                            proxy: pi,
+                            what: format!("vertex {v} out of range"),
+                        })?;
+                    world[j] = t.transform_point3(Vec3::from_array(*p));
+                }
+                let centroid = (world[0] + world[1] + world[2]) / 3.0;
+                for (j, &v) in tri.iter().enumerate() {
+                    let n = nm * Vec3::from_array(mesh.normals[v as usize]);
+                    bounds.add(world[j]);
+                    vertices.push(ProxyVertex {
+                        pos: world[j].to_array(),
+                        normal: n.normalize_or_zero().to_array(),
+                        albedo: mesh.albedo[v as usize],
+                        tint: inst.tint,
+                        mask,
+                        centroid: centroid.to_array(),
+                    });
+                }
+            }
+        }
+        proxies.push(PreparedProxy {
+            kind: proxy.kind,
+            vertices,
+            bounds,
+            views,
+        });
+    }
+    Ok(PreparedCell {
+        cell_id: cell,
+        originals: pack.originals.clone(),
+        proxies,
+    })
+}

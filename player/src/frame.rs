@@ -1,0 +1,112 @@
+//! What one frame draws in each configuration of the paper's evaluation (000 §4.1):
+//! A = all original geometry (`full`), B = original geometry with view-frustum culling
+//! per instance (`frustum`), C = the hybrid representation of the current cell with
+//! view-frustum culling per instance and per proxy (`hybrid`, §3.2).
+
+use crate::bake::Bake;
+use crate::camera::{Camera, Frustum};
+use crate::gpu::{DrawList, GpuModels, InstanceRaw};
+use crate::stream::{CurrentCell, ResidentCell};
+use std::collections::BTreeMap;
+
+/// Rendering configuration.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Mode {
+    /// Config A: every instance as original geometry.
+    Full,
+    /// Config B: originals with per-instance frustum culling.
+    Frustum,
+    /// Config C: the current cell's pack, frustum-culled.
+    Hybrid,
+}
+
+impl Mode {
+    pub fn name(self) -> &'static str {
+        match self {
+            Mode::Full => "full",
+            Mode::Frustum => "frustum",
+            Mode::Hybrid => "hybrid",
+        }
+    }
+}
+
+impl std::str::FromStr for Mode {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Mode, String> {
+        match s {
+            "full" => Ok(Mode::Full),
+            "frustum" => Ok(Mode::Frustum),
+            "hybrid" => Ok(Mode::Hybrid),
+            _ => Err(format!("unknown mode {s:?} (full, frustum, hybrid)")),
+        }
+    }
+}
+
+fn group(bake: &Bake, ids: impl Iterator<Item = u32>) -> Vec<(u32, Vec<InstanceRaw>)> {
+    let mut by_model: BTreeMap<u32, Vec<InstanceRaw>> = BTreeMap::new();
+    for i in ids {
+        if let Some(inst) = bake.base.instances.get(i as usize) {
+            by_model
+                .entry(inst.model)
+                .or_default()
+                .push(bake.instances[i as usize]);
+        }
+    }
+    by_model.into_iter().collect()
+}
+
+fn visible<'a>(
+    bake: &'a Bake,
+    frustum: &'a Frustum,
+    ids: impl Iterator<Item = u32> + 'a,
+) -> impl Iterator<Item = u32> + 'a {
+    ids.filter(move |&i| {
+        bake.instance_bounds
+            .get(i as usize)
+            .is_some_and(|b| frustum.intersects(b))
+    })
+}
+
+/// The draw list of configuration A or B, or of C's fallback (no usable pack).
+pub fn originals_list<'a>(bake: &Bake, camera: &Camera, cull: bool) -> DrawList<'a> {
+    let n = bake.base.instances.len() as u32;
+    let originals = if cull {
+        let f = camera.frustum();
+        group(bake, visible(bake, &f, 0..n))
+    } else {
+        group(bake, 0..n)
+    };
+    DrawList {
+        originals,
+        proxies: Vec::new(),
+    }
+}
+
+/// The hybrid draw list for the current cell (config C).
+pub fn hybrid_list<'a>(bake: &Bake, camera: &Camera, current: &CurrentCell<'a>) -> DrawList<'a> {
+    match current {
+        CurrentCell::Originals => originals_list(bake, camera, true),
+        CurrentCell::Pack(cell) => cell_list(bake, camera, cell),
+    }
+}
+
+fn cell_list<'a>(bake: &Bake, camera: &Camera, cell: &'a ResidentCell) -> DrawList<'a> {
+    let f = camera.frustum();
+    let originals = group(bake, visible(bake, &f, cell.originals.iter().copied()));
+    let proxies = cell
+        .proxies
+        .iter()
+        .zip(&cell.bounds)
+        .filter(|(p, b)| p.is_ready() && f.intersects(b))
+        .map(|(p, _)| p)
+        .collect();
+    DrawList { originals, proxies }
+}
+
+/// Triangles and texture bytes a draw list submits.
+pub fn list_stats(list: &DrawList<'_>, models: &GpuModels) -> (u64, u64) {
+    (
+        list.triangle_count(models),
+        list.proxies.iter().map(|p| p.texture_bytes).sum(),
+    )
+}

@@ -1,0 +1,876 @@
+//! The wgpu renderer (paper 000 §3.2 run-time rendering: inside objects "rendered as
+//! normal", SVMeshes by projective texture mapping, MVMeshes by view-dependent
+//! projective texturing with blending of two views; DESIGN.md "Shading").
+//!
+//! Headless: an offscreen `Rgba8UnormSrgb` colour target and a `Depth32Float` depth
+//! target; [`Renderer::read_pixels`] copies the colour back with rows padded to
+//! `COPY_BYTES_PER_ROW_ALIGNMENT` and strips the padding. Back-face culling is on
+//! (counter-clockwise front faces, as the worker's rasterizer). Each model is uploaded
+//! once ([`GpuModels`]); originals are drawn as instanced draws, one per model, with
+//! per-instance transforms. Proxies are de-indexed world-space triangle lists carrying
+//! each triangle's view mask and centroid (flat attributes), one draw per proxy.
+
+use crate::camera::Camera;
+use bytemuck::{Pod, Zeroable};
+use format::pack::BasePack;
+use glam::{Mat3, Mat4, Vec3};
+use std::time::Instant;
+use wgpu::util::DeviceExt;
+
+/// Background colour (sRGB8) — `worker::shade::SKY`.
+pub const SKY: [u8; 4] = [150, 190, 235, 255];
+/// Most views a proxy may have (format's `MAX_MV_VIEWS`).
+pub const MAX_VIEWS: usize = 8;
+
+const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
+const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+
+/// Why the renderer could not start.
+#[derive(Debug, thiserror::Error)]
+pub enum GpuError {
+    #[error("no graphics adapter found: {0}")]
+    NoAdapter(String),
+    #[error("cannot open the graphics device: {0}")]
+    Device(String),
+    #[error("reading the frame back failed: {0}")]
+    Readback(String),
+    #[error("frame size {width}x{height} outside 1..={max}")]
+    BadSize { width: u32, height: u32, max: u32 },
+}
+
+/// What the renderer runs on.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AdapterSummary {
+    pub name: String,
+    pub backend: String,
+    pub device_type: String,
+    pub driver: String,
+}
+
+impl std::fmt::Display for AdapterSummary {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{} (backend {}, device type {}, driver {})",
+            self.name, self.backend, self.device_type, self.driver
+        )
+    }
+}
+
+/// One vertex of an original model (model space).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct ModelVertex {
+    pub pos: [f32; 3],
+    pub normal: [f32; 3],
+    /// sRGB8.
+    pub albedo: [u8; 4],
+}
+
+/// Per-instance data of an original.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct InstanceRaw {
+    pub model: [[f32; 4]; 4],
+    /// Inverse-transpose of the linear part (normals → world), columns.
+    pub normal: [[f32; 4]; 3],
+    /// Linear RGB multiplier, w unused.
+    pub tint: [f32; 4],
+}
+
+impl InstanceRaw {
+    pub fn new(transform: Mat4, tint: Vec3) -> InstanceRaw {
+        let n = normal_matrix(&transform);
+        InstanceRaw {
+            model: transform.to_cols_array_2d(),
+            normal: [
+                n.x_axis.extend(0.0).to_array(),
+                n.y_axis.extend(0.0).to_array(),
+                n.z_axis.extend(0.0).to_array(),
+            ],
+            tint: tint.extend(1.0).to_array(),
+        }
+    }
+}
+
+/// Inverse-transpose of a transform's linear part (as the worker's rasterizer).
+pub fn normal_matrix(m: &Mat4) -> Mat3 {
+    let linear = Mat3::from_mat4(*m);
+    if linear.determinant().abs() > 1e-30 {
+        linear.inverse().transpose()
+    } else {
+        linear
+    }
+}
+
+/// One vertex of a proxy triangle list (world space).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct ProxyVertex {
+    pub pos: [f32; 3],
+    pub normal: [f32; 3],
+    /// sRGB8.
+    pub albedo: [u8; 4],
+    /// Linear RGB multiplier.
+    pub tint: [f32; 3],
+    /// Views that see this vertex's triangle (bit i = view i).
+    pub mask: u32,
+    /// The triangle's centroid (chooses the views, §3.2).
+    pub centroid: [f32; 3],
+}
+
+/// A proxy's per-view uniform block.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct ProxyUniform {
+    pub tex_from_world: [[f32; 16]; MAX_VIEWS],
+    pub view_eye: [[f32; 4]; MAX_VIEWS],
+    pub counts: [u32; 4],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct Globals {
+    clip_from_world: [f32; 16],
+    eye: [f32; 4],
+}
+
+/// The models of a bake on the GPU (uploaded once).
+pub struct GpuModels {
+    pub models: Vec<GpuModel>,
+}
+
+pub struct GpuModel {
+    vertices: wgpu::Buffer,
+    indices: wgpu::Buffer,
+    pub index_count: u32,
+    pub triangle_count: u64,
+}
+
+/// A proxy on the GPU. Textures arrive one by one (the per-frame upload budget);
+/// the proxy is drawable once every view's texture is there.
+pub struct GpuProxy {
+    vertices: wgpu::Buffer,
+    pub vertex_count: u32,
+    uniform: wgpu::Buffer,
+    textures: Vec<Option<wgpu::TextureView>>,
+    bind_group: Option<wgpu::BindGroup>,
+    pub texture_bytes: u64,
+    pub vertex_bytes: u64,
+}
+
+impl GpuProxy {
+    pub fn is_ready(&self) -> bool {
+        self.bind_group.is_some()
+    }
+
+    pub fn triangle_count(&self) -> u64 {
+        self.vertex_count as u64 / 3
+    }
+
+    pub fn missing_textures(&self) -> usize {
+        self.textures.iter().filter(|t| t.is_none()).count()
+    }
+}
+
+/// What to draw in one frame.
+#[derive(Default)]
+pub struct DrawList<'a> {
+    /// Originals grouped by model: (model index, instances).
+    pub originals: Vec<(u32, Vec<InstanceRaw>)>,
+    pub proxies: Vec<&'a GpuProxy>,
+}
+
+impl DrawList<'_> {
+    pub fn triangle_count(&self, models: &GpuModels) -> u64 {
+        let o: u64 = self
+            .originals
+            .iter()
+            .map(|(m, i)| models.models[*m as usize].triangle_count * i.len() as u64)
+            .sum();
+        o + self.proxies.iter().map(|p| p.triangle_count()).sum::<u64>()
+    }
+}
+
+/// The headless renderer.
+pub struct Renderer {
+    pub device: wgpu::Device,
+    pub queue: wgpu::Queue,
+    adapter: AdapterSummary,
+    width: u32,
+    height: u32,
+    color: wgpu::Texture,
+    color_view: wgpu::TextureView,
+    depth_view: wgpu::TextureView,
+    readback: wgpu::Buffer,
+    padded_row: u32,
+    lit_pipeline: wgpu::RenderPipeline,
+    proxy_pipeline: wgpu::RenderPipeline,
+    globals: wgpu::Buffer,
+    globals_bg: wgpu::BindGroup,
+    proxy_bgl: wgpu::BindGroupLayout,
+    sampler: wgpu::Sampler,
+    dummy_view: wgpu::TextureView,
+    instances: wgpu::Buffer,
+}
+
+fn srgb_to_linear(c: u8) -> f64 {
+    let c = c as f64 / 255.0;
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// Opens an adapter: `WGPU_BACKEND` and the like from the environment,
+/// high-performance preference (a real GPU where there is one).
+pub fn open_device() -> Result<(wgpu::Device, wgpu::Queue, AdapterSummary), GpuError> {
+    let instance =
+        wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+    open_device_for(&instance, None).map(|(d, q, s, _)| (d, q, s))
+}
+
+/// Opens an adapter of `instance` (compatible with `surface` if given) and its device.
+pub fn open_device_for(
+    instance: &wgpu::Instance,
+    surface: Option<&wgpu::Surface<'_>>,
+) -> Result<(wgpu::Device, wgpu::Queue, AdapterSummary, wgpu::Adapter), GpuError> {
+    let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+        power_preference: wgpu::PowerPreference::HighPerformance,
+        force_fallback_adapter: false,
+        compatible_surface: surface,
+        ..Default::default()
+    }))
+    .map_err(|e| GpuError::NoAdapter(e.to_string()))?;
+    let info = adapter.get_info();
+    let summary = AdapterSummary {
+        name: info.name.clone(),
+        backend: format!("{:?}", info.backend),
+        device_type: format!("{:?}", info.device_type),
+        driver: format!("{} {}", info.driver, info.driver_info)
+            .trim()
+            .to_string(),
+    };
+    let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+        label: Some("hexbake player"),
+        required_features: wgpu::Features::empty(),
+        required_limits: adapter.limits(),
+        ..Default::default()
+    }))
+    .map_err(|e| GpuError::Device(e.to_string()))?;
+    Ok((device, queue, summary, adapter))
+}
+
+impl Renderer {
+    /// A renderer with a `width × height` offscreen target.
+    pub fn new(width: u32, height: u32) -> Result<Renderer, GpuError> {
+        let (device, queue, adapter) = open_device()?;
+        Renderer::with_device(device, queue, adapter, width, height)
+    }
+
+    /// A renderer on an already opened device (e.g. one that presents to a window).
+    pub fn with_device(
+        device: wgpu::Device,
+        queue: wgpu::Queue,
+        adapter: AdapterSummary,
+        width: u32,
+        height: u32,
+    ) -> Result<Renderer, GpuError> {
+        let max = device.limits().max_texture_dimension_2d;
+        if width == 0 || height == 0 || width > max || height > max {
+            return Err(GpuError::BadSize { width, height, max });
+        }
+        let color = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("color"),
+            size: wgpu::Extent3d {
+                width,
+                height,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: COLOR_FORMAT,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+            view_formats: &[],
+        });
+        let color_view = color.create_view(&Default::default());
+        let depth = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("depth"),
+            size: wgpu::Extent3d {
+                width,
+                height,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: DEPTH_FORMAT,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+            view_formats: &[],
+        });
+        let depth_view = depth.create_view(&Default::default());
+        let align = wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+        let padded_row = (width * 4).div_ceil(align) * align;
+        let readback = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("readback"),
+            size: padded_row as u64 * height as u64,
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        });
+
+        let shader = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("player shaders"),
+            source: wgpu::ShaderSource::Wgsl(include_str!("shader.wgsl").into()),
+        });
+        let globals_bgl = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("globals"),
+            entries: &[wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Uniform,
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+                count: None,
+            }],
+        });
+        let mut proxy_entries = vec![
+            wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::FRAGMENT,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Uniform,
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+                count: None,
+            },
+            wgpu::BindGroupLayoutEntry {
+                binding: 1,
+                visibility: wgpu::ShaderStages::FRAGMENT,
+                ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                count: None,
+            },
+        ];
+        for i in 0..MAX_VIEWS as u32 {
+            proxy_entries.push(wgpu::BindGroupLayoutEntry {
+                binding: 2 + i,
+                visibility: wgpu::ShaderStages::FRAGMENT,
+                ty: wgpu::BindingType::Texture {
+                    sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                    view_dimension: wgpu::TextureViewDimension::D2,
+                    multisampled: false,
+                },
+                count: None,
+            });
+        }
+        let proxy_bgl = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("proxy"),
+            entries: &proxy_entries,
+        });
+        let lit_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("lit"),
+            bind_group_layouts: &[Some(&globals_bgl)],
+            immediate_size: 0,
+        });
+        let proxy_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("proxy"),
+            bind_group_layouts: &[Some(&globals_bgl), Some(&proxy_bgl)],
+            immediate_size: 0,
+        });
+        let primitive = wgpu::PrimitiveState {
+            topology: wgpu::PrimitiveTopology::TriangleList,
+            front_face: wgpu::FrontFace::Ccw,
+            cull_mode: Some(wgpu::Face::Back),
+            ..Default::default()
+        };
+        let depth_stencil = Some(wgpu::DepthStencilState {
+            format: DEPTH_FORMAT,
+            depth_write_enabled: Some(true),
+            depth_compare: Some(wgpu::CompareFunction::Less),
+            stencil: Default::default(),
+            bias: Default::default(),
+        });
+        let targets = [Some(wgpu::ColorTargetState {
+            format: COLOR_FORMAT,
+            blend: None,
+            write_mask: wgpu::ColorWrites::ALL,
+        })];
+        let model_attrs = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Unorm8x4];
+        let inst_attrs = wgpu::vertex_attr_array![
+            3 => Float32x4, 4 => Float32x4, 5 => Float32x4, 6 => Float32x4,
+            7 => Float32x4, 8 => Float32x4, 9 => Float32x4, 10 => Float32x4
+        ];
+        let lit_buffers = [
+            Some(wgpu::VertexBufferLayout {
+                array_stride: std::mem::size_of::<ModelVertex>() as u64,
+                step_mode: wgpu::VertexStepMode::Vertex,
+                attributes: &model_attrs,
+            }),
+            Some(wgpu::VertexBufferLayout {
+                array_stride: std::mem::size_of::<InstanceRaw>() as u64,
+                step_mode: wgpu::VertexStepMode::Instance,
+                attributes: &inst_attrs,
+            }),
+        ];
+        let lit_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("lit"),
+            layout: Some(&lit_layout),
+            vertex: wgpu::VertexState {
+                module: &shader,
+                entry_point: Some("vs_lit"),
+                compilation_options: Default::default(),
+                buffers: &lit_buffers,
+            },
+            primitive,
+            depth_stencil: depth_stencil.clone(),
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &shader,
+                entry_point: Some("fs_lit"),
+                compilation_options: Default::default(),
+                targets: &targets,
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        let proxy_attrs = wgpu::vertex_attr_array![
+            0 => Float32x3, 1 => Float32x3, 2 => Unorm8x4, 3 => Float32x3, 4 => Uint32, 5 => Float32x3
+        ];
+        let proxy_buffers = [Some(wgpu::VertexBufferLayout {
+            array_stride: std::mem::size_of::<ProxyVertex>() as u64,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &proxy_attrs,
+        })];
+        let proxy_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("proxy"),
+            layout: Some(&proxy_layout),
+            vertex: wgpu::VertexState {
+                module: &shader,
+                entry_point: Some("vs_proxy"),
+                compilation_options: Default::default(),
+                buffers: &proxy_buffers,
+            },
+            primitive,
+            depth_stencil,
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &shader,
+                entry_point: Some("fs_proxy"),
+                compilation_options: Default::default(),
+                targets: &targets,
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        let globals = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("globals"),
+            size: std::mem::size_of::<Globals>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let globals_bg = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("globals"),
+            layout: &globals_bgl,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: globals.as_entire_binding(),
+            }],
+        });
+        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("capture"),
+            address_mode_u: wgpu::AddressMode::ClampToEdge,
+            address_mode_v: wgpu::AddressMode::ClampToEdge,
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            ..Default::default()
+        });
+        let dummy = device.create_texture_with_data(
+            &queue,
+            &wgpu::TextureDescriptor {
+                label: Some("no view"),
+                size: wgpu::Extent3d {
+                    width: 1,
+                    height: 1,
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: wgpu::TextureFormat::Rgba8UnormSrgb,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING,
+                view_formats: &[],
+            },
+            wgpu::util::TextureDataOrder::LayerMajor,
+            &[0, 0, 0, 0],
+        );
+        let dummy_view = dummy.create_view(&Default::default());
+        let instances = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("instances"),
+            size: 1 << 16,
+            usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        Ok(Renderer {
+            device,
+            queue,
+            adapter,
+            width,
+            height,
+            color,
+            color_view,
+            depth_view,
+            readback,
+            padded_row,
+            lit_pipeline,
+            proxy_pipeline,
+            globals,
+            globals_bg,
+            proxy_bgl,
+            sampler,
+            dummy_view,
+            instances,
+        })
+    }
+
+    pub fn adapter(&self) -> &AdapterSummary {
+        &self.adapter
+    }
+
+    pub fn size(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+
+    /// Uploads every model of the base pack once.
+    pub fn upload_models(&self, base: &BasePack) -> GpuModels {
+        let models = base
+            .models
+            .iter()
+            .map(|m| {
+                let mesh = &m.mesh;
+                let verts: Vec<ModelVertex> = (0..mesh.positions.len())
+                    .map(|i| ModelVertex {
+                        pos: mesh.positions[i],
+                        normal: mesh.normals[i],
+                        albedo: mesh.albedo[i],
+                    })
+                    .collect();
+                // wgpu refuses zero-sized vertex buffers with a binding; keep one vertex.
+                let verts = if verts.is_empty() {
+                    vec![ModelVertex::zeroed()]
+                } else {
+                    verts
+                };
+                let mut idx: Vec<u32> = mesh.triangles.iter().flatten().copied().collect();
+                let index_count = idx.len() as u32;
+                if idx.is_empty() {
+                    idx = vec![0; 3];
+                }
+                GpuModel {
+                    vertices: self
+                        .device
+                        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                            label: Some(&m.name),
+                            contents: bytemuck::cast_slice(&verts),
+                            usage: wgpu::BufferUsages::VERTEX,
+                        }),
+                    indices: self
+                        .device
+                        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                            label: Some(&m.name),
+                            contents: bytemuck::cast_slice(&idx),
+                            usage: wgpu::BufferUsages::INDEX,
+                        }),
+                    index_count,
+                    triangle_count: mesh.triangles.len() as u64,
+                }
+            })
+            .collect();
+        GpuModels { models }
+    }
+
+    /// Creates a proxy's vertex and uniform buffers; textures come later through
+    /// [`Renderer::upload_view_texture`].
+    pub fn create_proxy(
+        &self,
+        vertices: &[ProxyVertex],
+        views: &[([f32; 16], [f32; 3])],
+    ) -> GpuProxy {
+        let mut u = ProxyUniform::zeroed();
+        for (i, (m, eye)) in views.iter().take(MAX_VIEWS).enumerate() {
+            u.tex_from_world[i] = *m;
+            u.view_eye[i] = [eye[0], eye[1], eye[2], 1.0];
+        }
+        u.counts[0] = views.len().min(MAX_VIEWS) as u32;
+        let contents: &[u8] = if vertices.is_empty() {
+            bytemuck::bytes_of(&ZERO_VERTEX)
+        } else {
+            bytemuck::cast_slice(vertices)
+        };
+        let vbuf = self
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("proxy vertices"),
+                contents,
+                usage: wgpu::BufferUsages::VERTEX,
+            });
+        let uniform = self
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("proxy views"),
+                contents: bytemuck::bytes_of(&u),
+                usage: wgpu::BufferUsages::UNIFORM,
+            });
+        let mut p = GpuProxy {
+            vertices: vbuf,
+            vertex_count: vertices.len() as u32,
+            uniform,
+            textures: vec![None; views.len().min(MAX_VIEWS)],
+            bind_group: None,
+            texture_bytes: 0,
+            vertex_bytes: std::mem::size_of_val(vertices) as u64,
+        };
+        self.try_bind(&mut p);
+        p
+    }
+
+    /// Uploads view `view`'s RGBA8 sRGB texels (row-major, row 0 = v 0).
+    pub fn upload_view_texture(
+        &self,
+        proxy: &mut GpuProxy,
+        view: usize,
+        width: u32,
+        height: u32,
+        rgba: &[u8],
+    ) {
+        if view >= proxy.textures.len() {
+            return;
+        }
+        let max = self.device.limits().max_texture_dimension_2d;
+        let expected = width as usize * height as usize * 4;
+        if width == 0 || height == 0 || width > max || height > max || rgba.len() != expected {
+            // Not uploadable here: the view samples as "no data" (alpha 0), so its
+            // triangles fall back to the other view or the lit vertex colour.
+            eprintln!(
+                "player: warning: capture texture {width}x{height} ({} bytes) not uploadable (max side {max}); drawing it lit",
+                rgba.len()
+            );
+            proxy.textures[view] = Some(self.dummy_view.clone());
+            self.try_bind(proxy);
+            return;
+        }
+        let tex = self.device.create_texture_with_data(
+            &self.queue,
+            &wgpu::TextureDescriptor {
+                label: Some("capture"),
+                size: wgpu::Extent3d {
+                    width,
+                    height,
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: wgpu::TextureFormat::Rgba8UnormSrgb,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+                view_formats: &[],
+            },
+            wgpu::util::TextureDataOrder::LayerMajor,
+            rgba,
+        );
+        proxy.texture_bytes += rgba.len() as u64;
+        proxy.textures[view] = Some(tex.create_view(&Default::default()));
+        self.try_bind(proxy);
+    }
+
+    fn try_bind(&self, p: &mut GpuProxy) {
+        if p.bind_group.is_some() || p.textures.iter().any(|t| t.is_none()) {
+            return;
+        }
+        let mut entries = vec![
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: p.uniform.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 1,
+                resource: wgpu::BindingResource::Sampler(&self.sampler),
+            },
+        ];
+        for i in 0..MAX_VIEWS {
+            let view = p
+                .textures
+                .get(i)
+                .and_then(|t| t.as_ref())
+                .unwrap_or(&self.dummy_view);
+            entries.push(wgpu::BindGroupEntry {
+                binding: 2 + i as u32,
+                resource: wgpu::BindingResource::TextureView(view),
+            });
+        }
+        p.bind_group = Some(self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("proxy"),
+            layout: &self.proxy_bgl,
+            entries: &entries,
+        }));
+    }
+
+    /// Draws one frame and waits for the GPU; returns the submit → done wall time in
+    /// milliseconds. Proxies that are not ready (textures missing) are skipped.
+    pub fn render(&mut self, camera: &Camera, models: &GpuModels, list: &DrawList<'_>) -> f64 {
+        let g = Globals {
+            clip_from_world: camera.clip_from_world_wgpu().to_cols_array(),
+            eye: camera.eye.extend(1.0).to_array(),
+        };
+        self.queue
+            .write_buffer(&self.globals, 0, bytemuck::bytes_of(&g));
+        let all: Vec<InstanceRaw> = list
+            .originals
+            .iter()
+            .flat_map(|(_, v)| v.iter().copied())
+            .collect();
+        let need = std::mem::size_of_val(all.as_slice()) as u64;
+        if need > self.instances.size() {
+            self.instances = self.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("instances"),
+                size: need.next_power_of_two(),
+                usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+        }
+        if !all.is_empty() {
+            self.queue
+                .write_buffer(&self.instances, 0, bytemuck::cast_slice(&all));
+        }
+        let mut enc = self
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+        {
+            let sky = |c: u8| srgb_to_linear(c);
+            let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("frame"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &self.color_view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color {
+                            r: sky(SKY[0]),
+                            g: sky(SKY[1]),
+                            b: sky(SKY[2]),
+                            a: 1.0,
+                        }),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &self.depth_view,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(1.0),
+                        store: wgpu::StoreOp::Store,
+                    }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_bind_group(0, Some(&self.globals_bg), &[]);
+            pass.set_pipeline(&self.lit_pipeline);
+            let mut first = 0u32;
+            for (m, inst) in &list.originals {
+                let model = &models.models[*m as usize];
+                let n = inst.len() as u32;
+                if model.index_count > 0 && n > 0 {
+                    pass.set_vertex_buffer(0, model.vertices.slice(..));
+                    pass.set_vertex_buffer(1, self.instances.slice(..));
+                    pass.set_index_buffer(model.indices.slice(..), wgpu::IndexFormat::Uint32);
+                    pass.draw_indexed(0..model.index_count, 0, first..first + n);
+                }
+                first += n;
+            }
+            pass.set_pipeline(&self.proxy_pipeline);
+            for p in &list.proxies {
+                if let (Some(bg), true) = (&p.bind_group, p.vertex_count > 0) {
+                    pass.set_bind_group(1, Some(bg), &[]);
+                    pass.set_vertex_buffer(0, p.vertices.slice(..));
+                    pass.draw(0..p.vertex_count, 0..1);
+                }
+            }
+        }
+        let t0 = Instant::now();
+        let idx = self.queue.submit([enc.finish()]);
+        let _ = self.device.poll(wgpu::PollType::Wait {
+            submission_index: Some(idx),
+            timeout: None,
+        });
+        t0.elapsed().as_secs_f64() * 1e3
+    }
+
+    /// The last frame as tightly packed RGBA8 sRGB, row 0 at the top.
+    pub fn read_pixels(&self) -> Result<Vec<u8>, GpuError> {
+        let mut enc = self
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+        enc.copy_texture_to_buffer(
+            wgpu::TexelCopyTextureInfo {
+                texture: &self.color,
+                mip_level: 0,
+                origin: wgpu::Origin3d::ZERO,
+                aspect: wgpu::TextureAspect::All,
+            },
+            wgpu::TexelCopyBufferInfo {
+                buffer: &self.readback,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(self.padded_row),
+                    rows_per_image: Some(self.height),
+                },
+            },
+            wgpu::Extent3d {
+                width: self.width,
+                height: self.height,
+                depth_or_array_layers: 1,
+            },
+        );
+        let idx = self.queue.submit([enc.finish()]);
+        let slice = self.readback.slice(..);
+        let (tx, rx) = std::sync::mpsc::channel();
+        slice.map_async(wgpu::MapMode::Read, move |r| {
+            let _ = tx.send(r);
+        });
+        self.device
+            .poll(wgpu::PollType::Wait {
+                submission_index: Some(idx),
+                timeout: None,
+            })
+            .map_err(|e| GpuError::Readback(e.to_string()))?;
+        rx.recv()
+            .map_err(|e| GpuError::Readback(e.to_string()))?
+            .map_err(|e| GpuError::Readback(e.to_string()))?;
+        let row = self.width as usize * 4;
+        let mut out = Vec::with_capacity(row * self.height as usize);
+        {
+            let data = slice
+                .get_mapped_range()
+                .map_err(|e| GpuError::Readback(e.to_string()))?;
+            for r in data.chunks(self.padded_row as usize) {
+                out.extend_from_slice(&r[..row]);
+            }
+        }
+        self.readback.unmap();
+        Ok(out)
+    }
+}
+
+const ZERO_VERTEX: ProxyVertex = ProxyVertex {
+    pos: [0.0; 3],
+    normal: [0.0; 3],
+    albedo: [0; 4],
+    tint: [0.0; 3],
+    mask: 0,
+    centroid: [0.0; 3],
+};

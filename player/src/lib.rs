@@ -1,0 +1,44 @@
+//! hexbake player (paper 000 §3.2): streams cell packs and renders the hybrid scene
+//! with wgpu — inside objects as original meshes, outside objects as projectively
+//! textured SV/MV meshes — headless (`player render`, `player compare`).
+//!
+//! Modules:
+//! - [`gpu`]: the wgpu renderer (offscreen `Rgba8UnormSrgb` + `Depth32Float`,
+//!   DESIGN.md shading in WGSL, projective texturing, MvMesh two-view blending).
+//! - [`bake`]: reading a bake directory; cell packs → upload-ready [`bake::PreparedCell`].
+//! - [`stream`]: current cell, prefetch thread, timestamped priority queue, FIFO
+//!   texture uploads under a per-frame budget, LRU eviction.
+//! - [`frame`]: draw lists of configurations A (`full`), B (`frustum`), C (`hybrid`).
+//! - [`grid`]: the worker's hex-grid layout, replicated (the player never links the
+//!   worker); [`camera`]: camera, frustum culling.
+//! - [`metrics`]: PSNR on luminance and SSIM; [`run`]: the `render`/`compare` commands.
+//! - [`testdata`]: synthetic bakes for tests (`write_synthetic_bake`, `write_quad_bake`).
+//!
+//! Conventions the bake must follow (what the player assumes):
+//! - `ProxyView::matrix` maps world points to homogeneous texture coordinates:
+//!   `uv = (M·p).xy / (M·p).w`, u to the right, v downwards, texel row 0 at v = 0
+//!   (the worker's pixel convention; [`testdata::texture_matrix`] builds it from an
+//!   OpenGL-style view-projection: `bias · clip_from_world` with
+//!   u = (x/w + 1)/2, v = (1 − y/w)/2). A texel with alpha < 0.5 means "nothing
+//!   captured here" and falls back to the other view or the lit vertex colour.
+//! - Proxy triangles are counter-clockwise seen from outside (back faces are culled).
+//! - MvMesh view masks: bit i = view i sees the triangle; the two views of the mask
+//!   whose direction to the triangle's centroid is closest to the viewer's are blended
+//!   with weights inversely proportional to those angles.
+//!
+//! CLI: `player render <out> --path <path.ron> --frames DIR [--mode hybrid|full|frustum]
+//! [--png] [--no-prefetch] [--size WxH]`, `player compare <out> --path <path.ron>
+//! [--json] [--worst DIR] [--worst-count N] [--no-crossings] [--size WxH]`,
+//! `player synth <out>` (a synthetic bake of `manifests/demo.ron`).
+
+pub mod bake;
+pub mod camera;
+pub mod frame;
+pub mod gpu;
+pub mod grid;
+pub mod metrics;
+pub mod run;
+pub mod stream;
+pub mod testdata;
+#[cfg(feature = "view")]
+pub mod view;

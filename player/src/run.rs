@@ -1,0 +1,491 @@
+//! `player render` and `player compare` (issue 7; paper 000 §4: configurations A/B/C,
+//! PSNR on luminance, frame rate at cell crossings — Fig. 14).
+
+use crate::bake::Bake;
+use crate::camera::Camera;
+use crate::frame::{hybrid_list, list_stats, originals_list, Mode};
+use crate::gpu::{GpuError, GpuModels, Renderer};
+use crate::metrics::{diff_image, psnr_y, ssim_y};
+use crate::stream::{StreamConfig, Streamer};
+use format::path::{CameraPath, PathFrame};
+use glam::Vec2;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// Errors of the commands.
+#[derive(Debug, thiserror::Error)]
+pub enum RunError {
+    #[error(transparent)]
+    Bake(Box<crate::bake::BakeError>),
+    #[error(transparent)]
+    Gpu(#[from] GpuError),
+    #[error(transparent)]
+    Path(#[from] format::path::PathError),
+    #[error("{path}: {what}")]
+    Write { path: PathBuf, what: String },
+    #[error("the camera path has no frames")]
+    NoFrames,
+}
+
+impl From<crate::bake::BakeError> for RunError {
+    fn from(e: crate::bake::BakeError) -> RunError {
+        RunError::Bake(Box::new(e))
+    }
+}
+
+fn write_err(path: &Path, e: impl std::fmt::Display) -> RunError {
+    RunError::Write {
+        path: path.to_path_buf(),
+        what: e.to_string(),
+    }
+}
+
+/// The camera of a path frame.
+pub fn camera_for(frame: &PathFrame, path: &CameraPath, size: (u32, u32), far: f32) -> Camera {
+    Camera {
+        eye: frame.eye,
+        dir: frame.dir,
+        fov_y_deg: path.fov_y_deg,
+        width: size.0,
+        height: size.1,
+        near: 0.25,
+        far,
+    }
+}
+
+/// One row of `frames.csv`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FrameRecord {
+    pub frame: usize,
+    pub time_s: f32,
+    pub cell: Option<u32>,
+    pub crossing: bool,
+    /// GPU submit → done, milliseconds.
+    pub frame_ms: f64,
+    pub triangles: u64,
+    pub texture_bytes: u64,
+    pub cache_hits: u64,
+    pub cache_misses: u64,
+    /// Render-thread streaming work this frame (demand loads, uploads), milliseconds.
+    pub stream_ms: f64,
+}
+
+pub const CSV_HEADER: &str =
+    "frame,time_s,cell,crossing,frame_ms,triangles,texture_bytes,cache_hits,cache_misses,stream_ms";
+
+impl FrameRecord {
+    pub fn csv(&self) -> String {
+        format!(
+            "{},{:.4},{},{},{:.3},{},{},{},{},{:.3}",
+            self.frame,
+            self.time_s,
+            self.cell.map_or(-1, |c| c as i64),
+            self.crossing as u8,
+            self.frame_ms,
+            self.triangles,
+            self.texture_bytes,
+            self.cache_hits,
+            self.cache_misses,
+            self.stream_ms
+        )
+    }
+}
+
+/// A renderer with a bake's models uploaded.
+pub struct Player {
+    pub bake: Bake,
+    pub renderer: Renderer,
+    pub models: GpuModels,
+}
+
+impl Player {
+    pub fn open(dir: &Path, size: (u32, u32)) -> Result<Player, RunError> {
+        let bake = Bake::open(dir)?;
+        let renderer = Renderer::new(size.0, size.1)?;
+        let models = renderer.upload_models(&bake.base);
+        Ok(Player {
+            bake,
+            renderer,
+            models,
+        })
+    }
+
+    /// Draws one frame of a configuration; `streamer` is needed for `Hybrid`.
+    /// Returns (frame_ms, triangles, texture bytes, stream stats).
+    pub fn draw(
+        &mut self,
+        camera: &Camera,
+        mode: Mode,
+        streamer: Option<&mut Streamer>,
+    ) -> (f64, u64, u64, crate::stream::StreamStats) {
+        match (mode, streamer) {
+            (Mode::Hybrid, Some(s)) => {
+                let (current, stats) = s.begin_frame(&self.renderer, &self.bake, camera);
+                let list = hybrid_list(&self.bake, camera, &current);
+                let (tris, tex) = list_stats(&list, &self.models);
+                let ms = self.renderer.render(camera, &self.models, &list);
+                (ms, tris, tex, stats)
+            }
+            (m, _) => {
+                let list = originals_list(&self.bake, camera, m != Mode::Full);
+                let (tris, tex) = list_stats(&list, &self.models);
+                let ms = self.renderer.render(camera, &self.models, &list);
+                let stats = crate::stream::StreamStats {
+                    cell: self
+                        .bake
+                        .grid
+                        .nearest_cell(Vec2::new(camera.eye.x, camera.eye.z)),
+                    ..Default::default()
+                };
+                (ms, tris, tex, stats)
+            }
+        }
+    }
+
+    /// Compiles the pipelines (shaders are compiled lazily on first use): one untimed
+    /// frame of each kind at `camera`.
+    pub fn warm_up(&mut self, camera: &Camera) {
+        let mut s = Streamer::new(
+            &self.bake,
+            StreamConfig {
+                prefetch: false,
+                ..Default::default()
+            },
+        );
+        self.draw(camera, Mode::Full, None);
+        self.draw(camera, Mode::Hybrid, Some(&mut s));
+    }
+}
+
+/// Writes RGBA8 as PNG.
+pub fn write_png(path: &Path, width: u32, height: u32, rgba: &[u8]) -> Result<(), RunError> {
+    let f = std::fs::File::create(path).map_err(|e| write_err(path, e))?;
+    let mut enc = png::Encoder::new(std::io::BufWriter::new(f), width, height);
+    enc.set_color(png::ColorType::Rgba);
+    enc.set_depth(png::BitDepth::Eight);
+    let mut w = enc.write_header().map_err(|e| write_err(path, e))?;
+    w.write_image_data(rgba).map_err(|e| write_err(path, e))?;
+    Ok(())
+}
+
+/// Options of `player render`.
+#[derive(Clone, Debug)]
+pub struct RenderOptions {
+    pub mode: Mode,
+    pub frames_dir: PathBuf,
+    pub png: bool,
+    pub stream: StreamConfig,
+    /// Overrides the path's resolution.
+    pub size: Option<(u32, u32)>,
+}
+
+/// Renders every frame of `path`; writes `frames.csv` (and PNGs) into the frames dir.
+pub fn render(
+    out: &Path,
+    path: &CameraPath,
+    opts: &RenderOptions,
+) -> Result<(Vec<FrameRecord>, Player), RunError> {
+    let size = opts.size.unwrap_or(path.resolution);
+    let frames = path.frames();
+    if frames.is_empty() {
+        return Err(RunError::NoFrames);
+    }
+    let mut player = Player::open(out, size)?;
+    eprintln!("player: adapter {}", player.renderer.adapter());
+    std::fs::create_dir_all(&opts.frames_dir).map_err(|e| write_err(&opts.frames_dir, e))?;
+    let far = player.bake.extent;
+    player.warm_up(&camera_for(&frames[0], path, size, far));
+    let mut streamer = Streamer::new(&player.bake, opts.stream.clone());
+    let mut records = Vec::with_capacity(frames.len());
+    let mut prev: Option<Option<u32>> = None;
+    for (i, f) in frames.iter().enumerate() {
+        let cam = camera_for(f, path, size, far);
+        let (ms, tris, tex, stats) = player.draw(&cam, opts.mode, Some(&mut streamer));
+        if opts.png {
+            let px = player.renderer.read_pixels()?;
+            let p = opts.frames_dir.join(format!("{i:05}.png"));
+            write_png(&p, size.0, size.1, &px)?;
+        }
+        records.push(FrameRecord {
+            frame: i,
+            time_s: f.time_s,
+            cell: stats.cell,
+            crossing: prev.is_some_and(|p| p != stats.cell),
+            frame_ms: ms,
+            triangles: tris,
+            texture_bytes: tex,
+            cache_hits: stats.hits,
+            cache_misses: stats.misses,
+            stream_ms: stats.stream_ms,
+        });
+        prev = Some(stats.cell);
+    }
+    drop(streamer);
+    let csv = opts.frames_dir.join("frames.csv");
+    write_csv(&csv, &records)?;
+    Ok((records, player))
+}
+
+pub fn write_csv(path: &Path, records: &[FrameRecord]) -> Result<(), RunError> {
+    let mut s = String::from(CSV_HEADER);
+    s.push('\n');
+    for r in records {
+        s.push_str(&r.csv());
+        s.push('\n');
+    }
+    let mut f = std::fs::File::create(path).map_err(|e| write_err(path, e))?;
+    f.write_all(s.as_bytes()).map_err(|e| write_err(path, e))
+}
+
+fn median(v: &mut [f64]) -> f64 {
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+/// Frame-time behaviour at cell crossings (paper Fig. 14): per crossing, the maximum
+/// total frame time (GPU + streaming) in the crossing frame and the 9 after it,
+/// relative to the median of the other (in-cell) frames.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct CrossingStats {
+    pub crossings: usize,
+    pub in_cell_median_ms: f64,
+    pub max_after_crossing_ms: f64,
+    /// max_after_crossing_ms / in_cell_median_ms.
+    pub ratio: f64,
+}
+
+pub fn crossing_stats(records: &[FrameRecord]) -> CrossingStats {
+    let total = |r: &FrameRecord| r.frame_ms + r.stream_ms;
+    let mut near = vec![false; records.len()];
+    let mut crossings = 0;
+    for (i, r) in records.iter().enumerate() {
+        if r.crossing {
+            crossings += 1;
+            for n in near.iter_mut().skip(i).take(10) {
+                *n = true;
+            }
+        }
+    }
+    let mut inside: Vec<f64> = records
+        .iter()
+        .zip(&near)
+        .filter(|(_, &n)| !n)
+        .map(|(r, _)| total(r))
+        .collect();
+    let med = median(&mut inside);
+    let max_after = records
+        .iter()
+        .zip(&near)
+        .filter(|(_, &n)| n)
+        .map(|(r, _)| total(r))
+        .fold(0.0, f64::max);
+    CrossingStats {
+        crossings,
+        in_cell_median_ms: med,
+        max_after_crossing_ms: max_after,
+        ratio: if med > 0.0 { max_after / med } else { f64::NAN },
+    }
+}
+
+/// PSNR reported for identical frames (and the cap of every PSNR in reports, so
+/// JSON never holds infinity).
+pub const PSNR_CAP: f64 = 100.0;
+
+/// One frame of `player compare`.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct CompareFrame {
+    pub frame: usize,
+    pub cell: Option<u32>,
+    pub psnr_y: f64,
+    pub ssim: f64,
+    pub triangles: u64,
+    pub reference_triangles: u64,
+    pub frame_ms: f64,
+    pub reference_frame_ms: f64,
+    pub frustum_frame_ms: f64,
+}
+
+/// The result of `player compare`.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct CompareReport {
+    pub frames: usize,
+    pub mean_psnr_y: f64,
+    pub min_psnr_y: f64,
+    pub mean_ssim: f64,
+    pub mean_triangles: f64,
+    pub reference_triangles: f64,
+    /// Mean hybrid frame time / mean full-geometry frame time.
+    pub frame_time_ratio: f64,
+    /// Mean hybrid frame time / mean frustum-culled frame time (config C vs B).
+    pub frame_time_ratio_frustum: f64,
+    pub adapter: String,
+    pub width: u32,
+    pub height: u32,
+    pub crossing_prefetch: Option<CrossingStats>,
+    pub crossing_no_prefetch: Option<CrossingStats>,
+    pub per_frame: Vec<CompareFrame>,
+}
+
+/// Options of `player compare`.
+#[derive(Clone, Debug, Default)]
+pub struct CompareOptions {
+    pub worst_dir: Option<PathBuf>,
+    pub worst_count: usize,
+    pub size: Option<(u32, u32)>,
+    /// Also run the hybrid with prefetching off (Fig. 14 comparison).
+    pub crossings: bool,
+    pub stream: StreamConfig,
+}
+
+fn mean(v: impl Iterator<Item = f64>) -> f64 {
+    let (s, n) = v.fold((0.0, 0usize), |(s, n), x| (s + x, n + 1));
+    if n == 0 {
+        f64::NAN
+    } else {
+        s / n as f64
+    }
+}
+
+/// Renders the reference (config A) and the hybrid (C) for every frame of the path
+/// (and B for timing); PSNR(Y) and SSIM of C against A.
+pub fn compare(
+    out: &Path,
+    path: &CameraPath,
+    opts: &CompareOptions,
+) -> Result<CompareReport, RunError> {
+    let size = opts.size.unwrap_or(path.resolution);
+    let frames = path.frames();
+    if frames.is_empty() {
+        return Err(RunError::NoFrames);
+    }
+    let mut player = Player::open(out, size)?;
+    eprintln!("player: adapter {}", player.renderer.adapter());
+    let far = player.bake.extent;
+    player.warm_up(&camera_for(&frames[0], path, size, far));
+    let mut streamer = Streamer::new(&player.bake, opts.stream.clone());
+    let mut per_frame = Vec::with_capacity(frames.len());
+    let mut hybrid_records = Vec::with_capacity(frames.len());
+    // (psnr, frame, reference, hybrid) of the worst frames.
+    let mut worst: Vec<(f64, usize, Vec<u8>, Vec<u8>)> = Vec::new();
+    let mut prev: Option<Option<u32>> = None;
+    for (i, f) in frames.iter().enumerate() {
+        let cam = camera_for(f, path, size, far);
+        let (ref_ms, ref_tris, _, _) = player.draw(&cam, Mode::Full, None);
+        let reference = player.renderer.read_pixels()?;
+        let (fr_ms, _, _, _) = player.draw(&cam, Mode::Frustum, None);
+        let (ms, tris, tex, stats) = player.draw(&cam, Mode::Hybrid, Some(&mut streamer));
+        let hybrid = player.renderer.read_pixels()?;
+        let psnr = psnr_y(&reference, &hybrid);
+        let ssim = ssim_y(&reference, &hybrid, size.0 as usize, size.1 as usize);
+        per_frame.push(CompareFrame {
+            frame: i,
+            cell: stats.cell,
+            psnr_y: psnr.min(PSNR_CAP),
+            ssim,
+            triangles: tris,
+            reference_triangles: ref_tris,
+            frame_ms: ms,
+            reference_frame_ms: ref_ms,
+            frustum_frame_ms: fr_ms,
+        });
+        hybrid_records.push(FrameRecord {
+            frame: i,
+            time_s: f.time_s,
+            cell: stats.cell,
+            crossing: prev.is_some_and(|p| p != stats.cell),
+            frame_ms: ms,
+            triangles: tris,
+            texture_bytes: tex,
+            cache_hits: stats.hits,
+            cache_misses: stats.misses,
+            stream_ms: stats.stream_ms,
+        });
+        prev = Some(stats.cell);
+        if opts.worst_dir.is_some() && opts.worst_count > 0 {
+            worst.push((psnr, i, reference, hybrid));
+            worst.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            worst.truncate(opts.worst_count);
+        }
+    }
+    drop(streamer);
+    let crossing_no_prefetch = if opts.crossings {
+        let mut s = Streamer::new(
+            &player.bake,
+            StreamConfig {
+                prefetch: false,
+                ..opts.stream.clone()
+            },
+        );
+        let mut recs = Vec::new();
+        let mut prev: Option<Option<u32>> = None;
+        for (i, f) in frames.iter().enumerate() {
+            let cam = camera_for(f, path, size, far);
+            let (ms, tris, tex, stats) = player.draw(&cam, Mode::Hybrid, Some(&mut s));
+            recs.push(FrameRecord {
+                frame: i,
+                time_s: f.time_s,
+                cell: stats.cell,
+                crossing: prev.is_some_and(|p| p != stats.cell),
+                frame_ms: ms,
+                triangles: tris,
+                texture_bytes: tex,
+                cache_hits: stats.hits,
+                cache_misses: stats.misses,
+                stream_ms: stats.stream_ms,
+            });
+            prev = Some(stats.cell);
+        }
+        Some(crossing_stats(&recs))
+    } else {
+        None
+    };
+    if let Some(dir) = &opts.worst_dir {
+        std::fs::create_dir_all(dir).map_err(|e| write_err(dir, e))?;
+        for (_, i, r, h) in &worst {
+            write_png(
+                &dir.join(format!("{i:05}-reference.png")),
+                size.0,
+                size.1,
+                r,
+            )?;
+            write_png(&dir.join(format!("{i:05}-hybrid.png")), size.0, size.1, h)?;
+            write_png(
+                &dir.join(format!("{i:05}-diff.png")),
+                size.0,
+                size.1,
+                &diff_image(r, h),
+            )?;
+        }
+    }
+    let n = per_frame.len();
+    let finite_min = per_frame
+        .iter()
+        .map(|f| f.psnr_y)
+        .fold(f64::INFINITY, f64::min);
+    Ok(CompareReport {
+        frames: n,
+        mean_psnr_y: mean(per_frame.iter().map(|f| f.psnr_y)),
+        min_psnr_y: finite_min.min(PSNR_CAP),
+        mean_ssim: mean(per_frame.iter().map(|f| f.ssim)),
+        mean_triangles: mean(per_frame.iter().map(|f| f.triangles as f64)),
+        reference_triangles: mean(per_frame.iter().map(|f| f.reference_triangles as f64)),
+        frame_time_ratio: mean(per_frame.iter().map(|f| f.frame_ms))
+            / mean(per_frame.iter().map(|f| f.reference_frame_ms)),
+        frame_time_ratio_frustum: mean(per_frame.iter().map(|f| f.frame_ms))
+            / mean(per_frame.iter().map(|f| f.frustum_frame_ms)),
+        adapter: player.renderer.adapter().to_string(),
+        width: size.0,
+        height: size.1,
+        crossing_prefetch: Some(crossing_stats(&hybrid_records)),
+        crossing_no_prefetch,
+        per_frame,
+    })
+}

@@ -1,0 +1,206 @@
+// hexbake player shaders (paper 000 §3.2; DESIGN.md "Shading").
+//
+// Originals: per-pixel Lambert in linear space,
+//   albedo · (0.3 + 0.7 · max(0, n·L)), L = normalize(0.4, 1.0, 0.3),
+// albedo = vertex sRGB8 colour → linear × instance tint; the Rgba8UnormSrgb target
+// encodes the linear result to sRGB8 (as worker::shade does on the CPU).
+//
+// Proxies: projective texturing from the proxy's captures (texcoord = M · world, / w,
+// u right, v down, row 0 of the texture at v = 0). Each triangle carries the mask of
+// the views that see it: none → lit vertex colour; one → that view; two or more → the
+// two views whose direction to the triangle is closest to the viewer's (angle between
+// eye_i → centroid and viewer → centroid), blended with weights inversely
+// proportional to those angles. A texel outside [0,1]², behind the capture or with
+// alpha < 0.5 (nothing captured there) falls back to the other view, then to lit.
+
+const AMBIENT: f32 = 0.3;
+const LIGHT: vec3<f32> = vec3<f32>(0.35777088, 0.89442719, 0.26832816);
+
+struct Globals {
+    clip_from_world: mat4x4<f32>,
+    eye: vec4<f32>,
+};
+@group(0) @binding(0) var<uniform> g: Globals;
+
+fn srgb_to_linear(c: vec3<f32>) -> vec3<f32> {
+    let lo = c / 12.92;
+    let hi = pow((c + vec3<f32>(0.055)) / 1.055, vec3<f32>(2.4));
+    return select(hi, lo, c <= vec3<f32>(0.04045));
+}
+
+fn shade(albedo: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
+    let l = max(dot(normalize(n), LIGHT), 0.0);
+    return albedo * (AMBIENT + (1.0 - AMBIENT) * l);
+}
+
+// ---- originals ----
+
+struct LitIn {
+    @location(0) pos: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) albedo: vec4<f32>,
+    @location(3) m0: vec4<f32>,
+    @location(4) m1: vec4<f32>,
+    @location(5) m2: vec4<f32>,
+    @location(6) m3: vec4<f32>,
+    @location(7) n0: vec4<f32>,
+    @location(8) n1: vec4<f32>,
+    @location(9) n2: vec4<f32>,
+    @location(10) tint: vec4<f32>,
+};
+
+struct LitOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) normal: vec3<f32>,
+    @location(1) albedo: vec3<f32>,
+};
+
+@vertex
+fn vs_lit(v: LitIn) -> LitOut {
+    let model = mat4x4<f32>(v.m0, v.m1, v.m2, v.m3);
+    let nm = mat3x3<f32>(v.n0.xyz, v.n1.xyz, v.n2.xyz);
+    var o: LitOut;
+    o.clip = g.clip_from_world * (model * vec4<f32>(v.pos, 1.0));
+    o.normal = nm * v.normal;
+    o.albedo = srgb_to_linear(v.albedo.rgb) * v.tint.rgb;
+    return o;
+}
+
+@fragment
+fn fs_lit(i: LitOut) -> @location(0) vec4<f32> {
+    return vec4<f32>(shade(i.albedo, i.normal), 1.0);
+}
+
+// ---- proxies ----
+
+struct Proxy {
+    tex_from_world: array<mat4x4<f32>, 8>,
+    view_eye: array<vec4<f32>, 8>,
+    // x: number of views
+    counts: vec4<u32>,
+};
+@group(1) @binding(0) var<uniform> p: Proxy;
+@group(1) @binding(1) var samp: sampler;
+@group(1) @binding(2) var t0: texture_2d<f32>;
+@group(1) @binding(3) var t1: texture_2d<f32>;
+@group(1) @binding(4) var t2: texture_2d<f32>;
+@group(1) @binding(5) var t3: texture_2d<f32>;
+@group(1) @binding(6) var t4: texture_2d<f32>;
+@group(1) @binding(7) var t5: texture_2d<f32>;
+@group(1) @binding(8) var t6: texture_2d<f32>;
+@group(1) @binding(9) var t7: texture_2d<f32>;
+
+struct ProxyIn {
+    @location(0) pos: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) albedo: vec4<f32>,
+    @location(3) tint: vec3<f32>,
+    @location(4) mask: u32,
+    @location(5) centroid: vec3<f32>,
+};
+
+struct ProxyOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) world: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) albedo: vec3<f32>,
+    @location(3) @interpolate(flat) mask: u32,
+    @location(4) @interpolate(flat) centroid: vec3<f32>,
+};
+
+@vertex
+fn vs_proxy(v: ProxyIn) -> ProxyOut {
+    var o: ProxyOut;
+    o.clip = g.clip_from_world * vec4<f32>(v.pos, 1.0);
+    o.world = v.pos;
+    o.normal = v.normal;
+    o.albedo = srgb_to_linear(v.albedo.rgb) * v.tint;
+    o.mask = v.mask;
+    o.centroid = v.centroid;
+    return o;
+}
+
+fn sample_view(i: u32, uv: vec2<f32>) -> vec4<f32> {
+    switch i {
+        case 0u: { return textureSampleLevel(t0, samp, uv, 0.0); }
+        case 1u: { return textureSampleLevel(t1, samp, uv, 0.0); }
+        case 2u: { return textureSampleLevel(t2, samp, uv, 0.0); }
+        case 3u: { return textureSampleLevel(t3, samp, uv, 0.0); }
+        case 4u: { return textureSampleLevel(t4, samp, uv, 0.0); }
+        case 5u: { return textureSampleLevel(t5, samp, uv, 0.0); }
+        case 6u: { return textureSampleLevel(t6, samp, uv, 0.0); }
+        default: { return textureSampleLevel(t7, samp, uv, 0.0); }
+    }
+}
+
+// Projective lookup of view i at a world point; alpha 0 = no data there.
+fn project_view(i: u32, world: vec3<f32>) -> vec4<f32> {
+    let tc = p.tex_from_world[i] * vec4<f32>(world, 1.0);
+    if tc.w <= 0.0 {
+        return vec4<f32>(0.0);
+    }
+    let uv = tc.xy / tc.w;
+    if any(uv < vec2<f32>(0.0)) || any(uv > vec2<f32>(1.0)) {
+        return vec4<f32>(0.0);
+    }
+    let c = sample_view(i, uv);
+    if c.a < 0.5 {
+        return vec4<f32>(0.0);
+    }
+    return vec4<f32>(c.rgb, 1.0);
+}
+
+fn angle_between(a: vec3<f32>, b: vec3<f32>) -> f32 {
+    return acos(clamp(dot(normalize(a), normalize(b)), -1.0, 1.0));
+}
+
+@fragment
+fn fs_proxy(i: ProxyOut) -> @location(0) vec4<f32> {
+    let lit = shade(i.albedo, i.normal);
+    let n = min(p.counts.x, 8u);
+    let to_poly = i.centroid - g.eye.xyz;
+    // The two views of the mask closest in direction to viewer → polygon.
+    var best0 = 8u;
+    var best1 = 8u;
+    var a0 = 1e9;
+    var a1 = 1e9;
+    for (var k = 0u; k < n; k = k + 1u) {
+        if ((i.mask >> k) & 1u) == 0u {
+            continue;
+        }
+        let a = angle_between(i.centroid - p.view_eye[k].xyz, to_poly);
+        if a < a0 {
+            best1 = best0;
+            a1 = a0;
+            best0 = k;
+            a0 = a;
+        } else if a < a1 {
+            best1 = k;
+            a1 = a;
+        }
+    }
+    if best0 == 8u {
+        return vec4<f32>(lit, 1.0);
+    }
+    let c0 = project_view(best0, i.world);
+    var c1 = vec4<f32>(0.0);
+    if best1 != 8u {
+        c1 = project_view(best1, i.world);
+    }
+    var w0 = c0.a;
+    var w1 = c1.a;
+    if w0 > 0.0 && w1 > 0.0 {
+        let s = a0 + a1;
+        if s > 1e-6 {
+            w0 = a1 / s;
+            w1 = a0 / s;
+        } else {
+            w0 = 0.5;
+            w1 = 0.5;
+        }
+    }
+    if w0 + w1 <= 0.0 {
+        return vec4<f32>(lit, 1.0);
+    }
+    return vec4<f32>((c0.rgb * w0 + c1.rgb * w1) / (w0 + w1), 1.0);
+}

@@ -1,0 +1,571 @@
+//! Streaming and prefetching of cell data (paper 000 §3.2, "Prefetching").
+//!
+//! - A **timestamp**, initially 0, grows by 1 whenever the viewer has moved a fixed
+//!   distance or turned a fixed angle since the last increment. At each increment the
+//!   neighbouring cells of the current cell (the index's neighbour lists) that are not
+//!   resident go into a **priority queue** with t-priority = timestamp + priority,
+//!   priority ∈ [0, 1) from frustum membership, closeness to the aim vector and
+//!   closeness to the viewpoint ([`cell_priority`]).
+//! - A separate **prefetch thread** repeatedly removes the highest t-priority entry,
+//!   drops it if it is out of date (t-priority < timestamp − 2), and otherwise maps,
+//!   validates and prepares the cell pack.
+//! - The render thread takes prepared cells, creates their GPU buffers and queues their
+//!   textures in a **FIFO upload queue** served under a per-frame byte budget (an
+//!   oversized texture is still uploaded when it is the first of the frame; one that
+//!   is not first is put back at the front, paper §4: "textures in general have size
+//!   in a wide range"). The current cell's own textures are uploaded at once.
+//! - Resident cells are evicted least-recently-used first above a memory budget (never
+//!   the current cell).
+//! - A cell whose pack is missing or corrupt is logged once and drawn as original
+//!   geometry.
+//!
+//! The thread is "low priority" in the paper's sense: it only does I/O and decoding
+//! and never touches the GPU; the OS priority is left as is.
+
+use crate::bake::{load_cell, Bake, PreparedCell};
+use crate::camera::{Aabb, Camera};
+use crate::gpu::{GpuProxy, Renderer};
+use format::pack::{BasePack, Index};
+use glam::{Vec2, Vec3};
+use std::cmp::Ordering;
+use std::collections::{BTreeMap, BTreeSet, BinaryHeap, VecDeque};
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering as AtomicOrdering};
+use std::sync::mpsc::{channel, Receiver, Sender};
+use std::sync::{Arc, Condvar, Mutex};
+use std::thread::JoinHandle;
+use std::time::Instant;
+
+/// Streaming parameters.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StreamConfig {
+    /// Run the prefetch thread (`--no-prefetch` turns it off: cells load on demand).
+    pub prefetch: bool,
+    /// Texture bytes uploaded per frame from the FIFO queue.
+    pub upload_budget_bytes: u64,
+    /// Resident cell data (vertices + texels) kept before LRU eviction.
+    pub memory_budget_bytes: u64,
+    /// Timestamp step: distance moved, in units (default: cell size / 5).
+    pub step_distance: Option<f32>,
+    /// Timestamp step: angle turned, in degrees.
+    pub step_angle_deg: f32,
+}
+
+impl Default for StreamConfig {
+    fn default() -> Self {
+        StreamConfig {
+            prefetch: true,
+            upload_budget_bytes: 4 << 20,
+            memory_budget_bytes: 512 << 20,
+            step_distance: None,
+            step_angle_deg: 15.0,
+        }
+    }
+}
+
+/// An entry of the prefetch queue.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct QueueEntry {
+    pub t_priority: f64,
+    pub cell: u32,
+}
+
+impl Eq for QueueEntry {}
+impl Ord for QueueEntry {
+    fn cmp(&self, o: &Self) -> Ordering {
+        self.t_priority
+            .total_cmp(&o.t_priority)
+            .then_with(|| o.cell.cmp(&self.cell))
+    }
+}
+impl PartialOrd for QueueEntry {
+    fn partial_cmp(&self, o: &Self) -> Option<Ordering> {
+        Some(self.cmp(o))
+    }
+}
+
+/// The timestamped priority queue of §3.2.
+#[derive(Debug, Default)]
+pub struct PrefetchQueue {
+    heap: BinaryHeap<QueueEntry>,
+}
+
+impl PrefetchQueue {
+    pub fn push(&mut self, timestamp: u64, priority: f64, cell: u32) {
+        let p = priority.clamp(0.0, 0.999_999);
+        self.heap.push(QueueEntry {
+            t_priority: timestamp as f64 + p,
+            cell,
+        });
+    }
+
+    /// The highest t-priority entry that is not out of date at `timestamp`
+    /// (t-priority ≥ timestamp − 2); stale entries met on the way are dropped.
+    pub fn pop(&mut self, timestamp: u64) -> Option<QueueEntry> {
+        while let Some(e) = self.heap.pop() {
+            if e.t_priority >= timestamp as f64 - 2.0 {
+                return Some(e);
+            }
+        }
+        None
+    }
+
+    pub fn len(&self) -> usize {
+        self.heap.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.heap.is_empty()
+    }
+}
+
+/// Priority in [0, 1) of prefetching a cell (§3.2): cells within the view frustum
+/// first (0.5), then closeness of the direction to the cell to the aim vector (0.3),
+/// then closeness to the viewpoint (0.2).
+pub fn cell_priority(camera: &Camera, prism: &Aabb, cell_size: f32) -> f64 {
+    let in_frustum = if camera.frustum().intersects(prism) {
+        1.0
+    } else {
+        0.0
+    };
+    let to_cell = prism.centre() - camera.eye;
+    let to_cell = Vec3::new(to_cell.x, 0.0, to_cell.z);
+    let aim = Vec3::new(camera.dir.x, 0.0, camera.dir.z);
+    let angle = if to_cell.length_squared() < 1e-12 || aim.length_squared() < 1e-12 {
+        0.0
+    } else {
+        to_cell.angle_between(aim)
+    };
+    let aim_term = 1.0 - angle as f64 / std::f64::consts::PI;
+    let dist_term = 1.0 / (1.0 + to_cell.length() as f64 / cell_size.max(1e-6) as f64);
+    (0.5 * in_frustum + 0.3 * aim_term + 0.2 * dist_term) * 0.999_999
+}
+
+struct Shared {
+    queue: Mutex<PrefetchQueue>,
+    wake: Condvar,
+    timestamp: AtomicU64,
+    stop: AtomicBool,
+    resident: Mutex<BTreeSet<u32>>,
+}
+
+/// A resident cell.
+pub struct ResidentCell {
+    pub cell_id: u32,
+    pub originals: Vec<u32>,
+    pub proxies: Vec<GpuProxy>,
+    pub bounds: Vec<Aabb>,
+    /// Texels still waiting in the upload queue: (proxy, view) → texels.
+    pending: BTreeMap<(usize, usize), (u32, u32, Vec<u8>)>,
+    pub bytes: u64,
+    last_used: u64,
+}
+
+impl ResidentCell {
+    pub fn is_ready(&self) -> bool {
+        self.pending.is_empty()
+    }
+}
+
+/// What the current frame draws for the hybrid configuration.
+pub enum CurrentCell<'a> {
+    /// The cell's pack is resident and uploaded.
+    Pack(&'a ResidentCell),
+    /// No usable pack (missing, corrupt, off the index): draw originals.
+    Originals,
+}
+
+/// Per-frame streaming statistics.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct StreamStats {
+    pub cell: Option<u32>,
+    /// Cumulative cache hits / misses of current-cell lookups.
+    pub hits: u64,
+    pub misses: u64,
+    /// Wall time spent on the render thread this frame on loading (demand misses)
+    /// and uploading.
+    pub stream_ms: f64,
+    pub timestamp: u64,
+}
+
+/// The cell cache, upload queue and prefetch thread.
+pub struct Streamer {
+    config: StreamConfig,
+    shared: Arc<Shared>,
+    rx: Receiver<(u32, Result<PreparedCell, String>)>,
+    thread: Option<JoinHandle<()>>,
+    cells: BTreeMap<u32, ResidentCell>,
+    failed: BTreeSet<u32>,
+    uploads: VecDeque<(u32, usize, usize)>,
+    clock: u64,
+    last_step: Option<(Vec3, Vec3)>,
+    current: Option<u32>,
+    stats: StreamStats,
+}
+
+impl Streamer {
+    pub fn new(bake: &Bake, config: StreamConfig) -> Streamer {
+        let shared = Arc::new(Shared {
+            queue: Mutex::new(PrefetchQueue::default()),
+            wake: Condvar::new(),
+            timestamp: AtomicU64::new(0),
+            stop: AtomicBool::new(false),
+            resident: Mutex::new(BTreeSet::new()),
+        });
+        let (tx, rx) = channel();
+        let thread = if config.prefetch {
+            let s = shared.clone();
+            let dir = bake.dir.clone();
+            let base = bake.base.clone();
+            let index = bake.index.clone();
+            std::thread::Builder::new()
+                .name("prefetch".into())
+                .spawn(move || prefetch_loop(s, dir, base, index, tx))
+                .ok()
+        } else {
+            None
+        };
+        Streamer {
+            config,
+            shared,
+            rx,
+            thread,
+            cells: BTreeMap::new(),
+            failed: BTreeSet::new(),
+            uploads: VecDeque::new(),
+            clock: 0,
+            last_step: None,
+            current: None,
+            stats: StreamStats::default(),
+        }
+    }
+
+    pub fn config(&self) -> &StreamConfig {
+        &self.config
+    }
+
+    pub fn resident_cells(&self) -> Vec<u32> {
+        self.cells.keys().copied().collect()
+    }
+
+    pub fn resident_bytes(&self) -> u64 {
+        self.cells.values().map(|c| c.bytes).sum()
+    }
+
+    pub fn queued_uploads(&self) -> usize {
+        self.uploads.len()
+    }
+
+    pub fn timestamp(&self) -> u64 {
+        self.shared.timestamp.load(AtomicOrdering::SeqCst)
+    }
+
+    /// Advances streaming for a frame seen by `camera`; returns what to draw.
+    pub fn begin_frame(
+        &mut self,
+        renderer: &Renderer,
+        bake: &Bake,
+        camera: &Camera,
+    ) -> (CurrentCell<'_>, StreamStats) {
+        let t0 = Instant::now();
+        self.clock += 1;
+        // 1. Cells the prefetch thread has prepared.
+        while let Ok((id, result)) = self.rx.try_recv() {
+            self.accept(renderer, id, result);
+        }
+        // 2. The current cell; timestamp and prefetch requests.
+        let cell = bake
+            .grid
+            .nearest_cell(Vec2::new(camera.eye.x, camera.eye.z));
+        self.current = cell;
+        self.step_timestamp(bake, camera, cell);
+        // 3. Make the current cell resident (demand load on a miss).
+        if let Some(id) = cell {
+            if self.cells.contains_key(&id) {
+                self.stats.hits += 1;
+            } else if !self.failed.contains(&id) {
+                self.stats.misses += 1;
+                let result = bake.load_cell(id).map_err(|e| e.to_string());
+                self.accept(renderer, id, result);
+            }
+            // The current cell's textures cannot wait for the budget.
+            self.upload_cell_now(renderer, id);
+        }
+        // 4. Budgeted FIFO uploads for prefetched cells.
+        self.upload_budgeted(renderer);
+        // 5. LRU eviction.
+        self.evict();
+        self.stats.cell = cell;
+        self.stats.stream_ms = t0.elapsed().as_secs_f64() * 1e3;
+        self.stats.timestamp = self.timestamp();
+        let stats = self.stats;
+        let current = match cell.and_then(|id| self.cells.get_mut(&id)) {
+            Some(c) => {
+                c.last_used = self.clock;
+                CurrentCell::Pack(&*c)
+            }
+            None => CurrentCell::Originals,
+        };
+        (current, stats)
+    }
+
+    fn step_timestamp(&mut self, bake: &Bake, camera: &Camera, cell: Option<u32>) {
+        let c = bake.grid.params().cell_size;
+        let step = self.config.step_distance.unwrap_or(c / 5.0);
+        let dir = camera.dir.normalize_or_zero();
+        let stepped = match self.last_step {
+            None => true,
+            Some((eye, d)) => {
+                eye.distance(camera.eye) >= step
+                    || d.angle_between(dir).to_degrees() >= self.config.step_angle_deg
+            }
+        };
+        if !stepped {
+            return;
+        }
+        let ts = if self.last_step.is_none() {
+            0
+        } else {
+            self.shared.timestamp.fetch_add(1, AtomicOrdering::SeqCst) + 1
+        };
+        self.last_step = Some((camera.eye, dir));
+        if self.thread.is_none() {
+            return;
+        }
+        let (Some(id), Some(index)) = (cell, bake.index.as_ref()) else {
+            return;
+        };
+        let Some(entry) = index.cell(id) else {
+            return;
+        };
+        let g = bake.grid.params();
+        let mut q = self.shared.queue.lock().unwrap_or_else(|e| e.into_inner());
+        for &n in &entry.neighbours {
+            if self.cells.contains_key(&n)
+                || self.failed.contains(&n)
+                || n >= bake.grid.cell_count()
+            {
+                continue;
+            }
+            let centre = bake.grid.centre(n);
+            let prism = Aabb {
+                min: Vec3::new(centre.x - c, g.min_eye_height, centre.y - c),
+                max: Vec3::new(centre.x + c, g.max_eye_height, centre.y + c),
+            };
+            q.push(ts, cell_priority(camera, &prism, c), n);
+        }
+        drop(q);
+        self.shared.wake.notify_one();
+    }
+
+    fn accept(&mut self, renderer: &Renderer, id: u32, result: Result<PreparedCell, String>) {
+        if self.cells.contains_key(&id) || self.failed.contains(&id) {
+            return;
+        }
+        match result {
+            Ok(cell) => {
+                let bytes = cell.bytes();
+                let mut proxies = Vec::with_capacity(cell.proxies.len());
+                let mut bounds = Vec::with_capacity(cell.proxies.len());
+                let mut pending = BTreeMap::new();
+                for (pi, p) in cell.proxies.into_iter().enumerate() {
+                    let views: Vec<([f32; 16], [f32; 3])> =
+                        p.views.iter().map(|v| (v.matrix, v.eye)).collect();
+                    proxies.push(renderer.create_proxy(&p.vertices, &views));
+                    bounds.push(p.bounds);
+                    for (vi, v) in p.views.into_iter().enumerate() {
+                        self.uploads.push_back((id, pi, vi));
+                        pending.insert((pi, vi), (v.width, v.height, v.rgba));
+                    }
+                }
+                self.cells.insert(
+                    id,
+                    ResidentCell {
+                        cell_id: id,
+                        originals: cell.originals,
+                        proxies,
+                        bounds,
+                        pending,
+                        bytes,
+                        last_used: self.clock,
+                    },
+                );
+                self.shared
+                    .resident
+                    .lock()
+                    .unwrap_or_else(|e| e.into_inner())
+                    .insert(id);
+            }
+            Err(e) => {
+                eprintln!("player: error: {e}; drawing this cell as original geometry");
+                self.failed.insert(id);
+            }
+        }
+    }
+
+    fn upload_one(&mut self, renderer: &Renderer, id: u32, pi: usize, vi: usize) -> u64 {
+        let Some(cell) = self.cells.get_mut(&id) else {
+            return 0;
+        };
+        let Some((w, h, rgba)) = cell.pending.remove(&(pi, vi)) else {
+            return 0;
+        };
+        renderer.upload_view_texture(&mut cell.proxies[pi], vi, w, h, &rgba);
+        rgba.len() as u64
+    }
+
+    fn upload_cell_now(&mut self, renderer: &Renderer, id: u32) {
+        let Some(cell) = self.cells.get(&id) else {
+            return;
+        };
+        if cell.pending.is_empty() {
+            return;
+        }
+        let keys: Vec<(usize, usize)> = cell.pending.keys().copied().collect();
+        for (pi, vi) in keys {
+            self.upload_one(renderer, id, pi, vi);
+        }
+        self.uploads.retain(|&(c, _, _)| c != id);
+    }
+
+    fn upload_budgeted(&mut self, renderer: &Renderer) {
+        let mut left = self.config.upload_budget_bytes;
+        let mut first = true;
+        while let Some((id, pi, vi)) = self.uploads.pop_front() {
+            let size = self
+                .cells
+                .get(&id)
+                .and_then(|c| c.pending.get(&(pi, vi)))
+                .map(|(_, _, t)| t.len() as u64);
+            let Some(size) = size else {
+                continue; // evicted or already uploaded
+            };
+            if size > left && !first {
+                self.uploads.push_front((id, pi, vi));
+                break;
+            }
+            self.upload_one(renderer, id, pi, vi);
+            left = left.saturating_sub(size);
+            first = false;
+            if left == 0 {
+                break;
+            }
+        }
+    }
+
+    fn evict(&mut self) {
+        let mut total = self.resident_bytes();
+        while total > self.config.memory_budget_bytes {
+            let victim = self
+                .cells
+                .values()
+                .filter(|c| Some(c.cell_id) != self.current)
+                .min_by_key(|c| (c.last_used, c.cell_id))
+                .map(|c| c.cell_id);
+            let Some(v) = victim else {
+                break;
+            };
+            if let Some(c) = self.cells.remove(&v) {
+                total -= c.bytes;
+            }
+            self.uploads.retain(|&(c, _, _)| c != v);
+            self.shared
+                .resident
+                .lock()
+                .unwrap_or_else(|e| e.into_inner())
+                .remove(&v);
+        }
+    }
+}
+
+impl Drop for Streamer {
+    fn drop(&mut self) {
+        self.shared.stop.store(true, AtomicOrdering::SeqCst);
+        self.shared.wake.notify_all();
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
+}
+
+fn prefetch_loop(
+    shared: Arc<Shared>,
+    dir: PathBuf,
+    base: Arc<BasePack>,
+    index: Option<Arc<Index>>,
+    tx: Sender<(u32, Result<PreparedCell, String>)>,
+) {
+    loop {
+        let entry = {
+            let mut q = shared.queue.lock().unwrap_or_else(|e| e.into_inner());
+            loop {
+                if shared.stop.load(AtomicOrdering::SeqCst) {
+                    return;
+                }
+                let ts = shared.timestamp.load(AtomicOrdering::SeqCst);
+                if let Some(e) = q.pop(ts) {
+                    break e;
+                }
+                q = shared.wake.wait(q).unwrap_or_else(|e| e.into_inner());
+            }
+        };
+        let resident = shared
+            .resident
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .contains(&entry.cell);
+        if resident {
+            continue;
+        }
+        let result =
+            load_cell(&dir, index.as_deref(), &base, entry.cell).map_err(|e| e.to_string());
+        if tx.send((entry.cell, result)).is_err() {
+            return;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn queue_pops_highest_t_priority_and_drops_stale_entries() {
+        let mut q = PrefetchQueue::default();
+        q.push(0, 0.9, 1);
+        q.push(3, 0.1, 2);
+        q.push(3, 0.5, 3);
+        q.push(1, 0.2, 4);
+        // At timestamp 3: 3.5, 3.1, then 1.2 ≥ 1 kept, 0.9 < 1 dropped.
+        assert_eq!(q.pop(3).map(|e| e.cell), Some(3));
+        assert_eq!(q.pop(3).map(|e| e.cell), Some(2));
+        assert_eq!(q.pop(3).map(|e| e.cell), Some(4));
+        assert_eq!(q.pop(3), None);
+        assert!(q.is_empty());
+    }
+
+    #[test]
+    fn priority_prefers_cells_ahead_and_near() {
+        let cam = Camera {
+            eye: Vec3::new(0.0, 6.0, 0.0),
+            dir: Vec3::new(1.0, 0.0, 0.0),
+            fov_y_deg: 60.0,
+            width: 64,
+            height: 64,
+            near: 0.5,
+            far: 1000.0,
+        };
+        let prism = |x: f32, z: f32| Aabb {
+            min: Vec3::new(x - 50.0, 6.0, z - 50.0),
+            max: Vec3::new(x + 50.0, 12.0, z + 50.0),
+        };
+        let ahead = cell_priority(&cam, &prism(100.0, 0.0), 50.0);
+        let behind = cell_priority(&cam, &prism(-100.0, 0.0), 50.0);
+        let far_ahead = cell_priority(&cam, &prism(300.0, 0.0), 50.0);
+        assert!(ahead > behind);
+        assert!(ahead > far_ahead);
+        for p in [ahead, behind, far_ahead] {
+            assert!((0.0..1.0).contains(&p));
+        }
+    }
+}

@@ -1,0 +1,500 @@
+//! Headless rendering tests on whatever adapter the environment gives (lavapipe in CI);
+//! every GPU test prints the adapter and skips with a note when there is none.
+
+use format::pack::{Texture, TextureEncoding};
+use glam::{Vec2, Vec3};
+use player::camera::Camera;
+use player::frame::Mode;
+use player::gpu::{GpuError, Renderer, SKY};
+use player::metrics::psnr_y;
+use player::run::{compare, render, CompareOptions, Player, RenderOptions, CSV_HEADER};
+use player::stream::{StreamConfig, Streamer};
+use player::testdata::{capture_camera, write_quad_bake, write_synthetic_bake};
+
+fn open(dir: &std::path::Path, size: (u32, u32)) -> Option<Player> {
+    match Player::open(dir, size) {
+        Ok(p) => {
+            eprintln!("adapter: {}", p.renderer.adapter());
+            Some(p)
+        }
+        Err(player::run::RunError::Gpu(GpuError::NoAdapter(e))) => {
+            eprintln!("SKIP: no graphics adapter ({e}); install mesa-vulkan-drivers for lavapipe");
+            None
+        }
+        Err(e) => panic!("{e}"),
+    }
+}
+
+fn non_sky(px: &[u8]) -> usize {
+    px.chunks_exact(4)
+        .filter(|p| p[0] != SKY[0] || p[1] != SKY[1] || p[2] != SKY[2])
+        .count()
+}
+
+#[test]
+fn adapter_reports_backend_and_device_type() {
+    match Renderer::new(16, 16) {
+        Ok(r) => {
+            let a = r.adapter();
+            println!(
+                "adapter {:?}, backend {}, device type {}",
+                a.name, a.backend, a.device_type
+            );
+            assert!(!a.backend.is_empty() && !a.device_type.is_empty());
+            assert!(["Vulkan", "Gl", "Metal", "Dx12"].contains(&a.backend.as_str()));
+        }
+        Err(GpuError::NoAdapter(e)) => eprintln!("SKIP: no graphics adapter ({e})"),
+        Err(e) => panic!("{e}"),
+    }
+}
+
+/// A camera 3 radii south of instance `i`, looking at it.
+fn camera_at_instance(p: &Player, i: usize, size: u32) -> Camera {
+    let b = p.bake.instance_bounds[i];
+    let c = b.centre();
+    let r = (b.max - b.min).length() * 0.5;
+    Camera {
+        eye: c + Vec3::new(0.0, 0.0, 3.0 * r),
+        dir: Vec3::NEG_Z,
+        fov_y_deg: 60.0,
+        width: size,
+        height: size,
+        near: 0.25,
+        far: p.bake.extent,
+    }
+}
+
+#[test]
+fn every_mode_draws_objects_and_frustum_culling_changes_no_pixel() {
+    let dir = tempfile::tempdir().unwrap();
+    let info = write_synthetic_bake(dir.path()).unwrap();
+    assert_eq!(info.cells, 16);
+    let Some(mut p) = open(dir.path(), (128, 128)) else {
+        return;
+    };
+    let cam = camera_at_instance(&p, 0, 128);
+    p.warm_up(&cam);
+    let mut s = Streamer::new(&p.bake, StreamConfig::default());
+    let mut images = Vec::new();
+    for mode in [Mode::Full, Mode::Frustum, Mode::Hybrid] {
+        let (_, tris, _, _) = p.draw(&cam, mode, Some(&mut s));
+        let px = p.renderer.read_pixels().unwrap();
+        let n = non_sky(&px);
+        println!("{}: {tris} triangles, {n} non-sky pixels", mode.name());
+        assert!(n > 300, "{}: only {n} object pixels", mode.name());
+        assert!(tris > 0);
+        images.push((tris, px));
+    }
+    assert!(images[1].0 < images[0].0, "frustum culling dropped nothing");
+    assert_eq!(psnr_y(&images[0].1, &images[1].1), f64::INFINITY);
+    // Sky where nothing is: looking straight up.
+    let up = Camera {
+        dir: Vec3::new(0.0, 1.0, 0.001),
+        ..cam
+    };
+    p.draw(&up, Mode::Full, None);
+    let px = p.renderer.read_pixels().unwrap();
+    assert_eq!(&px[..4], &SKY[..]);
+}
+
+#[test]
+fn projective_texture_shows_the_capture_with_u_right_and_v_down() {
+    let dir = tempfile::tempdir().unwrap();
+    let centre = Vec3::new(50.0, 6.0, 50.0);
+    let capture = Camera {
+        eye: Vec3::new(50.0, 6.0, 70.0),
+        dir: Vec3::NEG_Z,
+        fov_y_deg: 40.0,
+        width: 64,
+        height: 64,
+        near: 0.5,
+        far: 100.0,
+    };
+    // Quadrants: top-left red, top-right green, bottom-left blue, bottom-right yellow.
+    let rgba: Vec<u8> = (0..64 * 64)
+        .flat_map(|i| {
+            let (x, y) = (i % 64, i / 64);
+            match (x < 32, y < 32) {
+                (true, true) => [255, 0, 0, 255],
+                (false, true) => [0, 255, 0, 255],
+                (true, false) => [0, 0, 255, 255],
+                (false, false) => [255, 255, 0, 255],
+            }
+        })
+        .collect();
+    let tex = Texture::from_rgba8(64, 64, &rgba, TextureEncoding::Rgba8Left).unwrap();
+    write_quad_bake(dir.path(), centre, &capture, tex).unwrap();
+    let Some(mut p) = open(dir.path(), (64, 64)) else {
+        return;
+    };
+    let mut s = Streamer::new(&p.bake, StreamConfig::default());
+    for eye_dx in [0.0f32, 3.0] {
+        let cam = Camera {
+            eye: capture.eye + Vec3::new(eye_dx, 0.0, 0.0),
+            dir: centre - (capture.eye + Vec3::new(eye_dx, 0.0, 0.0)),
+            ..capture
+        };
+        let (_, tris, tex_bytes, stats) = p.draw(&cam, Mode::Hybrid, Some(&mut s));
+        assert_eq!(tris, 2);
+        assert_eq!(tex_bytes, 64 * 64 * 4);
+        assert!(stats.cell.is_some());
+        let px = p.renderer.read_pixels().unwrap();
+        let at = |x: usize, y: usize| {
+            let i = (y * 64 + x) * 4;
+            [px[i], px[i + 1], px[i + 2]]
+        };
+        // Project quad points on the player's camera to find their pixels.
+        let m = cam.clip_from_world_gl();
+        let pixel = |w: Vec3| {
+            let c = m * w.extend(1.0);
+            let ndc = Vec2::new(c.x / c.w, c.y / c.w);
+            (
+                ((ndc.x + 1.0) * 32.0) as usize,
+                ((1.0 - ndc.y) * 32.0) as usize,
+            )
+        };
+        let cases = [
+            (Vec3::new(-2.5, 2.5, 0.0), [255, 0, 0]),
+            (Vec3::new(2.5, 2.5, 0.0), [0, 255, 0]),
+            (Vec3::new(-2.5, -2.5, 0.0), [0, 0, 255]),
+            (Vec3::new(2.5, -2.5, 0.0), [255, 255, 0]),
+        ];
+        for (off, want) in cases {
+            let (x, y) = pixel(centre + off);
+            let got = at(x, y);
+            for k in 0..3 {
+                assert!(
+                    (got[k] as i32 - want[k]).abs() <= 2,
+                    "eye dx {eye_dx}: pixel ({x},{y}) of {off:?} is {got:?}, want {want:?}"
+                );
+            }
+        }
+        assert_eq!(at(0, 0), [SKY[0], SKY[1], SKY[2]]);
+    }
+}
+
+#[test]
+fn lit_shading_matches_the_design_formula() {
+    // The quad bake drawn as an original: grey 128 albedo, normal +z:
+    // linear 0.2158 · (0.3 + 0.7 · 0.26833) → sRGB8.
+    let dir = tempfile::tempdir().unwrap();
+    let centre = Vec3::new(50.0, 6.0, 50.0);
+    let capture = capture_camera(
+        Vec3::new(50.0, 6.0, 70.0),
+        centre - Vec3::splat(5.0),
+        centre + Vec3::splat(5.0),
+        8,
+    );
+    let tex = Texture::from_rgba8(1, 1, &[0, 0, 0, 0], TextureEncoding::Rgba8).unwrap();
+    write_quad_bake(dir.path(), centre, &capture, tex).unwrap();
+    let Some(mut p) = open(dir.path(), (32, 32)) else {
+        return;
+    };
+    let cam = Camera {
+        width: 32,
+        height: 32,
+        ..capture
+    };
+    p.draw(&cam, Mode::Full, None);
+    let px = p.renderer.read_pixels().unwrap();
+    let i = (16 * 32 + 16) * 4;
+    let lin = |c: f64| {
+        let c = c / 255.0;
+        if c <= 0.04045 {
+            c / 12.92
+        } else {
+            ((c + 0.055) / 1.055).powf(2.4)
+        }
+    };
+    let l = lin(128.0) * (0.3 + 0.7 * (0.3 / 1.25f64.sqrt()));
+    let enc = if l <= 0.0031308 {
+        l * 12.92
+    } else {
+        1.055 * l.powf(1.0 / 2.4) - 0.055
+    };
+    let want = (enc * 255.0).round() as i32;
+    for k in 0..3 {
+        assert!(
+            (px[i + k] as i32 - want).abs() <= 1,
+            "{:?} vs {want}",
+            &px[i..i + 3]
+        );
+    }
+    // The same quad as a proxy whose only texel is transparent falls back to the
+    // lit vertex colour.
+    let mut s = Streamer::new(&p.bake, StreamConfig::default());
+    p.draw(&cam, Mode::Hybrid, Some(&mut s));
+    let px2 = p.renderer.read_pixels().unwrap();
+    assert_eq!(&px2[i..i + 3], &px[i..i + 3]);
+}
+
+fn write_path(dir: &std::path::Path, res: u32) -> std::path::PathBuf {
+    let p = dir.join("walk.ron");
+    std::fs::write(
+        &p,
+        format!(
+            "(eye_height: 6.0, fov_y_deg: 60.0, resolution: ({res}, {res}), max_speed: 30.0,
+              max_turn_deg_per_s: 45.0, frame_rate: 1.0,
+              waypoints: [(30.0, 40.0), (150.0, 120.0), (270.0, 210.0)])"
+        ),
+    )
+    .unwrap();
+    p
+}
+
+#[test]
+fn render_writes_csv_and_compare_reports_quality() {
+    let dir = tempfile::tempdir().unwrap();
+    write_synthetic_bake(dir.path()).unwrap();
+    let path_file = write_path(dir.path(), 64);
+    let path = format::path::CameraPath::load(&path_file).unwrap();
+    if Renderer::new(8, 8).is_err() {
+        eprintln!("SKIP: no graphics adapter");
+        return;
+    }
+    let frames_dir = dir.path().join("frames");
+    let (records, _) = render(
+        dir.path(),
+        &path,
+        &RenderOptions {
+            mode: Mode::Hybrid,
+            frames_dir: frames_dir.clone(),
+            png: true,
+            stream: StreamConfig::default(),
+            size: None,
+        },
+    )
+    .unwrap();
+    assert_eq!(records.len(), path.frames().len());
+    let crossings = records.iter().filter(|r| r.crossing).count();
+    assert!(crossings >= 2, "{crossings} crossings");
+    let last = records.last().unwrap();
+    assert_eq!(
+        last.cache_hits + last.cache_misses,
+        records.len() as u64,
+        "one current-cell lookup per frame"
+    );
+    let csv = std::fs::read_to_string(frames_dir.join("frames.csv")).unwrap();
+    assert_eq!(csv.lines().next(), Some(CSV_HEADER));
+    assert_eq!(csv.lines().count(), records.len() + 1);
+    assert!(frames_dir.join("00000.png").exists());
+
+    let worst = dir.path().join("worst");
+    let report = compare(
+        dir.path(),
+        &path,
+        &CompareOptions {
+            worst_dir: Some(worst.clone()),
+            worst_count: 2,
+            size: Some((48, 48)),
+            crossings: true,
+            stream: StreamConfig::default(),
+        },
+    )
+    .unwrap();
+    println!(
+        "compare: psnr {:.2} (min {:.2}), ssim {:.4}, tris {} / {}",
+        report.mean_psnr_y,
+        report.min_psnr_y,
+        report.mean_ssim,
+        report.mean_triangles,
+        report.reference_triangles
+    );
+    assert_eq!(report.frames, records.len());
+    assert!(report.mean_psnr_y.is_finite() && report.mean_psnr_y > 5.0);
+    assert!(report.mean_ssim > 0.0 && report.mean_ssim <= 1.0);
+    assert!(report.mean_triangles <= report.reference_triangles);
+    let json = serde_json::to_value(&report).unwrap();
+    for key in [
+        "frames",
+        "mean_psnr_y",
+        "min_psnr_y",
+        "mean_ssim",
+        "mean_triangles",
+        "reference_triangles",
+        "frame_time_ratio",
+    ] {
+        assert!(json.get(key).is_some(), "missing {key}");
+    }
+    let pngs = std::fs::read_dir(&worst).unwrap().count();
+    assert_eq!(pngs, 6);
+}
+
+#[test]
+fn a_missing_or_corrupt_cell_pack_is_drawn_as_originals() {
+    let dir = tempfile::tempdir().unwrap();
+    write_synthetic_bake(dir.path()).unwrap();
+    let Some(mut p) = open(dir.path(), (64, 64)) else {
+        return;
+    };
+    let cam = camera_at_instance(&p, 0, 64);
+    let cell = p
+        .bake
+        .grid
+        .nearest_cell(Vec2::new(cam.eye.x, cam.eye.z))
+        .unwrap();
+    let pack = dir.path().join(format!("cells/{cell}.pack"));
+    let mut bytes = std::fs::read(&pack).unwrap();
+    let mid = bytes.len() / 2;
+    bytes[mid] ^= 0xff;
+    std::fs::write(&pack, &bytes).unwrap();
+    let mut s = Streamer::new(
+        &p.bake,
+        StreamConfig {
+            prefetch: false,
+            ..Default::default()
+        },
+    );
+    let (_, tris, tex, stats) = p.draw(&cam, Mode::Hybrid, Some(&mut s));
+    let hybrid = p.renderer.read_pixels().unwrap();
+    let (_, tris_b, _, _) = p.draw(&cam, Mode::Frustum, None);
+    let frustum = p.renderer.read_pixels().unwrap();
+    assert_eq!(stats.cell, Some(cell));
+    assert_eq!((tris, tex), (tris_b, 0));
+    assert_eq!(psnr_y(&hybrid, &frustum), f64::INFINITY);
+    std::fs::remove_file(&pack).unwrap();
+    let mut s2 = Streamer::new(&p.bake, StreamConfig::default());
+    let (_, tris2, _, _) = p.draw(&cam, Mode::Hybrid, Some(&mut s2));
+    assert_eq!(tris2, tris_b);
+}
+
+fn solid(rgb: [u8; 3]) -> Texture {
+    let rgba: Vec<u8> = (0..16 * 16)
+        .flat_map(|_| [rgb[0], rgb[1], rgb[2], 255])
+        .collect();
+    Texture::from_rgba8(16, 16, &rgba, TextureEncoding::Rgba8).unwrap()
+}
+
+#[test]
+fn mv_mesh_blends_the_two_views_closest_to_the_viewer_direction() {
+    // Three captures of the quad from the left, the front and the right; red, green,
+    // blue. Triangle 0 sees all three views, triangle 1 none (lit fallback).
+    let dir = tempfile::tempdir().unwrap();
+    let centre = Vec3::new(50.0, 6.0, 50.0);
+    let cap = |dx: f32| {
+        capture_camera(
+            Vec3::new(50.0 + dx, 6.0, 70.0),
+            centre - Vec3::splat(6.0),
+            centre + Vec3::splat(6.0),
+            16,
+        )
+    };
+    player::testdata::write_quad_bake_views(
+        dir.path(),
+        centre,
+        format::pack::ProxyKind::MvMesh,
+        vec![
+            (cap(-20.0), solid([255, 0, 0])),
+            (cap(0.0), solid([0, 255, 0])),
+            (cap(20.0), solid([0, 0, 255])),
+        ],
+        vec![0b111, 0],
+    )
+    .unwrap();
+    let Some(mut p) = open(dir.path(), (64, 64)) else {
+        return;
+    };
+    let mut s = Streamer::new(&p.bake, StreamConfig::default());
+    // Triangle 0 = (-h,-h), (h,-h), (h,h): its lower-right half; sample near (3, -3).
+    let probe = Vec3::new(3.0, -3.0, 0.0);
+    let centroid = centre + Vec3::new(5.0 / 3.0, -5.0 / 3.0, 0.0);
+    let mut last = None;
+    for eye_dx in [-20.0f32, -10.0, 0.0, 10.0, 20.0] {
+        let eye = Vec3::new(50.0 + eye_dx, 6.0, 70.0);
+        let cam = Camera {
+            eye,
+            dir: centre - eye,
+            fov_y_deg: 40.0,
+            width: 64,
+            height: 64,
+            near: 0.5,
+            far: 200.0,
+        };
+        p.draw(&cam, Mode::Hybrid, Some(&mut s));
+        let px = p.renderer.read_pixels().unwrap();
+        let c = cam.clip_from_world_gl() * (centre + probe).extend(1.0);
+        let (x, y) = (
+            ((c.x / c.w + 1.0) * 32.0) as usize,
+            ((1.0 - c.y / c.w) * 32.0) as usize,
+        );
+        let i = (y * 64 + x) * 4;
+        let got = [px[i], px[i + 1], px[i + 2]];
+        // Expected: the two views with the smallest angle at the triangle centroid,
+        // weights inversely proportional to the angles, blended in linear space.
+        let to_poly = centroid - eye;
+        let mut angles: Vec<(f32, usize)> = [-20.0f32, 0.0, 20.0]
+            .iter()
+            .enumerate()
+            .map(|(k, dx)| {
+                let ve = Vec3::new(50.0 + dx, 6.0, 70.0);
+                ((centroid - ve).angle_between(to_poly), k)
+            })
+            .collect();
+        angles.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let (a0, a1) = (angles[0].0 as f64, angles[1].0 as f64);
+        let (w0, w1) = if a0 + a1 > 1e-6 {
+            (a1 / (a0 + a1), a0 / (a0 + a1))
+        } else {
+            (0.5, 0.5)
+        };
+        let mut lin = [0f64; 3];
+        lin[angles[0].1] += w0;
+        lin[angles[1].1] += w1;
+        let enc = |l: f64| {
+            let v = if l <= 0.0031308 {
+                l * 12.92
+            } else {
+                1.055 * l.powf(1.0 / 2.4) - 0.055
+            };
+            (v * 255.0).round() as i32
+        };
+        for k in 0..3 {
+            assert!(
+                (got[k] as i32 - enc(lin[k])).abs() <= 3,
+                "eye dx {eye_dx}: {got:?} vs expected linear {lin:?}"
+            );
+        }
+        // Triangle 1 has an empty mask: lit grey, the same from every viewpoint.
+        let q = cam.clip_from_world_gl() * (centre + Vec3::new(-3.0, 3.0, 0.0)).extend(1.0);
+        let (x, y) = (
+            ((q.x / q.w + 1.0) * 32.0) as usize,
+            ((1.0 - q.y / q.w) * 32.0) as usize,
+        );
+        let j = (y * 64 + x) * 4;
+        let lit = [px[j], px[j + 1], px[j + 2]];
+        assert!(lit[0] == lit[1] && lit[1] == lit[2], "{lit:?}");
+        if let Some(prev) = last {
+            assert_eq!(prev, lit);
+        }
+        last = Some(lit);
+    }
+}
+
+#[test]
+fn compare_of_a_bake_without_proxies_is_perfect() {
+    let dir = tempfile::tempdir().unwrap();
+    player::testdata::write_synthetic_bake_with(dir.path(), true).unwrap();
+    let path_file = write_path(dir.path(), 32);
+    let path = format::path::CameraPath::load(&path_file).unwrap();
+    if Renderer::new(8, 8).is_err() {
+        eprintln!("SKIP: no graphics adapter");
+        return;
+    }
+    let report = compare(
+        dir.path(),
+        &path,
+        &CompareOptions {
+            size: Some((32, 32)),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert_eq!(report.mean_psnr_y, player::run::PSNR_CAP);
+    assert_eq!(report.min_psnr_y, player::run::PSNR_CAP);
+    assert!(
+        (report.mean_ssim - 1.0).abs() < 1e-9,
+        "{}",
+        report.mean_ssim
+    );
+    assert!(report.mean_triangles <= report.reference_triangles);
+}
