@@ -15,7 +15,7 @@ packages=(glmark2-data libcgal-demo assimp-testmodels assimp-utils)
 
 die() { echo "fetch-models: $*" >&2; exit 1; }
 
-verify() { (cd "$dest" && sha256sum --quiet -c "$sums" 2>/dev/null); }
+verify() { (cd "$dest" && sha256sum --quiet -c "$sums" >/dev/null 2>&1); }
 
 mkdir -p "$dest"
 if [ -f "$sums" ] && verify; then
