@@ -106,6 +106,7 @@ fn from_run(e: pipeline::run::RunError) -> Failure {
 }
 
 fn main() -> ExitCode {
+    restore_default_sigpipe();
     let cli = Cli::parse();
     match run(cli) {
         Ok(()) => ExitCode::SUCCESS,
@@ -217,5 +218,16 @@ fn run(cli: Cli) -> Result<(), Failure> {
             print!("{text}");
             Ok(())
         }
+    }
+}
+
+/// Like other Unix tools, end quietly when stdout is a closed pipe (`| head`) instead
+/// of panicking in `println!`: restore the default SIGPIPE action Rust ignores.
+fn restore_default_sigpipe() {
+    #[cfg(unix)]
+    // SAFETY: called first thing in main, before any thread starts; setting a
+    // signal's disposition to SIG_DFL has no other precondition.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
 }

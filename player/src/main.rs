@@ -136,6 +136,7 @@ enum Command {
 }
 
 fn main() -> ExitCode {
+    restore_default_sigpipe();
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Render {
@@ -275,5 +276,16 @@ fn main() -> ExitCode {
             eprintln!("player: error: {e}");
             ExitCode::FAILURE
         }
+    }
+}
+
+/// Like other Unix tools, end quietly when stdout is a closed pipe (`| head`) instead
+/// of panicking in `println!`: restore the default SIGPIPE action Rust ignores.
+fn restore_default_sigpipe() {
+    #[cfg(unix)]
+    // SAFETY: called first thing in main, before any thread starts; setting a
+    // signal's disposition to SIG_DFL has no other precondition.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
 }

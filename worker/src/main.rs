@@ -121,6 +121,7 @@ fn failed(error: impl Into<anyhow::Error>) -> Failure {
 }
 
 fn main() -> ExitCode {
+    restore_default_sigpipe();
     match run(Cli::parse()) {
         Ok(()) => ExitCode::SUCCESS,
         Err(f) => {
@@ -344,5 +345,16 @@ fn run(cli: Cli) -> Result<(), Failure> {
             println!("{}: {} instances drawn", out.display(), items.len());
             Ok(())
         }
+    }
+}
+
+/// Like other Unix tools, end quietly when stdout is a closed pipe (`| head`) instead
+/// of panicking in `println!`: restore the default SIGPIPE action Rust ignores.
+fn restore_default_sigpipe() {
+    #[cfg(unix)]
+    // SAFETY: called first thing in main, before any thread starts; setting a
+    // signal's disposition to SIG_DFL has no other precondition.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
 }
