@@ -70,6 +70,31 @@ pub struct FrameRecord {
     pub stream_ms: f64,
 }
 
+impl FrameRecord {
+    /// The record of frame `frame` drawn with `stats`; `prev` is the previous frame's
+    /// cell (`None` for the first frame), which marks crossings.
+    pub fn new(
+        frame: usize,
+        time_s: f32,
+        stats: &crate::stream::StreamStats,
+        prev: Option<Option<u32>>,
+        (frame_ms, triangles, texture_bytes): (f64, u64, u64),
+    ) -> FrameRecord {
+        FrameRecord {
+            frame,
+            time_s,
+            cell: stats.cell,
+            crossing: prev.is_some_and(|p| p != stats.cell),
+            frame_ms,
+            triangles,
+            texture_bytes,
+            cache_hits: stats.hits,
+            cache_misses: stats.misses,
+            stream_ms: stats.stream_ms,
+        }
+    }
+}
+
 pub const CSV_HEADER: &str =
     "frame,time_s,cell,crossing,frame_ms,triangles,texture_bytes,cache_hits,cache_misses,stream_ms";
 
@@ -206,18 +231,7 @@ pub fn render(
             let p = opts.frames_dir.join(format!("{i:05}.png"));
             write_png(&p, size.0, size.1, &px)?;
         }
-        records.push(FrameRecord {
-            frame: i,
-            time_s: f.time_s,
-            cell: stats.cell,
-            crossing: prev.is_some_and(|p| p != stats.cell),
-            frame_ms: ms,
-            triangles: tris,
-            texture_bytes: tex,
-            cache_hits: stats.hits,
-            cache_misses: stats.misses,
-            stream_ms: stats.stream_ms,
-        });
+        records.push(FrameRecord::new(i, f.time_s, &stats, prev, (ms, tris, tex)));
         prev = Some(stats.cell);
     }
     drop(streamer);
@@ -396,18 +410,7 @@ pub fn compare(
             reference_frame_ms: ref_ms,
             frustum_frame_ms: fr_ms,
         });
-        hybrid_records.push(FrameRecord {
-            frame: i,
-            time_s: f.time_s,
-            cell: stats.cell,
-            crossing: prev.is_some_and(|p| p != stats.cell),
-            frame_ms: ms,
-            triangles: tris,
-            texture_bytes: tex,
-            cache_hits: stats.hits,
-            cache_misses: stats.misses,
-            stream_ms: stats.stream_ms,
-        });
+        hybrid_records.push(FrameRecord::new(i, f.time_s, &stats, prev, (ms, tris, tex)));
         prev = Some(stats.cell);
         if opts.worst_dir.is_some() && opts.worst_count > 0 {
             worst.push((psnr, i, reference, hybrid));
