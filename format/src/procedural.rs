@@ -266,6 +266,13 @@ fn torus(segments: usize, ring: usize, major: f64, minor: f64) -> RawMesh {
     }
 }
 
+/// The unit icosphere of [`icosphere`] as plain positions and counter-clockwise
+/// (outward) triangles, for tests and tools that build their own meshes from it.
+pub fn unit_icosphere(levels: u32) -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
+    let raw = icosphere(levels);
+    (raw.positions, raw.triangles)
+}
+
 /// An icosahedron subdivided `levels` times, projected on the unit sphere.
 fn icosphere(levels: u32) -> RawMesh {
     let t = (1.0 + 5f64.sqrt()) / 2.0;

@@ -76,64 +76,8 @@ fn perturbed_grid(w: usize, h: usize, jitter: &[f32], flips: &[bool]) -> TestMes
 /// An icosphere of radius `radius` at `centre`, `levels` times subdivided, with its
 /// vertices pushed in or out by `bumps` (closed, manifold, outward ccw).
 fn icosphere(levels: u32, centre: Vec3, radius: f32, bumps: &[f32]) -> TestMesh {
-    let t = (1.0 + 5f32.sqrt()) / 2.0;
-    let mut positions: Vec<Vec3> = [
-        (-1.0, t, 0.0),
-        (1.0, t, 0.0),
-        (-1.0, -t, 0.0),
-        (1.0, -t, 0.0),
-        (0.0, -1.0, t),
-        (0.0, 1.0, t),
-        (0.0, -1.0, -t),
-        (0.0, 1.0, -t),
-        (t, 0.0, -1.0),
-        (t, 0.0, 1.0),
-        (-t, 0.0, -1.0),
-        (-t, 0.0, 1.0),
-    ]
-    .iter()
-    .map(|&(x, y, z)| Vec3::new(x, y, z).normalize())
-    .collect();
-    let mut triangles: Vec<[u32; 3]> = vec![
-        [0, 11, 5],
-        [0, 5, 1],
-        [0, 1, 7],
-        [0, 7, 10],
-        [0, 10, 11],
-        [1, 5, 9],
-        [5, 11, 4],
-        [11, 10, 2],
-        [10, 7, 6],
-        [7, 1, 8],
-        [3, 9, 4],
-        [3, 4, 2],
-        [3, 2, 6],
-        [3, 6, 8],
-        [3, 8, 9],
-        [4, 9, 5],
-        [2, 4, 11],
-        [6, 2, 10],
-        [8, 6, 7],
-        [9, 8, 1],
-    ];
-    for _ in 0..levels {
-        let mut midpoints = std::collections::BTreeMap::new();
-        let mut mid = |a: u32, b: u32, positions: &mut Vec<Vec3>| -> u32 {
-            *midpoints.entry((a.min(b), a.max(b))).or_insert_with(|| {
-                let p = (positions[a as usize] + positions[b as usize]).normalize();
-                positions.push(p);
-                positions.len() as u32 - 1
-            })
-        };
-        let mut next = Vec::new();
-        for [a, b, c] in triangles {
-            let ab = mid(a, b, &mut positions);
-            let bc = mid(b, c, &mut positions);
-            let ca = mid(c, a, &mut positions);
-            next.extend([[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
-        }
-        triangles = next;
-    }
+    let (unit, triangles) = format::procedural::unit_icosphere(levels);
+    let positions: Vec<Vec3> = unit.into_iter().map(Vec3::from).collect();
     let positions: Vec<Vec3> = positions
         .iter()
         .enumerate()
