@@ -21,87 +21,9 @@ fn models_dir() -> PathBuf {
         .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../models"))
 }
 
-/// Minimal OBJ (v/f) and OFF readers until the real loaders land.
+/// The model as the bake sees it (format's loader: welded, smooth normals, albedo).
 fn load(path: &Path) -> Option<Mesh> {
-    let text = std::fs::read_to_string(path).ok()?;
-    let mut positions: Vec<[f32; 3]> = Vec::new();
-    let mut triangles: Vec<[u32; 3]> = Vec::new();
-    let fan = |idx: &[u32], triangles: &mut Vec<[u32; 3]>| {
-        for k in 1..idx.len().saturating_sub(1) {
-            triangles.push([idx[0], idx[k], idx[k + 1]]);
-        }
-    };
-    if path.extension()? == "off" {
-        let mut it = text
-            .lines()
-            .filter(|l| !l.trim().is_empty() && !l.starts_with('#'));
-        it.next()?; // "OFF"
-        let counts: Vec<usize> = it
-            .next()?
-            .split_whitespace()
-            .map(|s| s.parse().unwrap())
-            .collect();
-        for _ in 0..counts[0] {
-            let v: Vec<f32> = it
-                .next()?
-                .split_whitespace()
-                .map(|s| s.parse().unwrap())
-                .collect();
-            positions.push([v[0], v[1], v[2]]);
-        }
-        for _ in 0..counts[1] {
-            let f: Vec<u32> = it
-                .next()?
-                .split_whitespace()
-                .map(|s| s.parse().unwrap())
-                .collect();
-            fan(&f[1..=f[0] as usize], &mut triangles);
-        }
-    } else {
-        for line in text.lines() {
-            let mut it = line.split_whitespace();
-            match it.next() {
-                Some("v") => {
-                    let v: Vec<f32> = it.take(3).map(|s| s.parse().unwrap()).collect();
-                    positions.push([v[0], v[1], v[2]]);
-                }
-                Some("f") => {
-                    let idx: Vec<u32> = it
-                        .map(|s| s.split('/').next().unwrap().parse::<u32>().unwrap() - 1)
-                        .collect();
-                    fan(&idx, &mut triangles);
-                }
-                _ => {}
-            }
-        }
-    }
-    let mut normals = vec![Vec3::ZERO; positions.len()];
-    for t in &triangles {
-        let p = t.map(|i| Vec3::from(positions[i as usize]));
-        let n = (p[1] - p[0]).cross(p[2] - p[0]);
-        for &i in t {
-            normals[i as usize] += n;
-        }
-    }
-    let albedo = positions
-        .iter()
-        .map(|p| {
-            if ((p[0] * 40.0).floor() + (p[1] * 40.0).floor()) as i32 % 2 == 0 {
-                [200, 130, 70, 255]
-            } else {
-                [80, 150, 210, 255]
-            }
-        })
-        .collect();
-    Some(Mesh {
-        normals: normals
-            .iter()
-            .map(|n| n.normalize_or_zero().to_array())
-            .collect(),
-        positions,
-        albedo,
-        triangles,
-    })
+    format::load::load_model(path).ok()
 }
 
 fn in_pool<T: Send>(threads: Option<usize>, f: impl FnOnce() -> T + Send) -> T {

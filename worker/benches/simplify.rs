@@ -28,57 +28,17 @@ struct Bunny {
     triangles: Vec<[u32; 3]>,
 }
 
+/// The bunny as the bake sees it (format's loader), scaled to the paper's 43 units.
 fn load_bunny() -> Option<Bunny> {
     let dir = std::env::var_os("HEXBAKE_MODELS")
         .map(PathBuf::from)
         .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../models"));
-    let text = std::fs::read_to_string(dir.join("bunny.obj")).ok()?;
-    let mut positions = Vec::new();
-    let mut triangles = Vec::new();
-    for line in text.lines() {
-        let mut words = line.split_whitespace();
-        match words.next() {
-            Some("v") => {
-                let c: Vec<f32> = words.take(3).filter_map(|w| w.parse().ok()).collect();
-                positions.push(Vec3::new(c[0], c[1], c[2]));
-            }
-            Some("f") => {
-                let c: Vec<u32> = words
-                    .filter_map(|w| w.split('/').next()?.parse::<u32>().ok())
-                    .map(|i| i - 1)
-                    .collect();
-                for k in 1..c.len() - 1 {
-                    triangles.push([c[0], c[k], c[k + 1]]);
-                }
-            }
-            _ => {}
-        }
-    }
-    let (lo, hi) = positions.iter().fold(
-        (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
-        |(lo, hi), p| (lo.min(*p), hi.max(*p)),
-    );
-    let scale = 43.0 / (hi.y - lo.y);
-    let base = Vec3::new((lo.x + hi.x) / 2.0, lo.y, (lo.z + hi.z) / 2.0);
-    for p in &mut positions {
-        *p = (*p - base) * scale;
-    }
-    let mut normals = vec![Vec3::ZERO; positions.len()];
-    for t in &triangles {
-        let [a, b, c] = t.map(|i| positions[i as usize]);
-        let n = (b - a).cross(c - a);
-        for &i in t {
-            normals[i as usize] += n;
-        }
-    }
-    let normals = normals
-        .into_iter()
-        .map(|n| n.try_normalize().unwrap_or(Vec3::Y))
-        .collect();
+    let mut mesh = format::load::load_model(&dir.join("bunny.obj")).ok()?;
+    format::scene_build::normalise(&mut mesh, [0.0; 3], 43.0).ok()?;
     Some(Bunny {
-        positions,
-        normals,
-        triangles,
+        positions: mesh.positions.iter().map(|&p| Vec3::from(p)).collect(),
+        normals: mesh.normals.iter().map(|&n| Vec3::from(n)).collect(),
+        triangles: mesh.triangles,
     })
 }
 

@@ -218,45 +218,6 @@ fn models_dir() -> Option<PathBuf> {
     dir.is_dir().then_some(dir)
 }
 
-/// Minimal OBJ reader (v / f lines, polygons fanned) until the real loader lands.
-fn load_obj_positions(path: &std::path::Path) -> Mesh {
-    let text = std::fs::read_to_string(path).unwrap();
-    let mut positions = Vec::new();
-    let mut triangles = Vec::new();
-    for line in text.lines() {
-        let mut it = line.split_whitespace();
-        match it.next() {
-            Some("v") => {
-                let v: Vec<f32> = it.take(3).map(|s| s.parse().unwrap()).collect();
-                positions.push([v[0], v[1], v[2]]);
-            }
-            Some("f") => {
-                let idx: Vec<u32> = it
-                    .map(|s| s.split('/').next().unwrap().parse::<i64>().unwrap())
-                    .map(|i| if i < 0 { positions.len() as i64 + i } else { i - 1 } as u32)
-                    .collect();
-                for k in 1..idx.len() - 1 {
-                    triangles.push([idx[0], idx[k], idx[k + 1]]);
-                }
-            }
-            _ => {}
-        }
-    }
-    let mut normals = vec![Vec3::ZERO; positions.len()];
-    for t in &triangles {
-        let p = t.map(|i| Vec3::from(positions[i as usize]));
-        let n = (p[1] - p[0]).cross(p[2] - p[0]);
-        for &i in t {
-            normals[i as usize] += n;
-        }
-    }
-    let normals = normals
-        .iter()
-        .map(|n| n.normalize_or_zero().to_array())
-        .collect();
-    finish(positions, normals, triangles)
-}
-
 // ---------------------------------------------------------------- coverage
 
 /// Counts pixels covered by each triangle of `mesh` rendered alone.
@@ -799,7 +760,7 @@ fn real_bunny_renders_deterministically() {
         eprintln!("SKIP: {} missing", path.display());
         return;
     }
-    let bunny = load_obj_positions(&path);
+    let bunny = format::load::load_model(&path).unwrap();
     assert_eq!(bunny.triangles.len(), 69_666);
     let (lo, hi) = bunny.bounds().unwrap();
     let (lo, hi) = (Vec3::from(lo), Vec3::from(hi));

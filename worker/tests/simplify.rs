@@ -677,57 +677,16 @@ fn find_model(name: &str) -> Option<PathBuf> {
     }
 }
 
-/// `v` and `f` lines of an OBJ (polygons fanned, `a/b/c` corners, negative indices),
-/// until the format crate's loader lands.
-fn parse_obj(text: &str) -> (Vec<Vec3>, Vec<[u32; 3]>) {
-    let mut positions = Vec::new();
-    let mut triangles = Vec::new();
-    for line in text.lines() {
-        let mut words = line.split_whitespace();
-        match words.next() {
-            Some("v") => {
-                let c: Vec<f32> = words.take(3).map(|w| w.parse().unwrap()).collect();
-                positions.push(Vec3::new(c[0], c[1], c[2]));
-            }
-            Some("f") => {
-                let corners: Vec<u32> = words
-                    .map(|w| {
-                        let i: i64 = w.split('/').next().unwrap().parse().unwrap();
-                        if i < 0 {
-                            (positions.len() as i64 + i) as u32
-                        } else {
-                            (i - 1) as u32
-                        }
-                    })
-                    .collect();
-                for k in 1..corners.len() - 1 {
-                    triangles.push([corners[0], corners[k], corners[k + 1]]);
-                }
-            }
-            _ => {}
-        }
-    }
-    (positions, triangles)
-}
-
-/// The bunny at the paper's size: 43 units tall, base on y = 0, centred in x–z.
+/// The bunny at the paper's size: 43 units tall, base on y = 0, centred in x–z
+/// (format's loader and normalisation, as the bake sees it).
 fn bunny() -> Option<TestMesh> {
     let path = find_model("bunny.obj")?;
-    let (mut positions, triangles) = parse_obj(&std::fs::read_to_string(path).unwrap());
-    let (lo, hi) = positions.iter().fold(
-        (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
-        |(lo, hi), p| (lo.min(*p), hi.max(*p)),
-    );
-    let scale = 43.0 / (hi.y - lo.y);
-    let base = Vec3::new((lo.x + hi.x) / 2.0, lo.y, (lo.z + hi.z) / 2.0);
-    for p in &mut positions {
-        *p = (*p - base) * scale;
-    }
-    let normals = smooth_normals(&positions, &triangles);
+    let mut mesh = format::load::load_model(&path).unwrap();
+    format::scene_build::normalise(&mut mesh, [0.0; 3], 43.0).unwrap();
     Some(TestMesh {
-        positions,
-        normals,
-        triangles,
+        positions: mesh.positions.iter().map(|&p| Vec3::from(p)).collect(),
+        normals: mesh.normals.iter().map(|&n| Vec3::from(n)).collect(),
+        triangles: mesh.triangles,
     })
 }
 
