@@ -16,34 +16,9 @@ use worker::raster::{CullMode, DrawItem, View};
 use worker::visibility::{ray_cast_capture, visible_by_rays, DepthTolerance};
 use worker::weights::vertex_weights;
 
-/// Tiny OBJ reader (`v` and `f` lines) until the format loaders land.
+/// The model as the bake sees it (format's loader: welded, smooth normals, albedo).
 fn load_obj(path: &std::path::Path) -> Option<format::Mesh> {
-    let text = std::fs::read_to_string(path).ok()?;
-    let mut mesh = format::Mesh::default();
-    for line in text.lines() {
-        let mut words = line.split_whitespace();
-        match words.next() {
-            Some("v") => {
-                let v: Vec<f32> = words.take(3).filter_map(|w| w.parse().ok()).collect();
-                if v.len() == 3 {
-                    mesh.positions.push([v[0], v[1], v[2]]);
-                }
-            }
-            Some("f") => {
-                let idx: Vec<u32> = words
-                    .filter_map(|w| w.split('/').next()?.parse::<u32>().ok())
-                    .map(|i| i.saturating_sub(1))
-                    .collect();
-                for k in 1..idx.len().saturating_sub(1) {
-                    mesh.triangles.push([idx[0], idx[k], idx[k + 1]]);
-                }
-            }
-            _ => {}
-        }
-    }
-    mesh.normals = vec![[0.0, 1.0, 0.0]; mesh.positions.len()];
-    mesh.albedo = vec![[180, 180, 180, 255]; mesh.positions.len()];
-    Some(mesh)
+    format::load::load_model(path).ok()
 }
 
 fn analysis(c: &mut Criterion) {

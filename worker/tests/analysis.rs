@@ -265,30 +265,9 @@ fn models_dir() -> PathBuf {
     }
 }
 
-/// Tiny OBJ reader (`v` and `f` lines, polygons fanned) until the format loaders land.
+/// The model as the bake sees it (format's loader: welded, smooth normals, albedo).
 fn load_obj(path: &std::path::Path) -> Option<format::Mesh> {
-    let text = std::fs::read_to_string(path).ok()?;
-    let mut positions = Vec::new();
-    let mut triangles = Vec::new();
-    for line in text.lines() {
-        let mut words = line.split_whitespace();
-        match words.next() {
-            Some("v") => {
-                let v: Vec<f32> = words.take(3).map(|w| w.parse().unwrap()).collect();
-                positions.push([v[0], v[1], v[2]]);
-            }
-            Some("f") => {
-                let idx: Vec<u32> = words
-                    .map(|w| w.split('/').next().unwrap().parse::<u32>().unwrap() - 1)
-                    .collect();
-                for k in 1..idx.len() - 1 {
-                    triangles.push([idx[0], idx[k], idx[k + 1]]);
-                }
-            }
-            _ => {}
-        }
-    }
-    Some(mesh_from(positions, triangles))
+    format::load::load_model(path).ok()
 }
 
 /// The bunny placed like the paper's (000 Table 2: 43.2 units tall), base on y = 0,
