@@ -3,17 +3,24 @@
 //!
 //! **Albedo.** [`albedo`] is a 3-D checker over object-space position in *unit-size*
 //! coordinates (the model's largest bounding-box extent = 1, origin at the base
-//! centre; [`apply_albedo`] does that mapping), with [`CHECKER_CELLS_PER_EXTENT`] = 40
-//! cells across the model: about target_height / 40 for an upright statue. Even
-//! cells take one hue family, odd cells the opposite hue; each cell varies saturation
-//! and value by a hash of its integer coordinates. The pattern is evaluated per
-//! *vertex* (albedo is a vertex colour), so it is only as fine as the mesh: a cell
-//! spans a few edges of the Stanford bunny's 35k-vertex mesh (46% of its edges join
-//! differently coloured vertices), and the procedural models here are tessellated to
-//! an edge length near one cell (57–81% of their edges change colour). Any
-//! simplified mesh with edges much longer than a cell therefore loses the pattern,
-//! which is the point: only the captured texture can keep it (000 §3.1.5).
+//! centre; [`apply_albedo`] does that mapping), with [`CHECKER_CELLS_PER_EXTENT`] = 16
+//! cells across the model: about target_height / 16 for an upright statue. Even
+//! and odd cells take neighbouring hues ([`PARITY_HUE_STEP`]) and two value levels;
+//! each cell varies hue, saturation and value by a hash of its integer coordinates.
+//! The pattern is evaluated per *vertex* (albedo is a vertex colour), so it is only
+//! as fine as the mesh: a cell spans about five edges of the Stanford bunny's
+//! 35k-vertex mesh (20% of its edges join differently coloured vertices; 24–48% on
+//! the procedural models here). A simplified mesh — a proxy keeps a few hundred
+//! triangles of a statue, edges spanning several cells — therefore loses the
+//! pattern, which is the point: only the captured texture can keep it (000 §3.1.5).
 //!
+//! Until 2026-11 the checker had 40 cells per extent and complementary hues. That
+//! stress pattern made every sub-pixel parallax of a proxy's projected texture a
+//! full-contrast error; the paper's statues carry smooth colours. The current
+//! pattern is still far finer than any proxy's geometry (DESIGN.md "Shading") but
+//! its contrast is that of a painted statue (BENCHMARKS.md lists the effect on
+//! PSNR: +1 dB on park-2m cell 275 — silhouettes, not texture, dominate the error).
+
 //! **Models.** [`build`] makes every name in [`NAMES`]: each is closed, 2-manifold and
 //! wound counter-clockwise seen from outside (the tests check it), in arbitrary units
 //! (scenes normalise them), y up.
@@ -26,7 +33,10 @@ use std::f64::consts::PI;
 pub const NAMES: &[&str] = &["torus_knot", "sphere", "box", "column", "vase", "torus"];
 
 /// Checker cells across the model's largest extent.
-pub const CHECKER_CELLS_PER_EXTENT: f32 = 40.0;
+pub const CHECKER_CELLS_PER_EXTENT: f32 = 16.0;
+
+/// Hue difference between the two checker parities (a fraction of a turn).
+pub const PARITY_HUE_STEP: f64 = 0.12;
 
 /// The procedural albedo (sRGB8, alpha 255) at `p_object`, a position in unit-size
 /// object coordinates (see the module docs), for a model seeded by `model_seed`.
@@ -38,7 +48,7 @@ pub fn albedo(p_object: [f32; 3], model_seed: u64) -> [u8; 4] {
     });
     let parity = (cell[0] + cell[1] + cell[2]).rem_euclid(2);
     let family_hue = (mix(model_seed, 0x0A1B_ED0C) >> 11) as f64 / (1u64 << 53) as f64;
-    let hue = (family_hue + 0.5 * parity as f64).fract();
+    let hue = (family_hue + PARITY_HUE_STEP * parity as f64).fract();
     let h = mix(
         mix(mix(model_seed, cell[0] as u64), cell[1] as u64),
         cell[2] as u64,
@@ -46,7 +56,7 @@ pub fn albedo(p_object: [f32; 3], model_seed: u64) -> [u8; 4] {
     let jitter = |shift: u32| ((h >> shift) & 0xFFFF) as f64 / 65535.0;
     let hue = (hue + 0.06 * (jitter(0) - 0.5)).rem_euclid(1.0);
     let saturation = 0.35 + 0.3 * jitter(16);
-    let value = if parity == 0 { 0.85 } else { 0.55 } + 0.12 * (jitter(32) - 0.5);
+    let value = if parity == 0 { 0.80 } else { 0.62 } + 0.10 * (jitter(32) - 0.5);
     let [r, g, b] = hsv_to_rgb(hue, saturation, value);
     let to8 = |x: f64| (x.clamp(0.0, 1.0) * 255.0).round() as u8;
     [to8(r), to8(g), to8(b), 255]

@@ -61,8 +61,8 @@ fn bunny_obj() {
     assert_eq!(mesh.vertex_count(), 34_835);
     assert!(mesh.edge_topology().is_closed_manifold());
     assert!(!stats.file_colors);
-    // The procedural albedo varies at the scale of the mesh's edges: a checker cell
-    // spans a few bunny edges, so a large share of edges change colour (46%).
+    // The procedural albedo varies at the scale of a few mesh edges: a checker cell
+    // spans about five bunny edges, so a fifth of the edges change colour (19.8%).
     let mut differ = 0;
     for t in &mesh.triangles {
         for k in 0..3 {
@@ -74,7 +74,7 @@ fn bunny_obj() {
         "bunny: {differ} of {} edges change colour",
         3 * mesh.triangle_count()
     );
-    assert!(differ * 3 > 3 * mesh.triangle_count());
+    assert!(differ * 6 > 3 * mesh.triangle_count());
     // Same file, same mesh, byte for byte.
     assert_eq!(
         load_model(&path).unwrap().content_hash(),

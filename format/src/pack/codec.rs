@@ -8,7 +8,9 @@ use super::layout::{Codec, MAX_EXPANSION};
 use std::io::Read;
 
 /// The zstd level every writer uses. Fixed: the same input must give the same bytes.
-pub const ZSTD_LEVEL: i32 = 15;
+/// Level 6, not higher: on a real park-2m cell's 200 capture textures, level 15 is
+/// 3% smaller but 6× slower and took half of the bake's CPU time (BENCHMARKS.md).
+pub const ZSTD_LEVEL: i32 = 6;
 
 /// A compressed section is kept only if it saves at least 1/16 of the raw size — or
 /// 1/4 for sections that prefer to stay raw (vertex arrays, which a memory-mapped
