@@ -84,7 +84,14 @@ fn analysis(c: &mut Criterion) {
         })
     });
     group.bench_function("visible_by_rays", |b| {
-        b.iter(|| visible_by_rays(black_box(&mesh), transform, eye))
+        b.iter(|| {
+            visible_by_rays(
+                black_box(&mesh),
+                transform,
+                &view,
+                DepthTolerance::default().footprint_px,
+            )
+        })
     });
     group.throughput(Throughput::Elements(mesh.triangles.len() as u64));
     group.bench_function("regional_backface_cull", |b| {

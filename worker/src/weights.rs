@@ -9,20 +9,23 @@
 //!    ([`BACK_FACING_WEIGHT`]). A vertex no triangle references is back-facing by
 //!    that definition (it never takes part in a collapse anyway).
 //! 2. Every other (front-facing) vertex is projected into the capture and tested
-//!    against the depth buffer ([`crate::visibility`], module docs: the vertex's own
-//!    triangle IDs in its 3×3 neighbourhood, or its own pixel's depth with a
-//!    three-pixel-footprint tolerance, or an empty own pixel). A visible vertex gets
-//!    the weight of the class of the pixel it projects to
-//!    ([`crate::classify::PixelClass::weight`]: 0.5 / 0.4 / 0.25 / 0.125) — the
-//!    supporting pixel nearest to its projection.
+//!    against the depth buffer ([`crate::visibility`], module docs: visible when it
+//!    lies at most one pixel footprint behind the plane of the triangle seen at its own
+//!    pixel — the triangle-ID buffer names it — measured along that plane's normal, or
+//!    when its own pixel is empty). A visible vertex gets the weight of the class of
+//!    the pixel it projects to ([`crate::classify::PixelClass::weight`]: 0.5 / 0.4 /
+//!    0.25 / 0.125): its own pixel, or, when that does not show the object (a vertex
+//!    on the outline whose pixel centre the object misses), the object pixel nearest
+//!    to its projection in the 3×3 around it.
 //! 3. An invisible front-facing vertex gets 0.05 ([`INVISIBLE_WEIGHT`]), "smaller than
 //!    vertices corresponding to the pixel category interior". A front-facing vertex
 //!    projecting outside the capture (outside the window, behind the eye, beyond
 //!    near/far) is not seen from the centre either and also gets 0.05.
 //!
-//! A visible vertex whose supporting pixel belongs to another object (only possible in
-//! a capture holding foreign objects) is a sub-pixel part of the object on the outline
-//! of its coverage, and gets the exterior-silhouette weight.
+//! A visible vertex with no pixel of its object around it (its own pixel empty or
+//! showing another object farther away, and none of the 3×3 showing its object) is a
+//! sub-pixel part of the object on the outline of its coverage, and gets the
+//! exterior-silhouette weight.
 
 use crate::backface::{front_facing_vertices_of, world_positions};
 use crate::classify::PixelClass;

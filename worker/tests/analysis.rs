@@ -796,7 +796,12 @@ fn hidden_and_outside_front_facing_vertices_weigh_0_05() {
         9,
         DepthTolerance::default(),
     );
-    let rays = visible_by_rays(&mesh, Mat4::IDENTITY, view.eye);
+    let rays = visible_by_rays(
+        &mesh,
+        Mat4::IDENTITY,
+        &view,
+        DepthTolerance::default().footprint_px,
+    );
     assert!(!depth[4] && !rays[4]);
     for v in [0, 1, 2, 3, 5, 6, 7, 8] {
         assert!(depth[v] && rays[v], "grid vertex {v}");
@@ -810,11 +815,117 @@ fn hidden_and_outside_front_facing_vertices_weigh_0_05() {
     }
 }
 
-/// The depth-buffer test and the ray oracle agree on ≥ 99% of the bunny's vertices off
-/// the contour generator, and on ≥ 97.5% of all its vertices, from a cell-centre eye at
-/// three distances (1024² tight captures; measured 98.0–98.3% and 99.45–99.55%). On the
-/// contour generator the eye ray grazes the scanned surface and its answer turns on
-/// sub-pixel bumps (visibility.rs, "Agreement with the ray oracle").
+/// A vertex 0.7 pixel behind an occluding edge is hidden both ways, although its own
+/// triangles show in the pixels beside the edge (the depth test reads the surface at its
+/// own pixel, not any pixel of the 3×3 showing one of its triangles).
+#[test]
+fn vertex_just_behind_an_occluding_edge_is_hidden() {
+    // A 3×3 grid at z = 0 (spacing 20, facing +z) and a box in front of its left half
+    // whose right edge passes 0.7 pixel to the right of the centre vertex in the image.
+    let eye = Vec3::new(0.0, 0.0, 300.0);
+    let view = design_view(eye, Vec3::ZERO, 256);
+    let footprint = worker::visibility::pixel_footprint(&view, 300.0);
+    let edge_x = 0.7 * footprint * 270.0 / 300.0; // box front face at depth 270
+    let mut positions = Vec::new();
+    for j in 0..3 {
+        for i in 0..3 {
+            positions.push([-20.0 + 20.0 * i as f32, -20.0 + 20.0 * j as f32, 0.0]);
+        }
+    }
+    let mut triangles = Vec::new();
+    for j in 0..2u32 {
+        for i in 0..2u32 {
+            let a = j * 3 + i;
+            triangles.push([a, a + 1, a + 4]);
+            triangles.push([a, a + 4, a + 3]);
+        }
+    }
+    let occluder = box_mesh(Vec3::new(-30.0, -30.0, 20.0), Vec3::new(edge_x, 30.0, 30.0));
+    let base = positions.len() as u32;
+    positions.extend(occluder.positions.iter().copied());
+    triangles.extend(occluder.triangles.iter().map(|t| t.map(|i| i + base)));
+    let mesh = mesh_from(positions, triangles);
+    let item = DrawItem {
+        mesh: &mesh,
+        transform: Mat4::IDENTITY,
+        tint: Vec3::ONE,
+        object_id: 3,
+        triangles: None,
+    };
+    let capture = ray_cast_capture(&[item], &view, CullMode::None);
+
+    // Preconditions: the centre vertex's own pixel shows the box, the pixel to its
+    // right shows one of the vertex's own (grid) triangles.
+    let point = project_to_pixel(&view, Vec3::ZERO).unwrap();
+    let own = pixel_index(&view, point).unwrap();
+    assert!(capture.triangle_id[own] >= 8, "own pixel shows the box");
+    assert!(
+        capture.triangle_id[own + 1] < 8,
+        "right neighbour shows the grid"
+    );
+    let grid_vertex_4: Vec<u32> = (0..8u32)
+        .filter(|&t| mesh.triangles[t as usize].contains(&4))
+        .collect();
+    assert!(grid_vertex_4.contains(&capture.triangle_id[own + 1]));
+
+    let tolerance = DepthTolerance::default();
+    let depth = visible_by_depth(&mesh, Mat4::IDENTITY, &capture, 3, tolerance);
+    let rays = visible_by_rays(&mesh, Mat4::IDENTITY, &view, tolerance.footprint_px);
+    assert!(!depth[4] && !rays[4], "centre vertex behind the edge");
+    for v in [2, 5, 8] {
+        assert!(depth[v] && rays[v], "grid vertex {v} right of the box");
+    }
+    for v in [0, 3, 6] {
+        assert!(!depth[v] && !rays[v], "grid vertex {v} behind the box");
+    }
+}
+
+/// Every front-facing vertex of a convex mesh is visible (the segment from an outside
+/// eye meets a convex solid only at the vertex), including those on the contour
+/// generator, where the line of sight grazes the surface; every back-facing one is
+/// hidden. Both oracles must say so, whatever the sub-pixel position of the contour.
+#[test]
+fn convex_mesh_front_facing_vertices_are_visible_both_ways() {
+    let mesh = sphere_mesh(Vec3::ZERO, 20.0, 48, 96);
+    for (eye, size) in [
+        (Vec3::new(0.0, 40.0, 300.0), 256),
+        (Vec3::new(170.0, -60.0, 90.0), 320),
+    ] {
+        let view = design_view(eye, Vec3::ZERO, size);
+        let item = DrawItem {
+            mesh: &mesh,
+            transform: Mat4::IDENTITY,
+            tint: Vec3::ONE,
+            object_id: 2,
+            triangles: None,
+        };
+        let capture = ray_cast_capture(&[item], &view, CullMode::None);
+        let tolerance = DepthTolerance::default();
+        let front = front_facing_vertices(&mesh, Mat4::IDENTITY, eye);
+        let depth = visible_by_depth(&mesh, Mat4::IDENTITY, &capture, 2, tolerance);
+        let rays = visible_by_rays(&mesh, Mat4::IDENTITY, &view, tolerance.footprint_px);
+        let mut contour = 0;
+        for v in 0..mesh.positions.len() {
+            assert_eq!(depth[v], front[v], "depth test, vertex {v} from {eye}");
+            assert_eq!(rays[v], front[v], "ray oracle, vertex {v} from {eye}");
+            let tris = mesh.triangles.iter().filter(|t| t.contains(&(v as u32)));
+            let facing: Vec<bool> = tris
+                .map(|t| {
+                    let [a, b, c] = t.map(|i| Vec3::from(mesh.positions[i as usize]));
+                    (b - a).cross(c - a).dot(eye - a) > 0.0
+                })
+                .collect();
+            contour += (facing.contains(&true) && facing.contains(&false)) as usize;
+        }
+        assert!(contour > 50, "{contour} vertices on the contour generator");
+    }
+}
+
+/// The depth-buffer test and the ray oracle agree on ≥ 99% of the bunny's vertices
+/// from a cell-centre eye at three distances (1024² tight captures; measured 99.13 /
+/// 99.10 / 99.06 %; the rest change visibility within a pixel: visibility.rs,
+/// "Agreement"). Both oracles also hide thousands of front-facing vertices (the ear,
+/// the thigh, the far side): the agreement is not that of the facing rule alone.
 #[test]
 fn visibility_oracles_agree_on_the_bunny() {
     let Some((mesh, transform)) = bunny() else {
@@ -824,23 +935,33 @@ fn visibility_oracles_agree_on_the_bunny() {
         let view = bunny_view(distance, Some(1024));
         let capture = bunny_capture(&mesh, transform, &view);
         let report = agreement_report(&mesh, transform, &capture, 7);
-        let visible = visible_by_rays(&mesh, transform, view.eye)
-            .iter()
-            .filter(|&&v| v)
-            .count();
+        let visible = visible_by_rays(
+            &mesh,
+            transform,
+            &view,
+            DepthTolerance::default().footprint_px,
+        )
+        .iter()
+        .filter(|&&v| v)
+        .count();
         eprintln!(
-            "bunny at {distance}: oracles agree on {:.3}% of {} vertices, {:.3}% of the {} off the contour generator ({visible} visible by rays)",
+            "bunny at {distance}: oracles agree on {:.3}% of {} vertices, {:.3}% of the {} off the contour generator ({visible} visible by rays, {} front-facing hidden both ways)",
             100.0 * report.overall(),
             report.inside,
             100.0 * report.away_from_contours(),
             report.inside - report.contour,
+            report.front_facing_hidden,
         );
         assert_eq!(report.inside, mesh.positions.len());
+        assert!(report.overall() >= 0.99, "{report:?} at {distance}");
         assert!(
-            report.away_from_contours() >= 0.99,
+            report.away_from_contours() >= 0.995,
             "{report:?} at {distance}"
         );
-        assert!(report.overall() >= 0.975, "{report:?} at {distance}");
+        assert!(
+            report.front_facing_hidden > mesh.positions.len() / 20,
+            "{report:?} at {distance}"
+        );
         assert_eq!(agreement(&mesh, transform, &capture, 7), report.overall());
         assert!(visible > mesh.positions.len() / 4 && visible < mesh.positions.len() * 3 / 4);
     }
