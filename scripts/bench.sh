@@ -2,15 +2,18 @@
 # scripts/bench.sh [--full]: re-run the paper's experiments (000 §4: Tables 3–8,
 # Fig. 14) on hexbake and regenerate BENCHMARKS.md's measured tables (issue 8).
 #
-# Default run (sized for a 2-core machine, well under an hour when park-2m is already
-# baked; a fresh park-2m bake adds ≈ 25–30 min):
+# Default run, sized for a 2-core machine (estimates from the demo bake and the per-cell
+# bake times, not from a timed run of this script): park-2m already baked ⇒ ≈ 10 min
+# park-4m path bake (~26 jobs, ~100 cells) + ≈ 20 min player (1024², lavapipe) +
+# ≈ 4 min sweeps (30 cells) + the release build; a fresh park-2m bake adds ≈ 25–30 min.
+# BENCH_SIZE=512x512 makes the player part ~2× faster (PSNR then differs a little).
 #   1. scripts/fetch-models.sh; cargo build --release -p pipeline -p player
 #   2. bake park-2m fully (resumable: done jobs are skipped)
 #   3. bake park-4m along park-walk.ron only (--cells path:...: the path's cells and
 #      their neighbours, so the player's prefetcher finds packs)
 #   4. player compare (hybrid vs full) + player render --mode frustum|hybrid along
-#      park-walk.ron on each, and player compare --mode lod (recorded as "not
-#      available" when the player has no lod mode)
+#      park-walk.ron on each, and player compare --mode lod on park-2m (recorded as
+#      "lod: not available" when the player has no lod mode)
 #   5. sweeps on park-4m over a fixed sample of cells (one job per cell):
 #      T_s ∈ {3,5,7} (Table 3), T_l ∈ {3.0,4.5,6.0} (Table 4), cell size ∈ {50,100}
 #      (Table 5); the sample is cells 275 (centre), 264 and 517 (edges), 0 and 527
@@ -35,9 +38,14 @@
 #   BENCH_RESULTS       run files and plots            (default docs/bench)
 #   BENCH_DOC           document to regenerate         (default BENCHMARKS.md)
 #   BENCH_SIZE          player frame size, e.g. 512x512 (default: the path's, 1024²)
+#   BENCH_LOD_ERRORS    --lod-pixel-error values for the lod baseline (default: the
+#                       player's default only; --full: "0.5 1 2 4 8")
+#   BENCH_LOD_SCENES    scenes the lod baseline runs on (default: the first fully baked
+#                       scene, park-2m; --full: every scene)
 #   BENCH_THREADS       pipeline --threads             (default: all cores)
 #   BENCH_FETCH=0       skip scripts/fetch-models.sh (procedural scenes)
 #   BENCH_BUILD=0       skip the release build (binaries must exist)
+#   BENCH_BIN_DIR       where pipeline and player are  (default $CARGO_TARGET_DIR/release or target/release)
 set -uo pipefail
 
 cd "$(dirname "$0")/.."
@@ -60,6 +68,8 @@ done
 if [ "$FULL" = 1 ]; then
     : "${BENCH_FULL_SCENES:=park-2m park-4m park-8m}"
     : "${BENCH_PATH_SCENES:=}"
+    : "${BENCH_LOD_ERRORS:=0.5 1 2 4 8}"
+    : "${BENCH_LOD_SCENES:=park-2m park-4m park-8m}"
     MODE=full
 else
     : "${BENCH_FULL_SCENES:=park-2m}"
@@ -86,9 +96,14 @@ fi
 : "${BENCH_BUILD:=1}"
 [ -n "${BENCH_MODE:-}" ] && MODE=$BENCH_MODE
 
-TARGET=${CARGO_TARGET_DIR:-target}
-PIPELINE=$TARGET/release/pipeline
-PLAYER=$TARGET/release/player
+if [ -z "${BENCH_LOD_SCENES+x}" ]; then
+    for first in $BENCH_FULL_SCENES; do break; done
+    BENCH_LOD_SCENES=$(basename "${first:-park-2m}" .ron)
+fi
+
+BIN_DIR=${BENCH_BIN_DIR:-${CARGO_TARGET_DIR:-target}/release}
+PIPELINE=$BIN_DIR/pipeline
+PLAYER=$BIN_DIR/player
 RUN_ID=$(date -u +%Y%m%dT%H%M%SZ)
 WORK=$BENCH_OUT/bench-work/$RUN_ID
 mkdir -p "$WORK" "$BENCH_RESULTS"
@@ -218,20 +233,37 @@ size=${BENCH_SIZE:-path default}"
         [ "$RC" = 0 ] || FAILED+=("player render $scene $mode (exit $RC)")
     done
 
-    say "player compare $scene --mode lod (distance-LOD baseline)"
-    logged "$WORK/compare-$scene-lod.json" "$WORK/compare-$scene-lod.err" \
-        "$PLAYER" compare "$out" --path "$BENCH_PATH" --json --mode lod "${SIZE[@]}"
-    local note=""
-    if [ "$RC" != 0 ]; then
-        if grep -qiE "unexpected argument|unknown mode|invalid value|unrecognized" "$WORK/compare-$scene-lod.err"; then
-            note="lod: not available (this player has no --mode lod for compare)"
-            echo "bench.sh: $note" >&2
-        else
-            FAILED+=("player compare $scene --mode lod (exit $RC)")
+    # The distance-LOD baseline, at the player's default --lod-pixel-error or at each
+    # of BENCH_LOD_ERRORS (more points let the tables compare at equal triangles and
+    # at equal PSNR).
+    local errs=${BENCH_LOD_ERRORS:-default}
+    case " $BENCH_LOD_SCENES " in
+        *" $scene "*) ;;
+        *) errs="" ;;
+    esac
+    for e in $errs; do
+        local label=$scene-lod extra=()
+        if [ "$e" != default ]; then
+            label=$scene-lod-e$e
+            extra=(--lod-pixel-error "$e")
         fi
-    fi
-    printf 'label=%s\nmode=lod\n%s\nwall_s=%s\nexit=%s\nnote=%s\n' "$scene-lod" "$meta" "$WALL" "$RC" "$note" \
-        >"$WORK/compare-$scene-lod.txt"
+        say "player compare $scene --mode lod ${extra[*]} (distance-LOD baseline)"
+        logged "$WORK/compare-$label.json" "$WORK/compare-$label.err" \
+            "$PLAYER" compare "$out" --path "$BENCH_PATH" --json --mode lod --no-crossings "${extra[@]}" "${SIZE[@]}"
+        local note=""
+        if [ "$RC" != 0 ]; then
+            if grep -qiE "unexpected argument|unknown mode|invalid value|unrecognized" "$WORK/compare-$label.err"; then
+                note="lod: not available (this player has no --mode lod for compare)"
+                echo "bench.sh: $note" >&2
+            else
+                FAILED+=("player compare $scene --mode lod $e (exit $RC)")
+            fi
+        fi
+        printf 'label=%s\nmode=lod\n%s\nwall_s=%s\nexit=%s\nnote=%s\n' "$label" "$meta" "$WALL" "$RC" "$note" \
+            >"$WORK/compare-$label.txt"
+        [ "$e" != default ] && echo "lod_pixel_error=$e" >>"$WORK/compare-$label.txt"
+        [ -n "$note" ] && break
+    done
 
     say "cell load times $scene"
     logged "$WORK/load-$scene.json" "$WORK/load-$scene.err" "$PIPELINE" benchmarks load "$out" --label "$scene"

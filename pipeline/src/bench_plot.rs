@@ -50,6 +50,10 @@ pub fn render_walk_plot(
     let crossings = crossing_frames(hybrid);
     draw_text(&mut pm, LEFT, 12.0, title, INK, 3.0);
 
+    let lod_name = match lod.and_then(|l| l.lod_pixel_error) {
+        Some(e) => format!("lod {e} px"),
+        None => "lod".to_string(),
+    };
     // Top: PSNR(Y), dB.
     let mut psnr = vec![Series {
         values: hybrid.per_frame.iter().map(|f| f.psnr_y).collect(),
@@ -60,7 +64,7 @@ pub fn render_walk_plot(
         psnr.push(Series {
             values: l.per_frame.iter().map(|f| f.psnr_y).collect(),
             colour: ORANGE,
-            name: "lod",
+            name: &lod_name,
         });
     }
     let (lo, hi) = range(psnr.iter().flat_map(|s| s.values.iter().copied()));
@@ -113,7 +117,7 @@ pub fn render_walk_plot(
         tris.push(Series {
             values: l.per_frame.iter().map(|f| f.triangles as f64).collect(),
             colour: ORANGE,
-            name: "lod",
+            name: &lod_name,
         });
     }
     let (tlo, thi) = range(
@@ -199,14 +203,19 @@ fn panel(
         let s = label(t);
         draw_text(pm, LEFT - 8.0 - text_width(&s, 2.0), y - 5.0, &s, INK, 2.0);
     }
-    draw_text(pm, 8.0, y0 - 16.0, title, INK, 2.0);
+    draw_text(pm, 8.0, y0 - 24.0, title, INK, 2.0);
     // Crossings.
     for &c in crossings {
         let x = x_of(c);
         line(pm, x, y0, x, y0 + PANEL_H, YELLOW, 1.5);
     }
-    // Series and legend.
+    // Series and legend (crossings first).
     let mut lx = LEFT + plot_w;
+    if !crossings.is_empty() {
+        lx -= text_width("crossing", 2.0) + 30.0;
+        line(pm, lx, y0 - 10.0, lx + 18.0, y0 - 10.0, YELLOW, 3.0);
+        draw_text(pm, lx + 22.0, y0 - 15.0, "crossing", YELLOW, 2.0);
+    }
     for s in series.iter().rev() {
         lx -= text_width(s.name, 2.0) + 30.0;
         line(pm, lx, y0 - 10.0, lx + 18.0, y0 - 10.0, s.colour, 3.0);

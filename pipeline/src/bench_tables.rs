@@ -10,6 +10,7 @@ use crate::benchmarks::{BakeResult, CompareResult, LoadTime, Merged, RenderResul
 use crate::report::Report;
 use std::collections::{BTreeMap, BTreeSet};
 use std::fmt::Write;
+use std::path::Path;
 
 // ---------------------------------------------------------------------------------
 // The paper's numbers (000 = Chen et al. 2003). Scenes in the order 2M, 4M, 8M.
@@ -340,6 +341,8 @@ fn coverage(r: &Report) -> String {
     }
 }
 
+/// A table header: the first column left-aligned, the others right-aligned
+/// (numbers).
 fn table_header(m: &mut String, cols: &[String]) {
     let _ = writeln!(m, "| {} |", cols.join(" | "));
     let _ = writeln!(
@@ -350,6 +353,12 @@ fn table_header(m: &mut String, cols: &[String]) {
             .map(|(i, _)| if i == 0 { "---|" } else { "---:|" })
             .collect::<String>()
     );
+}
+
+/// A table header with every column left-aligned (text).
+fn text_table_header(m: &mut String, cols: &[String]) {
+    let _ = writeln!(m, "| {} |", cols.join(" | "));
+    let _ = writeln!(m, "|{}", "---|".repeat(cols.len()));
 }
 
 fn row(m: &mut String, cells: &[String]) {
@@ -648,13 +657,15 @@ fn sweep(ctx: &Ctx, param: &str) -> String {
     }
     row(&mut m, &cells);
     let sample: BTreeSet<String> = points.iter().filter_map(|(_, b)| b.cells.clone()).collect();
+    let scenes: BTreeSet<&str> = points.iter().map(|(_, b)| b.scene.as_str()).collect();
     let _ = writeln!(
         &mut m,
         "\nPaper: averages over all cells of the 4M scene. Ours: averages over the cells \
-         baked with `--cells {}` on `park-4m` (one job per cell), i.e. a fixed sample of \
+         baked with `--cells {}` on `{}` (one job per cell), i.e. a fixed sample of \
          centre, edge and corner cells, not the whole grid. The paper's FPS and PSNR rows \
          need a path bake per setting and are not re-run here.",
-        sample.into_iter().collect::<Vec<_>>().join("` / `")
+        sample.into_iter().collect::<Vec<_>>().join("` / `"),
+        scenes.into_iter().collect::<Vec<_>>().join("`, `")
     );
     m
 }
@@ -669,7 +680,19 @@ fn runtime(ctx: &Ctx) -> String {
     if compares.iter().all(Option::is_none) {
         return NOT_MEASURED.into();
     }
-    let mut cols = vec!["along `park-walk.ron`".to_string()];
+    let paths: BTreeSet<String> = compares
+        .iter()
+        .flatten()
+        .map(|c| {
+            Path::new(&c.path)
+                .file_name()
+                .map_or(c.path.clone(), |n| n.to_string_lossy().into_owned())
+        })
+        .collect();
+    let mut cols = vec![format!(
+        "along `{}`",
+        paths.into_iter().collect::<Vec<_>>().join("`, `")
+    )];
     for ((_, paper), c) in SCENES.iter().zip(&compares) {
         cols.push(format!("{paper} paper"));
         cols.push(match c {
@@ -828,7 +851,27 @@ fn runtime(ctx: &Ctx) -> String {
     m
 }
 
-/// Hybrid (the bake) against the distance-LOD baseline (`--mode lod`).
+/// Linear interpolation of y at `x0` on the first segment of `points` (sorted by x)
+/// that brackets it; None outside the measured range.
+pub fn interpolate(points: &[(f64, f64)], x0: f64) -> Option<f64> {
+    points.windows(2).find_map(|w| {
+        let ((xa, ya), (xb, yb)) = (w[0], w[1]);
+        if xa <= x0 && x0 <= xb {
+            Some(if xb > xa {
+                ya + (yb - ya) * (x0 - xa) / (xb - xa)
+            } else {
+                ya
+            })
+        } else {
+            None
+        }
+    })
+}
+
+/// Hybrid (the bake) against the distance-LOD baseline (`player compare --mode
+/// lod`, one row per `--lod-pixel-error`), and the comparison at equal triangles
+/// (lod PSNR interpolated at the hybrid's triangle count, on log triangles) and at
+/// equal PSNR (lod triangles interpolated at the hybrid's PSNR).
 fn hybrid_vs_lod(ctx: &Ctx) -> String {
     let mut m = String::new();
     let mut any = false;
@@ -846,21 +889,49 @@ fn hybrid_vs_lod(ctx: &Ctx) -> String {
     let mut notes = Vec::new();
     for (scene, paper) in SCENES {
         let h = ctx.hybrid_compare(scene);
-        let l = ctx.compare(&format!("{scene}-lod"));
-        if h.is_none() && l.is_none() {
+        let lod_prefix = format!("{scene}-lod");
+        let lods: Vec<&CompareResult> = ctx
+            .m
+            .compares
+            .keys()
+            .filter(|k| **k == lod_prefix || k.starts_with(&format!("{lod_prefix}-")))
+            .filter_map(|k| ctx.compare(k))
+            .collect();
+        if h.is_none() && lods.is_empty() {
             continue;
         }
         any = true;
-        let mut pts = Vec::new();
-        for (mode, c) in [("hybrid", h), ("lod", l)] {
+        let mut entries: Vec<(String, Option<&CompareResult>)> = vec![("hybrid".into(), h)];
+        if lods.is_empty() {
+            entries.push(("lod".into(), None));
+        }
+        for l in &lods {
+            let err = l
+                .summary
+                .as_ref()
+                .and_then(|s| s.lod_pixel_error)
+                .or(l.lod_pixel_error);
+            let name = match err {
+                Some(e) => format!("lod, {e} px"),
+                None => "lod".into(),
+            };
+            entries.push((name, Some(l)));
+        }
+        let mut hybrid_point = None;
+        let mut lod_points = Vec::new();
+        for (mode, c) in entries {
             match c.and_then(|c| c.summary.as_ref().filter(|_| c.available)) {
                 Some(s) => {
-                    pts.push((mode, s.mean_triangles, s.mean_psnr_y));
+                    if mode == "hybrid" {
+                        hybrid_point = Some((s.mean_triangles, s.mean_psnr_y));
+                    } else {
+                        lod_points.push((s.mean_triangles, s.mean_psnr_y));
+                    }
                     row(
                         &mut m,
                         &[
                             format!("{scene} ({paper})"),
-                            mode.into(),
+                            mode,
                             int(s.mean_triangles),
                             format!("{} / {}", fixed(s.mean_psnr_y, 2), fixed(s.min_psnr_y, 2)),
                             format!("{} / {}", fixed(s.mean_ssim, 4), fixed(s.min_ssim(), 4)),
@@ -868,44 +939,82 @@ fn hybrid_vs_lod(ctx: &Ctx) -> String {
                         ],
                     )
                 }
-                None => row(
-                    &mut m,
-                    &[
-                        format!("{scene} ({paper})"),
-                        mode.into(),
-                        format!(
-                            "{mode}: not available ({})",
-                            c.and_then(|c| c.message.clone())
-                                .unwrap_or("not run".into())
-                                .replace('|', "\\|")
-                        ),
-                        String::new(),
-                        String::new(),
-                        String::new(),
-                    ],
-                ),
+                None => {
+                    let why = c
+                        .and_then(|c| c.message.clone())
+                        .unwrap_or("not run".into())
+                        .replace('|', "\\|");
+                    let text = if why.starts_with(&format!("{mode}: not available")) {
+                        why
+                    } else {
+                        format!("{mode}: not available ({why})")
+                    };
+                    row(
+                        &mut m,
+                        &[
+                            format!("{scene} ({paper})"),
+                            mode.clone(),
+                            text,
+                            String::new(),
+                            String::new(),
+                            String::new(),
+                        ],
+                    )
+                }
             }
         }
-        if let [(_, ht, hp), (_, lt, lp)] = pts[..] {
-            notes.push(format!(
-                "{scene}: lod draws {} the hybrid's triangles for {} dB {} PSNR(Y).",
-                if ht > 0.0 {
-                    format!("{:.2}×", lt / ht)
-                } else {
-                    "–".into()
-                },
-                fixed((lp - hp).abs(), 2),
-                if lp >= hp { "more" } else { "less" }
-            ));
+        let Some((ht, hp)) = hybrid_point else {
+            continue;
+        };
+        if lod_points.is_empty() || ht.is_nan() || ht <= 0.0 {
+            continue;
         }
+        let mut by_tris: Vec<(f64, f64)> = lod_points
+            .iter()
+            .filter(|(t, p)| *t > 0.0 && p.is_finite())
+            .map(|&(t, p)| (t.ln(), p))
+            .collect();
+        by_tris.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let mut by_psnr: Vec<(f64, f64)> = by_tris.iter().map(|&(lt, p)| (p, lt)).collect();
+        by_psnr.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let at_tris = match interpolate(&by_tris, ht.ln()) {
+            Some(p) => format!(
+                "at the hybrid's {} triangles lod would score {} dB (hybrid {} dB)",
+                int(ht),
+                fixed(p, 2),
+                fixed(hp, 2)
+            ),
+            None => format!(
+                "the hybrid's {} triangles are outside the lod points measured ({} to {})",
+                int(ht),
+                int(by_tris.first().map_or(f64::NAN, |p| p.0.exp())),
+                int(by_tris.last().map_or(f64::NAN, |p| p.0.exp()))
+            ),
+        };
+        let at_psnr = match interpolate(&by_psnr, hp) {
+            Some(lt) => format!(
+                "to reach the hybrid's {} dB lod needs {} triangles ({:.2}× the hybrid's)",
+                fixed(hp, 2),
+                int(lt.exp()),
+                lt.exp() / ht
+            ),
+            None => format!(
+                "the hybrid's {} dB is outside the lod points' PSNR range ({} to {} dB)",
+                fixed(hp, 2),
+                fixed(by_psnr.first().map_or(f64::NAN, |p| p.0), 2),
+                fixed(by_psnr.last().map_or(f64::NAN, |p| p.0), 2)
+            ),
+        };
+        notes.push(format!("{scene}: {at_tris}; {at_psnr}."));
     }
     if !any {
         return NOT_MEASURED.into();
     }
     let _ = writeln!(
         &mut m,
-        "\nOne operating point per mode (the player's defaults), so \"equal triangles\" and \
-         \"equal PSNR\" are read off these two points, not interpolated."
+        "\nEqual triangles / equal PSNR: interpolated linearly between the two lod points \
+         that bracket the hybrid (PSNR against log triangles); with one lod point only the \
+         two operating points are shown."
     );
     for n in notes {
         let _ = writeln!(&mut m, "\n{n}");
@@ -1199,7 +1308,7 @@ fn machine(ctx: &Ctx) -> String {
         return NOT_MEASURED.into();
     }
     let mut m = String::new();
-    table_header(
+    text_table_header(
         &mut m,
         &[
             "run file".into(),
@@ -1321,10 +1430,52 @@ mod tests {
     }
 
     #[test]
+    fn interpolation_brackets() {
+        let pts = [(0.0, 10.0), (1.0, 20.0), (3.0, 40.0)];
+        assert_eq!(interpolate(&pts, 0.5), Some(15.0));
+        assert_eq!(interpolate(&pts, 2.0), Some(30.0));
+        assert_eq!(interpolate(&pts, 3.5), None);
+        assert_eq!(interpolate(&pts[..1], 0.0), None);
+    }
+
+    #[test]
     fn empty_results_say_not_measured() {
         let s = sections(&Merged::default(), "docs/bench");
         assert!(s.values().all(|v| v == NOT_MEASURED), "{s:?}");
     }
+}
+
+/// The lod run drawn next to the hybrid: the one at the player's default threshold
+/// (`<scene>-lod`), else the `<scene>-lod-e*` whose triangle count is closest (in
+/// ratio) to the hybrid's.
+fn plot_lod<'a>(
+    merged: &'a Merged,
+    scene: &str,
+    hybrid_triangles: f64,
+) -> Option<&'a crate::benchmarks::CompareSummary> {
+    let available = |label: &str| {
+        merged
+            .compares
+            .get(label)
+            .filter(|(_, c)| c.available)
+            .and_then(|(_, c)| c.summary.as_ref())
+    };
+    if let Some(s) = available(&format!("{scene}-lod")) {
+        return Some(s);
+    }
+    let prefix = format!("{scene}-lod-");
+    merged
+        .compares
+        .keys()
+        .filter(|k| k.starts_with(&prefix))
+        .filter_map(|k| available(k))
+        .filter(|s| s.mean_triangles > 0.0)
+        .min_by(|a, b| {
+            let d = |s: &crate::benchmarks::CompareSummary| {
+                (s.mean_triangles / hybrid_triangles.max(1.0)).ln().abs()
+            };
+            d(a).total_cmp(&d(b))
+        })
 }
 
 /// What [`regenerate`] wrote.
@@ -1352,19 +1503,22 @@ pub fn regenerate(
     let new = replace_sections(&text, &secs).with_context(|| doc.display().to_string())?;
     let mut plots = Vec::new();
     for (scene, _) in SCENES {
-        let hybrid = merged
+        let Some((_, compare)) = merged
             .compares
             .get(&format!("{scene}-hybrid"))
             .filter(|(_, c)| c.available)
-            .and_then(|(_, c)| c.summary.as_ref());
-        let Some(hybrid) = hybrid else { continue };
-        let lod = merged
-            .compares
-            .get(&format!("{scene}-lod"))
-            .filter(|(_, c)| c.available)
-            .and_then(|(_, c)| c.summary.as_ref());
+        else {
+            continue;
+        };
+        let Some(hybrid) = compare.summary.as_ref() else {
+            continue;
+        };
+        let path_name = Path::new(&compare.path)
+            .file_name()
+            .map_or(compare.path.clone(), |n| n.to_string_lossy().into_owned());
+        let lod = plot_lod(&merged, scene, hybrid.mean_triangles);
         let png = crate::bench_plot::render_walk_plot(
-            &format!("{scene} along park-walk.ron"),
+            &format!("{scene} along {path_name}"),
             hybrid,
             lod,
         )?;

@@ -16,7 +16,8 @@
 //! commands.tsv          wall_s <TAB> exit <TAB> command, one line per command run
 //! bake-<label>.txt      key=value: label, scene, manifest, out, cells, set (repeated),
 //!                       sweep=PARAM:VALUE (repeated), wall_s, exit
-//! compare-<label>.txt   key=value: label, scene, mode, out, path, size, wall_s, exit
+//! compare-<label>.txt   key=value: label, scene, mode, out, path, size, wall_s, exit,
+//!                       lod_pixel_error (lod), note (why a mode is not available)
 //! compare-<label>.json  `player compare --json` stdout (absent when it failed)
 //! compare-<label>.err   its stderr
 //! render-<label>.txt    key=value: label, scene, mode, out, path, size, wall_s, exit
@@ -149,6 +150,12 @@ pub struct CompareSummary {
     pub adapter: String,
     pub width: u32,
     pub height: u32,
+    /// The compared configuration (`hybrid`, `lod`); older players omit it.
+    pub mode: String,
+    /// `--lod-pixel-error` of a `lod` compare.
+    pub lod_pixel_error: Option<f64>,
+    /// Time to build the LOD chains of a `lod` compare, ms.
+    pub lod_build_ms: Option<f64>,
     pub crossing_prefetch: Option<Crossings>,
     pub crossing_no_prefetch: Option<Crossings>,
     pub per_frame: Vec<CompareFrame>,
@@ -178,6 +185,8 @@ pub struct CompareResult {
     pub scene: String,
     /// `hybrid` or `lod` (`--mode lod`).
     pub mode: String,
+    /// `--lod-pixel-error` given to a `lod` compare (None: the player's default).
+    pub lod_pixel_error: Option<f64>,
     pub out: String,
     pub path: String,
     pub size: String,
@@ -526,6 +535,7 @@ pub fn collect(work: &Path) -> anyhow::Result<BenchRun> {
             label,
             scene: f.string("scene"),
             mode: f.string("mode"),
+            lod_pixel_error: f.get("lod_pixel_error").and_then(|v| v.parse().ok()),
             out: f.string("out"),
             path: f.string("path"),
             size: f.string("size"),

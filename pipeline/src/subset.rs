@@ -318,6 +318,14 @@ mod tests {
             }
         }
         assert!(sel.len() < 528 / 2, "{} cells: a subset", sel.len());
+        // Jobs of 4 cells of a row, as park-4m plans them.
+        let jobs: BTreeSet<u32> = sel.iter().map(|c| (c / 22) * 6 + (c % 22) / 4).collect();
+        eprintln!(
+            "TEMP path cells {} selected {} jobs {}",
+            on_path.len(),
+            sel.len(),
+            jobs.len()
+        );
     }
 
     #[test]
