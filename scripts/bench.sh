@@ -4,8 +4,10 @@
 #
 # Default run, sized for a 2-core machine (estimates from the demo bake and the per-cell
 # bake times, not from a timed run of this script): park-2m already baked ⇒ ≈ 10 min
-# park-4m path bake (~26 jobs, ~100 cells) + ≈ 20 min player (1024², lavapipe) +
+# park-4m path bake (~26 jobs, ~100 cells) + ≈ 25 min player (1024², lavapipe) +
 # ≈ 4 min sweeps (30 cells) + the release build; a fresh park-2m bake adds ≈ 25–30 min.
+# The player part dominates: per scene one compare (full, frustum and hybrid per frame,
+# plus a no-prefetch pass), two renders, and on park-2m two lod compares.
 # BENCH_SIZE=512x512 makes the player part ~2× faster (PSNR then differs a little).
 #   1. scripts/fetch-models.sh; cargo build --release -p pipeline -p player
 #   2. bake park-2m fully (resumable: done jobs are skipped)
@@ -38,8 +40,10 @@
 #   BENCH_RESULTS       run files and plots            (default docs/bench)
 #   BENCH_DOC           document to regenerate         (default BENCHMARKS.md)
 #   BENCH_SIZE          player frame size, e.g. 512x512 (default: the path's, 1024²)
-#   BENCH_LOD_ERRORS    --lod-pixel-error values for the lod baseline (default: the
-#                       player's default only; --full: "0.5 1 2 4 8")
+#   BENCH_LOD_ERRORS    --lod-pixel-error values for the lod baseline (default "0.25 1";
+#                       --full "0.0625 0.125 0.25 0.5 1 2 4"; "default": the player's
+#                       default only). Two or more points that bracket the hybrid give
+#                       the comparison at equal triangles and at equal PSNR.
 #   BENCH_LOD_SCENES    scenes the lod baseline runs on (default: the first fully baked
 #                       scene, park-2m; --full: every scene)
 #   BENCH_THREADS       pipeline --threads             (default: all cores)
@@ -68,12 +72,13 @@ done
 if [ "$FULL" = 1 ]; then
     : "${BENCH_FULL_SCENES:=park-2m park-4m park-8m}"
     : "${BENCH_PATH_SCENES:=}"
-    : "${BENCH_LOD_ERRORS:=0.5 1 2 4 8}"
+    : "${BENCH_LOD_ERRORS:=0.0625 0.125 0.25 0.5 1 2 4}"
     : "${BENCH_LOD_SCENES:=park-2m park-4m park-8m}"
     MODE=full
 else
     : "${BENCH_FULL_SCENES:=park-2m}"
     : "${BENCH_PATH_SCENES:=park-4m}"
+    : "${BENCH_LOD_ERRORS:=0.25 1}"
     MODE=default
 fi
 : "${BENCH_MANIFESTS:=manifests}"
