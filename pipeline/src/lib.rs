@@ -1,10 +1,15 @@
 //! hexbake's coordinator: plan, executors (local rayon, Slurm), resume, reports.
 
+pub mod bench_plot;
+pub mod bench_tables;
+pub mod benchmarks;
 pub mod heatmap;
 pub mod inspect;
 pub mod lock;
+pub mod overrides;
 pub mod report;
 pub mod run;
 pub mod scene_cmd;
 pub mod slurm;
 pub mod status;
+pub mod subset;

@@ -47,6 +47,16 @@ enum Command {
         /// Print the summary as JSON (implies --quiet).
         #[arg(long)]
         json: bool,
+        /// Bake only the jobs holding these cells (local executor): a comma-separated
+        /// list of cell ids, `path:FILE.ron` (the cells a camera path walks through
+        /// and their neighbours), `at:X:Z`, `grid:SIZE:ID`. The index lists only baked
+        /// cells; exit 0 when every requested cell is baked.
+        #[arg(long, value_name = "SPEC")]
+        cells: Option<String>,
+        /// Override a manifest parameter, e.g. `--set T_s=3 --set cells.cell_size=100`
+        /// (local executor; use a separate --out per setting).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
         #[command(flatten)]
         slurm: pipeline::slurm::SlurmArgs,
     },
@@ -69,6 +79,10 @@ enum Command {
         #[arg(long)]
         out: Option<PathBuf>,
     },
+    /// Benchmark plumbing for scripts/bench.sh (collect results, time cell loads,
+    /// regenerate BENCHMARKS.md's tables).
+    #[command(hide = true, subcommand)]
+    Benchmarks(BenchCommand),
     /// Print a pack's header and sections and check every checksum.
     Inspect {
         /// A `base.pack`, `cells/<id>.pack` or `index.pack`.
@@ -76,6 +90,39 @@ enum Command {
         /// Print JSON instead of text.
         #[arg(long)]
         json: bool,
+    },
+}
+
+/// `pipeline benchmarks ...`: the pieces `scripts/bench.sh` calls.
+#[derive(Subcommand)]
+enum BenchCommand {
+    /// Turn a bench.sh work folder into one run file (docs/bench/run-<id>.json).
+    Collect {
+        work: PathBuf,
+        #[arg(long)]
+        out: PathBuf,
+    },
+    /// Time loading the cell packs of a bake (open + validate + decode).
+    Load {
+        out: PathBuf,
+        /// Label of the bake in the results.
+        #[arg(long, default_value = "")]
+        label: String,
+        /// Cells to time, spread over the index (0: all).
+        #[arg(long, default_value_t = 64)]
+        sample: usize,
+    },
+    /// Regenerate the marked tables of a document from the run files, and the plots.
+    Tables {
+        /// Folder of run files (and where the plots go).
+        #[arg(long, default_value = "docs/bench")]
+        results: PathBuf,
+        /// The document to rewrite between its `<!-- bench:NAME -->` markers.
+        #[arg(long, default_value = "BENCHMARKS.md")]
+        write: PathBuf,
+        /// How the document links the plots (default: --results as given).
+        #[arg(long)]
+        plot_prefix: Option<String>,
     },
 }
 
@@ -141,9 +188,37 @@ fn run(cli: Cli) -> Result<(), Failure> {
             executor,
             quiet,
             json,
+            cells,
+            set,
             slurm,
         } => {
-            let loaded = pipeline::run::load(&manifest, out.as_deref()).map_err(from_run)?;
+            let overrides = set
+                .iter()
+                .map(|s| pipeline::overrides::parse_override(s))
+                .collect::<Result<Vec<_>, _>>()
+                .map_err(bad_input)?;
+            if executor == ExecutorArg::Slurm && (cells.is_some() || !overrides.is_empty()) {
+                return Err(bad_input(anyhow::anyhow!(
+                    "--cells and --set work with the local executor only"
+                )));
+            }
+            let loaded = pipeline::run::load_with(&manifest, out.as_deref(), &overrides)
+                .map_err(from_run)?;
+            if let Some(spec) = cells {
+                let selection = pipeline::subset::Selection::new(&spec, &loaded.build.grid)
+                    .map_err(bad_input)?;
+                let (summary, partial) = pipeline::run::run_local_selected(
+                    &loaded,
+                    &selection,
+                    force,
+                    &pipeline::run::LocalOptions {
+                        threads,
+                        progress: !quiet && !json,
+                    },
+                )
+                .map_err(from_run)?;
+                return finish_selected(&summary, partial.as_ref(), json);
+            }
             let summary = match executor {
                 ExecutorArg::Local => pipeline::run::run_local(
                     &loaded,
@@ -205,11 +280,13 @@ fn run(cli: Cli) -> Result<(), Failure> {
         Command::Finalize { manifest, out } => {
             let loaded = pipeline::run::load(&manifest, out.as_deref()).map_err(from_run)?;
             pipeline::run::assemble(&loaded).map_err(from_run)?;
+            let _ = std::fs::remove_file(pipeline::run::partial_path(&loaded.out));
             pipeline::report::write_report(&loaded.out)
                 .map_err(|error| Failure { code: 1, error })?;
             println!("assembled {}", loaded.out.join("index.pack").display());
             Ok(())
         }
+        Command::Benchmarks(cmd) => benchmarks(cmd).map_err(|error| Failure { code: 1, error }),
         Command::Inspect { pack, json } => {
             // A pack that fails validation is a failure of the data (exit 1), not of
             // the command line; the message names the file and the bad section.
@@ -218,6 +295,88 @@ fn run(cli: Cli) -> Result<(), Failure> {
             print!("{text}");
             Ok(())
         }
+    }
+}
+
+fn benchmarks(cmd: BenchCommand) -> anyhow::Result<()> {
+    use anyhow::Context;
+    match cmd {
+        BenchCommand::Collect { work, out } => {
+            let run = pipeline::benchmarks::collect(&work)?;
+            if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
+                std::fs::create_dir_all(dir).with_context(|| dir.display().to_string())?;
+            }
+            let text = serde_json::to_vec_pretty(&run)?;
+            format::pack::write_atomic(&out, &text).with_context(|| out.display().to_string())?;
+            println!(
+                "{}: {} bakes, {} compares, {} renders, {} load timings, {} commands",
+                out.display(),
+                run.bakes.len(),
+                run.compares.len(),
+                run.renders.len(),
+                run.load_times.len(),
+                run.commands.len()
+            );
+        }
+        BenchCommand::Load { out, label, sample } => {
+            let t = pipeline::benchmarks::time_cell_loads(&out, &label, sample)?;
+            println!("{}", serde_json::to_string_pretty(&t)?);
+        }
+        BenchCommand::Tables {
+            results,
+            write,
+            plot_prefix,
+        } => {
+            let prefix = plot_prefix.unwrap_or_else(|| results.display().to_string());
+            let r = pipeline::bench_tables::regenerate(&results, &write, &prefix)?;
+            println!(
+                "{}: {} sections from {} run file(s) in {}; {} plot(s)",
+                write.display(),
+                r.sections,
+                r.runs,
+                results.display(),
+                r.plots.len()
+            );
+        }
+    }
+    Ok(())
+}
+
+/// Prints the summary of a `--cells` run; Ok when every requested cell is baked.
+fn finish_selected(
+    summary: &pipeline::run::RunSummary,
+    partial: Option<&pipeline::run::Partial>,
+    json: bool,
+) -> Result<(), Failure> {
+    #[derive(serde::Serialize)]
+    struct Selected<'a> {
+        #[serde(flatten)]
+        summary: &'a pipeline::run::RunSummary,
+        partial: Option<&'a pipeline::run::Partial>,
+    }
+    if json {
+        let text = serde_json::to_string_pretty(&Selected { summary, partial })
+            .expect("summary serializes");
+        println!("{text}");
+    } else {
+        println!("{}", summary.line());
+        match partial {
+            Some(p) => println!("{}", p.line()),
+            None if summary.complete => println!("every cell of the grid is baked"),
+            None => {}
+        }
+    }
+    if summary.complete {
+        Ok(())
+    } else {
+        Err(Failure {
+            code: 1,
+            error: anyhow::anyhow!(
+                "{} requested job(s) failed; `pipeline status {}` lists them",
+                summary.jobs_failed.len().max(1),
+                summary.out.display()
+            ),
+        })
     }
 }
 

@@ -7,13 +7,14 @@
 
 use crate::run::PlanFile;
 use format::pack::{BasePack, PackFile, SectionKind};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::Path;
 use worker::job::{record_path, JobRecord};
 
 /// Numbers of one cell (from its job record and pack).
-#[derive(Clone, Debug, Default, Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
 pub struct CellLine {
     pub cell: u32,
     /// Triangles of the original instances inside the cell.
@@ -36,7 +37,8 @@ pub struct CellLine {
     pub stage_ms: BTreeMap<String, f64>,
 }
 
-#[derive(Clone, Debug, Default, Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
 pub struct Storage {
     pub base_bytes: u64,
     pub index_bytes: u64,
@@ -50,7 +52,8 @@ pub struct Storage {
 }
 
 /// Per-cell averages, the rows of the paper's Tables 3–8.
-#[derive(Clone, Debug, Default, Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
 pub struct PaperTable {
     pub polygons_inside_a_cell: f64,
     pub sv_single_percent: f64,
@@ -64,10 +67,22 @@ pub struct PaperTable {
     pub texture_kb: f64,
 }
 
-#[derive(Clone, Debug, Default, Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
 pub struct Report {
     pub scene: String,
+    /// Cells baked (with a done job record).
     pub cells: usize,
+    /// Cells of the grid; more than `cells` for a partial (`--cells`) bake.
+    pub grid_cells: usize,
+    /// Set when the bake is partial (`<out>/partial.json`).
+    pub partial: Option<crate::run::Partial>,
+    /// `--set` overrides of the manifest's parameters.
+    pub overrides: Vec<String>,
+    /// Bake and cell parameters in effect (absent for plans written before they were
+    /// recorded).
+    pub bake: Option<format::manifest::BakeParams>,
+    pub cell_params: Option<format::manifest::CellParams>,
     pub jobs: usize,
     pub instances: usize,
     pub scene_triangles: u64,
@@ -104,6 +119,11 @@ pub fn build_report(out: &Path) -> anyhow::Result<Report> {
     let mut report = Report {
         scene: plan.name.clone(),
         jobs: plan.jobs.len(),
+        grid_cells: plan.jobs.iter().map(|j| j.cells.len()).sum(),
+        partial: crate::run::read_partial(out),
+        overrides: plan.overrides.clone(),
+        bake: plan.bake.clone(),
+        cell_params: plan.cell_params.clone(),
         instances: base.instances.len(),
         scene_triangles,
         ..Report::default()
@@ -211,6 +231,20 @@ pub fn to_markdown(r: &Report) -> String {
         "{} cells in {} jobs; {} instances, {} triangles.\n",
         r.cells, r.jobs, r.instances, r.scene_triangles
     );
+    if let Some(p) = &r.partial {
+        let _ = writeln!(
+            m,
+            "**{}**: the averages below are over the baked cells only.\n",
+            p.line()
+        );
+    }
+    if !r.overrides.is_empty() {
+        let _ = writeln!(
+            m,
+            "Parameters overridden on the command line: `{}`.\n",
+            r.overrides.join("`, `")
+        );
+    }
     let _ = writeln!(m, "## Per-cell averages (paper 000, Tables 3–8)\n");
     let _ = writeln!(m, "| statistic | value |\n|---|---|");
     let rows = [

@@ -21,6 +21,15 @@ pub struct PlanFile {
     pub manifest: PathBuf,
     pub name: String,
     pub jobs: Vec<Job>,
+    /// `--set` overrides the run applied to the manifest (`KEY=VALUE`, canonical keys).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub overrides: Vec<String>,
+    /// The bake and cell parameters in effect (after overrides); absent in plans
+    /// written before they were recorded.
+    #[serde(default)]
+    pub bake: Option<format::manifest::BakeParams>,
+    #[serde(default)]
+    pub cell_params: Option<format::manifest::CellParams>,
 }
 
 /// A job that failed: `<out>/jobs/<id>.error` holds the message.
@@ -46,13 +55,27 @@ pub struct Loaded {
     pub scene: Scene,
     pub build: BuildPlan,
     pub out: PathBuf,
+    /// `--set` overrides applied to `plan` (canonical `KEY=VALUE`).
+    pub overrides: Vec<String>,
 }
 
 /// Parses the manifest, loads the scene and plans the jobs. `out` overrides the
 /// manifest's output directory.
 pub fn load(manifest: &Path, out: Option<&Path>) -> Result<Loaded, RunError> {
-    let plan =
+    load_with(manifest, out, &[])
+}
+
+/// [`load`] with `--set` overrides applied to the manifest's parameters before the
+/// jobs are planned (a cell-size override changes the grid).
+pub fn load_with(
+    manifest: &Path,
+    out: Option<&Path>,
+    overrides: &[crate::overrides::Override],
+) -> Result<Loaded, RunError> {
+    let mut plan =
         format::manifest::parse_manifest(manifest).map_err(|e| RunError::BadInput(e.into()))?;
+    crate::overrides::apply_overrides(&mut plan, overrides)
+        .map_err(|e| RunError::BadInput(e.into()))?;
     let scene = plan
         .load_scene()
         .map_err(|e| RunError::BadInput(e.into()))?;
@@ -65,6 +88,7 @@ pub fn load(manifest: &Path, out: Option<&Path>) -> Result<Loaded, RunError> {
         scene,
         build,
         out,
+        overrides: overrides.iter().map(|o| o.to_string()).collect(),
     })
 }
 
@@ -88,6 +112,9 @@ pub fn write_plan_and_base(l: &Loaded) -> Result<(), RunError> {
             .unwrap_or(l.plan.manifest_path.clone()),
         name: l.plan.name.clone(),
         jobs: l.build.jobs.clone(),
+        overrides: l.overrides.clone(),
+        bake: Some(l.plan.bake.clone()),
+        cell_params: Some(l.plan.cells.clone()),
     };
     let text = serde_json::to_vec_pretty(&plan_file).expect("plan serializes");
     format::pack::write_atomic(&l.out.join("plan.json"), &text).map_err(failed)?;
@@ -177,8 +204,7 @@ pub fn bake_local(l: &Loaded, jobs: &[Job], opts: &LocalOptions) -> Result<BakeO
 /// Writes `index.pack` from the done jobs (all must be done), checking each pack
 /// against its record. Returns the index.
 pub fn assemble(l: &Loaded) -> Result<Index, RunError> {
-    let mut entries = Vec::new();
-    let mut fps = Vec::new();
+    let mut done = Vec::new();
     for job in &l.build.jobs {
         let record = done_record(&l.out, job).ok_or_else(|| {
             failed(anyhow::anyhow!(
@@ -187,6 +213,37 @@ pub fn assemble(l: &Loaded) -> Result<Index, RunError> {
                 job.cells
             ))
         })?;
+        done.push((job, record));
+    }
+    write_index(l, &done)
+}
+
+/// Writes `index.pack` from whichever jobs are done (a `--cells` run): the index
+/// lists the cells of done jobs only, so the player draws every other cell as
+/// original geometry. Returns the index and the cells not baked (ascending).
+pub fn assemble_available(l: &Loaded) -> Result<(Index, Vec<u32>), RunError> {
+    let records: Vec<Option<JobRecord>> = l
+        .build
+        .jobs
+        .par_iter()
+        .map(|job| done_record(&l.out, job))
+        .collect();
+    let mut done = Vec::new();
+    let mut not_baked = Vec::new();
+    for (job, record) in l.build.jobs.iter().zip(records) {
+        match record {
+            Some(r) => done.push((job, r)),
+            None => not_baked.extend(job.cells.iter().copied()),
+        }
+    }
+    not_baked.sort_unstable();
+    Ok((write_index(l, &done)?, not_baked))
+}
+
+fn write_index(l: &Loaded, done: &[(&Job, JobRecord)]) -> Result<Index, RunError> {
+    let mut entries = Vec::new();
+    let mut fps = Vec::new();
+    for (job, record) in done {
         fps.push(job.fingerprint);
         for c in &record.cells {
             entries.push(IndexEntry {
@@ -266,6 +323,7 @@ pub fn run_local(l: &Loaded, force: bool, opts: &LocalOptions) -> Result<RunSumm
     let complete = outcome.failed.is_empty();
     if complete {
         assemble(l)?;
+        let _ = std::fs::remove_file(partial_path(&l.out));
         crate::report::write_report(&l.out).map_err(failed)?;
     }
     Ok(RunSummary {
@@ -278,4 +336,123 @@ pub fn run_local(l: &Loaded, force: bool, opts: &LocalOptions) -> Result<RunSumm
         wall_s: start.elapsed().as_secs_f64(),
         complete,
     })
+}
+
+/// `<out>/partial.json`: written by a `--cells` run that leaves cells unbaked, removed
+/// by any run after which every cell is baked.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Partial {
+    /// The `--cells` spec as given.
+    pub spec: String,
+    /// The cells the spec resolved to.
+    pub requested_cells: Vec<u32>,
+    /// Cells with a done pack (requested or not: jobs are baked whole).
+    pub baked_cells: usize,
+    /// Cells of the grid.
+    pub grid_cells: usize,
+    /// Cells not baked: not in the index, drawn as original geometry by the player.
+    pub not_baked_cells: Vec<u32>,
+    /// Requested cells that are not baked (their job failed); empty on success.
+    pub requested_not_baked: Vec<u32>,
+}
+
+impl Partial {
+    /// One line for people, e.g. `partial: 84 of 528 cells baked (62 requested: all baked)`.
+    pub fn line(&self) -> String {
+        let requested = if self.requested_not_baked.is_empty() {
+            "all baked".to_string()
+        } else {
+            format!("{} NOT baked", self.requested_not_baked.len())
+        };
+        format!(
+            "partial: {} of {} cells baked ({} requested by --cells {:?}: {}); cells not in the index are drawn as original geometry",
+            self.baked_cells,
+            self.grid_cells,
+            self.requested_cells.len(),
+            self.spec,
+            requested
+        )
+    }
+}
+
+pub fn partial_path(out: &Path) -> PathBuf {
+    out.join("partial.json")
+}
+
+/// Reads `<out>/partial.json`, if the bake is partial.
+pub fn read_partial(out: &Path) -> Option<Partial> {
+    serde_json::from_slice(&std::fs::read(partial_path(out)).ok()?).ok()
+}
+
+/// `pipeline run --cells` with the local executor: bakes only the jobs holding a
+/// selected cell (skipping those already done), then writes an index of every done
+/// cell, `partial.json` (or removes it when every cell turned out baked) and the
+/// report. The summary counts the selected jobs; it is `complete` when every
+/// selected job is done.
+pub fn run_local_selected(
+    l: &Loaded,
+    selection: &crate::subset::Selection,
+    force: bool,
+    opts: &LocalOptions,
+) -> Result<(RunSummary, Option<Partial>), RunError> {
+    let start = std::time::Instant::now();
+    // 1. Lock, plan and base, as for a full run.
+    std::fs::create_dir_all(&l.out).map_err(failed)?;
+    let _lock = OutputLock::acquire(&l.out).map_err(failed)?;
+    write_plan_and_base(l)?;
+    // 2. The selected jobs; with --force their records go.
+    let selected = crate::subset::jobs_for_cells(&l.build.jobs, &selection.cells);
+    if force {
+        for job in &selected {
+            let _ = std::fs::remove_file(worker::job::record_path(&l.out, job.id));
+        }
+    }
+    let missing: Vec<Job> = selected
+        .par_iter()
+        .filter(|j| done_record(&l.out, j).is_none())
+        .cloned()
+        .collect();
+    // 3. Bake them.
+    let outcome = bake_local(l, &missing, opts)?;
+    let complete = outcome.failed.is_empty();
+    // 4. Index of what is done, partial.json, report.
+    let mut partial = None;
+    if complete {
+        let (_, not_baked) = assemble_available(l)?;
+        let grid_cells = l.build.grid.cell_count() as usize;
+        let p = Partial {
+            spec: selection.spec.clone(),
+            requested_cells: selection.cells.iter().copied().collect(),
+            baked_cells: grid_cells - not_baked.len(),
+            grid_cells,
+            requested_not_baked: selection
+                .cells
+                .iter()
+                .copied()
+                .filter(|c| not_baked.binary_search(c).is_ok())
+                .collect(),
+            not_baked_cells: not_baked,
+        };
+        if p.not_baked_cells.is_empty() {
+            let _ = std::fs::remove_file(partial_path(&l.out));
+        } else {
+            let text = serde_json::to_vec_pretty(&p).expect("partial serializes");
+            format::pack::write_atomic(&partial_path(&l.out), &text).map_err(failed)?;
+            partial = Some(p);
+        }
+        crate::report::write_report(&l.out).map_err(failed)?;
+    }
+    Ok((
+        RunSummary {
+            out: l.out.clone(),
+            cells: selected.iter().map(|j| j.cells.len()).sum(),
+            jobs: selected.len(),
+            jobs_skipped: selected.len() - missing.len(),
+            jobs_baked: outcome.done.len(),
+            jobs_failed: outcome.failed,
+            wall_s: start.elapsed().as_secs_f64(),
+            complete,
+        },
+        partial,
+    ))
 }

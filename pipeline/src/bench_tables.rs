@@ -1,0 +1,1538 @@
+//! BENCHMARKS.md's measured tables, regenerated from `docs/bench/*.json`
+//! ([`crate::benchmarks`]) side by side with the paper's published numbers
+//! (000 §4: Tables 2–8 and Fig. 14, typed in below with their table and row).
+//!
+//! Each table lives between `<!-- bench:NAME begin -->` and `<!-- bench:NAME end -->`
+//! in the document; [`replace_sections`] rewrites only what is between the markers,
+//! so the hand-written text around them (explanations, "why we are worse") stays.
+
+use crate::benchmarks::{BakeResult, CompareResult, LoadTime, Merged, RenderResult};
+use crate::report::Report;
+use std::collections::{BTreeMap, BTreeSet};
+use std::fmt::Write;
+use std::path::Path;
+
+// ---------------------------------------------------------------------------------
+// The paper's numbers (000 = Chen et al. 2003). Scenes in the order 2M, 4M, 8M.
+
+/// The paper's scene names for our park scenes.
+pub const SCENES: [(&str, &str); 3] = [("park-2m", "2M"), ("park-4m", "4M"), ("park-8m", "8M")];
+
+/// Table 2, "Total" polygons of the 2M/4M/8M scenes (text of §4.1.1).
+pub const PAPER_SCENE_POLYGONS: [f64; 3] = [2_017_700.0, 4_188_885.0, 8_004_863.0];
+
+/// One row of a paper table: our statistic's name and the paper's values per column.
+pub struct PaperRow {
+    pub name: &'static str,
+    pub values: &'static [f64],
+}
+
+/// Table 7 "Performance of configuration C for different scene complexities"
+/// (2M, 4M, 8M; all with cell size 50, T_s 5, T_l 4.5).
+pub mod table7 {
+    pub const POLYGONS_INSIDE_A_VIEWCELL: [f64; 3] = [4_145.0, 9_308.0, 18_302.0];
+    pub const POLYGONS_SV_AND_MV: [f64; 3] = [18_829.0, 39_981.0, 75_891.0];
+    pub const POLYGONS_FOR_A_VIEWCELL: [f64; 3] = [22_974.0, 49_290.0, 94_193.0];
+    /// "Simplified:original" as 1:x.
+    pub const SIMPLIFIED_TO_ORIGINAL: [f64; 3] = [87.8, 85.0, 85.0];
+    pub const FPS: [f64; 3] = [353.3, 278.0, 220.4];
+    pub const PSNR_DB: [f64; 3] = [44.92, 39.54, 37.34];
+    pub const TEXTURE_KB_IN_FRUSTUM: [f64; 3] = [112.4, 544.1, 992.4];
+    /// "Avg. polygon count inside view frustum" (outside the parenthesis).
+    pub const POLYGONS_IN_FRUSTUM: [f64; 3] = [4_548.0, 13_102.0, 23_580.0];
+}
+
+/// Table 3 "Simplification performance under different T_s" (4M-50-T_s-4.5),
+/// columns T_s = 3, 5, 7.
+pub mod table3 {
+    pub const T_S: [f64; 3] = [3.0, 5.0, 7.0];
+    pub const SV_CLUSTERED_PERCENT: [f64; 3] = [9.8, 18.7, 25.5];
+    pub const SV_SINGLE_PERCENT: [f64; 3] = [64.8, 64.9, 62.4];
+    pub const MV_PERCENT: [f64; 3] = [25.3, 16.3, 12.1];
+    pub const POLYGONS_INSIDE_A_VIEWCELL: [f64; 3] = [9_308.0, 9_308.0, 9_308.0];
+    pub const POLYGONS_SV_AND_MV: [f64; 3] = [40_742.0, 39_981.0, 39_360.0];
+    pub const POLYGONS_FOR_A_VIEWCELL: [f64; 3] = [50_050.0, 49_290.0, 48_669.0];
+    pub const SIMPLIFIED_TO_ORIGINAL: [f64; 3] = [83.7, 85.0, 86.1];
+    pub const FPS: [f64; 3] = [271.5, 278.0, 281.9];
+    pub const PSNR_DB: [f64; 3] = [39.64, 39.54, 39.46];
+}
+
+/// Table 4 "Simplification performance under different T_l" (4M-50-5-T_l),
+/// columns T_l = 3.0, 4.5, 6.0.
+pub mod table4 {
+    pub const T_L: [f64; 3] = [3.0, 4.5, 6.0];
+    pub const POLYGONS_INSIDE_A_VIEWCELL: [f64; 3] = [9_308.0, 9_308.0, 9_308.0];
+    pub const POLYGONS_SV_AND_MV: [f64; 3] = [46_249.0, 39_981.0, 35_226.0];
+    pub const POLYGONS_FOR_A_VIEWCELL: [f64; 3] = [55_557.0, 49_290.0, 44_535.0];
+    pub const SIMPLIFIED_TO_ORIGINAL: [f64; 3] = [75.4, 85.0, 94.1];
+    pub const FPS: [f64; 3] = [265.4, 278.0, 289.2];
+    pub const PSNR_DB: [f64; 3] = [39.98, 39.54, 39.13];
+}
+
+/// Table 5 "4M scene under different cell sizes 50 and 100".
+pub mod table5 {
+    pub const CELL_SIZE: [f64; 2] = [50.0, 100.0];
+    /// "Viewcells" 22×24 and 11×12.
+    pub const VIEWCELLS: [&str; 2] = ["22 × 24", "11 × 12"];
+    pub const POLYGONS_INSIDE_A_VIEWCELL: [f64; 2] = [9_308.0, 38_986.0];
+    pub const POLYGONS_SV_AND_MV: [f64; 2] = [39_981.0, 45_356.0];
+    pub const POLYGONS_FOR_A_VIEWCELL: [f64; 2] = [49_290.0, 84_342.0];
+    pub const SIMPLIFIED_TO_ORIGINAL: [f64; 2] = [85.0, 49.7];
+    pub const FPS: [f64; 2] = [278.0, 255.5];
+    pub const PSNR_DB: [f64; 2] = [39.54, 39.62];
+}
+
+/// Table 6 "Performance of the three configurations on a 8M-scene" (A, B, C).
+pub mod table6 {
+    pub const POLYGONS: [f64; 3] = [8_004_863.0, 2_443_969.0, 23_580.0];
+    pub const FRAME_TIME_MS: [f64; 3] = [1_247.0, 349.1, 4.54];
+    pub const FPS: [f64; 3] = [0.802, 2.864, 220.4];
+    pub const SPEEDUP: [f64; 3] = [1.0, 3.57, 274.8];
+}
+
+/// Table 8 "Storage and loading time for different scene complexities" (2M, 4M, 8M).
+pub mod table8 {
+    /// "Total secondary storage requirement (MB)".
+    pub const SV_MV_MB: [f64; 3] = [101.4, 218.6, 408.8];
+    pub const TEXTURES_MB: [f64; 3] = [209.3, 440.5, 850.8];
+    pub const TOTAL_MB: [f64; 3] = [310.7, 659.1, 1_260.0];
+    pub const ORIGINAL_MESHES_MB: [f64; 3] = [27.8, 59.6, 112.6];
+    /// "Average run-time requirement (KB) for a cell".
+    pub const CELL_POLYGONS_KB: [f64; 3] = [71.4, 154.2, 287.2];
+    pub const CELL_TEXTURES_KB: [f64; 3] = [481.2, 1_011.0, 1_965.0];
+    pub const CELL_TOTAL_KB: [f64; 3] = [552.6, 1_165.0, 2_252.0];
+    /// "Average loading time (ms) for a cell" at 55 and 35 MB/s.
+    pub const LOAD_MS_55: [f64; 3] = [10.0, 21.2, 41.0];
+    pub const LOAD_MS_35: [f64; 3] = [15.8, 33.3, 64.4];
+}
+
+// ---------------------------------------------------------------------------------
+// Markers.
+
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum MarkerError {
+    #[error("no `<!-- bench:{name} {which} -->` marker in the document (the generator writes section `{name}`)")]
+    Missing { name: String, which: &'static str },
+    #[error("marker `<!-- bench:{name} {which} -->` appears {count} times")]
+    Duplicate {
+        name: String,
+        which: &'static str,
+        count: usize,
+    },
+    #[error("`<!-- bench:{name} end -->` comes before its begin marker")]
+    OutOfOrder { name: String },
+    #[error(
+        "the document has a section `bench:{name}` the generator does not know (known: {known})"
+    )]
+    Unknown { name: String, known: String },
+}
+
+fn marker(name: &str, which: &str) -> String {
+    format!("<!-- bench:{name} {which} -->")
+}
+
+/// Replaces the text between each section's begin and end markers with the section
+/// (followed by a newline); everything outside markers is kept byte for byte. Every
+/// section must have exactly one begin and one end marker, in order, and every
+/// `bench:` marker in the document must name a known section.
+pub fn replace_sections(
+    doc: &str,
+    sections: &BTreeMap<String, String>,
+) -> Result<String, MarkerError> {
+    // Unknown sections in the document (a typo would otherwise go stale silently).
+    let mut found = BTreeSet::new();
+    for (i, _) in doc.match_indices("<!-- bench:") {
+        let rest = &doc[i + "<!-- bench:".len()..];
+        if let Some(name) = rest.split_whitespace().next() {
+            found.insert(name.to_string());
+        }
+    }
+    for name in &found {
+        if !sections.contains_key(name) {
+            return Err(MarkerError::Unknown {
+                name: name.clone(),
+                known: sections.keys().cloned().collect::<Vec<_>>().join(", "),
+            });
+        }
+    }
+    // Locate every section's markers first, then splice from the back.
+    let mut spans = Vec::new();
+    for name in sections.keys() {
+        let at = |which: &'static str| -> Result<(usize, usize), MarkerError> {
+            let m = marker(name, which);
+            let hits: Vec<usize> = doc.match_indices(&m).map(|(i, _)| i).collect();
+            match hits.len() {
+                0 => Err(MarkerError::Missing {
+                    name: name.clone(),
+                    which,
+                }),
+                1 => Ok((hits[0], hits[0] + m.len())),
+                count => Err(MarkerError::Duplicate {
+                    name: name.clone(),
+                    which,
+                    count,
+                }),
+            }
+        };
+        let (_, begin_end) = at("begin")?;
+        let (end_start, _) = at("end")?;
+        if end_start < begin_end {
+            return Err(MarkerError::OutOfOrder { name: name.clone() });
+        }
+        spans.push((begin_end, end_start, name));
+    }
+    spans.sort();
+    let mut out = String::with_capacity(doc.len());
+    let mut pos = 0;
+    for (start, end, name) in spans {
+        out.push_str(&doc[pos..start]);
+        out.push('\n');
+        let body = &sections[name];
+        out.push_str(body.trim_end_matches('\n'));
+        out.push('\n');
+        pos = end;
+    }
+    out.push_str(&doc[pos..]);
+    Ok(out)
+}
+
+// ---------------------------------------------------------------------------------
+// Number formatting.
+
+/// `1234567.8` → `1,234,568`; NaN → `–`.
+pub fn int(v: f64) -> String {
+    if !v.is_finite() {
+        return "–".into();
+    }
+    let n = v.round() as i64;
+    let digits = n.unsigned_abs().to_string();
+    let mut s = String::new();
+    for (i, ch) in digits.chars().enumerate() {
+        if i > 0 && (digits.len() - i).is_multiple_of(3) {
+            s.push(',');
+        }
+        s.push(ch);
+    }
+    if n < 0 {
+        format!("−{s}")
+    } else {
+        s
+    }
+}
+
+/// Fixed decimals; NaN → `–`.
+pub fn fixed(v: f64, decimals: usize) -> String {
+    if v.is_finite() {
+        format!("{v:.decimals$}")
+    } else {
+        "–".into()
+    }
+}
+
+fn ratio(v: f64) -> String {
+    if v.is_finite() && v > 0.0 {
+        format!("1:{v:.1}")
+    } else {
+        "–".into()
+    }
+}
+
+fn mb(bytes: f64) -> f64 {
+    bytes / 1e6
+}
+
+fn kb(bytes: f64) -> f64 {
+    bytes / 1e3
+}
+
+/// `better` / `worse` / `≈` (within 5%) of ours against the paper's value, for a
+/// metric where lower is better (triangles, bytes, time).
+fn verdict(ours: f64, paper: f64) -> String {
+    if !ours.is_finite() || !paper.is_finite() || paper == 0.0 {
+        return String::new();
+    }
+    let rel = ours / paper;
+    if (rel - 1.0).abs() <= 0.05 {
+        return "≈".into();
+    }
+    let ours_better = rel < 1.0;
+    let factor = if rel >= 1.0 { rel } else { 1.0 / rel };
+    format!(
+        "{} ({factor:.1}× {})",
+        if ours_better { "better" } else { "worse" },
+        if rel >= 1.0 { "higher" } else { "lower" }
+    )
+}
+
+/// Like [`verdict`] for dB values: a difference, not a ratio.
+fn verdict_db(ours: f64, paper: f64) -> String {
+    if !ours.is_finite() || !paper.is_finite() {
+        return String::new();
+    }
+    let d = ours - paper;
+    if d.abs() <= 0.5 {
+        "≈".into()
+    } else if d > 0.0 {
+        format!("better (+{d:.1} dB)")
+    } else {
+        format!("worse ({d:.1} dB)")
+    }
+}
+
+const NOT_MEASURED: &str = "_Not measured yet: run `scripts/bench.sh`._";
+
+// ---------------------------------------------------------------------------------
+// Lookups in the merged results.
+
+struct Ctx<'a> {
+    m: &'a Merged,
+    /// Folder of the plots as the document links them (e.g. `docs/bench`).
+    plot_prefix: &'a str,
+    /// Run files that contributed to the output (for the machine section).
+    used: std::cell::RefCell<BTreeSet<String>>,
+}
+
+impl<'a> Ctx<'a> {
+    fn bake(&self, label: &str) -> Option<&'a BakeResult> {
+        let (file, b) = self.m.bakes.get(label)?;
+        self.used.borrow_mut().insert(file.clone());
+        Some(b)
+    }
+    fn compare(&self, label: &str) -> Option<&'a CompareResult> {
+        let (file, c) = self.m.compares.get(label)?;
+        self.used.borrow_mut().insert(file.clone());
+        Some(c)
+    }
+    fn render(&self, label: &str) -> Option<&'a RenderResult> {
+        let (file, r) = self.m.renders.get(label)?;
+        self.used.borrow_mut().insert(file.clone());
+        Some(r)
+    }
+    fn load(&self, label: &str) -> Option<&'a LoadTime> {
+        let (file, l) = self.m.load_times.get(label)?;
+        self.used.borrow_mut().insert(file.clone());
+        Some(l)
+    }
+    /// The bake standing for a scene at the paper's settings: the full bake if there
+    /// is one, else the path-only (partial) bake.
+    fn scene_bake(&self, scene: &str) -> Option<(&'static str, &'a BakeResult)> {
+        if let Some(b) = self.bake(scene).filter(|b| b.report.is_some()) {
+            return Some(("", b));
+        }
+        self.bake(&format!("{scene}-path"))
+            .filter(|b| b.report.is_some())
+            .map(|b| ("path", b))
+    }
+    /// The bake the player ran on for a scene (the label the compare names).
+    fn hybrid_compare(&self, scene: &str) -> Option<&'a CompareResult> {
+        self.compare(&format!("{scene}-hybrid"))
+    }
+}
+
+/// A statistic row: name, the paper's values, our value from a report, formatting.
+type StatRow<P> = (&'static str, P, fn(&Report) -> f64, fn(f64) -> String);
+
+/// "(84 of 528 cells)" for a partial report.
+fn coverage(r: &Report) -> String {
+    if r.grid_cells > 0 && r.cells < r.grid_cells {
+        format!(" ({} of {} cells)", r.cells, r.grid_cells)
+    } else {
+        String::new()
+    }
+}
+
+/// A table header: the first column left-aligned, the others right-aligned
+/// (numbers).
+fn table_header(m: &mut String, cols: &[String]) {
+    let _ = writeln!(m, "| {} |", cols.join(" | "));
+    let _ = writeln!(
+        m,
+        "|{}",
+        cols.iter()
+            .enumerate()
+            .map(|(i, _)| if i == 0 { "---|" } else { "---:|" })
+            .collect::<String>()
+    );
+}
+
+/// A table header with every column left-aligned (text).
+fn text_table_header(m: &mut String, cols: &[String]) {
+    let _ = writeln!(m, "| {} |", cols.join(" | "));
+    let _ = writeln!(m, "|{}", "---|".repeat(cols.len()));
+}
+
+fn row(m: &mut String, cells: &[String]) {
+    let _ = writeln!(m, "| {} |", cells.join(" | "));
+}
+
+// ---------------------------------------------------------------------------------
+// Sections.
+
+/// Every section the generator writes, by marker name; plots are linked as
+/// `<plot_prefix>/<scene>-walk.png`.
+pub fn sections(m: &Merged, plot_prefix: &str) -> BTreeMap<String, String> {
+    let ctx = Ctx {
+        m,
+        plot_prefix,
+        used: Default::default(),
+    };
+    let mut s = BTreeMap::new();
+    s.insert("per-cell".to_string(), per_cell(&ctx));
+    s.insert("sweep-ts".to_string(), sweep(&ctx, "T_s"));
+    s.insert("sweep-tl".to_string(), sweep(&ctx, "T_l"));
+    s.insert("sweep-cell".to_string(), sweep(&ctx, "cell_size"));
+    s.insert("runtime".to_string(), runtime(&ctx));
+    s.insert("hybrid-vs-lod".to_string(), hybrid_vs_lod(&ctx));
+    s.insert("crossings".to_string(), crossings(&ctx));
+    s.insert("storage".to_string(), storage(&ctx));
+    s.insert("bake-time".to_string(), bake_time(&ctx));
+    s.insert("plots".to_string(), plots(&ctx));
+    // Last: it lists the runs the other sections used.
+    s.insert("machine".to_string(), machine(&ctx));
+    s
+}
+
+/// Tables 3–8's per-cell statistics per scene (Table 7's rows; the percentages are
+/// Table 3's T_s = 5 column, the paper's only published split).
+fn per_cell(ctx: &Ctx) -> String {
+    let mut m = String::new();
+    let bakes: Vec<_> = SCENES.iter().map(|(s, _)| ctx.scene_bake(s)).collect();
+    if bakes.iter().all(Option::is_none) {
+        return NOT_MEASURED.into();
+    }
+    let mut cols = vec!["per cell (c 50, T_s 5, T_l 4.5)".to_string()];
+    for ((_, paper), b) in SCENES.iter().zip(&bakes) {
+        cols.push(format!("{paper} paper"));
+        cols.push(match b.and_then(|(_, b)| b.report.as_ref()) {
+            Some(r) => format!("{paper} ours{}", coverage(r)),
+            None => format!("{paper} ours"),
+        });
+    }
+    table_header(&mut m, &cols);
+    let rows: [StatRow<[f64; 3]>; 9] = [
+        (
+            "polygons inside a cell (Table 7)",
+            table7::POLYGONS_INSIDE_A_VIEWCELL,
+            |r| r.per_cell.polygons_inside_a_cell,
+            int,
+        ),
+        (
+            "SVMesh from clustered objects % (Table 3)",
+            [f64::NAN, table3::SV_CLUSTERED_PERCENT[1], f64::NAN],
+            |r| r.per_cell.sv_clustered_percent,
+            |v| fixed(v, 1),
+        ),
+        (
+            "SVMesh from single objects % (Table 3)",
+            [f64::NAN, table3::SV_SINGLE_PERCENT[1], f64::NAN],
+            |r| r.per_cell.sv_single_percent,
+            |v| fixed(v, 1),
+        ),
+        (
+            "MVMesh % (Table 3)",
+            [f64::NAN, table3::MV_PERCENT[1], f64::NAN],
+            |r| r.per_cell.mv_percent,
+            |v| fixed(v, 1),
+        ),
+        (
+            "culled objects %",
+            [f64::NAN; 3],
+            |r| r.per_cell.culled_percent,
+            |v| fixed(v, 1),
+        ),
+        (
+            "polygons of SVMesh & MVMesh (Table 7)",
+            table7::POLYGONS_SV_AND_MV,
+            |r| r.per_cell.polygons_sv_and_mv,
+            int,
+        ),
+        (
+            "polygons for a cell (Table 7)",
+            table7::POLYGONS_FOR_A_VIEWCELL,
+            |r| r.per_cell.polygons_for_a_cell,
+            int,
+        ),
+        (
+            "simplified : original (Table 7)",
+            table7::SIMPLIFIED_TO_ORIGINAL,
+            |r| r.per_cell.simplified_to_original,
+            ratio,
+        ),
+        (
+            "texture texels per cell, KB raw RGBA8 (paper: DXT3 KB × 4, Table 8)",
+            [
+                table8::CELL_TEXTURES_KB[0] * 4.0,
+                table8::CELL_TEXTURES_KB[1] * 4.0,
+                table8::CELL_TEXTURES_KB[2] * 4.0,
+            ],
+            |r| r.per_cell.texture_kb * 1.024,
+            int,
+        ),
+    ];
+    for (name, paper, pick, fmt) in rows {
+        let mut cells = vec![name.to_string()];
+        for (k, b) in bakes.iter().enumerate() {
+            cells.push(fmt(paper[k]));
+            cells.push(
+                b.and_then(|(_, b)| b.report.as_ref())
+                    .map_or("–".into(), |r| fmt(pick(r))),
+            );
+        }
+        row(&mut m, &cells);
+    }
+    let _ = writeln!(
+        &mut m,
+        "\nOurs: `report.json` of each bake (`pipeline report`), averaged over the baked cells; \
+         a scene marked \"N of M cells\" was baked only along `park-walk.ron` (`--cells path:`), \
+         whose cells are not a uniform sample of the park."
+    );
+    m
+}
+
+/// Tables 3 / 4 / 5: one sweep over the fixed cell sample.
+fn sweep(ctx: &Ctx, param: &str) -> String {
+    let mut points: Vec<(f64, &BakeResult)> = ctx
+        .m
+        .bakes
+        .values()
+        .map(|(_, b)| b)
+        .filter(|b| b.report.is_some())
+        .filter_map(|b| {
+            let point = b.sweeps.iter().find(|s| s.param == param)?;
+            Some((point.value, b))
+        })
+        .collect();
+    points.sort_by(|a, b| a.0.total_cmp(&b.0));
+    for (_, b) in &points {
+        ctx.bake(&b.label);
+    }
+    if points.is_empty() {
+        return NOT_MEASURED.into();
+    }
+    let (table, paper_values, symbol): (&str, &[f64], &str) = match param {
+        "T_s" => ("Table 3", &table3::T_S, "T_s"),
+        "T_l" => ("Table 4", &table4::T_L, "T_l"),
+        _ => ("Table 5", &table5::CELL_SIZE, "cell size"),
+    };
+    let paper_col = |v: f64| paper_values.iter().position(|p| (p - v).abs() < 1e-6);
+    let mut cols = vec![format!("4M, {symbol} ({table})")];
+    for (v, b) in &points {
+        let cells = b.report.as_ref().map_or(0, |r| r.cells);
+        cols.push(format!("{symbol} {v} paper"));
+        cols.push(format!("{symbol} {v} ours ({cells} cells)"));
+    }
+    let mut m = String::new();
+    table_header(&mut m, &cols);
+    let paper_rows: Vec<StatRow<Vec<f64>>> = match param {
+        "T_s" => vec![
+            (
+                "SVMesh from clustered objects %",
+                table3::SV_CLUSTERED_PERCENT.to_vec(),
+                |r| r.per_cell.sv_clustered_percent,
+                |v| fixed(v, 1),
+            ),
+            (
+                "SVMesh from single objects %",
+                table3::SV_SINGLE_PERCENT.to_vec(),
+                |r| r.per_cell.sv_single_percent,
+                |v| fixed(v, 1),
+            ),
+            (
+                "MVMesh %",
+                table3::MV_PERCENT.to_vec(),
+                |r| r.per_cell.mv_percent,
+                |v| fixed(v, 1),
+            ),
+            (
+                "polygons inside a cell",
+                table3::POLYGONS_INSIDE_A_VIEWCELL.to_vec(),
+                |r| r.per_cell.polygons_inside_a_cell,
+                int,
+            ),
+            (
+                "polygons of SVMesh & MVMesh",
+                table3::POLYGONS_SV_AND_MV.to_vec(),
+                |r| r.per_cell.polygons_sv_and_mv,
+                int,
+            ),
+            (
+                "polygons for a cell",
+                table3::POLYGONS_FOR_A_VIEWCELL.to_vec(),
+                |r| r.per_cell.polygons_for_a_cell,
+                int,
+            ),
+            (
+                "simplified : original",
+                table3::SIMPLIFIED_TO_ORIGINAL.to_vec(),
+                |r| r.per_cell.simplified_to_original,
+                ratio,
+            ),
+        ],
+        "T_l" => vec![
+            (
+                "polygons inside a cell",
+                table4::POLYGONS_INSIDE_A_VIEWCELL.to_vec(),
+                |r| r.per_cell.polygons_inside_a_cell,
+                int,
+            ),
+            (
+                "polygons of SVMesh & MVMesh",
+                table4::POLYGONS_SV_AND_MV.to_vec(),
+                |r| r.per_cell.polygons_sv_and_mv,
+                int,
+            ),
+            (
+                "polygons for a cell",
+                table4::POLYGONS_FOR_A_VIEWCELL.to_vec(),
+                |r| r.per_cell.polygons_for_a_cell,
+                int,
+            ),
+            (
+                "simplified : original",
+                table4::SIMPLIFIED_TO_ORIGINAL.to_vec(),
+                |r| r.per_cell.simplified_to_original,
+                ratio,
+            ),
+        ],
+        _ => vec![
+            (
+                "polygons inside a cell",
+                table5::POLYGONS_INSIDE_A_VIEWCELL.to_vec(),
+                |r| r.per_cell.polygons_inside_a_cell,
+                int,
+            ),
+            (
+                "polygons of SVMesh & MVMesh",
+                table5::POLYGONS_SV_AND_MV.to_vec(),
+                |r| r.per_cell.polygons_sv_and_mv,
+                int,
+            ),
+            (
+                "polygons for a cell",
+                table5::POLYGONS_FOR_A_VIEWCELL.to_vec(),
+                |r| r.per_cell.polygons_for_a_cell,
+                int,
+            ),
+            (
+                "simplified : original",
+                table5::SIMPLIFIED_TO_ORIGINAL.to_vec(),
+                |r| r.per_cell.simplified_to_original,
+                ratio,
+            ),
+        ],
+    };
+    if param == "cell_size" {
+        let mut cells = vec!["cells (grid)".to_string()];
+        for (v, b) in &points {
+            cells.push(
+                paper_col(*v)
+                    .map(|i| table5::VIEWCELLS[i].to_string())
+                    .unwrap_or("–".into()),
+            );
+            cells.push(
+                b.report
+                    .as_ref()
+                    .map_or("–".into(), |r| int(r.grid_cells as f64)),
+            );
+        }
+        row(&mut m, &cells);
+    }
+    for (name, paper, pick, fmt) in paper_rows {
+        let mut cells = vec![name.to_string()];
+        for (v, b) in &points {
+            cells.push(paper_col(*v).map_or("–".into(), |i| fmt(paper[i])));
+            cells.push(b.report.as_ref().map_or("–".into(), |r| fmt(pick(r))));
+        }
+        row(&mut m, &cells);
+    }
+    // The other Tables 3–5 rows where we have a counterpart.
+    let mut cells = vec!["culled objects %".to_string()];
+    for (_, b) in &points {
+        cells.push("–".into());
+        cells.push(
+            b.report
+                .as_ref()
+                .map_or("–".into(), |r| fixed(r.per_cell.culled_percent, 1)),
+        );
+    }
+    row(&mut m, &cells);
+    let sample: BTreeSet<String> = points.iter().filter_map(|(_, b)| b.cells.clone()).collect();
+    let scenes: BTreeSet<&str> = points.iter().map(|(_, b)| b.scene.as_str()).collect();
+    let _ = writeln!(
+        &mut m,
+        "\nPaper: averages over all cells of the 4M scene. Ours: averages over the cells \
+         baked with `--cells {}` on `{}` (one job per cell), i.e. a fixed sample of \
+         centre, edge and corner cells, not the whole grid. The paper's FPS and PSNR rows \
+         need a path bake per setting and are not re-run here.",
+        sample.into_iter().collect::<Vec<_>>().join("` / `"),
+        scenes.into_iter().collect::<Vec<_>>().join("`, `")
+    );
+    m
+}
+
+/// Tables 6–7: the player along the path.
+fn runtime(ctx: &Ctx) -> String {
+    let mut m = String::new();
+    let compares: Vec<_> = SCENES
+        .iter()
+        .map(|(s, _)| ctx.hybrid_compare(s).filter(|c| c.available))
+        .collect();
+    if compares.iter().all(Option::is_none) {
+        return NOT_MEASURED.into();
+    }
+    let paths: BTreeSet<String> = compares
+        .iter()
+        .flatten()
+        .map(|c| {
+            Path::new(&c.path)
+                .file_name()
+                .map_or(c.path.clone(), |n| n.to_string_lossy().into_owned())
+        })
+        .collect();
+    let mut cols = vec![format!(
+        "along `{}`",
+        paths.into_iter().collect::<Vec<_>>().join("`, `")
+    )];
+    for ((_, paper), c) in SCENES.iter().zip(&compares) {
+        cols.push(format!("{paper} paper"));
+        cols.push(match c {
+            Some(c) => format!(
+                "{paper} ours ({} frames, {})",
+                c.summary.as_ref().map_or(0, |s| s.frames),
+                c.size
+            ),
+            None => format!("{paper} ours"),
+        });
+        cols.push("vs paper".to_string());
+    }
+    table_header(&mut m, &cols);
+    let frustum: Vec<Option<&RenderResult>> = SCENES
+        .iter()
+        .map(|(s, _)| ctx.render(&format!("{s}-frustum")).filter(|r| r.available))
+        .collect();
+    let hybrid_render: Vec<Option<&RenderResult>> = SCENES
+        .iter()
+        .map(|(s, _)| ctx.render(&format!("{s}-hybrid")).filter(|r| r.available))
+        .collect();
+    let paper_a = |k: usize| {
+        if k == 2 {
+            table6::POLYGONS[0]
+        } else {
+            PAPER_SCENE_POLYGONS[k]
+        }
+    };
+    let mut add = |name: &str,
+                   paper: [f64; 3],
+                   ours: [f64; 3],
+                   fmt: fn(f64) -> String,
+                   v: &dyn Fn(f64, f64) -> String| {
+        let mut cells = vec![name.to_string()];
+        for k in 0..3 {
+            cells.push(fmt(paper[k]));
+            cells.push(fmt(ours[k]));
+            cells.push(v(ours[k], paper[k]));
+        }
+        row(&mut m, &cells);
+    };
+    let s = |k: usize| compares[k].and_then(|c| c.summary.as_ref());
+    let per = |f: &dyn Fn(usize) -> f64| [f(0), f(1), f(2)];
+    let nan = f64::NAN;
+    add(
+        "triangles per frame, C hybrid (Tables 6–7)",
+        table7::POLYGONS_IN_FRUSTUM,
+        per(&|k| s(k).map_or(nan, |s| s.mean_triangles)),
+        int,
+        &|o, p| verdict(o, p),
+    );
+    add(
+        "triangles per frame, B frustum (Table 6)",
+        [nan, nan, table6::POLYGONS[1]],
+        per(&|k| frustum[k].map_or(nan, |r| r.mean_triangles())),
+        int,
+        &|_, _| String::new(),
+    );
+    add(
+        "triangles per frame, A full (Table 6; 2M/4M: scene)",
+        per(&paper_a),
+        per(&|k| s(k).map_or(nan, |s| s.reference_triangles)),
+        int,
+        &|_, _| String::new(),
+    );
+    add(
+        "PSNR(Y) mean, dB (Table 7)",
+        table7::PSNR_DB,
+        per(&|k| s(k).map_or(nan, |s| s.mean_psnr_y)),
+        |v| fixed(v, 2),
+        &verdict_db,
+    );
+    add(
+        "PSNR(Y) min, dB",
+        [nan; 3],
+        per(&|k| s(k).map_or(nan, |s| s.min_psnr_y)),
+        |v| fixed(v, 2),
+        &|_, _| String::new(),
+    );
+    add(
+        "SSIM(Y) mean",
+        [nan; 3],
+        per(&|k| s(k).map_or(nan, |s| s.mean_ssim)),
+        |v| fixed(v, 4),
+        &|_, _| String::new(),
+    );
+    add(
+        "SSIM(Y) min",
+        [nan; 3],
+        per(&|k| s(k).map_or(nan, |s| s.min_ssim())),
+        |v| fixed(v, 4),
+        &|_, _| String::new(),
+    );
+    add(
+        "frame time C / B frustum (Table 6)",
+        [
+            nan,
+            nan,
+            table6::FRAME_TIME_MS[2] / table6::FRAME_TIME_MS[1],
+        ],
+        per(&|k| s(k).map_or(nan, |s| s.frame_time_ratio_frustum)),
+        |v| fixed(v, 4),
+        &|o, p| verdict(o, p),
+    );
+    add(
+        "frame time C / A full (Table 6)",
+        [
+            nan,
+            nan,
+            table6::FRAME_TIME_MS[2] / table6::FRAME_TIME_MS[0],
+        ],
+        per(&|k| s(k).map_or(nan, |s| s.frame_time_ratio)),
+        |v| fixed(v, 4),
+        &|o, p| verdict(o, p),
+    );
+    add(
+        "C frame time, ms (mean)",
+        [nan, nan, table6::FRAME_TIME_MS[2]],
+        per(&|k| s(k).map_or(nan, |s| s.mean_ms(|f| f.frame_ms))),
+        |v| fixed(v, 2),
+        &|_, _| String::new(),
+    );
+    add(
+        "C frames per second (Table 7)",
+        table7::FPS,
+        per(&|k| s(k).map_or(nan, |s| 1e3 / s.mean_ms(|f| f.frame_ms))),
+        |v| fixed(v, 1),
+        &|_, _| String::new(),
+    );
+    add(
+        "C with streaming (`player render`), ms (mean)",
+        [nan; 3],
+        per(&|k| hybrid_render[k].map_or(nan, |r| r.mean_frame_ms())),
+        |v| fixed(v, 2),
+        &|_, _| String::new(),
+    );
+    let adapters: BTreeSet<String> = compares
+        .iter()
+        .flatten()
+        .filter_map(|c| c.summary.as_ref().map(|s| s.adapter.clone()))
+        .filter(|a| !a.is_empty())
+        .collect();
+    let _ = writeln!(
+        &mut m,
+        "\nPaper: GeForce4 Ti 4400, 1024². Ours: `player compare` (C vs A, PSNR/SSIM on Y) and \
+         `player render --mode frustum|hybrid` on {}. Frame times on a software rasterizer are \
+         not the paper's GPU frame times; the ratios are the comparable part. Our polygon \
+         counts are whole-frame triangles after per-instance/per-proxy frustum culling; the \
+         paper's are polygons inside the view frustum.",
+        if adapters.is_empty() {
+            "the adapter the player reported".to_string()
+        } else {
+            adapters.into_iter().collect::<Vec<_>>().join(", ")
+        }
+    );
+    m
+}
+
+/// Linear interpolation of y at `x0` on the first segment of `points` (sorted by x)
+/// that brackets it; None outside the measured range.
+pub fn interpolate(points: &[(f64, f64)], x0: f64) -> Option<f64> {
+    points.windows(2).find_map(|w| {
+        let ((xa, ya), (xb, yb)) = (w[0], w[1]);
+        if xa <= x0 && x0 <= xb {
+            Some(if xb > xa {
+                ya + (yb - ya) * (x0 - xa) / (xb - xa)
+            } else {
+                ya
+            })
+        } else {
+            None
+        }
+    })
+}
+
+/// Hybrid (the bake) against the distance-LOD baseline (`player compare --mode
+/// lod`, one row per `--lod-pixel-error`), and the comparison at equal triangles
+/// (lod PSNR interpolated at the hybrid's triangle count, on log triangles) and at
+/// equal PSNR (lod triangles interpolated at the hybrid's PSNR).
+fn hybrid_vs_lod(ctx: &Ctx) -> String {
+    let mut m = String::new();
+    let mut any = false;
+    table_header(
+        &mut m,
+        &[
+            "scene".into(),
+            "mode".into(),
+            "triangles per frame".into(),
+            "PSNR(Y) mean / min".into(),
+            "SSIM mean / min".into(),
+            "frame time / full".into(),
+        ],
+    );
+    let mut notes = Vec::new();
+    for (scene, paper) in SCENES {
+        let h = ctx.hybrid_compare(scene);
+        let lod_prefix = format!("{scene}-lod");
+        let lods: Vec<&CompareResult> = ctx
+            .m
+            .compares
+            .keys()
+            .filter(|k| **k == lod_prefix || k.starts_with(&format!("{lod_prefix}-")))
+            .filter_map(|k| ctx.compare(k))
+            .collect();
+        if h.is_none() && lods.is_empty() {
+            continue;
+        }
+        any = true;
+        let mut entries: Vec<(String, Option<&CompareResult>)> = vec![("hybrid".into(), h)];
+        if lods.is_empty() {
+            entries.push(("lod".into(), None));
+        }
+        for l in &lods {
+            let err = l
+                .summary
+                .as_ref()
+                .and_then(|s| s.lod_pixel_error)
+                .or(l.lod_pixel_error);
+            let name = match err {
+                Some(e) => format!("lod, {e} px"),
+                None => "lod".into(),
+            };
+            entries.push((name, Some(l)));
+        }
+        let mut hybrid_point = None;
+        let mut lod_points = Vec::new();
+        for (mode, c) in entries {
+            match c.and_then(|c| c.summary.as_ref().filter(|_| c.available)) {
+                Some(s) => {
+                    if mode == "hybrid" {
+                        hybrid_point = Some((s.mean_triangles, s.mean_psnr_y));
+                    } else {
+                        lod_points.push((s.mean_triangles, s.mean_psnr_y));
+                    }
+                    row(
+                        &mut m,
+                        &[
+                            format!("{scene} ({paper})"),
+                            mode,
+                            int(s.mean_triangles),
+                            format!("{} / {}", fixed(s.mean_psnr_y, 2), fixed(s.min_psnr_y, 2)),
+                            format!("{} / {}", fixed(s.mean_ssim, 4), fixed(s.min_ssim(), 4)),
+                            fixed(s.frame_time_ratio, 3),
+                        ],
+                    )
+                }
+                None => {
+                    let why = c
+                        .and_then(|c| c.message.clone())
+                        .unwrap_or("not run".into())
+                        .replace('|', "\\|");
+                    let text = if why.starts_with(&format!("{mode}: not available")) {
+                        why
+                    } else {
+                        format!("{mode}: not available ({why})")
+                    };
+                    row(
+                        &mut m,
+                        &[
+                            format!("{scene} ({paper})"),
+                            mode.clone(),
+                            text,
+                            String::new(),
+                            String::new(),
+                            String::new(),
+                        ],
+                    )
+                }
+            }
+        }
+        let Some((ht, hp)) = hybrid_point else {
+            continue;
+        };
+        if lod_points.is_empty() || ht.is_nan() || ht <= 0.0 {
+            continue;
+        }
+        let mut by_tris: Vec<(f64, f64)> = lod_points
+            .iter()
+            .filter(|(t, p)| *t > 0.0 && p.is_finite())
+            .map(|&(t, p)| (t.ln(), p))
+            .collect();
+        by_tris.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let mut by_psnr: Vec<(f64, f64)> = by_tris.iter().map(|&(lt, p)| (p, lt)).collect();
+        by_psnr.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let at_tris = match interpolate(&by_tris, ht.ln()) {
+            Some(p) => format!(
+                "at the hybrid's {} triangles lod would score {} dB (hybrid {} dB)",
+                int(ht),
+                fixed(p, 2),
+                fixed(hp, 2)
+            ),
+            None => format!(
+                "the hybrid's {} triangles are outside the lod points measured ({} to {})",
+                int(ht),
+                int(by_tris.first().map_or(f64::NAN, |p| p.0.exp())),
+                int(by_tris.last().map_or(f64::NAN, |p| p.0.exp()))
+            ),
+        };
+        let at_psnr = match interpolate(&by_psnr, hp) {
+            Some(lt) => format!(
+                "to reach the hybrid's {} dB lod needs {} triangles ({:.2}× the hybrid's)",
+                fixed(hp, 2),
+                int(lt.exp()),
+                lt.exp() / ht
+            ),
+            None => format!(
+                "the hybrid's {} dB is outside the lod points' PSNR range ({} to {} dB)",
+                fixed(hp, 2),
+                fixed(by_psnr.first().map_or(f64::NAN, |p| p.0), 2),
+                fixed(by_psnr.last().map_or(f64::NAN, |p| p.0), 2)
+            ),
+        };
+        notes.push(format!("{scene}: {at_tris}; {at_psnr}."));
+    }
+    if !any {
+        return NOT_MEASURED.into();
+    }
+    let _ = writeln!(
+        &mut m,
+        "\nEqual triangles / equal PSNR: interpolated linearly between the two lod points \
+         that bracket the hybrid (PSNR against log triangles); with one lod point only the \
+         two operating points are shown."
+    );
+    for n in notes {
+        let _ = writeln!(&mut m, "\n{n}");
+    }
+    m
+}
+
+/// Fig. 14: frame time at cell crossings, prefetch on and off.
+fn crossings(ctx: &Ctx) -> String {
+    let mut m = String::new();
+    let mut any = false;
+    table_header(
+        &mut m,
+        &[
+            "scene".into(),
+            "prefetch".into(),
+            "crossings".into(),
+            "in-cell median ms".into(),
+            "max in the 10 frames after a crossing, ms".into(),
+            "ratio".into(),
+        ],
+    );
+    for (scene, paper) in SCENES {
+        let Some(s) = ctx
+            .hybrid_compare(scene)
+            .filter(|c| c.available)
+            .and_then(|c| c.summary.as_ref())
+        else {
+            continue;
+        };
+        for (name, c) in [
+            ("on", &s.crossing_prefetch),
+            ("off", &s.crossing_no_prefetch),
+        ] {
+            if let Some(c) = c {
+                any = true;
+                row(
+                    &mut m,
+                    &[
+                        format!("{scene} ({paper})"),
+                        name.into(),
+                        c.crossings.to_string(),
+                        fixed(c.in_cell_median_ms, 2),
+                        fixed(c.max_after_crossing_ms, 2),
+                        fixed(c.ratio, 2),
+                    ],
+                );
+            }
+        }
+    }
+    if !any {
+        return NOT_MEASURED.into();
+    }
+    let _ = writeln!(
+        &mut m,
+        "\nPaper (Fig. 14, 8M): the frame rate with prefetching is \"quite stable except some \
+         sudden decreases\" (at cells containing objects); no number is published."
+    );
+    m
+}
+
+/// Table 8: storage and cell load time.
+fn storage(ctx: &Ctx) -> String {
+    let mut m = String::new();
+    let bakes: Vec<_> = SCENES.iter().map(|(s, _)| ctx.scene_bake(s)).collect();
+    if bakes.iter().all(Option::is_none) {
+        return NOT_MEASURED.into();
+    }
+    let mut cols = vec!["storage (Table 8)".to_string()];
+    for ((_, paper), b) in SCENES.iter().zip(&bakes) {
+        cols.push(format!("{paper} paper"));
+        cols.push(match b.and_then(|(_, b)| b.report.as_ref()) {
+            Some(r) => format!("{paper} ours{}", coverage(r)),
+            None => format!("{paper} ours"),
+        });
+        cols.push("vs paper".into());
+    }
+    table_header(&mut m, &cols);
+    let reports: Vec<Option<&Report>> = bakes
+        .iter()
+        .map(|b| b.and_then(|(_, b)| b.report.as_ref()))
+        .collect();
+    // Totals of a partial bake are extrapolated from its per-cell average.
+    let scale = |r: &Report| {
+        if r.cells > 0 && r.grid_cells > r.cells {
+            r.grid_cells as f64 / r.cells as f64
+        } else {
+            1.0
+        }
+    };
+    let loads: Vec<Option<&LoadTime>> = SCENES
+        .iter()
+        .zip(&bakes)
+        .map(|((s, _), b)| {
+            ctx.load(s)
+                .or_else(|| b.and_then(|(_, b)| ctx.load(&b.label)))
+        })
+        .collect();
+    type Pick<'x> = &'x dyn Fn(&Report) -> f64;
+    let mut add = |name: &str, paper: [f64; 3], pick: Pick, fmt: fn(f64) -> String| {
+        let mut cells = vec![name.to_string()];
+        for k in 0..3 {
+            let ours = reports[k].map_or(f64::NAN, pick);
+            cells.push(fmt(paper[k]));
+            cells.push(fmt(ours));
+            cells.push(verdict(ours, paper[k]));
+        }
+        row(&mut m, &cells);
+    };
+    let f1 = |v: f64| fixed(v, 1);
+    add(
+        "SVMesh & MVMesh (cell meshes, tables), MB",
+        table8::SV_MV_MB,
+        &|r| mb(r.storage.mesh_bytes as f64 * scale(r)),
+        f1,
+    );
+    add(
+        "textures, MB",
+        table8::TEXTURES_MB,
+        &|r| mb(r.storage.texture_bytes as f64 * scale(r)),
+        f1,
+    );
+    add(
+        "total (cells + index), MB",
+        table8::TOTAL_MB,
+        &|r| mb((r.storage.cell_bytes as f64 * scale(r)) + r.storage.index_bytes as f64),
+        f1,
+    );
+    add(
+        "original meshes (base.pack), MB",
+        table8::ORIGINAL_MESHES_MB,
+        &|r| mb(r.storage.base_bytes as f64),
+        f1,
+    );
+    add(
+        "per cell: meshes, KB",
+        table8::CELL_POLYGONS_KB,
+        &|r| kb(r.storage.mesh_bytes as f64 / r.cells.max(1) as f64),
+        f1,
+    );
+    add(
+        "per cell: textures, KB",
+        table8::CELL_TEXTURES_KB,
+        &|r| kb(r.storage.texture_bytes as f64 / r.cells.max(1) as f64),
+        f1,
+    );
+    add(
+        "per cell: total, KB",
+        table8::CELL_TOTAL_KB,
+        &|r| kb(r.storage.per_cell_bytes),
+        f1,
+    );
+    add(
+        "cell load at 55 MB/s (size ÷ speed), ms",
+        table8::LOAD_MS_55,
+        &|r| r.storage.per_cell_bytes / 55e6 * 1e3,
+        f1,
+    );
+    add(
+        "cell load at 35 MB/s (size ÷ speed), ms",
+        table8::LOAD_MS_35,
+        &|r| r.storage.per_cell_bytes / 35e6 * 1e3,
+        f1,
+    );
+    let mut cells =
+        vec!["measured: open + validate + decode, warm cache, ms (mean / max)".to_string()];
+    for l in &loads {
+        cells.push("–".into());
+        cells.push(l.map_or("–".into(), |l| {
+            format!("{} / {}", fixed(l.mean_ms, 1), fixed(l.max_ms, 1))
+        }));
+        cells.push(String::new());
+    }
+    row(&mut m, &cells);
+    let _ = writeln!(
+        &mut m,
+        "\nPaper: DXT3 textures (1:4). Ours: lossless RGBA8 in zstd (format/README.md); \
+         \"meshes\" is every non-texture byte of the cell packs. Totals of a partial bake \
+         (\"N of M cells\") are its per-cell average × M. The measured load time is CPU \
+         (mmap, blake3 of every section, zstd, decode) on this machine, from `pipeline \
+         benchmarks load`; the paper's is disk time at the given speed."
+    );
+    m
+}
+
+/// Bake time by stage (the paper publishes none).
+fn bake_time(ctx: &Ctx) -> String {
+    let mut m = String::new();
+    let bakes: Vec<&BakeResult> = ctx
+        .m
+        .bakes
+        .values()
+        .map(|(_, b)| b)
+        .filter(|b| b.report.is_some())
+        .collect();
+    if bakes.is_empty() {
+        return NOT_MEASURED.into();
+    }
+    let stages: BTreeSet<String> = bakes
+        .iter()
+        .filter_map(|b| b.report.as_ref())
+        .flat_map(|r| r.stage_s.keys().cloned())
+        .collect();
+    let mut cols: Vec<String> = [
+        "bake",
+        "settings",
+        "cells",
+        "job wall s",
+        "job CPU s",
+        "CPU s per cell",
+    ]
+    .map(String::from)
+    .to_vec();
+    cols.extend(stages.iter().map(|s| format!("{s} s")));
+    table_header(&mut m, &cols);
+    for b in bakes {
+        ctx.bake(&b.label);
+        let r = b.report.as_ref().expect("filtered");
+        let mut settings = b.set.clone();
+        if let Some(c) = &b.cells {
+            settings.push(format!("--cells {c}"));
+        }
+        let mut cells = vec![
+            b.label.clone(),
+            if settings.is_empty() {
+                "manifest".into()
+            } else {
+                format!("`{}`", settings.join(" "))
+            },
+            format!("{}{}", r.cells, coverage(r)),
+            fixed(r.job_wall_s, 1),
+            fixed(r.job_cpu_s, 1),
+            fixed(r.job_cpu_s / r.cells.max(1) as f64, 2),
+        ];
+        let total: f64 = r.stage_s.values().sum();
+        for s in &stages {
+            let v = r.stage_s.get(s).copied().unwrap_or(f64::NAN);
+            cells.push(if total > 0.0 && v.is_finite() {
+                format!("{} ({:.0}%)", fixed(v, 1), 100.0 * v / total)
+            } else {
+                fixed(v, 1)
+            });
+        }
+        row(&mut m, &cells);
+    }
+    let _ = writeln!(
+        &mut m,
+        "\nJob wall and CPU are summed over the jobs' records (a resumed bake keeps the times \
+         of the run that baked each job); stage seconds are CPU summed over cells. The paper \
+         gives no preprocessing times."
+    );
+    m
+}
+
+/// Links to the per-frame plots (written next to the run files).
+fn plots(ctx: &Ctx) -> String {
+    let mut m = String::new();
+    for (scene, paper) in SCENES {
+        if ctx
+            .hybrid_compare(scene)
+            .is_some_and(|c| c.available && c.summary.is_some())
+        {
+            let _ = writeln!(
+                &mut m,
+                "![{scene} ({paper}): per-frame PSNR(Y) and triangles along park-walk.ron, cell crossings marked]({}/{})\n",
+                ctx.plot_prefix,
+                plot_file_name(scene)
+            );
+        }
+    }
+    if m.is_empty() {
+        return NOT_MEASURED.into();
+    }
+    m.push_str(
+        "Top: PSNR(Y) of each frame against full geometry (hybrid blue, lod orange when \
+         measured); bottom: triangles drawn (hybrid blue, full grey, lod orange); yellow \
+         lines: cell crossings (the paper's Fig. 14 marks them the same way).",
+    );
+    m
+}
+
+/// File name of a scene's plot in the results folder.
+pub fn plot_file_name(scene: &str) -> String {
+    format!("{scene}-walk.png")
+}
+
+/// The runs used and their exact commands.
+fn machine(ctx: &Ctx) -> String {
+    let used = ctx.used.borrow().clone();
+    if used.is_empty() {
+        return NOT_MEASURED.into();
+    }
+    let mut m = String::new();
+    text_table_header(
+        &mut m,
+        &[
+            "run file".into(),
+            "mode".into(),
+            "date".into(),
+            "commit".into(),
+            "nproc".into(),
+            "CPU".into(),
+            "memory".into(),
+        ],
+    );
+    let get = |r: &crate::benchmarks::BenchRun, k: &str| {
+        r.machine.get(k).cloned().unwrap_or_else(|| "–".into())
+    };
+    for (file, run) in ctx.m.runs.iter().filter(|(f, _)| used.contains(f)) {
+        row(
+            &mut m,
+            &[
+                format!("`docs/bench/{file}`"),
+                run.mode.clone(),
+                get(run, "date"),
+                get(run, "git_commit"),
+                get(run, "nproc"),
+                get(run, "cpu_model"),
+                get(run, "memory"),
+            ],
+        );
+    }
+    for (file, run) in ctx.m.runs.iter().filter(|(f, _)| used.contains(f)) {
+        let _ = writeln!(
+            &mut m,
+            "\n<details><summary>Commands of {file} ({} commands, {:.0} s)</summary>\n\n```sh",
+            run.commands.len(),
+            run.commands
+                .iter()
+                .map(|c| c.wall_s)
+                .filter(|w| w.is_finite())
+                .sum::<f64>()
+        );
+        for c in &run.commands {
+            let _ = writeln!(
+                &mut m,
+                "{}  # {} s, exit {}",
+                c.command,
+                fixed(c.wall_s, 1),
+                c.exit
+            );
+        }
+        let _ = writeln!(&mut m, "```\n\n</details>");
+    }
+    m
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn secs(names: &[&str]) -> BTreeMap<String, String> {
+        names
+            .iter()
+            .map(|n| (n.to_string(), format!("new {n}")))
+            .collect()
+    }
+
+    #[test]
+    fn text_outside_markers_is_untouched() {
+        let doc = "# Title\n\nhand text\n<!-- bench:a begin -->\nold a\n<!-- bench:a end -->\nmiddle ✓\n<!-- bench:b begin --><!-- bench:b end -->\ntail";
+        let out = replace_sections(doc, &secs(&["a", "b"])).unwrap();
+        assert_eq!(
+            out,
+            "# Title\n\nhand text\n<!-- bench:a begin -->\nnew a\n<!-- bench:a end -->\nmiddle ✓\n<!-- bench:b begin -->\nnew b\n<!-- bench:b end -->\ntail"
+        );
+        // Idempotent.
+        assert_eq!(replace_sections(&out, &secs(&["a", "b"])).unwrap(), out);
+    }
+
+    #[test]
+    fn marker_errors_are_clear() {
+        let doc = "<!-- bench:a begin -->x<!-- bench:a end -->";
+        let e = replace_sections(doc, &secs(&["a", "b"])).unwrap_err();
+        assert_eq!(
+            e,
+            MarkerError::Missing {
+                name: "b".into(),
+                which: "begin"
+            }
+        );
+        assert!(e.to_string().contains("<!-- bench:b begin -->"), "{e}");
+        let e = replace_sections("<!-- bench:a begin -->", &secs(&["a"])).unwrap_err();
+        assert!(matches!(e, MarkerError::Missing { which: "end", .. }));
+        let e = replace_sections("<!-- bench:a end --><!-- bench:a begin -->", &secs(&["a"]))
+            .unwrap_err();
+        assert!(matches!(e, MarkerError::OutOfOrder { .. }));
+        let e = replace_sections(
+            "<!-- bench:a begin --><!-- bench:a begin --><!-- bench:a end -->",
+            &secs(&["a"]),
+        )
+        .unwrap_err();
+        assert!(matches!(e, MarkerError::Duplicate { count: 2, .. }));
+        let e = replace_sections(
+            "<!-- bench:a begin --><!-- bench:a end --><!-- bench:typo begin -->",
+            &secs(&["a"]),
+        )
+        .unwrap_err();
+        assert!(matches!(e, MarkerError::Unknown { .. }), "{e}");
+    }
+
+    #[test]
+    fn numbers_format() {
+        assert_eq!(int(2_007_920.4), "2,007,920");
+        assert_eq!(int(999.0), "999");
+        assert_eq!(int(f64::NAN), "–");
+        assert_eq!(ratio(85.04), "1:85.0");
+        assert_eq!(verdict(44.0, 30.0), "worse (1.5× higher)");
+        assert_eq!(verdict(20.0, 40.0), "better (2.0× lower)");
+        assert_eq!(verdict(20.0, f64::NAN), "");
+        assert_eq!(verdict(41.0, 40.0), "≈");
+        assert_eq!(verdict_db(34.1, 44.92), "worse (-10.8 dB)");
+    }
+
+    #[test]
+    fn interpolation_brackets() {
+        let pts = [(0.0, 10.0), (1.0, 20.0), (3.0, 40.0)];
+        assert_eq!(interpolate(&pts, 0.5), Some(15.0));
+        assert_eq!(interpolate(&pts, 2.0), Some(30.0));
+        assert_eq!(interpolate(&pts, 3.5), None);
+        assert_eq!(interpolate(&pts[..1], 0.0), None);
+    }
+
+    #[test]
+    fn empty_results_say_not_measured() {
+        let s = sections(&Merged::default(), "docs/bench");
+        assert!(s.values().all(|v| v == NOT_MEASURED), "{s:?}");
+    }
+}
+
+/// The lod run drawn next to the hybrid: the one at the player's default threshold
+/// (`<scene>-lod`), else the `<scene>-lod-e*` whose triangle count is closest (in
+/// ratio) to the hybrid's.
+fn plot_lod<'a>(
+    merged: &'a Merged,
+    scene: &str,
+    hybrid_triangles: f64,
+) -> Option<&'a crate::benchmarks::CompareSummary> {
+    let available = |label: &str| {
+        merged
+            .compares
+            .get(label)
+            .filter(|(_, c)| c.available)
+            .and_then(|(_, c)| c.summary.as_ref())
+    };
+    if let Some(s) = available(&format!("{scene}-lod")) {
+        return Some(s);
+    }
+    let prefix = format!("{scene}-lod-");
+    merged
+        .compares
+        .keys()
+        .filter(|k| k.starts_with(&prefix))
+        .filter_map(|k| available(k))
+        .filter(|s| s.mean_triangles > 0.0)
+        .min_by(|a, b| {
+            let d = |s: &crate::benchmarks::CompareSummary| {
+                (s.mean_triangles / hybrid_triangles.max(1.0)).ln().abs()
+            };
+            d(a).total_cmp(&d(b))
+        })
+}
+
+/// What [`regenerate`] wrote.
+#[derive(Debug, Default)]
+pub struct Regenerated {
+    pub runs: usize,
+    pub sections: usize,
+    pub plots: Vec<std::path::PathBuf>,
+}
+
+/// Reads every run file in `results`, draws the per-scene plots into `results`, and
+/// rewrites the marked sections of `doc` (plots linked as `plot_prefix/...`).
+pub fn regenerate(
+    results: &std::path::Path,
+    doc: &std::path::Path,
+    plot_prefix: &str,
+) -> anyhow::Result<Regenerated> {
+    use anyhow::Context;
+    let runs = crate::benchmarks::read_runs(results)?;
+    let n_runs = runs.len();
+    let merged = crate::benchmarks::merge(runs);
+    let text =
+        std::fs::read_to_string(doc).with_context(|| format!("{}: cannot read", doc.display()))?;
+    let secs = sections(&merged, plot_prefix);
+    let new = replace_sections(&text, &secs).with_context(|| doc.display().to_string())?;
+    let mut plots = Vec::new();
+    for (scene, _) in SCENES {
+        let Some((_, compare)) = merged
+            .compares
+            .get(&format!("{scene}-hybrid"))
+            .filter(|(_, c)| c.available)
+        else {
+            continue;
+        };
+        let Some(hybrid) = compare.summary.as_ref() else {
+            continue;
+        };
+        let path_name = Path::new(&compare.path)
+            .file_name()
+            .map_or(compare.path.clone(), |n| n.to_string_lossy().into_owned());
+        let lod = plot_lod(&merged, scene, hybrid.mean_triangles);
+        let png = crate::bench_plot::render_walk_plot(
+            &format!("{scene} along {path_name}"),
+            hybrid,
+            lod,
+        )?;
+        let path = results.join(plot_file_name(scene));
+        format::pack::write_atomic(&path, &png).with_context(|| path.display().to_string())?;
+        plots.push(path);
+    }
+    if new != text {
+        format::pack::write_atomic(doc, new.as_bytes())
+            .with_context(|| doc.display().to_string())?;
+    }
+    Ok(Regenerated {
+        runs: n_runs,
+        sections: secs.len(),
+        plots,
+    })
+}
