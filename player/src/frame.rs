@@ -1,7 +1,10 @@
 //! What one frame draws in each configuration of the paper's evaluation (000 §4.1):
 //! A = all original geometry (`full`), B = original geometry with view-frustum culling
 //! per instance (`frustum`), C = the hybrid representation of the current cell with
-//! view-frustum culling per instance and per proxy (`hybrid`, §3.2).
+//! view-frustum culling per instance and per proxy (`hybrid`, §3.2); and the
+//! distance-LOD baseline (`lod`, issue 8: every instance frustum-culled and drawn at
+//! the coarsest level of its model's meshoptimizer chain under a projected pixel
+//! error, [`crate::lod`]).
 
 use crate::bake::Bake;
 use crate::camera::{Camera, Frustum};
@@ -10,14 +13,17 @@ use crate::stream::{CurrentCell, ResidentCell};
 use std::collections::BTreeMap;
 
 /// Rendering configuration.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Mode {
     /// Config A: every instance as original geometry.
     Full,
     /// Config B: originals with per-instance frustum culling.
     Frustum,
     /// Config C: the current cell's pack, frustum-culled.
+    #[default]
     Hybrid,
+    /// Baseline: originals, frustum-culled, at a distance-chosen level of detail.
+    Lod,
 }
 
 impl Mode {
@@ -26,6 +32,7 @@ impl Mode {
             Mode::Full => "full",
             Mode::Frustum => "frustum",
             Mode::Hybrid => "hybrid",
+            Mode::Lod => "lod",
         }
     }
 }
@@ -37,7 +44,8 @@ impl std::str::FromStr for Mode {
             "full" => Ok(Mode::Full),
             "frustum" => Ok(Mode::Frustum),
             "hybrid" => Ok(Mode::Hybrid),
-            _ => Err(format!("unknown mode {s:?} (full, frustum, hybrid)")),
+            "lod" => Ok(Mode::Lod),
+            _ => Err(format!("unknown mode {s:?} (full, frustum, hybrid, lod)")),
         }
     }
 }
@@ -78,7 +86,20 @@ pub fn originals_list<'a>(bake: &Bake, camera: &Camera, cull: bool) -> DrawList<
     };
     DrawList {
         originals,
-        proxies: Vec::new(),
+        ..Default::default()
+    }
+}
+
+/// The draw list of the LOD baseline.
+pub fn lod_list<'a>(
+    bake: &Bake,
+    set: &crate::lod::LodSet,
+    camera: &Camera,
+    threshold_px: f32,
+) -> DrawList<'a> {
+    DrawList {
+        levels: crate::lod::lod_groups(bake, set, camera, threshold_px),
+        ..Default::default()
     }
 }
 
@@ -90,9 +111,20 @@ pub fn hybrid_list<'a>(bake: &Bake, camera: &Camera, current: &CurrentCell<'a>) 
     }
 }
 
+/// The cell's inside objects as originals, its ready proxies, and — while a proxy's
+/// textures are still in the upload queue — that proxy's member objects as originals
+/// (never a hole; [`ResidentCell::fallback_instances`]).
 fn cell_list<'a>(bake: &Bake, camera: &Camera, cell: &'a ResidentCell) -> DrawList<'a> {
     let f = camera.frustum();
-    let originals = group(bake, visible(bake, &f, cell.originals.iter().copied()));
+    let fallback = cell.fallback_instances();
+    let ids: Vec<u32> = if fallback.is_empty() {
+        cell.originals.clone()
+    } else {
+        let mut all: std::collections::BTreeSet<u32> = fallback.into_iter().collect();
+        all.extend(cell.originals.iter().copied());
+        all.into_iter().collect()
+    };
+    let originals = group(bake, visible(bake, &f, ids.into_iter()));
     let proxies = cell
         .proxies
         .iter()
@@ -100,7 +132,11 @@ fn cell_list<'a>(bake: &Bake, camera: &Camera, cell: &'a ResidentCell) -> DrawLi
         .filter(|(p, b)| p.is_ready() && f.intersects(b))
         .map(|(p, _)| p)
         .collect();
-    DrawList { originals, proxies }
+    DrawList {
+        originals,
+        levels: Vec::new(),
+        proxies,
+    }
 }
 
 /// Triangles and texture bytes a draw list submits.

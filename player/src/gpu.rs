@@ -145,6 +145,16 @@ pub struct GpuModel {
     indices: wgpu::Buffer,
     pub index_count: u32,
     pub triangle_count: u64,
+    /// Simplified levels 1.. of the LOD baseline ([`Renderer::upload_lods`]); they
+    /// index `vertices`.
+    pub lods: Vec<GpuLod>,
+}
+
+/// One simplified level of a model on the GPU (an index buffer only).
+pub struct GpuLod {
+    indices: wgpu::Buffer,
+    pub index_count: u32,
+    pub triangle_count: u64,
 }
 
 /// A proxy on the GPU. Textures arrive one by one (the per-frame upload budget);
@@ -178,6 +188,8 @@ impl GpuProxy {
 pub struct DrawList<'a> {
     /// Originals grouped by model: (model index, instances).
     pub originals: Vec<(u32, Vec<InstanceRaw>)>,
+    /// Originals at a simplified level (LOD baseline): ((model, level ≥ 1), instances).
+    pub levels: Vec<((u32, u32), Vec<InstanceRaw>)>,
     pub proxies: Vec<&'a GpuProxy>,
 }
 
@@ -188,7 +200,23 @@ impl DrawList<'_> {
             .iter()
             .map(|(m, i)| models.models[*m as usize].triangle_count * i.len() as u64)
             .sum();
-        o + self.proxies.iter().map(|p| p.triangle_count()).sum::<u64>()
+        let l: u64 = self
+            .levels
+            .iter()
+            .map(|((m, l), i)| {
+                let model = &models.models[*m as usize];
+                let t = match *l {
+                    0 => model.triangle_count,
+                    // A level that is not uploaded is drawn as the original.
+                    l => model
+                        .lods
+                        .get(l as usize - 1)
+                        .map_or(model.triangle_count, |g| g.triangle_count),
+                };
+                t * i.len() as u64
+            })
+            .sum();
+        o + l + self.proxies.iter().map(|p| p.triangle_count()).sum::<u64>()
     }
 }
 
@@ -586,10 +614,34 @@ impl Renderer {
                         }),
                     index_count,
                     triangle_count: mesh.triangles.len() as u64,
+                    lods: Vec::new(),
                 }
             })
             .collect();
         GpuModels { models }
+    }
+
+    /// Uploads the simplified levels (1..) of each model's LOD chain as index buffers
+    /// over the model's vertex buffer; replaces earlier ones.
+    pub fn upload_lods(&self, models: &mut GpuModels, set: &crate::lod::LodSet) {
+        for (model, chain) in models.models.iter_mut().zip(&set.chains) {
+            model.lods = chain
+                .levels
+                .iter()
+                .skip(1)
+                .map(|level| GpuLod {
+                    indices: self
+                        .device
+                        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                            label: Some("lod indices"),
+                            contents: bytemuck::cast_slice(&level.indices),
+                            usage: wgpu::BufferUsages::INDEX,
+                        }),
+                    index_count: level.indices.len() as u32,
+                    triangle_count: level.triangle_count(),
+                })
+                .collect();
+        }
     }
 
     /// Creates a proxy's vertex and uniform buffers; textures come later through
@@ -731,6 +783,7 @@ impl Renderer {
             .originals
             .iter()
             .flat_map(|(_, v)| v.iter().copied())
+            .chain(list.levels.iter().flat_map(|(_, v)| v.iter().copied()))
             .collect();
         let need = std::mem::size_of_val(all.as_slice()) as u64;
         if need > self.instances.size() {
@@ -789,6 +842,24 @@ impl Renderer {
                     pass.set_vertex_buffer(1, self.instances.slice(..));
                     pass.set_index_buffer(model.indices.slice(..), wgpu::IndexFormat::Uint32);
                     pass.draw_indexed(0..model.index_count, 0, first..first + n);
+                }
+                first += n;
+            }
+            for ((m, l), inst) in &list.levels {
+                let model = &models.models[*m as usize];
+                let n = inst.len() as u32;
+                let (indices, count) = match *l {
+                    0 => (&model.indices, model.index_count),
+                    l => match model.lods.get(l as usize - 1) {
+                        Some(g) => (&g.indices, g.index_count),
+                        None => (&model.indices, model.index_count),
+                    },
+                };
+                if count > 0 && n > 0 {
+                    pass.set_vertex_buffer(0, model.vertices.slice(..));
+                    pass.set_vertex_buffer(1, self.instances.slice(..));
+                    pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
+                    pass.draw_indexed(0..count, 0, first..first + n);
                 }
                 first += n;
             }

@@ -262,6 +262,7 @@ fn render_writes_csv_and_compare_reports_quality() {
             png: true,
             stream: StreamConfig::default(),
             size: None,
+            lod_pixel_error: 1.0,
         },
     )
     .unwrap();
@@ -289,6 +290,7 @@ fn render_writes_csv_and_compare_reports_quality() {
             size: Some((48, 48)),
             crossings: true,
             stream: StreamConfig::default(),
+            ..Default::default()
         },
     )
     .unwrap();
