@@ -9,7 +9,7 @@
 use crate::bake::Bake;
 use crate::camera::{Camera, Frustum};
 use crate::gpu::{DrawList, GpuModels, InstanceRaw};
-use crate::stream::{CurrentCell, ResidentCell};
+use crate::stream::{CurrentCell, PendingDraw, ResidentCell};
 use std::collections::BTreeMap;
 
 /// Rendering configuration.
@@ -104,19 +104,33 @@ pub fn lod_list<'a>(
 }
 
 /// The hybrid draw list for the current cell (config C).
-pub fn hybrid_list<'a>(bake: &Bake, camera: &Camera, current: &CurrentCell<'a>) -> DrawList<'a> {
+pub fn hybrid_list<'a>(
+    bake: &Bake,
+    camera: &Camera,
+    current: &CurrentCell<'a>,
+    pending: PendingDraw,
+) -> DrawList<'a> {
     match current {
         CurrentCell::Originals => originals_list(bake, camera, true),
-        CurrentCell::Pack(cell) => cell_list(bake, camera, cell),
+        CurrentCell::Pack(cell) => cell_list(bake, camera, cell, pending),
     }
 }
 
 /// The cell's inside objects as originals, its ready proxies, and — while a proxy's
 /// textures are still in the upload queue — that proxy's member objects as originals
-/// (never a hole; [`ResidentCell::fallback_instances`]).
-fn cell_list<'a>(bake: &Bake, camera: &Camera, cell: &'a ResidentCell) -> DrawList<'a> {
+/// (never a hole; [`ResidentCell::fallback_instances`]) or, with
+/// [`PendingDraw::Lit`], the proxy lit without textures.
+fn cell_list<'a>(
+    bake: &Bake,
+    camera: &Camera,
+    cell: &'a ResidentCell,
+    pending: PendingDraw,
+) -> DrawList<'a> {
     let f = camera.frustum();
-    let fallback = cell.fallback_instances();
+    let fallback = match pending {
+        PendingDraw::Originals => cell.fallback_instances(),
+        PendingDraw::Lit => Vec::new(),
+    };
     let ids: Vec<u32> = if fallback.is_empty() {
         cell.originals.clone()
     } else {
@@ -125,17 +139,23 @@ fn cell_list<'a>(bake: &Bake, camera: &Camera, cell: &'a ResidentCell) -> DrawLi
         all.into_iter().collect()
     };
     let originals = group(bake, visible(bake, &f, ids.into_iter()));
-    let proxies = cell
-        .proxies
-        .iter()
-        .zip(&cell.bounds)
-        .filter(|(p, b)| p.is_ready() && f.intersects(b))
-        .map(|(p, _)| p)
-        .collect();
+    let in_view = || {
+        cell.proxies
+            .iter()
+            .zip(&cell.bounds)
+            .filter(|(_, b)| f.intersects(b))
+            .map(|(p, _)| p)
+    };
+    let proxies = in_view().filter(|p| p.is_ready()).collect();
+    let lit_proxies = match pending {
+        PendingDraw::Originals => Vec::new(),
+        PendingDraw::Lit => in_view().filter(|p| !p.is_ready()).collect(),
+    };
     DrawList {
         originals,
         levels: Vec::new(),
         proxies,
+        lit_proxies,
     }
 }
 

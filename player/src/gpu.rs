@@ -165,6 +165,9 @@ pub struct GpuProxy {
     uniform: wgpu::Buffer,
     textures: Vec<Option<wgpu::TextureView>>,
     bind_group: Option<wgpu::BindGroup>,
+    /// Every view bound to the "nothing captured" texture: the proxy drawn with lit
+    /// vertex colours while its textures wait in the upload queue.
+    lit_bind_group: wgpu::BindGroup,
     pub texture_bytes: u64,
     pub vertex_bytes: u64,
 }
@@ -191,6 +194,9 @@ pub struct DrawList<'a> {
     /// Originals at a simplified level (LOD baseline): ((model, level ≥ 1), instances).
     pub levels: Vec<((u32, u32), Vec<InstanceRaw>)>,
     pub proxies: Vec<&'a GpuProxy>,
+    /// Proxies drawn lit (vertex colours, no texture) because their textures are not
+    /// resident yet (`--pending lit`).
+    pub lit_proxies: Vec<&'a GpuProxy>,
 }
 
 impl DrawList<'_> {
@@ -216,7 +222,13 @@ impl DrawList<'_> {
                 t * i.len() as u64
             })
             .sum();
-        o + l + self.proxies.iter().map(|p| p.triangle_count()).sum::<u64>()
+        o + l
+            + self
+                .proxies
+                .iter()
+                .chain(&self.lit_proxies)
+                .map(|p| p.triangle_count())
+                .sum::<u64>()
     }
 }
 
@@ -676,12 +688,14 @@ impl Renderer {
                 contents: bytemuck::bytes_of(&u),
                 usage: wgpu::BufferUsages::UNIFORM,
             });
+        let lit_bind_group = self.bind_views(&uniform, &[]);
         let mut p = GpuProxy {
             vertices: vbuf,
             vertex_count: vertices.len() as u32,
             uniform,
             textures: vec![None; views.len().min(MAX_VIEWS)],
             bind_group: None,
+            lit_bind_group,
             texture_bytes: 0,
             vertex_bytes: std::mem::size_of_val(vertices) as u64,
         };
@@ -742,10 +756,20 @@ impl Renderer {
         if p.bind_group.is_some() || p.textures.iter().any(|t| t.is_none()) {
             return;
         }
+        p.bind_group = Some(self.bind_views(&p.uniform, &p.textures));
+    }
+
+    /// A proxy bind group: its view uniform, the sampler and its view textures (the
+    /// "nothing captured" texture for missing ones and unused slots).
+    fn bind_views(
+        &self,
+        uniform: &wgpu::Buffer,
+        textures: &[Option<wgpu::TextureView>],
+    ) -> wgpu::BindGroup {
         let mut entries = vec![
             wgpu::BindGroupEntry {
                 binding: 0,
-                resource: p.uniform.as_entire_binding(),
+                resource: uniform.as_entire_binding(),
             },
             wgpu::BindGroupEntry {
                 binding: 1,
@@ -753,8 +777,7 @@ impl Renderer {
             },
         ];
         for i in 0..MAX_VIEWS {
-            let view = p
-                .textures
+            let view = textures
                 .get(i)
                 .and_then(|t| t.as_ref())
                 .unwrap_or(&self.dummy_view);
@@ -763,15 +786,16 @@ impl Renderer {
                 resource: wgpu::BindingResource::TextureView(view),
             });
         }
-        p.bind_group = Some(self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        self.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("proxy"),
             layout: &self.proxy_bgl,
             entries: &entries,
-        }));
+        })
     }
 
     /// Draws one frame and waits for the GPU; returns the submit → done wall time in
-    /// milliseconds. Proxies that are not ready (textures missing) are skipped.
+    /// milliseconds. Proxies of `list.proxies` that are not ready (textures missing)
+    /// are skipped; `list.lit_proxies` are drawn without their textures.
     pub fn render(&mut self, camera: &Camera, models: &GpuModels, list: &DrawList<'_>) -> f64 {
         let g = Globals {
             clip_from_world: camera.clip_from_world_wgpu().to_cols_array(),
@@ -870,6 +894,11 @@ impl Renderer {
                     pass.set_vertex_buffer(0, p.vertices.slice(..));
                     pass.draw(0..p.vertex_count, 0..1);
                 }
+            }
+            for p in list.lit_proxies.iter().filter(|p| p.vertex_count > 0) {
+                pass.set_bind_group(1, Some(&p.lit_bind_group), &[]);
+                pass.set_vertex_buffer(0, p.vertices.slice(..));
+                pass.draw(0..p.vertex_count, 0..1);
             }
         }
         let t0 = Instant::now();

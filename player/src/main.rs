@@ -5,7 +5,7 @@
 use clap::{Parser, Subcommand};
 use player::frame::Mode;
 use player::run::{compare, crossing_stats, render, CompareOptions, RenderOptions};
-use player::stream::StreamConfig;
+use player::stream::{PendingDraw, StreamConfig};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -31,6 +31,10 @@ struct StreamArgs {
     /// Resident cell data kept before LRU eviction, in MiB.
     #[arg(long, default_value_t = 512)]
     memory_budget_mib: u64,
+    /// How a proxy whose textures are still queued is drawn: `originals` (its
+    /// member objects) or `lit` (the proxy mesh with vertex colours).
+    #[arg(long, default_value = "originals")]
+    pending: PendingDraw,
     /// Override the path's resolution, e.g. 256x256.
     #[arg(long, value_parser = parse_size)]
     size: Option<(u32, u32)>,
@@ -46,6 +50,7 @@ impl StreamArgs {
             prefetch: !self.no_prefetch,
             upload_budget_bytes: self.upload_budget,
             memory_budget_bytes: self.memory_budget_mib << 20,
+            pending: self.pending,
             ..Default::default()
         }
     }

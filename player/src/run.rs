@@ -183,8 +183,9 @@ impl Player {
     ) -> (f64, u64, u64, crate::stream::StreamStats) {
         match (mode, streamer) {
             (Mode::Hybrid, Some(s)) => {
+                let pending = s.config().pending;
                 let (current, stats) = s.begin_frame(&self.renderer, &self.bake, camera);
-                let list = hybrid_list(&self.bake, camera, &current);
+                let list = hybrid_list(&self.bake, camera, &current, pending);
                 let (tris, tex) = list_stats(&list, &self.models);
                 let ms = self.renderer.render(camera, &self.models, &list);
                 (ms, tris, tex, stats)

@@ -22,7 +22,8 @@
 //!   whose textures are still queued, they move to the front of the queue, keeping
 //!   their order, and go up under the same budget. Until all of a proxy's textures
 //!   are resident, the frame draws the proxy's member objects as original geometry
-//!   ([`ResidentCell::fallback_instances`]) — never a hole.
+//!   ([`ResidentCell::fallback_instances`]; or, with [`PendingDraw::Lit`], the proxy
+//!   mesh with lit vertex colours) — never a hole.
 //! - Resident cells are evicted least-recently-used first above a memory budget (never
 //!   the current cell).
 //! - A cell whose pack is missing or corrupt is logged once and drawn as original
@@ -58,6 +59,29 @@ pub struct StreamConfig {
     pub step_distance: Option<f32>,
     /// Timestamp step: angle turned, in degrees.
     pub step_angle_deg: f32,
+    /// How a proxy whose textures are still queued is drawn.
+    pub pending: PendingDraw,
+}
+
+/// How the hybrid draws a proxy whose textures are not resident yet (never a hole).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum PendingDraw {
+    /// Its member objects as original geometry (exact, more triangles).
+    #[default]
+    Originals,
+    /// The proxy mesh itself with lit vertex colours (DESIGN.md shading, no texture).
+    Lit,
+}
+
+impl std::str::FromStr for PendingDraw {
+    type Err = String;
+    fn from_str(s: &str) -> Result<PendingDraw, String> {
+        match s {
+            "originals" => Ok(PendingDraw::Originals),
+            "lit" => Ok(PendingDraw::Lit),
+            _ => Err(format!("unknown pending draw {s:?} (originals, lit)")),
+        }
+    }
 }
 
 impl Default for StreamConfig {
@@ -68,6 +92,7 @@ impl Default for StreamConfig {
             memory_budget_bytes: 512 << 20,
             step_distance: None,
             step_angle_deg: 15.0,
+            pending: PendingDraw::Originals,
         }
     }
 }

@@ -8,7 +8,7 @@ use player::frame::Mode;
 use player::gpu::{GpuError, Renderer, SKY};
 use player::metrics::psnr_y;
 use player::run::{compare, render, CompareOptions, Player, RenderOptions, CSV_HEADER};
-use player::stream::{StreamConfig, Streamer};
+use player::stream::{PendingDraw, StreamConfig, Streamer};
 use player::testdata::{capture_camera, write_quad_bake, write_synthetic_bake};
 
 fn open(dir: &std::path::Path, size: (u32, u32)) -> Option<Player> {
@@ -620,25 +620,36 @@ fn proxies_waiting_for_textures_are_drawn_as_originals() {
     p.warm_up(&cam);
     p.draw(&cam, Mode::Frustum, None);
     let reference = p.renderer.read_pixels().unwrap();
-    let stream = |p: &Player, budget: u64| {
+    let stream = |p: &Player, budget: u64, pending: PendingDraw| {
         Streamer::new(
             &p.bake,
             StreamConfig {
                 prefetch: false,
                 upload_budget_bytes: budget,
+                pending,
                 ..Default::default()
             },
         )
     };
-    let mut tiny = stream(&p, 1);
+    let mut tiny = stream(&p, 1, PendingDraw::Originals);
     let (_, _, _, stats) = p.draw(&cam, Mode::Hybrid, Some(&mut tiny));
     let waiting = p.renderer.read_pixels().unwrap();
     assert_eq!(stats.uploaded_bytes, 32 * 32 * 4, "one texture per frame");
     assert!(stats.pending_proxies > 0);
-    let mut big = stream(&p, 1 << 30);
-    let (_, _, _, stats_big) = p.draw(&cam, Mode::Hybrid, Some(&mut big));
+    let mut big = stream(&p, 1 << 30, PendingDraw::Originals);
+    let (_, tris_ready, _, stats_big) = p.draw(&cam, Mode::Hybrid, Some(&mut big));
     let ready = p.renderer.read_pixels().unwrap();
     assert_eq!(stats_big.pending_proxies, 0);
+    // `--pending lit`: the waiting proxies drawn untextured (the same triangles as
+    // when they are ready; the synthetic proxies are not simplified, so their
+    // members' originals are not more here), no holes either.
+    let mut lit = stream(&p, 1, PendingDraw::Lit);
+    let (_, tris_lit, _, stats_lit) = p.draw(&cam, Mode::Hybrid, Some(&mut lit));
+    let lit_px = p.renderer.read_pixels().unwrap();
+    assert_eq!(stats_lit.pending_proxies, stats.pending_proxies);
+    assert_eq!(tris_lit, tris_ready);
+    assert!(holes(&reference, &lit_px) <= holes(&reference, &ready));
+    assert!(non_sky(&lit_px) >= non_sky(&ready) * 95 / 100);
     let object_pixels = non_sky(&reference);
     let (h_wait, h_ready) = (holes(&reference, &waiting), holes(&reference, &ready));
     println!(
