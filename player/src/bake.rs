@@ -180,6 +180,9 @@ pub struct PreparedView {
 #[derive(Clone, Debug, PartialEq)]
 pub struct PreparedProxy {
     pub kind: ProxyKind,
+    /// The member instances (what the player draws as original geometry while the
+    /// proxy's textures are not uploaded yet).
+    pub members: Vec<u32>,
     pub vertices: Vec<ProxyVertex>,
     pub bounds: Aabb,
     pub views: Vec<PreparedView>,
@@ -292,6 +295,7 @@ pub fn prepare_cell(base: &BasePack, pack: &CellPack) -> Result<PreparedCell, Ba
         }
         proxies.push(PreparedProxy {
             kind: proxy.kind,
+            members: proxy.members.iter().map(|m| m.instance).collect(),
             vertices,
             bounds,
             views,

@@ -1,23 +1,29 @@
 //! What one frame draws in each configuration of the paper's evaluation (000 §4.1):
 //! A = all original geometry (`full`), B = original geometry with view-frustum culling
 //! per instance (`frustum`), C = the hybrid representation of the current cell with
-//! view-frustum culling per instance and per proxy (`hybrid`, §3.2).
+//! view-frustum culling per instance and per proxy (`hybrid`, §3.2); and the
+//! distance-LOD baseline (`lod`, issue 8: every instance frustum-culled and drawn at
+//! the coarsest level of its model's meshoptimizer chain under a projected pixel
+//! error, [`crate::lod`]).
 
 use crate::bake::Bake;
 use crate::camera::{Camera, Frustum};
 use crate::gpu::{DrawList, GpuModels, InstanceRaw};
-use crate::stream::{CurrentCell, ResidentCell};
+use crate::stream::{CurrentCell, PendingDraw, ResidentCell};
 use std::collections::BTreeMap;
 
 /// Rendering configuration.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Mode {
     /// Config A: every instance as original geometry.
     Full,
     /// Config B: originals with per-instance frustum culling.
     Frustum,
     /// Config C: the current cell's pack, frustum-culled.
+    #[default]
     Hybrid,
+    /// Baseline: originals, frustum-culled, at a distance-chosen level of detail.
+    Lod,
 }
 
 impl Mode {
@@ -26,6 +32,7 @@ impl Mode {
             Mode::Full => "full",
             Mode::Frustum => "frustum",
             Mode::Hybrid => "hybrid",
+            Mode::Lod => "lod",
         }
     }
 }
@@ -37,7 +44,8 @@ impl std::str::FromStr for Mode {
             "full" => Ok(Mode::Full),
             "frustum" => Ok(Mode::Frustum),
             "hybrid" => Ok(Mode::Hybrid),
-            _ => Err(format!("unknown mode {s:?} (full, frustum, hybrid)")),
+            "lod" => Ok(Mode::Lod),
+            _ => Err(format!("unknown mode {s:?} (full, frustum, hybrid, lod)")),
         }
     }
 }
@@ -78,29 +86,77 @@ pub fn originals_list<'a>(bake: &Bake, camera: &Camera, cull: bool) -> DrawList<
     };
     DrawList {
         originals,
-        proxies: Vec::new(),
+        ..Default::default()
+    }
+}
+
+/// The draw list of the LOD baseline.
+pub fn lod_list<'a>(
+    bake: &Bake,
+    set: &crate::lod::LodSet,
+    camera: &Camera,
+    threshold_px: f32,
+) -> DrawList<'a> {
+    DrawList {
+        levels: crate::lod::lod_groups(bake, set, camera, threshold_px),
+        ..Default::default()
     }
 }
 
 /// The hybrid draw list for the current cell (config C).
-pub fn hybrid_list<'a>(bake: &Bake, camera: &Camera, current: &CurrentCell<'a>) -> DrawList<'a> {
+pub fn hybrid_list<'a>(
+    bake: &Bake,
+    camera: &Camera,
+    current: &CurrentCell<'a>,
+    pending: PendingDraw,
+) -> DrawList<'a> {
     match current {
         CurrentCell::Originals => originals_list(bake, camera, true),
-        CurrentCell::Pack(cell) => cell_list(bake, camera, cell),
+        CurrentCell::Pack(cell) => cell_list(bake, camera, cell, pending),
     }
 }
 
-fn cell_list<'a>(bake: &Bake, camera: &Camera, cell: &'a ResidentCell) -> DrawList<'a> {
+/// The cell's inside objects as originals, its ready proxies, and — while a proxy's
+/// textures are still in the upload queue — that proxy's member objects as originals
+/// (never a hole; [`ResidentCell::fallback_instances`]) or, with
+/// [`PendingDraw::Lit`], the proxy lit without textures.
+fn cell_list<'a>(
+    bake: &Bake,
+    camera: &Camera,
+    cell: &'a ResidentCell,
+    pending: PendingDraw,
+) -> DrawList<'a> {
     let f = camera.frustum();
-    let originals = group(bake, visible(bake, &f, cell.originals.iter().copied()));
-    let proxies = cell
-        .proxies
-        .iter()
-        .zip(&cell.bounds)
-        .filter(|(p, b)| p.is_ready() && f.intersects(b))
-        .map(|(p, _)| p)
-        .collect();
-    DrawList { originals, proxies }
+    let fallback = match pending {
+        PendingDraw::Originals => cell.fallback_instances(),
+        PendingDraw::Lit => Vec::new(),
+    };
+    let ids: Vec<u32> = if fallback.is_empty() {
+        cell.originals.clone()
+    } else {
+        let mut all: std::collections::BTreeSet<u32> = fallback.into_iter().collect();
+        all.extend(cell.originals.iter().copied());
+        all.into_iter().collect()
+    };
+    let originals = group(bake, visible(bake, &f, ids.into_iter()));
+    let in_view = || {
+        cell.proxies
+            .iter()
+            .zip(&cell.bounds)
+            .filter(|(_, b)| f.intersects(b))
+            .map(|(p, _)| p)
+    };
+    let proxies = in_view().filter(|p| p.is_ready()).collect();
+    let lit_proxies = match pending {
+        PendingDraw::Originals => Vec::new(),
+        PendingDraw::Lit => in_view().filter(|p| !p.is_ready()).collect(),
+    };
+    DrawList {
+        originals,
+        levels: Vec::new(),
+        proxies,
+        lit_proxies,
+    }
 }
 
 /// Triangles and texture bytes a draw list submits.

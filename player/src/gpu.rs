@@ -145,6 +145,16 @@ pub struct GpuModel {
     indices: wgpu::Buffer,
     pub index_count: u32,
     pub triangle_count: u64,
+    /// Simplified levels 1.. of the LOD baseline ([`Renderer::upload_lods`]); they
+    /// index `vertices`.
+    pub lods: Vec<GpuLod>,
+}
+
+/// One simplified level of a model on the GPU (an index buffer only).
+pub struct GpuLod {
+    indices: wgpu::Buffer,
+    pub index_count: u32,
+    pub triangle_count: u64,
 }
 
 /// A proxy on the GPU. Textures arrive one by one (the per-frame upload budget);
@@ -155,6 +165,9 @@ pub struct GpuProxy {
     uniform: wgpu::Buffer,
     textures: Vec<Option<wgpu::TextureView>>,
     bind_group: Option<wgpu::BindGroup>,
+    /// Every view bound to the "nothing captured" texture: the proxy drawn with lit
+    /// vertex colours while its textures wait in the upload queue.
+    lit_bind_group: wgpu::BindGroup,
     pub texture_bytes: u64,
     pub vertex_bytes: u64,
 }
@@ -178,7 +191,12 @@ impl GpuProxy {
 pub struct DrawList<'a> {
     /// Originals grouped by model: (model index, instances).
     pub originals: Vec<(u32, Vec<InstanceRaw>)>,
+    /// Originals at a simplified level (LOD baseline): ((model, level ≥ 1), instances).
+    pub levels: Vec<((u32, u32), Vec<InstanceRaw>)>,
     pub proxies: Vec<&'a GpuProxy>,
+    /// Proxies drawn lit (vertex colours, no texture) because their textures are not
+    /// resident yet (`--pending lit`).
+    pub lit_proxies: Vec<&'a GpuProxy>,
 }
 
 impl DrawList<'_> {
@@ -188,7 +206,29 @@ impl DrawList<'_> {
             .iter()
             .map(|(m, i)| models.models[*m as usize].triangle_count * i.len() as u64)
             .sum();
-        o + self.proxies.iter().map(|p| p.triangle_count()).sum::<u64>()
+        let l: u64 = self
+            .levels
+            .iter()
+            .map(|((m, l), i)| {
+                let model = &models.models[*m as usize];
+                let t = match *l {
+                    0 => model.triangle_count,
+                    // A level that is not uploaded is drawn as the original.
+                    l => model
+                        .lods
+                        .get(l as usize - 1)
+                        .map_or(model.triangle_count, |g| g.triangle_count),
+                };
+                t * i.len() as u64
+            })
+            .sum();
+        o + l
+            + self
+                .proxies
+                .iter()
+                .chain(&self.lit_proxies)
+                .map(|p| p.triangle_count())
+                .sum::<u64>()
     }
 }
 
@@ -586,10 +626,34 @@ impl Renderer {
                         }),
                     index_count,
                     triangle_count: mesh.triangles.len() as u64,
+                    lods: Vec::new(),
                 }
             })
             .collect();
         GpuModels { models }
+    }
+
+    /// Uploads the simplified levels (1..) of each model's LOD chain as index buffers
+    /// over the model's vertex buffer; replaces earlier ones.
+    pub fn upload_lods(&self, models: &mut GpuModels, set: &crate::lod::LodSet) {
+        for (model, chain) in models.models.iter_mut().zip(&set.chains) {
+            model.lods = chain
+                .levels
+                .iter()
+                .skip(1)
+                .map(|level| GpuLod {
+                    indices: self
+                        .device
+                        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                            label: Some("lod indices"),
+                            contents: bytemuck::cast_slice(&level.indices),
+                            usage: wgpu::BufferUsages::INDEX,
+                        }),
+                    index_count: level.indices.len() as u32,
+                    triangle_count: level.triangle_count(),
+                })
+                .collect();
+        }
     }
 
     /// Creates a proxy's vertex and uniform buffers; textures come later through
@@ -624,12 +688,14 @@ impl Renderer {
                 contents: bytemuck::bytes_of(&u),
                 usage: wgpu::BufferUsages::UNIFORM,
             });
+        let lit_bind_group = self.bind_views(&uniform, &[]);
         let mut p = GpuProxy {
             vertices: vbuf,
             vertex_count: vertices.len() as u32,
             uniform,
             textures: vec![None; views.len().min(MAX_VIEWS)],
             bind_group: None,
+            lit_bind_group,
             texture_bytes: 0,
             vertex_bytes: std::mem::size_of_val(vertices) as u64,
         };
@@ -690,10 +756,20 @@ impl Renderer {
         if p.bind_group.is_some() || p.textures.iter().any(|t| t.is_none()) {
             return;
         }
+        p.bind_group = Some(self.bind_views(&p.uniform, &p.textures));
+    }
+
+    /// A proxy bind group: its view uniform, the sampler and its view textures (the
+    /// "nothing captured" texture for missing ones and unused slots).
+    fn bind_views(
+        &self,
+        uniform: &wgpu::Buffer,
+        textures: &[Option<wgpu::TextureView>],
+    ) -> wgpu::BindGroup {
         let mut entries = vec![
             wgpu::BindGroupEntry {
                 binding: 0,
-                resource: p.uniform.as_entire_binding(),
+                resource: uniform.as_entire_binding(),
             },
             wgpu::BindGroupEntry {
                 binding: 1,
@@ -701,8 +777,7 @@ impl Renderer {
             },
         ];
         for i in 0..MAX_VIEWS {
-            let view = p
-                .textures
+            let view = textures
                 .get(i)
                 .and_then(|t| t.as_ref())
                 .unwrap_or(&self.dummy_view);
@@ -711,15 +786,16 @@ impl Renderer {
                 resource: wgpu::BindingResource::TextureView(view),
             });
         }
-        p.bind_group = Some(self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        self.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("proxy"),
             layout: &self.proxy_bgl,
             entries: &entries,
-        }));
+        })
     }
 
     /// Draws one frame and waits for the GPU; returns the submit → done wall time in
-    /// milliseconds. Proxies that are not ready (textures missing) are skipped.
+    /// milliseconds. Proxies of `list.proxies` that are not ready (textures missing)
+    /// are skipped; `list.lit_proxies` are drawn without their textures.
     pub fn render(&mut self, camera: &Camera, models: &GpuModels, list: &DrawList<'_>) -> f64 {
         let g = Globals {
             clip_from_world: camera.clip_from_world_wgpu().to_cols_array(),
@@ -731,6 +807,7 @@ impl Renderer {
             .originals
             .iter()
             .flat_map(|(_, v)| v.iter().copied())
+            .chain(list.levels.iter().flat_map(|(_, v)| v.iter().copied()))
             .collect();
         let need = std::mem::size_of_val(all.as_slice()) as u64;
         if need > self.instances.size() {
@@ -792,6 +869,24 @@ impl Renderer {
                 }
                 first += n;
             }
+            for ((m, l), inst) in &list.levels {
+                let model = &models.models[*m as usize];
+                let n = inst.len() as u32;
+                let (indices, count) = match *l {
+                    0 => (&model.indices, model.index_count),
+                    l => match model.lods.get(l as usize - 1) {
+                        Some(g) => (&g.indices, g.index_count),
+                        None => (&model.indices, model.index_count),
+                    },
+                };
+                if count > 0 && n > 0 {
+                    pass.set_vertex_buffer(0, model.vertices.slice(..));
+                    pass.set_vertex_buffer(1, self.instances.slice(..));
+                    pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
+                    pass.draw_indexed(0..count, 0, first..first + n);
+                }
+                first += n;
+            }
             pass.set_pipeline(&self.proxy_pipeline);
             for p in &list.proxies {
                 if let (Some(bg), true) = (&p.bind_group, p.vertex_count > 0) {
@@ -799,6 +894,11 @@ impl Renderer {
                     pass.set_vertex_buffer(0, p.vertices.slice(..));
                     pass.draw(0..p.vertex_count, 0..1);
                 }
+            }
+            for p in list.lit_proxies.iter().filter(|p| p.vertex_count > 0) {
+                pass.set_bind_group(1, Some(&p.lit_bind_group), &[]);
+                pass.set_vertex_buffer(0, p.vertices.slice(..));
+                pass.draw(0..p.vertex_count, 0..1);
             }
         }
         let t0 = Instant::now();

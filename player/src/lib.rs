@@ -11,6 +11,8 @@
 //! - [`frame`]: draw lists of configurations A (`full`), B (`frustum`), C (`hybrid`).
 //! - [`grid`]: the worker's hex-grid layout, replicated (the player never links the
 //!   worker); [`camera`]: camera, frustum culling.
+//! - [`lod`]: the distance-LOD baseline (`--mode lod`, issue 8): meshoptimizer
+//!   chains per model, level chosen by projected pixel error.
 //! - [`metrics`]: PSNR on luminance and SSIM; [`run`]: the `render`/`compare` commands.
 //! - [`testdata`]: synthetic bakes for tests (`write_synthetic_bake`, `write_quad_bake`).
 //!
@@ -26,9 +28,10 @@
 //!   whose direction to the triangle's centroid is closest to the viewer's are blended
 //!   with weights inversely proportional to those angles.
 //!
-//! CLI: `player render <out> --path <path.ron> --frames DIR [--mode hybrid|full|frustum]
-//! [--png] [--no-prefetch] [--size WxH]`, `player compare <out> --path <path.ron>
-//! [--json] [--worst DIR] [--worst-count N] [--no-crossings] [--size WxH]`,
+//! CLI: `player render <out> --path <path.ron> --frames DIR
+//! [--mode hybrid|full|frustum|lod] [--lod-pixel-error PX] [--png] [--no-prefetch]
+//! [--size WxH]`, `player compare <out> --path <path.ron> [--mode hybrid|lod] [--json]
+//! [--worst DIR] [--worst-count N] [--no-crossings] [--size WxH]`,
 //! `player synth <out>` (a synthetic bake of `manifests/demo.ron`).
 
 pub mod bake;
@@ -36,6 +39,7 @@ pub mod camera;
 pub mod frame;
 pub mod gpu;
 pub mod grid;
+pub mod lod;
 pub mod metrics;
 pub mod run;
 pub mod stream;

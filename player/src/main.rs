@@ -1,11 +1,11 @@
 //! `player`: walks through a bake (paper 000 §3.2) — `render` a camera path headless
-//! in one configuration (A full, B frustum, C hybrid), `compare` the hybrid with the
-//! full-geometry reference (PSNR on luminance, SSIM, triangle and frame-time ratios).
+//! in one configuration (A full, B frustum, C hybrid, or the distance-LOD baseline),
+//! `compare` the hybrid (or the LOD baseline) with the full-geometry reference (PSNR on luminance, SSIM, triangle and frame-time ratios).
 
 use clap::{Parser, Subcommand};
 use player::frame::Mode;
 use player::run::{compare, crossing_stats, render, CompareOptions, RenderOptions};
-use player::stream::StreamConfig;
+use player::stream::{PendingDraw, StreamConfig};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -31,9 +31,17 @@ struct StreamArgs {
     /// Resident cell data kept before LRU eviction, in MiB.
     #[arg(long, default_value_t = 512)]
     memory_budget_mib: u64,
+    /// How a proxy whose textures are still queued is drawn: `originals` (its
+    /// member objects) or `lit` (the proxy mesh with vertex colours).
+    #[arg(long, default_value = "originals")]
+    pending: PendingDraw,
     /// Override the path's resolution, e.g. 256x256.
     #[arg(long, value_parser = parse_size)]
     size: Option<(u32, u32)>,
+    /// `--mode lod`: the projected error, in pixels, below which an instance may use
+    /// a coarser level of its model's LOD chain.
+    #[arg(long, default_value_t = player::lod::DEFAULT_PIXEL_ERROR)]
+    lod_pixel_error: f32,
 }
 
 impl StreamArgs {
@@ -42,6 +50,7 @@ impl StreamArgs {
             prefetch: !self.no_prefetch,
             upload_budget_bytes: self.upload_budget,
             memory_budget_bytes: self.memory_budget_mib << 20,
+            pending: self.pending,
             ..Default::default()
         }
     }
@@ -113,11 +122,14 @@ enum Command {
     /// Write a synthetic bake of manifests/demo.ron (hand-made proxies, flat
     /// textures) for trying the player without a bake.
     Synth { out: PathBuf },
-    /// Compare the hybrid with full geometry along a camera path.
+    /// Compare the hybrid (or the LOD baseline) with full geometry along a camera path.
     Compare {
         out: PathBuf,
         #[arg(long)]
         path: PathBuf,
+        /// What to compare with the full-geometry reference: hybrid or lod.
+        #[arg(long, default_value = "hybrid")]
+        mode: Mode,
         /// Print the report as JSON on stdout.
         #[arg(long)]
         json: bool,
@@ -155,6 +167,7 @@ fn main() -> ExitCode {
                     png,
                     stream: stream.config(),
                     size: stream.size,
+                    lod_pixel_error: stream.lod_pixel_error,
                 };
                 render(&out, &p, &opts)
             })
@@ -206,6 +219,7 @@ fn main() -> ExitCode {
         Command::Compare {
             out,
             path,
+            mode,
             json,
             worst,
             worst_count,
@@ -223,6 +237,8 @@ fn main() -> ExitCode {
                         size: stream.size,
                         crossings: !no_crossings,
                         stream: stream.config(),
+                        mode,
+                        lod_pixel_error: stream.lod_pixel_error,
                     },
                 )
             })
@@ -245,8 +261,9 @@ fn main() -> ExitCode {
                         );
                     }
                     println!(
-                        "{} frames: mean PSNR(Y) {:.2} dB (min {:.2}), mean SSIM {:.4}, triangles {:.0} / {:.0} ({:.3}), frame time ratio {:.3} vs full, {:.3} vs frustum",
+                        "{} frames ({}): mean PSNR(Y) {:.2} dB (min {:.2}), mean SSIM {:.4}, triangles {:.0} / {:.0} ({:.3}), frame time ratio {:.3} vs full, {:.3} vs frustum",
                         r.frames,
+                        r.mode,
                         r.mean_psnr_y,
                         r.min_psnr_y,
                         r.mean_ssim,

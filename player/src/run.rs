@@ -3,8 +3,9 @@
 
 use crate::bake::Bake;
 use crate::camera::Camera;
-use crate::frame::{hybrid_list, list_stats, originals_list, Mode};
+use crate::frame::{hybrid_list, list_stats, lod_list, originals_list, Mode};
 use crate::gpu::{GpuError, GpuModels, Renderer};
+use crate::lod::LodSet;
 use crate::metrics::{diff_image, psnr_y, ssim_y};
 use crate::stream::{StreamConfig, Streamer};
 use format::path::{CameraPath, PathFrame};
@@ -63,11 +64,17 @@ pub struct FrameRecord {
     /// GPU submit → done, milliseconds.
     pub frame_ms: f64,
     pub triangles: u64,
+    /// Texture bytes of the proxies the frame draws.
     pub texture_bytes: u64,
     pub cache_hits: u64,
     pub cache_misses: u64,
     /// Render-thread streaming work this frame (demand loads, uploads), milliseconds.
     pub stream_ms: f64,
+    /// Texture bytes uploaded from the texture queue before this frame (≤ the
+    /// per-frame budget unless one texture alone is larger).
+    pub uploaded_bytes: u64,
+    /// Proxies of the current cell drawn as original geometry (textures queued).
+    pub pending_proxies: usize,
 }
 
 impl FrameRecord {
@@ -91,17 +98,18 @@ impl FrameRecord {
             cache_hits: stats.hits,
             cache_misses: stats.misses,
             stream_ms: stats.stream_ms,
+            uploaded_bytes: stats.uploaded_bytes,
+            pending_proxies: stats.pending_proxies,
         }
     }
 }
 
-pub const CSV_HEADER: &str =
-    "frame,time_s,cell,crossing,frame_ms,triangles,texture_bytes,cache_hits,cache_misses,stream_ms";
+pub const CSV_HEADER: &str = "frame,time_s,cell,crossing,frame_ms,triangles,texture_bytes,cache_hits,cache_misses,stream_ms,uploaded_bytes,pending_proxies";
 
 impl FrameRecord {
     pub fn csv(&self) -> String {
         format!(
-            "{},{:.4},{},{},{:.3},{},{},{},{},{:.3}",
+            "{},{:.4},{},{},{:.3},{},{},{},{},{:.3},{},{}",
             self.frame,
             self.time_s,
             self.cell.map_or(-1, |c| c as i64),
@@ -111,7 +119,9 @@ impl FrameRecord {
             self.texture_bytes,
             self.cache_hits,
             self.cache_misses,
-            self.stream_ms
+            self.stream_ms,
+            self.uploaded_bytes,
+            self.pending_proxies
         )
     }
 }
@@ -121,6 +131,10 @@ pub struct Player {
     pub bake: Bake,
     pub renderer: Renderer,
     pub models: GpuModels,
+    /// The LOD baseline's chains, built on first use ([`Player::prepare_lod`]).
+    pub lod: Option<LodSet>,
+    /// `--lod-pixel-error`: the projected error a level may have, in pixels.
+    pub lod_pixel_error: f32,
 }
 
 impl Player {
@@ -128,11 +142,35 @@ impl Player {
         let bake = Bake::open(dir)?;
         let renderer = Renderer::new(size.0, size.1)?;
         let models = renderer.upload_models(&bake.base);
-        Ok(Player {
+        Ok(Player::from_parts(bake, renderer, models))
+    }
+
+    pub fn from_parts(bake: Bake, renderer: Renderer, models: GpuModels) -> Player {
+        Player {
             bake,
             renderer,
             models,
-        })
+            lod: None,
+            lod_pixel_error: crate::lod::DEFAULT_PIXEL_ERROR,
+        }
+    }
+
+    /// Builds the LOD chains of every model once (cached) and uploads their index
+    /// buffers; prints the build time. Returns the chains.
+    pub fn prepare_lod(&mut self) -> &LodSet {
+        if self.lod.is_none() {
+            let set = LodSet::build(&self.bake.base);
+            self.renderer.upload_lods(&mut self.models, &set);
+            eprintln!(
+                "player: LOD chains of {} models built in {:.1} ms ({} simplified levels, {} triangles)",
+                set.chains.len(),
+                set.build_ms,
+                set.simplified_levels(),
+                set.simplified_triangles()
+            );
+            self.lod = Some(set);
+        }
+        self.lod.as_ref().expect("built above")
     }
 
     /// Draws one frame of a configuration; `streamer` is needed for `Hybrid`.
@@ -145,25 +183,38 @@ impl Player {
     ) -> (f64, u64, u64, crate::stream::StreamStats) {
         match (mode, streamer) {
             (Mode::Hybrid, Some(s)) => {
+                let pending = s.config().pending;
                 let (current, stats) = s.begin_frame(&self.renderer, &self.bake, camera);
-                let list = hybrid_list(&self.bake, camera, &current);
+                let list = hybrid_list(&self.bake, camera, &current, pending);
                 let (tris, tex) = list_stats(&list, &self.models);
                 let ms = self.renderer.render(camera, &self.models, &list);
                 (ms, tris, tex, stats)
+            }
+            (Mode::Lod, _) => {
+                self.prepare_lod();
+                let set = self.lod.as_ref().expect("prepared");
+                let list = lod_list(&self.bake, set, camera, self.lod_pixel_error);
+                let (tris, tex) = list_stats(&list, &self.models);
+                let ms = self.renderer.render(camera, &self.models, &list);
+                (ms, tris, tex, self.cell_stats(camera))
             }
             (m, _) => {
                 let list = originals_list(&self.bake, camera, m != Mode::Full);
                 let (tris, tex) = list_stats(&list, &self.models);
                 let ms = self.renderer.render(camera, &self.models, &list);
-                let stats = crate::stream::StreamStats {
-                    cell: self
-                        .bake
-                        .grid
-                        .nearest_cell(Vec2::new(camera.eye.x, camera.eye.z)),
-                    ..Default::default()
-                };
-                (ms, tris, tex, stats)
+                (ms, tris, tex, self.cell_stats(camera))
             }
+        }
+    }
+
+    /// Stream statistics of a frame drawn without the streamer: only the cell.
+    fn cell_stats(&self, camera: &Camera) -> crate::stream::StreamStats {
+        crate::stream::StreamStats {
+            cell: self
+                .bake
+                .grid
+                .nearest_cell(Vec2::new(camera.eye.x, camera.eye.z)),
+            ..Default::default()
         }
     }
 
@@ -179,6 +230,9 @@ impl Player {
         );
         self.draw(camera, Mode::Full, None);
         self.draw(camera, Mode::Hybrid, Some(&mut s));
+        if self.lod.is_some() {
+            self.draw(camera, Mode::Lod, None);
+        }
     }
 }
 
@@ -202,6 +256,8 @@ pub struct RenderOptions {
     pub stream: StreamConfig,
     /// Overrides the path's resolution.
     pub size: Option<(u32, u32)>,
+    /// `--lod-pixel-error` of `lod` mode.
+    pub lod_pixel_error: f32,
 }
 
 /// Renders every frame of `path`; writes `frames.csv` (and PNGs) into the frames dir.
@@ -218,6 +274,10 @@ pub fn render(
     let mut player = Player::open(out, size)?;
     eprintln!("player: adapter {}", player.renderer.adapter());
     std::fs::create_dir_all(&opts.frames_dir).map_err(|e| write_err(&opts.frames_dir, e))?;
+    player.lod_pixel_error = opts.lod_pixel_error;
+    if opts.mode == Mode::Lod {
+        player.prepare_lod();
+    }
     let far = player.bake.extent;
     player.warm_up(&camera_for(&frames[0], path, size, far));
     let mut streamer = Streamer::new(&player.bake, opts.stream.clone());
@@ -336,20 +396,28 @@ pub struct CompareReport {
     pub mean_ssim: f64,
     pub mean_triangles: f64,
     pub reference_triangles: f64,
-    /// Mean hybrid frame time / mean full-geometry frame time.
+    /// Mean frame time of the compared mode (hybrid or lod) / mean full-geometry
+    /// frame time.
     pub frame_time_ratio: f64,
-    /// Mean hybrid frame time / mean frustum-culled frame time (config C vs B).
+    /// Mean frame time of the compared mode / mean frustum-culled frame time (config
+    /// C vs B for the hybrid).
     pub frame_time_ratio_frustum: f64,
     pub adapter: String,
     pub width: u32,
     pub height: u32,
+    /// The compared configuration (`hybrid`, `lod`, ...).
+    pub mode: String,
+    /// The LOD threshold in pixels (`lod` mode only).
+    pub lod_pixel_error: Option<f32>,
+    /// Wall time of building the LOD chains (`lod` mode only), milliseconds.
+    pub lod_build_ms: Option<f64>,
     pub crossing_prefetch: Option<CrossingStats>,
     pub crossing_no_prefetch: Option<CrossingStats>,
     pub per_frame: Vec<CompareFrame>,
 }
 
 /// Options of `player compare`.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug)]
 pub struct CompareOptions {
     pub worst_dir: Option<PathBuf>,
     pub worst_count: usize,
@@ -357,6 +425,25 @@ pub struct CompareOptions {
     /// Also run the hybrid with prefetching off (Fig. 14 comparison).
     pub crossings: bool,
     pub stream: StreamConfig,
+    /// What is compared with the full-geometry reference: `hybrid` (default) or
+    /// `lod` (the distance-LOD baseline); `full`/`frustum` work too.
+    pub mode: Mode,
+    /// `--lod-pixel-error` of `lod` mode.
+    pub lod_pixel_error: f32,
+}
+
+impl Default for CompareOptions {
+    fn default() -> Self {
+        CompareOptions {
+            worst_dir: None,
+            worst_count: 0,
+            size: None,
+            crossings: false,
+            stream: StreamConfig::default(),
+            mode: Mode::Hybrid,
+            lod_pixel_error: crate::lod::DEFAULT_PIXEL_ERROR,
+        }
+    }
 }
 
 fn mean(v: impl Iterator<Item = f64>) -> f64 {
@@ -368,8 +455,9 @@ fn mean(v: impl Iterator<Item = f64>) -> f64 {
     }
 }
 
-/// Renders the reference (config A) and the hybrid (C) for every frame of the path
-/// (and B for timing); PSNR(Y) and SSIM of C against A.
+/// Renders the reference (config A) and the hybrid (C, or the mode of
+/// `opts.mode`, e.g. the LOD baseline) for every frame of the path (and B for
+/// timing); PSNR(Y) and SSIM against A.
 pub fn compare(
     out: &Path,
     path: &CameraPath,
@@ -382,6 +470,8 @@ pub fn compare(
     }
     let mut player = Player::open(out, size)?;
     eprintln!("player: adapter {}", player.renderer.adapter());
+    player.lod_pixel_error = opts.lod_pixel_error;
+    let lod_build_ms = (opts.mode == Mode::Lod).then(|| player.prepare_lod().build_ms);
     let far = player.bake.extent;
     player.warm_up(&camera_for(&frames[0], path, size, far));
     let mut streamer = Streamer::new(&player.bake, opts.stream.clone());
@@ -395,7 +485,7 @@ pub fn compare(
         let (ref_ms, ref_tris, _, _) = player.draw(&cam, Mode::Full, None);
         let reference = player.renderer.read_pixels()?;
         let (fr_ms, _, _, _) = player.draw(&cam, Mode::Frustum, None);
-        let (ms, tris, tex, stats) = player.draw(&cam, Mode::Hybrid, Some(&mut streamer));
+        let (ms, tris, tex, stats) = player.draw(&cam, opts.mode, Some(&mut streamer));
         let hybrid = player.renderer.read_pixels()?;
         let psnr = psnr_y(&reference, &hybrid);
         let ssim = ssim_y(&reference, &hybrid, size.0 as usize, size.1 as usize);
@@ -419,7 +509,7 @@ pub fn compare(
         }
     }
     drop(streamer);
-    let crossing_no_prefetch = if opts.crossings {
+    let crossing_no_prefetch = if opts.crossings && opts.mode == Mode::Hybrid {
         let mut s = Streamer::new(
             &player.bake,
             StreamConfig {
@@ -432,18 +522,7 @@ pub fn compare(
         for (i, f) in frames.iter().enumerate() {
             let cam = camera_for(f, path, size, far);
             let (ms, tris, tex, stats) = player.draw(&cam, Mode::Hybrid, Some(&mut s));
-            recs.push(FrameRecord {
-                frame: i,
-                time_s: f.time_s,
-                cell: stats.cell,
-                crossing: prev.is_some_and(|p| p != stats.cell),
-                frame_ms: ms,
-                triangles: tris,
-                texture_bytes: tex,
-                cache_hits: stats.hits,
-                cache_misses: stats.misses,
-                stream_ms: stats.stream_ms,
-            });
+            recs.push(FrameRecord::new(i, f.time_s, &stats, prev, (ms, tris, tex)));
             prev = Some(stats.cell);
         }
         Some(crossing_stats(&recs))
@@ -459,7 +538,12 @@ pub fn compare(
                 size.1,
                 r,
             )?;
-            write_png(&dir.join(format!("{i:05}-hybrid.png")), size.0, size.1, h)?;
+            write_png(
+                &dir.join(format!("{i:05}-{}.png", opts.mode.name())),
+                size.0,
+                size.1,
+                h,
+            )?;
             write_png(
                 &dir.join(format!("{i:05}-diff.png")),
                 size.0,
@@ -487,6 +571,9 @@ pub fn compare(
         adapter: player.renderer.adapter().to_string(),
         width: size.0,
         height: size.1,
+        mode: opts.mode.name().to_string(),
+        lod_pixel_error: (opts.mode == Mode::Lod).then_some(opts.lod_pixel_error),
+        lod_build_ms,
         crossing_prefetch: Some(crossing_stats(&hybrid_records)),
         crossing_no_prefetch,
         per_frame,

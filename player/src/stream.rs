@@ -10,10 +10,20 @@
 //!   drops it if it is out of date (t-priority < timestamp − 2), and otherwise maps,
 //!   validates and prepares the cell pack.
 //! - The render thread takes prepared cells, creates their GPU buffers and queues their
-//!   textures in a **FIFO upload queue** served under a per-frame byte budget (an
-//!   oversized texture is still uploaded when it is the first of the frame; one that
-//!   is not first is put back at the front, paper §4: "textures in general have size
-//!   in a wide range"). The current cell's own textures are uploaded at once.
+//!   textures in a **FIFO texture queue** served before each frame under a per-frame
+//!   byte budget (§3.2: "an amount of texture constrained by a budget is loaded
+//!   before each frame"; a texture that is not the first of the frame and is larger
+//!   than the remaining budget is put back as the first in the queue; a single
+//!   texture larger than the whole budget is uploaded alone, as the first of a
+//!   frame, or it would never be). Prefetched cells' textures are thus uploaded
+//!   progressively while the viewer is still in the previous cell.
+//! - **Crossings never break the budget** (issue 7: a 723 ms crossing frame when
+//!   the new cell's textures were uploaded at once): when the viewer enters a cell
+//!   whose textures are still queued, they move to the front of the queue, keeping
+//!   their order, and go up under the same budget. Until all of a proxy's textures
+//!   are resident, the frame draws the proxy's member objects as original geometry
+//!   ([`ResidentCell::fallback_instances`]; or, with [`PendingDraw::Lit`], the proxy
+//!   mesh with lit vertex colours) — never a hole.
 //! - Resident cells are evicted least-recently-used first above a memory budget (never
 //!   the current cell).
 //! - A cell whose pack is missing or corrupt is logged once and drawn as original
@@ -49,6 +59,29 @@ pub struct StreamConfig {
     pub step_distance: Option<f32>,
     /// Timestamp step: angle turned, in degrees.
     pub step_angle_deg: f32,
+    /// How a proxy whose textures are still queued is drawn.
+    pub pending: PendingDraw,
+}
+
+/// How the hybrid draws a proxy whose textures are not resident yet (never a hole).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum PendingDraw {
+    /// Its member objects as original geometry (exact, more triangles).
+    #[default]
+    Originals,
+    /// The proxy mesh itself with lit vertex colours (DESIGN.md shading, no texture).
+    Lit,
+}
+
+impl std::str::FromStr for PendingDraw {
+    type Err = String;
+    fn from_str(s: &str) -> Result<PendingDraw, String> {
+        match s {
+            "originals" => Ok(PendingDraw::Originals),
+            "lit" => Ok(PendingDraw::Lit),
+            _ => Err(format!("unknown pending draw {s:?} (originals, lit)")),
+        }
+    }
 }
 
 impl Default for StreamConfig {
@@ -59,6 +92,7 @@ impl Default for StreamConfig {
             memory_budget_bytes: 512 << 20,
             step_distance: None,
             step_angle_deg: 15.0,
+            pending: PendingDraw::Originals,
         }
     }
 }
@@ -155,6 +189,8 @@ pub struct ResidentCell {
     pub originals: Vec<u32>,
     pub proxies: Vec<GpuProxy>,
     pub bounds: Vec<Aabb>,
+    /// Per proxy: its member instances (drawn as originals until it is ready).
+    pub members: Vec<Vec<u32>>,
     /// Texels still waiting in the upload queue: (proxy, view) → texels.
     pending: BTreeMap<(usize, usize), (u32, u32, Vec<u8>)>,
     pub bytes: u64,
@@ -162,8 +198,27 @@ pub struct ResidentCell {
 }
 
 impl ResidentCell {
+    /// Every texture of the cell is resident.
     pub fn is_ready(&self) -> bool {
         self.pending.is_empty()
+    }
+
+    /// Proxies that cannot be drawn yet (textures still queued).
+    pub fn pending_proxies(&self) -> usize {
+        self.proxies.iter().filter(|p| !p.is_ready()).count()
+    }
+
+    /// The member instances of proxies whose textures are not all resident yet,
+    /// sorted, without duplicates: the frame draws them as original geometry.
+    pub fn fallback_instances(&self) -> Vec<u32> {
+        let set: BTreeSet<u32> = self
+            .proxies
+            .iter()
+            .zip(&self.members)
+            .filter(|(p, _)| !p.is_ready())
+            .flat_map(|(_, m)| m.iter().copied())
+            .collect();
+        set.into_iter().collect()
     }
 }
 
@@ -186,6 +241,12 @@ pub struct StreamStats {
     /// and uploading.
     pub stream_ms: f64,
     pub timestamp: u64,
+    /// Texture bytes uploaded before this frame (at most the budget, unless one
+    /// texture alone is larger).
+    pub uploaded_bytes: u64,
+    /// Proxies of the current cell drawn as original geometry this frame because
+    /// their textures are still queued.
+    pub pending_proxies: usize,
 }
 
 /// The cell cache, upload queue and prefetch thread.
@@ -288,25 +349,28 @@ impl Streamer {
                 let result = bake.load_cell(id).map_err(|e| e.to_string());
                 self.accept(renderer, id, result);
             }
-            // The current cell's textures cannot wait for the budget.
-            self.upload_cell_now(renderer, id);
+            // The current cell's queued textures go first, under the same budget.
+            self.prioritise(id);
         }
-        // 4. Budgeted FIFO uploads for prefetched cells.
-        self.upload_budgeted(renderer);
+        // 4. The texture queue, FIFO under the per-frame budget.
+        self.stats.uploaded_bytes = self.upload_budgeted(renderer);
         // 5. LRU eviction.
         self.evict();
         self.stats.cell = cell;
         self.stats.stream_ms = t0.elapsed().as_secs_f64() * 1e3;
         self.stats.timestamp = self.timestamp();
-        let stats = self.stats;
         let current = match cell.and_then(|id| self.cells.get_mut(&id)) {
             Some(c) => {
                 c.last_used = self.clock;
+                self.stats.pending_proxies = c.pending_proxies();
                 CurrentCell::Pack(&*c)
             }
-            None => CurrentCell::Originals,
+            None => {
+                self.stats.pending_proxies = 0;
+                CurrentCell::Originals
+            }
         };
-        (current, stats)
+        (current, self.stats)
     }
 
     fn step_timestamp(&mut self, bake: &Bake, camera: &Camera, cell: Option<u32>) {
@@ -367,12 +431,14 @@ impl Streamer {
                 let bytes = cell.bytes();
                 let mut proxies = Vec::with_capacity(cell.proxies.len());
                 let mut bounds = Vec::with_capacity(cell.proxies.len());
+                let mut members = Vec::with_capacity(cell.proxies.len());
                 let mut pending = BTreeMap::new();
                 for (pi, p) in cell.proxies.into_iter().enumerate() {
                     let views: Vec<([f32; 16], [f32; 3])> =
                         p.views.iter().map(|v| (v.matrix, v.eye)).collect();
                     proxies.push(renderer.create_proxy(&p.vertices, &views));
                     bounds.push(p.bounds);
+                    members.push(p.members);
                     for (vi, v) in p.views.into_iter().enumerate() {
                         self.uploads.push_back((id, pi, vi));
                         pending.insert((pi, vi), (v.width, v.height, v.rgba));
@@ -385,6 +451,7 @@ impl Streamer {
                         originals: cell.originals,
                         proxies,
                         bounds,
+                        members,
                         pending,
                         bytes,
                         last_used: self.clock,
@@ -414,22 +481,35 @@ impl Streamer {
         rgba.len() as u64
     }
 
-    fn upload_cell_now(&mut self, renderer: &Renderer, id: u32) {
+    /// Moves cell `id`'s queued textures to the front of the texture queue, in
+    /// their order (stable partition); no-op when they are already there.
+    fn prioritise(&mut self, id: u32) {
         let Some(cell) = self.cells.get(&id) else {
             return;
         };
         if cell.pending.is_empty() {
             return;
         }
-        let keys: Vec<(usize, usize)> = cell.pending.keys().copied().collect();
-        for (pi, vi) in keys {
-            self.upload_one(renderer, id, pi, vi);
+        let already_first = self
+            .uploads
+            .iter()
+            .position(|&(c, _, _)| c != id)
+            .is_none_or(|k| self.uploads.iter().skip(k).all(|&(c, _, _)| c != id));
+        if already_first {
+            return;
         }
-        self.uploads.retain(|&(c, _, _)| c != id);
+        let (mine, rest): (VecDeque<_>, VecDeque<_>) =
+            self.uploads.drain(..).partition(|&(c, _, _)| c == id);
+        self.uploads = mine;
+        self.uploads.extend(rest);
     }
 
-    fn upload_budgeted(&mut self, renderer: &Renderer) {
-        let mut left = self.config.upload_budget_bytes;
+    /// Serves the texture queue under the per-frame budget; returns the bytes
+    /// uploaded.
+    fn upload_budgeted(&mut self, renderer: &Renderer) -> u64 {
+        let budget = self.config.upload_budget_bytes;
+        let mut left = budget;
+        let mut uploaded = 0;
         let mut first = true;
         while let Some((id, pi, vi)) = self.uploads.pop_front() {
             let size = self
@@ -444,13 +524,14 @@ impl Streamer {
                 self.uploads.push_front((id, pi, vi));
                 break;
             }
-            self.upload_one(renderer, id, pi, vi);
+            uploaded += self.upload_one(renderer, id, pi, vi);
             left = left.saturating_sub(size);
             first = false;
             if left == 0 {
                 break;
             }
         }
+        uploaded
     }
 
     fn evict(&mut self) {

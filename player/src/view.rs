@@ -140,11 +140,7 @@ impl App {
             device,
             config,
             bgra: matches!(format, F::Bgra8UnormSrgb | F::Bgra8Unorm),
-            player: Player {
-                bake,
-                renderer,
-                models,
-            },
+            player: Player::from_parts(bake, renderer, models),
             streamer,
             eye: Vec3::new(x, g.min_eye_height, z),
             yaw: 0.0,

@@ -8,7 +8,7 @@ use player::frame::Mode;
 use player::gpu::{GpuError, Renderer, SKY};
 use player::metrics::psnr_y;
 use player::run::{compare, render, CompareOptions, Player, RenderOptions, CSV_HEADER};
-use player::stream::{StreamConfig, Streamer};
+use player::stream::{PendingDraw, StreamConfig, Streamer};
 use player::testdata::{capture_camera, write_quad_bake, write_synthetic_bake};
 
 fn open(dir: &std::path::Path, size: (u32, u32)) -> Option<Player> {
@@ -262,6 +262,7 @@ fn render_writes_csv_and_compare_reports_quality() {
             png: true,
             stream: StreamConfig::default(),
             size: None,
+            lod_pixel_error: 1.0,
         },
     )
     .unwrap();
@@ -289,6 +290,7 @@ fn render_writes_csv_and_compare_reports_quality() {
             size: Some((48, 48)),
             crossings: true,
             stream: StreamConfig::default(),
+            ..Default::default()
         },
     )
     .unwrap();
@@ -497,4 +499,166 @@ fn compare_of_a_bake_without_proxies_is_perfect() {
         report.mean_ssim
     );
     assert!(report.mean_triangles <= report.reference_triangles);
+}
+
+/// Pixels where the reference shows an object and `img` shows sky.
+fn holes(reference: &[u8], img: &[u8]) -> usize {
+    let sky = |p: &[u8]| p[0] == SKY[0] && p[1] == SKY[1] && p[2] == SKY[2];
+    reference
+        .chunks_exact(4)
+        .zip(img.chunks_exact(4))
+        .filter(|(r, h)| !sky(r) && sky(h))
+        .count()
+}
+
+/// Issue 7 (the 723 ms crossing frame): the texture queue never uploads more than
+/// the per-frame budget, also at crossings; the current cell's queued textures go
+/// first, so its proxies waiting for textures only decrease while the viewer stays.
+#[test]
+fn texture_uploads_stay_under_the_budget_at_every_frame() {
+    let dir = tempfile::tempdir().unwrap();
+    write_synthetic_bake(dir.path()).unwrap();
+    if Renderer::new(8, 8).is_err() {
+        eprintln!("SKIP: no graphics adapter");
+        return;
+    }
+    let path = format::path::CameraPath::load(
+        &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../manifests/paths/demo-walk.ron"),
+    )
+    .unwrap();
+    let budget = 3 * 32 * 32 * 4; // three of the synthetic bake's 32² captures
+    let frames_dir = dir.path().join("frames");
+    let (records, _) = render(
+        dir.path(),
+        &path,
+        &RenderOptions {
+            mode: Mode::Hybrid,
+            frames_dir: frames_dir.clone(),
+            png: false,
+            stream: StreamConfig {
+                upload_budget_bytes: budget,
+                ..Default::default()
+            },
+            size: Some((48, 48)),
+            lod_pixel_error: 1.0,
+        },
+    )
+    .unwrap();
+    let csv = std::fs::read_to_string(frames_dir.join("frames.csv")).unwrap();
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let (up, pend, cell) = (col("uploaded_bytes"), col("pending_proxies"), col("cell"));
+    let rows: Vec<Vec<String>> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(str::to_string).collect())
+        .collect();
+    assert_eq!(rows.len(), records.len());
+    let mut total = 0u64;
+    for (r, rec) in rows.iter().zip(&records) {
+        let bytes: u64 = r[up].parse().unwrap();
+        assert_eq!(bytes, rec.uploaded_bytes);
+        assert!(
+            bytes <= budget,
+            "frame {}: {bytes} bytes uploaded, budget {budget}",
+            r[0]
+        );
+        total += bytes;
+    }
+    assert!(total > 0, "textures were uploaded");
+    let crossings = records.iter().filter(|r| r.crossing).count();
+    assert!(crossings >= 3, "{crossings} crossings");
+    // Within a stay in one cell, proxies waiting for textures never increase.
+    for w in rows.windows(2) {
+        if w[0][cell] == w[1][cell] {
+            let (a, b): (usize, usize) = (w[0][pend].parse().unwrap(), w[1][pend].parse().unwrap());
+            assert!(
+                b <= a,
+                "frames {} → {}: pending {a} → {b}",
+                w[0][0],
+                w[1][0]
+            );
+        }
+    }
+    assert!(
+        records.iter().any(|r| r.pending_proxies > 0),
+        "the small budget leaves proxies waiting at crossings"
+    );
+    println!(
+        "uploads per frame: {:?}",
+        records.iter().map(|r| r.uploaded_bytes).collect::<Vec<_>>()
+    );
+    println!(
+        "pending proxies: {:?}",
+        records
+            .iter()
+            .map(|r| r.pending_proxies)
+            .collect::<Vec<_>>()
+    );
+}
+
+/// Proxies whose textures are still queued are drawn as their members' original
+/// geometry: a frame with a tiny budget has no more holes than one with every
+/// texture resident (a skipped proxy would leave sky where its objects are).
+#[test]
+fn proxies_waiting_for_textures_are_drawn_as_originals() {
+    let dir = tempfile::tempdir().unwrap();
+    write_synthetic_bake(dir.path()).unwrap();
+    let Some(mut p) = open(dir.path(), (96, 96)) else {
+        return;
+    };
+    // Looking across the park from a corner: many outside objects (proxies) in view.
+    let cam = Camera {
+        eye: Vec3::new(30.0, 6.0, 40.0),
+        dir: Vec3::new(120.0, -2.0, 80.0),
+        fov_y_deg: 60.0,
+        width: 96,
+        height: 96,
+        near: 0.25,
+        far: p.bake.extent,
+    };
+    p.warm_up(&cam);
+    p.draw(&cam, Mode::Frustum, None);
+    let reference = p.renderer.read_pixels().unwrap();
+    let stream = |p: &Player, budget: u64, pending: PendingDraw| {
+        Streamer::new(
+            &p.bake,
+            StreamConfig {
+                prefetch: false,
+                upload_budget_bytes: budget,
+                pending,
+                ..Default::default()
+            },
+        )
+    };
+    let mut tiny = stream(&p, 1, PendingDraw::Originals);
+    let (_, _, _, stats) = p.draw(&cam, Mode::Hybrid, Some(&mut tiny));
+    let waiting = p.renderer.read_pixels().unwrap();
+    assert_eq!(stats.uploaded_bytes, 32 * 32 * 4, "one texture per frame");
+    assert!(stats.pending_proxies > 0);
+    let mut big = stream(&p, 1 << 30, PendingDraw::Originals);
+    let (_, tris_ready, _, stats_big) = p.draw(&cam, Mode::Hybrid, Some(&mut big));
+    let ready = p.renderer.read_pixels().unwrap();
+    assert_eq!(stats_big.pending_proxies, 0);
+    // `--pending lit`: the waiting proxies drawn untextured (the same triangles as
+    // when they are ready; the synthetic proxies are not simplified, so their
+    // members' originals are not more here), no holes either.
+    let mut lit = stream(&p, 1, PendingDraw::Lit);
+    let (_, tris_lit, _, stats_lit) = p.draw(&cam, Mode::Hybrid, Some(&mut lit));
+    let lit_px = p.renderer.read_pixels().unwrap();
+    assert_eq!(stats_lit.pending_proxies, stats.pending_proxies);
+    assert_eq!(tris_lit, tris_ready);
+    assert!(holes(&reference, &lit_px) <= holes(&reference, &ready));
+    assert!(non_sky(&lit_px) >= non_sky(&ready) * 95 / 100);
+    let object_pixels = non_sky(&reference);
+    let (h_wait, h_ready) = (holes(&reference, &waiting), holes(&reference, &ready));
+    println!(
+        "{} proxies waiting; holes {h_wait} (waiting) vs {h_ready} (ready) of {object_pixels} object pixels; PSNR {:.2} / {:.2}",
+        stats.pending_proxies,
+        psnr_y(&reference, &waiting),
+        psnr_y(&reference, &ready)
+    );
+    assert!(object_pixels > 500);
+    assert!(h_wait <= h_ready, "{h_wait} > {h_ready}");
+    assert!(psnr_y(&reference, &waiting) >= psnr_y(&reference, &ready));
 }
