@@ -678,8 +678,8 @@ impl Validator<'_> {
 
         let output = match raw.output {
             Some(o) if o.is_empty() => return Err(self.error("output", "must not be empty".into())),
-            Some(o) => self.base_dir().join(o),
-            None => self.base_dir().join("..").join("out").join(&name),
+            Some(o) => lexically_normal(&self.base_dir().join(o)),
+            None => lexically_normal(&self.base_dir().join("..").join("out").join(&name)),
         };
 
         Ok(Plan {
@@ -696,5 +696,47 @@ impl Validator<'_> {
             cells_per_job,
             output,
         })
+    }
+}
+
+/// `path` with `.` components dropped and `name/..` pairs folded, without touching the
+/// file system (so `manifests/../out/demo` prints as `out/demo`). A `..` that follows
+/// no normal component is kept; an empty result is `.`.
+pub fn lexically_normal(path: &Path) -> PathBuf {
+    use std::path::Component;
+    let mut parts: Vec<Component> = Vec::new();
+    for c in path.components() {
+        match c {
+            Component::CurDir => {}
+            Component::ParentDir => match parts.last() {
+                Some(Component::Normal(_)) => {
+                    parts.pop();
+                }
+                Some(Component::RootDir) | Some(Component::Prefix(_)) => {}
+                _ => parts.push(c),
+            },
+            _ => parts.push(c),
+        }
+    }
+    if parts.is_empty() {
+        return PathBuf::from(".");
+    }
+    parts.iter().collect()
+}
+
+#[cfg(test)]
+mod lexical_tests {
+    use super::lexically_normal;
+    use std::path::Path;
+
+    #[test]
+    fn folds_dot_and_dot_dot() {
+        let n = |s: &str| lexically_normal(Path::new(s)).display().to_string();
+        assert_eq!(n("manifests/../out/demo"), "out/demo");
+        assert_eq!(n("./manifests/./x.ron"), "manifests/x.ron");
+        assert_eq!(n("../out/demo"), "../out/demo");
+        assert_eq!(n("./../out"), "../out");
+        assert_eq!(n("/a/../../b"), "/b");
+        assert_eq!(n("a/.."), ".");
     }
 }
