@@ -1,5 +1,6 @@
 //! Fingerprints (DESIGN.md "Fingerprints"; bevy_asset-style cache keys): a job's
-//! fingerprint hashes the pack format version, the bake and cell parameters, the
+//! fingerprint hashes the pack format version, the bake revision ([`BAKE_REVISION`]),
+//! the bake and cell parameters, the
 //! content of every model and the instance table it reads, and the cells it bakes.
 //! An unchanged fingerprint and a valid pack mean the job is done.
 //!
@@ -13,6 +14,13 @@ use crate::pack::FORMAT_VERSION;
 use crate::Scene;
 
 pub type Fingerprint = [u8; 32];
+
+/// Revision of the bake's *output* for unchanged inputs, hashed into every job
+/// fingerprint. Bump it in the same commit as any change to the worker that changes
+/// the bytes a bake writes (an algorithm, a default, the writer's compression), so
+/// that `pipeline run` on an old output rebakes instead of keeping stale packs.
+/// History: 1 — session 1; 2 — zstd level 6, the one-pixel visibility tolerance.
+pub const BAKE_REVISION: u32 = 2;
 
 /// Hex form for file names, logs and reports.
 pub fn to_hex(f: &Fingerprint) -> String {
@@ -50,6 +58,7 @@ pub fn params_fingerprint(bake: &BakeParams, cells: &CellParams) -> Fingerprint 
     let mut h = blake3::Hasher::new();
     h.update(b"hexbake params v1\0");
     h.update(&FORMAT_VERSION.to_le_bytes());
+    h.update(&BAKE_REVISION.to_le_bytes());
     // Destructure so a new parameter cannot be forgotten here.
     let BakeParams {
         image_res,
