@@ -137,58 +137,12 @@ fn format_value(v: f64) -> String {
     }
 }
 
-/// 3×5 glyphs for digits and the few letters the labels use.
-fn glyph(c: char) -> [u8; 5] {
-    match c {
-        '0' => [7, 5, 5, 5, 7],
-        '1' => [2, 6, 2, 2, 7],
-        '2' => [7, 1, 7, 4, 7],
-        '3' => [7, 1, 7, 1, 7],
-        '4' => [5, 5, 7, 1, 1],
-        '5' => [7, 4, 7, 1, 7],
-        '6' => [7, 4, 7, 5, 7],
-        '7' => [7, 1, 1, 1, 1],
-        '8' => [7, 5, 7, 5, 7],
-        '9' => [7, 5, 7, 1, 7],
-        '.' => [0, 0, 0, 0, 2],
-        '-' => [0, 0, 7, 0, 0],
-        'k' => [4, 5, 6, 5, 5],
-        'm' => [0, 7, 7, 5, 5],
-        'b' => [4, 4, 7, 5, 7],
-        'y' => [5, 5, 7, 1, 7],
-        't' => [2, 7, 2, 2, 3],
-        'e' => [7, 5, 7, 4, 7],
-        's' => [7, 4, 7, 1, 7],
-        'p' => [7, 5, 7, 4, 4],
-        'o' => [0, 7, 5, 5, 7],
-        'l' => [2, 2, 2, 2, 3],
-        'g' => [7, 5, 7, 1, 7],
-        'n' => [0, 6, 5, 5, 5],
-        _ => [0, 0, 0, 0, 0],
-    }
-}
-
 const PX: f32 = 3.0;
 
 fn text_width(s: &str) -> f32 {
-    s.chars().count() as f32 * 4.0 * PX
+    crate::pixel_font::text_width(s, PX)
 }
 
 fn draw_text(pm: &mut Pixmap, x: f32, y: f32, s: &str) {
-    let mut paint = Paint::default();
-    paint.set_color_rgba8(30, 30, 30, 255);
-    for (i, ch) in s.chars().enumerate() {
-        let g = glyph(ch);
-        for (row, bits) in g.iter().enumerate() {
-            for col in 0..3 {
-                if bits & (4 >> col) != 0 {
-                    let px = x + (i as f32 * 4.0 + col as f32) * PX;
-                    let py = y + row as f32 * PX;
-                    if let Some(r) = Rect::from_xywh(px, py, PX, PX) {
-                        pm.fill_rect(r, &paint, Transform::identity(), None);
-                    }
-                }
-            }
-        }
-    }
+    crate::pixel_font::draw_text(pm, x, y, s, [30, 30, 30], PX);
 }

@@ -7,6 +7,7 @@ pub mod heatmap;
 pub mod inspect;
 pub mod lock;
 pub mod overrides;
+pub mod pixel_font;
 pub mod report;
 pub mod run;
 pub mod scene_cmd;
