@@ -456,27 +456,36 @@ impl Renderer {
                 attributes: &inst_attrs,
             }),
         ];
-        let lit_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("lit"),
-            layout: Some(&lit_layout),
-            vertex: wgpu::VertexState {
-                module: &shader,
-                entry_point: Some("vs_lit"),
-                compilation_options: Default::default(),
-                buffers: &lit_buffers,
-            },
-            primitive,
-            depth_stencil: depth_stencil.clone(),
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &shader,
-                entry_point: Some("fs_lit"),
-                compilation_options: Default::default(),
-                targets: &targets,
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+        // The lit and proxy pipelines differ only in layout, entry points and buffers.
+        let make_pipeline =
+            |label: &str,
+             layout: &wgpu::PipelineLayout,
+             vs: &str,
+             fs: &str,
+             buffers: &[Option<wgpu::VertexBufferLayout>]| {
+                device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                    label: Some(label),
+                    layout: Some(layout),
+                    vertex: wgpu::VertexState {
+                        module: &shader,
+                        entry_point: Some(vs),
+                        compilation_options: Default::default(),
+                        buffers,
+                    },
+                    primitive,
+                    depth_stencil: depth_stencil.clone(),
+                    multisample: Default::default(),
+                    fragment: Some(wgpu::FragmentState {
+                        module: &shader,
+                        entry_point: Some(fs),
+                        compilation_options: Default::default(),
+                        targets: &targets,
+                    }),
+                    multiview_mask: None,
+                    cache: None,
+                })
+            };
+        let lit_pipeline = make_pipeline("lit", &lit_layout, "vs_lit", "fs_lit", &lit_buffers);
         let proxy_attrs = wgpu::vertex_attr_array![
             0 => Float32x3, 1 => Float32x3, 2 => Unorm8x4, 3 => Float32x3, 4 => Uint32, 5 => Float32x3
         ];
@@ -485,27 +494,13 @@ impl Renderer {
             step_mode: wgpu::VertexStepMode::Vertex,
             attributes: &proxy_attrs,
         })];
-        let proxy_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("proxy"),
-            layout: Some(&proxy_layout),
-            vertex: wgpu::VertexState {
-                module: &shader,
-                entry_point: Some("vs_proxy"),
-                compilation_options: Default::default(),
-                buffers: &proxy_buffers,
-            },
-            primitive,
-            depth_stencil,
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &shader,
-                entry_point: Some("fs_proxy"),
-                compilation_options: Default::default(),
-                targets: &targets,
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+        let proxy_pipeline = make_pipeline(
+            "proxy",
+            &proxy_layout,
+            "vs_proxy",
+            "fs_proxy",
+            &proxy_buffers,
+        );
         let globals = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("globals"),
             size: std::mem::size_of::<Globals>() as u64,
