@@ -170,14 +170,9 @@ fn run(cli: Cli) -> Result<(), Failure> {
             let plan = format::manifest::parse_manifest(&manifest).map_err(bad_input)?;
             let scene = plan.load_scene().map_err(bad_input)?;
             let summary = pipeline::scene_cmd::summarize(&plan, &scene);
-            if json {
-                println!(
-                    "{}",
-                    serde_json::to_string_pretty(&summary).expect("summary serializes")
-                );
-            } else {
-                print!("{}", pipeline::scene_cmd::render_text(&summary));
-            }
+            print_json_or_text(json, &summary, || {
+                pipeline::scene_cmd::render_text(&summary)
+            });
             Ok(())
         }
         Command::Run {
@@ -254,27 +249,13 @@ fn run(cli: Cli) -> Result<(), Failure> {
         }
         Command::Status { out, json } => {
             let status = pipeline::status::status(&out).map_err(bad_input)?;
-            if json {
-                println!(
-                    "{}",
-                    serde_json::to_string_pretty(&status).expect("status serializes")
-                );
-            } else {
-                print!("{}", status.to_text());
-            }
+            print_json_or_text(json, &status, || status.to_text());
             Ok(())
         }
         Command::Report { out, json } => {
             let r =
                 pipeline::report::write_report(&out).map_err(|error| Failure { code: 1, error })?;
-            if json {
-                println!(
-                    "{}",
-                    serde_json::to_string_pretty(&r).expect("report serializes")
-                );
-            } else {
-                print!("{}", pipeline::report::to_markdown(&r));
-            }
+            print_json_or_text(json, &r, || pipeline::report::to_markdown(&r));
             Ok(())
         }
         Command::Finalize { manifest, out } => {
@@ -388,5 +369,18 @@ fn restore_default_sigpipe() {
     // signal's disposition to SIG_DFL has no other precondition.
     unsafe {
         libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
+}
+
+/// Prints `value` as pretty JSON when `json`, else the text `text` makes (which ends
+/// with its own newline).
+fn print_json_or_text<T: serde::Serialize>(json: bool, value: &T, text: impl FnOnce() -> String) {
+    if json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(value).expect("a report value serializes")
+        );
+    } else {
+        print!("{}", text());
     }
 }
