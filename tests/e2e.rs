@@ -15,6 +15,11 @@ fn repo() -> PathBuf {
 
 /// Builds the binaries once per test run (a no-op when fresh) and returns the
 /// directory holding them (the profile directory of this test executable).
+///
+/// `--tests` makes cargo resolve features as `cargo test --workspace` did (with the
+/// dev-dependencies), so the binaries link the dependencies that test run already
+/// compiled; without it cargo compiled a second copy of wgpu, winit and friends,
+/// which filled a CI machine's disk.
 fn bin_dir() -> &'static Path {
     static DIR: OnceLock<PathBuf> = OnceLock::new();
     DIR.get_or_init(|| {
@@ -22,9 +27,8 @@ fn bin_dir() -> &'static Path {
         let dir = exe.parent().unwrap().parent().unwrap().to_path_buf(); // target/<profile>
         let profile = dir.file_name().unwrap().to_str().unwrap().to_string();
         let mut cmd = Command::new(env!("CARGO"));
-        cmd.current_dir(repo()).args([
-            "build", "--bins", "-p", "worker", "-p", "pipeline", "-p", "player",
-        ]);
+        cmd.current_dir(repo())
+            .args(["build", "--workspace", "--bins", "--tests"]);
         if profile != "debug" {
             cmd.args([
                 "--profile",
