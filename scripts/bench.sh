@@ -2,24 +2,30 @@
 # scripts/bench.sh [--full]: re-run the paper's experiments (000 §4: Tables 3–8,
 # Fig. 14) on hexbake and regenerate BENCHMARKS.md's measured tables (issue 8).
 #
-# Default run, sized for a 2-core machine (estimates from the demo bake and the per-cell
-# bake times, not from a timed run of this script): park-2m already baked ⇒ ≈ 10 min
-# park-4m path bake (~26 jobs, ~100 cells) + ≈ 25 min player (1024², lavapipe) +
-# ≈ 4 min sweeps (30 cells) + the release build; a fresh park-2m bake adds ≈ 25–30 min.
-# The player part dominates: per scene one compare (full, frustum and hybrid per frame,
-# plus a no-prefetch pass), two renders, and on park-2m two lod compares.
+# Default run, sized for a 2-core machine (BENCHMARKS.md "bench.sh" has the timed
+# runs): park-2m and park-4m are baked along the walk only (≈ 8 min each, ~100 cells),
+# ≈ 15 min player (1024², lavapipe), ≈ 6 min sweeps (6 settings × 5 cells, each baked
+# and measured by the player), plus the release build. The player part dominates: per
+# scene one compare (full, frustum and hybrid per frame, plus a no-prefetch pass),
+# two renders, and on park-2m two lod compares.
 # BENCH_SIZE=512x512 makes the player part ~2× faster (PSNR then differs a little).
 #   1. scripts/fetch-models.sh; cargo build --release -p pipeline -p player
-#   2. bake park-2m fully (resumable: done jobs are skipped)
-#   3. bake park-4m along park-walk.ron only (--cells path:...: the path's cells and
-#      their neighbours, so the player's prefetcher finds packs)
+#   2. bake the BENCH_FULL_SCENES fully (default none; --full: all three parks;
+#      resumable: done jobs are skipped)
+#   3. bake park-2m and park-4m along park-walk.ron only (--cells path:...: the
+#      path's cells and their neighbours, so the player's prefetcher finds packs);
+#      their per-cell tables are then averages over those cells (the report says
+#      "partial: X of Y cells")
 #   4. player compare (hybrid vs full) + player render --mode frustum|hybrid along
 #      park-walk.ron on each, and player compare --mode lod on park-2m (recorded as
 #      "lod: not available" when the player has no lod mode)
 #   5. sweeps on park-4m over a fixed sample of cells (one job per cell):
 #      T_s ∈ {3,5,7} (Table 3), T_l ∈ {3.0,4.5,6.0} (Table 4), cell size ∈ {50,100}
 #      (Table 5); the sample is cells 275 (centre), 264 and 517 (edges), 0 and 527
-#      (corners) of the 50-unit grid, mapped by position onto other grids (grid:50:ID)
+#      (corners) of the 50-unit grid, mapped by position onto other grids (grid:50:ID);
+#      each setting's bake is then measured by `player compare` over `worker check`'s
+#      16 viewpoints in each sampled cell (`pipeline benchmarks views`): the FPS, PSNR
+#      and triangles rows of Tables 3–5
 #   6. cell load times; one JSON of raw results in docs/bench/run-<UTC time>.json
 #      (machine, commands, reports, player output); BENCHMARKS.md regenerated between
 #      its <!-- bench:NAME --> markers, plots in docs/bench/.
@@ -27,25 +33,26 @@
 #
 # Environment overrides (for trying the script on small inputs, e.g.
 #   BENCH_FULL_SCENES=demo BENCH_PATH_SCENES=tiny BENCH_PATH=manifests/paths/demo-walk.ron ...):
-#   BENCH_FULL_SCENES   scenes baked fully            (default park-2m; --full: park-2m park-4m park-8m)
-#   BENCH_PATH_SCENES   scenes baked along the path   (default park-4m; --full: none)
+#   BENCH_FULL_SCENES   scenes baked fully            (default none; --full: park-2m park-4m park-8m)
+#   BENCH_PATH_SCENES   scenes baked along the path   (default park-2m park-4m; --full: none)
 #   BENCH_MANIFESTS     folder of <scene>.ron          (default manifests; a scene may also be a path to a .ron)
 #   BENCH_PATH          camera path                   (default manifests/paths/park-walk.ron)
 #   BENCH_SWEEP_SCENE   scene of the sweeps           (default park-4m; empty: no sweeps)
 #   BENCH_SAMPLE        sample cell ids               (default 275,264,517,0,527)
 #   BENCH_SAMPLE_GRID   cell size the ids refer to    (default 50)
+#   BENCH_SWEEP_VIEWS   player views per sampled cell (default 16; 0: no sweep compares)
 #   BENCH_TS / BENCH_TL / BENCH_CELL_SIZES            (defaults "3 5 7" / "3.0 4.5 6.0" / "50 100")
 #   BENCH_BASE_TS / BENCH_BASE_TL / BENCH_BASE_CELL   the manifest's values (5 / 4.5 / 50)
 #   BENCH_OUT           bake outputs: $BENCH_OUT/<scene> (default out)
 #   BENCH_RESULTS       run files and plots            (default docs/bench)
 #   BENCH_DOC           document to regenerate         (default BENCHMARKS.md)
 #   BENCH_SIZE          player frame size, e.g. 512x512 (default: the path's, 1024²)
-#   BENCH_LOD_ERRORS    --lod-pixel-error values for the lod baseline (default "0.25 1";
+#   BENCH_LOD_ERRORS    --lod-pixel-error values for the lod baseline (default "1 4";
 #                       --full "0.0625 0.125 0.25 0.5 1 2 4"; "default": the player's
 #                       default only). Two or more points that bracket the hybrid give
 #                       the comparison at equal triangles and at equal PSNR.
-#   BENCH_LOD_SCENES    scenes the lod baseline runs on (default: the first fully baked
-#                       scene, park-2m; --full: every scene)
+#   BENCH_LOD_SCENES    scenes the lod baseline runs on (default: the first scene,
+#                       park-2m; --full: every scene)
 #   BENCH_THREADS       pipeline --threads             (default: all cores)
 #   BENCH_FETCH=0       skip scripts/fetch-models.sh (procedural scenes)
 #   BENCH_BUILD=0       skip the release build (binaries must exist)
@@ -76,9 +83,9 @@ if [ "$FULL" = 1 ]; then
     : "${BENCH_LOD_SCENES:=park-2m park-4m park-8m}"
     MODE=full
 else
-    : "${BENCH_FULL_SCENES:=park-2m}"
-    : "${BENCH_PATH_SCENES:=park-4m}"
-    : "${BENCH_LOD_ERRORS:=0.25 1}"
+    : "${BENCH_FULL_SCENES=}"
+    : "${BENCH_PATH_SCENES:=park-2m park-4m}"
+    : "${BENCH_LOD_ERRORS:=1 4}"
     MODE=default
 fi
 : "${BENCH_MANIFESTS:=manifests}"
@@ -86,6 +93,7 @@ fi
 : "${BENCH_SWEEP_SCENE=park-4m}"
 : "${BENCH_SAMPLE:=275,264,517,0,527}"
 : "${BENCH_SAMPLE_GRID:=50}"
+: "${BENCH_SWEEP_VIEWS:=16}"
 : "${BENCH_TS:=3 5 7}"
 : "${BENCH_TL:=3.0 4.5 6.0}"
 : "${BENCH_CELL_SIZES:=50 100}"
@@ -102,7 +110,7 @@ fi
 [ -n "${BENCH_MODE:-}" ] && MODE=$BENCH_MODE
 
 if [ -z "${BENCH_LOD_SCENES+x}" ]; then
-    for first in $BENCH_FULL_SCENES; do break; done
+    for first in $BENCH_FULL_SCENES $BENCH_PATH_SCENES; do break; done
     BENCH_LOD_SCENES=$(basename "${first:-park-2m}" .ron)
 fi
 
@@ -275,6 +283,33 @@ size=${BENCH_SIZE:-path default}"
     [ "$RC" = 0 ] || rm -f "$WORK/load-$scene.json"
 }
 
+# sweep_compare LABEL OUT: `player compare` of a sweep bake over `worker check`'s
+# viewpoints in its sampled cells (Tables 3–5: FPS, PSNR, triangles in the frustum).
+# Every texture is uploaded before its frame (a 1 GiB budget): the views jump between
+# cells, and pending proxies drawn as originals would measure the streaming instead.
+sweep_compare() {
+    local label=$1 out=$2
+    [ "$BENCH_SWEEP_VIEWS" -gt 0 ] 2>/dev/null || return 0
+    if [ ! -f "$out/index.pack" ]; then
+        FAILED+=("sweep compare $label: no index.pack in $out")
+        return
+    fi
+    say "player compare $label over $BENCH_SWEEP_VIEWS views per sampled cell"
+    logged - "$WORK/views-$label.err" \
+        "$PIPELINE" benchmarks views "$out" --per-cell "$BENCH_SWEEP_VIEWS" --path "$out/views.ron"
+    if [ "$RC" != 0 ]; then
+        FAILED+=("pipeline benchmarks views $label (exit $RC, see $WORK/views-$label.err)")
+        return
+    fi
+    logged "$WORK/compare-$label.json" "$WORK/compare-$label.err" \
+        "$PLAYER" compare "$out" --path "$out/views.ron" --json --no-crossings \
+        --upload-budget 1073741824 "${SIZE[@]}"
+    printf 'label=%s\nmode=hybrid\nscene=%s\nout=%s\npath=%s\nsize=%s\nwall_s=%s\nexit=%s\n' \
+        "$label" "$sweep_name" "$out" "$out/views.ron" "${BENCH_SIZE:-path default}" "$WALL" "$RC" \
+        >"$WORK/compare-$label.txt"
+    [ "$RC" = 0 ] || FAILED+=("player compare $label (exit $RC, see $WORK/compare-$label.err)")
+}
+
 # 2–3. Bakes at the paper's settings.
 for scene in $BENCH_FULL_SCENES; do
     name=$(scene_of "$(manifest_of "$scene")")
@@ -299,20 +334,24 @@ if [ -n "$BENCH_SWEEP_SCENE" ]; then
     # The base setting is a point of every sweep.
     BAKE_META=("sweep=T_s:$BENCH_BASE_TS" "sweep=T_l:$BENCH_BASE_TL" "sweep=cell_size:$BENCH_BASE_CELL")
     bake sweep-base "$BENCH_SWEEP_SCENE" "$sweep_out/base" --cells "$spec" --set cells_per_job=1
+    sweep_compare sweep-base "$sweep_out/base"
     for v in $BENCH_TS; do
         [ "$v" = "$BENCH_BASE_TS" ] && continue
         BAKE_META=("sweep=T_s:$v")
         bake "sweep-ts$v" "$BENCH_SWEEP_SCENE" "$sweep_out/ts$v" --cells "$spec" --set cells_per_job=1 --set "T_s=$v"
+        sweep_compare "sweep-ts$v" "$sweep_out/ts$v"
     done
     for v in $BENCH_TL; do
         [ "$v" = "$BENCH_BASE_TL" ] && continue
         BAKE_META=("sweep=T_l:$v")
         bake "sweep-tl$v" "$BENCH_SWEEP_SCENE" "$sweep_out/tl$v" --cells "$spec" --set cells_per_job=1 --set "T_l=$v"
+        sweep_compare "sweep-tl$v" "$sweep_out/tl$v"
     done
     for v in $BENCH_CELL_SIZES; do
         [ "$v" = "$BENCH_BASE_CELL" ] && continue
         BAKE_META=("sweep=cell_size:$v")
         bake "sweep-c$v" "$BENCH_SWEEP_SCENE" "$sweep_out/c$v" --cells "$spec" --set cells_per_job=1 --set "cells.cell_size=$v"
+        sweep_compare "sweep-c$v" "$sweep_out/c$v"
     done
 fi
 

@@ -19,8 +19,9 @@ pub type Fingerprint = [u8; 32];
 /// fingerprint. Bump it in the same commit as any change to the worker that changes
 /// the bytes a bake writes (an algorithm, a default, the writer's compression), so
 /// that `pipeline run` on an old output rebakes instead of keeping stale packs.
-/// History: 1 — session 1; 2 — zstd level 6, the one-pixel visibility tolerance.
-pub const BAKE_REVISION: u32 = 2;
+/// History: 1 — session 1; 2 — zstd level 6, the one-pixel visibility tolerance;
+/// 3 — the MVMesh's l′ also looks from the prism point nearest each edge.
+pub const BAKE_REVISION: u32 = 3;
 
 /// Hex form for file names, logs and reports.
 pub fn to_hex(f: &Fingerprint) -> String {

@@ -6,6 +6,12 @@
 //! segment at `max_turn_deg_per_s`, then walks the segment at `max_speed` looking
 //! along it. Frames are taken every `1 / frame_rate` seconds of that motion, so a
 //! path gives the same frames on every machine.
+//!
+//! Instead of waypoints a path may list explicit `views` (eye and direction), one
+//! frame each, `1 / frame_rate` seconds apart: `pipeline benchmarks views` writes such
+//! paths over the check viewpoints of sampled cells, so the player can measure a
+//! partial bake without walking through cells that were not baked. The speed and
+//! turn limits do not apply to views.
 
 use glam::{Vec2, Vec3};
 use serde::{Deserialize, Serialize};
@@ -22,9 +28,16 @@ pub struct CameraPath {
     pub max_turn_deg_per_s: f32,
     /// Frames sampled per second of motion.
     pub frame_rate: f32,
-    /// (x, z) points on the ground.
+    /// (x, z) points on the ground (at least 2, or none when `views` is given).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub waypoints: Vec<(f32, f32)>,
+    /// Explicit poses, `((x, y, z) eye, (x, y, z) direction)`, one frame each.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub views: Vec<PathView>,
 }
+
+/// An explicit camera pose of a path: `((x, y, z) eye, (x, y, z) direction)`.
+pub type PathView = ((f32, f32, f32), (f32, f32, f32));
 
 /// One sampled camera pose.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -32,7 +45,7 @@ pub struct PathFrame {
     /// Seconds since the start of the path.
     pub time_s: f32,
     pub eye: Vec3,
-    /// Unit viewing direction (horizontal).
+    /// Unit viewing direction (horizontal on walked paths).
     pub dir: Vec3,
 }
 
@@ -100,8 +113,31 @@ impl CameraPath {
         if !positive(parsed.frame_rate) {
             return Err(invalid("frame_rate", "must be a positive number"));
         }
+        if !parsed.views.is_empty() {
+            if !parsed.waypoints.is_empty() {
+                return Err(invalid("views", "give either waypoints or views, not both"));
+            }
+            for (k, &((x, y, z), (dx, dy, dz))) in parsed.views.iter().enumerate() {
+                if ![x, y, z, dx, dy, dz].iter().all(|v| v.is_finite()) {
+                    return Err(invalid(
+                        "views",
+                        &format!("view {k}: every coordinate must be finite"),
+                    ));
+                }
+                if dx * dx + dy * dy + dz * dz < 1e-12 {
+                    return Err(invalid(
+                        "views",
+                        &format!("view {k}: the direction must not be zero"),
+                    ));
+                }
+            }
+            return Ok(parsed);
+        }
         if parsed.waypoints.len() < 2 {
-            return Err(invalid("waypoints", "needs at least 2 points"));
+            return Err(invalid(
+                "waypoints",
+                "needs at least 2 points (or give views)",
+            ));
         }
         if parsed
             .waypoints
@@ -127,8 +163,20 @@ impl CameraPath {
             .map(|w| (Vec2::new(w[0].0, w[0].1), Vec2::new(w[1].0, w[1].1)))
     }
 
-    /// Samples the motion into frames (see the module docs).
+    /// Samples the motion into frames, or lists the explicit views (module docs).
     pub fn frames(&self) -> Vec<PathFrame> {
+        if !self.views.is_empty() {
+            return self
+                .views
+                .iter()
+                .enumerate()
+                .map(|(i, &((x, y, z), (dx, dy, dz)))| PathFrame {
+                    time_s: i as f32 / self.frame_rate,
+                    eye: Vec3::new(x, y, z),
+                    dir: Vec3::new(dx, dy, dz).normalize(),
+                })
+                .collect();
+        }
         // 1. Build the motion as a list of timed pieces: turns in place and walks.
         enum Piece {
             Turn { at: Vec2, from: f32, to: f32 },
@@ -210,6 +258,7 @@ mod tests {
             max_turn_deg_per_s: 45.0,
             frame_rate: 10.0,
             waypoints,
+            views: Vec::new(),
         }
     }
 
@@ -240,5 +289,27 @@ mod tests {
         assert!(err.to_string().contains("waypoints"), "{err}");
         let err = CameraPath::parse("(eye_hight: 8.0)", Path::new("p.ron")).unwrap_err();
         assert!(err.to_string().starts_with("p.ron:1:"), "{err}");
+    }
+
+    #[test]
+    fn explicit_views_are_one_frame_each_and_round_trip() {
+        let text = "(eye_height: 8.0, fov_y_deg: 60.0, resolution: (8, 8), max_speed: 30.0, \
+                    max_turn_deg_per_s: 45.0, frame_rate: 10.0, \
+                    views: [((1.0, 8.0, 2.0), (2.0, 0.0, 0.0)), ((5.0, 9.0, 6.0), (0.0, 0.0, -1.0))])";
+        let p = CameraPath::parse(text, Path::new("v.ron")).unwrap();
+        let frames = p.frames();
+        assert_eq!(frames.len(), 2);
+        assert_eq!(frames[0].eye, Vec3::new(1.0, 8.0, 2.0));
+        assert_eq!(frames[0].dir, Vec3::X);
+        assert_eq!(frames[1].time_s, 0.1);
+        let again = CameraPath::parse(&ron::to_string(&p).unwrap(), Path::new("v.ron")).unwrap();
+        assert_eq!(again, p);
+        // Both, or a zero direction, are refused with the field named.
+        let both = text.replace("views:", "waypoints: [(0.0, 0.0), (1.0, 0.0)], views:");
+        let err = CameraPath::parse(&both, Path::new("v.ron")).unwrap_err();
+        assert!(err.to_string().contains("not both"), "{err}");
+        let zero = text.replace("(2.0, 0.0, 0.0)", "(0.0, 0.0, 0.0)");
+        let err = CameraPath::parse(&zero, Path::new("v.ron")).unwrap_err();
+        assert!(err.to_string().contains("view 0"), "{err}");
     }
 }

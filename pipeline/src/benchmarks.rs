@@ -320,6 +320,76 @@ pub fn time_cell_loads(out: &Path, label: &str, sample: usize) -> anyhow::Result
 }
 
 // ---------------------------------------------------------------------------------
+// Check viewpoints of sampled cells as a camera path.
+
+/// The camera path of `pipeline benchmarks views`: `per_cell` viewpoints of each of
+/// `cells` (default: the cells a partial bake was asked for, `<out>/partial.json`)
+/// on the bake's own grid (its `base.pack`), placed as `worker check` places them
+/// (`worker::check::check_views`: spread over the cell's prism, directions evenly
+/// around the horizon), one frame each at 60° FOV and `resolution`. With it the
+/// player measures the sweeps' partial bakes (paper Tables 3–5, FPS and PSNR rows)
+/// without walking through cells that were not baked.
+pub fn check_view_path(
+    out: &Path,
+    cells: Option<Vec<u32>>,
+    per_cell: usize,
+    resolution: (u32, u32),
+) -> anyhow::Result<format::path::CameraPath> {
+    let base_path = out.join("base.pack");
+    let base = BasePack::read(&base_path).with_context(|| base_path.display().to_string())?;
+    let g = &base.grid;
+    let grid = worker::grid::HexGrid::try_new(
+        format::Ground {
+            min: g.ground_min,
+            max: g.ground_max,
+        },
+        g.cell_size,
+    )
+    .with_context(|| format!("{}: grid", base_path.display()))?;
+    let cells = match cells {
+        Some(c) => c,
+        None => {
+            crate::run::read_partial(out)
+                .with_context(|| {
+                    format!(
+                        "{}: not a partial bake (no readable partial.json): give --cells",
+                        out.display()
+                    )
+                })?
+                .requested_cells
+        }
+    };
+    anyhow::ensure!(!cells.is_empty(), "no cells to place views in");
+    anyhow::ensure!(per_cell > 0, "--per-cell must be at least 1");
+    let params = format::manifest::CellParams {
+        cell_size: g.cell_size,
+        min_eye_height: g.min_eye_height,
+        max_eye_height: g.max_eye_height,
+    };
+    let mut views = Vec::with_capacity(cells.len() * per_cell);
+    for &cell in &cells {
+        anyhow::ensure!(
+            cell < grid.cell_count(),
+            "cell {cell} is not on the grid ({} cells)",
+            grid.cell_count()
+        );
+        for (eye, dir) in worker::check::check_views(&grid, cell, &params, per_cell) {
+            views.push(((eye.x, eye.y, eye.z), (dir.x, dir.y, dir.z)));
+        }
+    }
+    Ok(format::path::CameraPath {
+        eye_height: 0.5 * (g.min_eye_height + g.max_eye_height),
+        fov_y_deg: 60.0,
+        resolution,
+        max_speed: 30.0,
+        max_turn_deg_per_s: 45.0,
+        frame_rate: 10.0,
+        waypoints: Vec::new(),
+        views,
+    })
+}
+
+// ---------------------------------------------------------------------------------
 // Collecting a work folder into one run file.
 
 /// Reads `key=value` lines (`#` comments and blank lines skipped); repeated keys keep

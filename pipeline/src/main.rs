@@ -112,6 +112,23 @@ enum BenchCommand {
         #[arg(long, default_value_t = 64)]
         sample: usize,
     },
+    /// Write a camera path of explicit views: `worker check`'s viewpoints in each
+    /// cell of a (partial) bake, so the player can measure it cell by cell.
+    Views {
+        out: PathBuf,
+        /// Cells (comma-separated ids; default: the cells of `<out>/partial.json`).
+        #[arg(long, value_delimiter = ',')]
+        cells: Option<Vec<u32>>,
+        /// Views per cell.
+        #[arg(long, default_value_t = 16)]
+        per_cell: usize,
+        /// Frame size, WIDTHxHEIGHT.
+        #[arg(long, default_value = "1024x1024")]
+        size: String,
+        /// The path file to write.
+        #[arg(long)]
+        path: PathBuf,
+    },
     /// Regenerate the marked tables of a document from the run files, and the plots.
     Tables {
         /// Folder of run files (and where the plots go).
@@ -302,6 +319,26 @@ fn benchmarks(cmd: BenchCommand) -> anyhow::Result<()> {
         BenchCommand::Load { out, label, sample } => {
             let t = pipeline::benchmarks::time_cell_loads(&out, &label, sample)?;
             println!("{}", serde_json::to_string_pretty(&t)?);
+        }
+        BenchCommand::Views {
+            out,
+            cells,
+            per_cell,
+            size,
+            path,
+        } => {
+            let resolution = size
+                .split_once('x')
+                .and_then(|(w, h)| Some((w.parse().ok()?, h.parse().ok()?)))
+                .filter(|&(w, h): &(u32, u32)| w > 0 && h > 0)
+                .with_context(|| {
+                    format!("--size {size:?}: expected WIDTHxHEIGHT, e.g. 1024x1024")
+                })?;
+            let p = pipeline::benchmarks::check_view_path(&out, cells, per_cell, resolution)?;
+            let text = ron::ser::to_string_pretty(&p, ron::ser::PrettyConfig::default())?;
+            format::pack::write_atomic(&path, text.as_bytes())
+                .with_context(|| path.display().to_string())?;
+            println!("{}: {} views", path.display(), p.views.len());
         }
         BenchCommand::Tables {
             results,

@@ -314,7 +314,7 @@ pub fn bake_cell(
                     ))
                 }
                 Job::Mv(i) => {
-                    let mv = derive_mvmesh(scene, *i, &eyes, &corners, &settings).map_err(wrap)?;
+                    let mv = derive_mvmesh(scene, *i, &eyes, &prism, &settings).map_err(wrap)?;
                     Ok((
                         BakedProxy {
                             kind: ProxyKind::MvMesh,

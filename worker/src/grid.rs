@@ -401,6 +401,40 @@ impl Prism {
         d.y <= SQRT3 * c / 2.0 + tol && SQRT3 * d.x + d.y <= SQRT3 * c + tol
     }
 
+    /// The point of the (closed) prism nearest to `p`: `p` itself inside, else the
+    /// nearest point of the hexagon in x–z (nearest point on the nearest edge when
+    /// outside) with y clamped to the prism's eye heights (the prism is a product of
+    /// the two, so the nearest point is the product of the nearest points).
+    pub fn closest_point(&self, p: Vec3) -> Vec3 {
+        let y = p.y.clamp(self.min_y, self.max_y);
+        let q = Vec2::new(p.x, p.z);
+        let hex = self.hexagon();
+        // Inside: on the inner side of every edge (counter-clockwise corners).
+        let inside = (0..6).all(|k| {
+            let (a, b) = (hex[k], hex[(k + 1) % 6]);
+            (b - a).perp_dot(q - a) >= 0.0
+        });
+        let xz = if inside {
+            q
+        } else {
+            let mut best = q;
+            let mut best_d = f32::INFINITY;
+            for k in 0..6 {
+                let (a, b) = (hex[k], hex[(k + 1) % 6]);
+                let ab = b - a;
+                let t = ((q - a).dot(ab) / ab.length_squared()).clamp(0.0, 1.0);
+                let c = a + t * ab;
+                let d = c.distance_squared(q);
+                if d < best_d {
+                    best_d = d;
+                    best = c;
+                }
+            }
+            best
+        };
+        Vec3::new(xz.x, y, xz.y)
+    }
+
     /// Whether the axis-aligned box `[min, max]` intersects the (closed) prism.
     ///
     /// Both are prisms along y, so this is a y-interval overlap plus a 2D

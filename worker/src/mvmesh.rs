@@ -20,7 +20,8 @@
 //!    The back-facing weight marks the rim of what a view sees; with several views
 //!    the rim of the union is where no view sees the vertex from the front.
 //! 5. Weighted edge collapse with l′ = the maximum projected length over the prism's
-//!    12 corners ([`ProjectedLength::MaxOverPoints`]) and the view-set constraint of
+//!    12 corners and its point nearest the edge ([`ProjectedLength::MaxOverPrism`]:
+//!    "with respect to the cell") and the view-set constraint of
 //!    §3.1.4 (`simplify` with `view_sets`); each triangle's view mask is the AND of its
 //!    vertices' sets.
 //! 6. Keep only the views some triangle's mask names, renumbering the mask bits in
@@ -29,6 +30,7 @@
 use crate::backface::regional_backface_cull;
 use crate::capture::{capture_objects, CaptureError};
 use crate::classify::{classify_objects, WindowDepth};
+use crate::grid::Prism;
 use crate::raster::ProjectedTexture;
 use crate::simplify::{
     pixels_per_radian, simplify, ProjectedLength, SimplifyInput, SimplifyParams, MAX_VIEWS,
@@ -56,16 +58,17 @@ pub struct MvMesh {
     pub times: StageTimes,
 }
 
-/// Derives the MVMesh of `instance` for a cell whose prism corners are
-/// `prism_corners`, with captures from `eyes` (the cell centre first, then the
-/// neighbours' centres; at most [`MAX_VIEWS`] are used).
+/// Derives the MVMesh of `instance` for a cell whose view region is `prism`, with
+/// captures from `eyes` (the cell centre first, then the neighbours' centres; at
+/// most [`MAX_VIEWS`] are used).
 pub fn derive_mvmesh(
     scene: &Scene,
     instance: u32,
     eyes: &[Vec3],
-    prism_corners: &[Vec3; 12],
+    prism: &Prism,
     settings: &ProxySettings,
 ) -> Result<MvMesh, ProxyError> {
+    let prism_corners = &prism.corners();
     let mut times = StageTimes::default();
     let item = draw_item(scene, instance)?;
     let mesh = item.mesh;
@@ -163,8 +166,8 @@ pub fn derive_mvmesh(
         },
         &SimplifyParams {
             edge_length_tolerance: settings.edge_length_tolerance,
-            length: ProjectedLength::MaxOverPoints {
-                eyes: prism_corners.to_vec(),
+            length: ProjectedLength::MaxOverPrism {
+                prism: *prism,
                 pixels_per_radian: pixels_per_radian(settings.image_res),
             },
         },

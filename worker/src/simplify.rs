@@ -87,18 +87,40 @@ pub enum ProjectedLength {
     /// SVMesh: the angle the edge subtends seen from `eye` (the cell centre) ×
     /// pixels per radian.
     FromPoint { eye: Vec3, pixels_per_radian: f32 },
-    /// MVMesh: the maximum of that over `eyes` (the cell's corners), the paper's l′.
+    /// The maximum of that over `eyes`.
     MaxOverPoints {
         eyes: Vec<Vec3>,
+        pixels_per_radian: f32,
+    },
+    /// MVMesh: the paper's l′, "the projected length of the edge with respect to the
+    /// cell": the maximum over the viewpoints of the cell's prism, taken over its 12
+    /// corners and the prism's point nearest to the edge's midpoint. The corners
+    /// alone miss the viewer standing at the middle of the side face next to a near
+    /// object (for an object 5 units outside a face of a 50-unit cell, the face's
+    /// middle is 5 units away and the nearest corner ~25), and l′ was ~5× too small
+    /// there: such objects were simplified for a far viewer and showed 2–5 pixel
+    /// silhouette errors from the face.
+    MaxOverPrism {
+        prism: crate::grid::Prism,
         pixels_per_radian: f32,
     },
 }
 
 impl ProjectedLength {
-    fn eyes(&self) -> &[Vec3] {
+    /// The fixed viewpoints (for `MaxOverPrism`: the 12 corners; the per-edge
+    /// nearest point comes on top).
+    fn eyes(&self) -> Vec<Vec3> {
         match self {
-            ProjectedLength::FromPoint { eye, .. } => std::slice::from_ref(eye),
-            ProjectedLength::MaxOverPoints { eyes, .. } => eyes,
+            ProjectedLength::FromPoint { eye, .. } => vec![*eye],
+            ProjectedLength::MaxOverPoints { eyes, .. } => eyes.clone(),
+            ProjectedLength::MaxOverPrism { prism, .. } => prism.corners().to_vec(),
+        }
+    }
+
+    fn prism(&self) -> Option<&crate::grid::Prism> {
+        match self {
+            ProjectedLength::MaxOverPrism { prism, .. } => Some(prism),
+            _ => None,
         }
     }
 
@@ -109,6 +131,9 @@ impl ProjectedLength {
             }
             | ProjectedLength::MaxOverPoints {
                 pixels_per_radian, ..
+            }
+            | ProjectedLength::MaxOverPrism {
+                pixels_per_radian, ..
             } => *pixels_per_radian,
         }
     }
@@ -118,15 +143,25 @@ impl ProjectedLength {
     /// gives `f32::INFINITY` (never collapsed); no eyes gives 0 ([`simplify`]
     /// refuses an empty eye list).
     pub fn pixels(&self, a: Vec3, b: Vec3) -> f32 {
+        let mut eyes = self.eyes();
+        if let Some(prism) = self.prism() {
+            eyes.push(prism.closest_point(0.5 * (a + b)));
+        }
         let mut chord: f32 = 0.0;
-        for &eye in self.eyes() {
-            match (unit_direction(a - eye), unit_direction(b - eye)) {
-                (Some(da), Some(db)) => chord = chord.max((da - db).length()),
-                _ => return f32::INFINITY,
+        for eye in eyes {
+            match chord_from(eye, a, b) {
+                Some(c) => chord = chord.max(c),
+                None => return f32::INFINITY,
             }
         }
         chord_to_angle(chord) * self.pixels_per_radian()
     }
+}
+
+/// Chord between the unit directions from `eye` to `a` and to `b` (`None` when an
+/// endpoint is on the eye).
+fn chord_from(eye: Vec3, a: Vec3, b: Vec3) -> Option<f32> {
+    Some((unit_direction(a - eye)? - unit_direction(b - eye)?).length())
 }
 
 fn unit_direction(d: Vec3) -> Option<Vec3> {
@@ -286,6 +321,8 @@ pub fn simplify(
     // once: an edge's l is then one chord per eye (the same arithmetic as
     // `ProjectedLength::pixels`). `slot` maps a vertex id to its row.
     let eyes = params.length.eyes();
+    let eyes = &eyes[..];
+    let prism = params.length.prism();
     let mut slot = vec![u32::MAX; input.positions.len()];
     let mut directions: Vec<Option<Vec3>> = Vec::new();
     for tri in input.triangles {
@@ -298,9 +335,16 @@ pub fn simplify(
         }
     }
     let length = |a: u32, b: u32| -> f32 {
+        let mut chord: f32 = 0.0;
+        if let Some(prism) = prism {
+            let (pa, pb) = (input.positions[a as usize], input.positions[b as usize]);
+            match chord_from(prism.closest_point(0.5 * (pa + pb)), pa, pb) {
+                Some(c) => chord = c,
+                None => return f32::INFINITY,
+            }
+        }
         let row = |v: u32| slot[v as usize] as usize * eyes.len();
         let (a, b) = (row(a), row(b));
-        let mut chord: f32 = 0.0;
         for k in 0..eyes.len() {
             match (directions[a + k], directions[b + k]) {
                 (Some(da), Some(db)) => chord = chord.max((da - db).length()),

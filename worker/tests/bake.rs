@@ -247,7 +247,7 @@ fn bunny_proxy_counts_match_the_paper() {
                     .into_iter()
                     .map(|c| worker::bake::cell_eye(&grid, c, &cells)),
             );
-            let mv = derive_mvmesh(&scene, 0, &eyes, &prism.corners(), &settings).unwrap();
+            let mv = derive_mvmesh(&scene, 0, &eyes, &prism, &settings).unwrap();
             validate(n, &mv.member.input_triangles, &mv.member.simplified).unwrap();
             validate_view_masks(&mv.vertex_view_sets, &mv.member.simplified).unwrap();
             let s = &mv.member.simplified;

@@ -155,6 +155,36 @@ fn prism_aabb_test_matches_sampling() {
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(256))]
 
+    /// `Prism::closest_point` (the MVMesh's l′ looks from it): in the prism, the point
+    /// itself when inside, and no sampled point of the prism is nearer.
+    #[test]
+    fn closest_point_of_prism_is_nearest(
+        x in -120.0f32..120.0, y in -20.0f32..40.0, z in -120.0f32..120.0,
+    ) {
+        let g = park();
+        let id = g.cell_at(Vec2::new(800.0, 1000.0)).unwrap();
+        let prism = g.prism(id, 5.0, 12.0);
+        let c = prism.centre3();
+        let p = c + Vec3::new(x, y, z);
+        let q = prism.closest_point(p);
+        prop_assert!(prism.contains(q), "{q} not in the prism");
+        if prism.contains(p) {
+            prop_assert!(q.distance(p) < 1e-4, "inside point {p} moved to {q}");
+        }
+        let d = q.distance(p);
+        for i in 0..12u32 {
+            for j in 0..12u32 {
+                for k in 0..3u32 {
+                    let s = prism.sample(i as f32 / 11.0, j as f32 / 11.0, k as f32 / 2.0);
+                    prop_assert!(d <= s.distance(p) + 1e-3, "{s} is nearer to {p} than {q}");
+                }
+            }
+        }
+        for corner in prism.corners() {
+            prop_assert!(d <= corner.distance(p) + 1e-3);
+        }
+    }
+
     #[test]
     fn point_maps_to_nearest_centre(x in -100.0f32..1750.0, z in -100.0f32..2135.0) {
         let g = park();

@@ -357,6 +357,45 @@ fn projected_length_is_angle_times_pixels_per_radian() {
     );
 }
 
+/// l′ "with respect to the cell" (000 §3.1.4) looks from the prism's point nearest
+/// the edge too: an edge 5 units outside the middle of a side face of a 50-unit
+/// cell is ~5× longer from there than from the nearest corner.
+#[test]
+fn cell_length_sees_the_middle_of_the_nearest_face() {
+    let ppr = pixels_per_radian(1024);
+    let prism = worker::grid::Prism {
+        centre: glam::Vec2::ZERO,
+        cell_size: 50.0,
+        min_y: 5.0,
+        max_y: 12.0,
+    };
+    // The face between corners 0 (50, 0) and 1 (25, 43.3): its middle and normal.
+    let mid = glam::Vec2::new(37.5, 21.65);
+    let normal = mid.normalize();
+    let p = mid + 5.0 * normal;
+    let along = glam::Vec2::new(-normal.y, normal.x) * 0.5;
+    let (a, b) = (
+        Vec3::new(p.x - along.x, 8.0, p.y - along.y),
+        Vec3::new(p.x + along.x, 8.0, p.y + along.y),
+    );
+    let corners = ProjectedLength::MaxOverPoints {
+        eyes: prism.corners().to_vec(),
+        pixels_per_radian: ppr,
+    };
+    let cell = ProjectedLength::MaxOverPrism {
+        prism,
+        pixels_per_radian: ppr,
+    };
+    let from_face = 2.0 * (0.5f32 / 5.0).atan() * ppr;
+    assert!((cell.pixels(a, b) - from_face).abs() < 1e-2 * from_face);
+    assert!(cell.pixels(a, b) > 4.0 * corners.pixels(a, b));
+    // Never below the corners' maximum; far away the two agree.
+    let far = Vec3::new(400.0, 8.0, 300.0);
+    let (fa, fb) = (far, far + Vec3::new(0.0, 1.0, 1.0));
+    let (c, l) = (corners.pixels(fa, fb), cell.pixels(fa, fb));
+    assert!(l >= c && l < 1.1 * c, "far edge: corners {c}, cell {l}");
+}
+
 #[test]
 fn cost_follows_the_paper() {
     // One edge of a two-triangle strip, everything else locked out by a huge cost:
