@@ -56,6 +56,8 @@
 #   BENCH_THREADS       pipeline --threads             (default: all cores)
 #   BENCH_FETCH=0       skip scripts/fetch-models.sh (procedural scenes)
 #   BENCH_BUILD=0       skip the release build (binaries must exist)
+#   BENCH_BAKE=0        skip every bake (outputs must exist): a player-only run whose
+#                       tables take the bakes from earlier run files
 #   BENCH_BIN_DIR       where pipeline and player are  (default $CARGO_TARGET_DIR/release or target/release)
 set -uo pipefail
 
@@ -107,6 +109,7 @@ fi
 : "${BENCH_THREADS:=}"
 : "${BENCH_FETCH:=1}"
 : "${BENCH_BUILD:=1}"
+: "${BENCH_BAKE:=1}"
 [ -n "${BENCH_MODE:-}" ] && MODE=$BENCH_MODE
 
 if [ -z "${BENCH_LOD_SCENES+x}" ]; then
@@ -198,6 +201,11 @@ bake() {
     shift 3
     local manifest
     manifest=$(manifest_of "$scene")
+    if [ "$BENCH_BAKE" = 0 ]; then
+        say "bake $label: skipped (BENCH_BAKE=0), using $out"
+        BAKE_META=()
+        return
+    fi
     say "bake $label: $manifest → $out $*"
     logged - - "$PIPELINE" run "$manifest" --out "$out" "${THREADS[@]}" "$@"
     {

@@ -25,9 +25,15 @@ struct StreamArgs {
     /// Turn the prefetch thread off (cells load on demand; paper Fig. 14).
     #[arg(long)]
     no_prefetch: bool,
-    /// Texture bytes uploaded per frame from the FIFO queue.
+    /// Texture bytes uploaded per drawn frame from the FIFO queue.
     #[arg(long, default_value_t = 4 << 20)]
     upload_budget: u64,
+    /// `render`/`compare`: the display rate a path stands for. A path frame is
+    /// 1 / frame_rate seconds of walking (0.1 s on the parks' walk), in which a
+    /// player drawing at this rate uploads display_hz / frame_rate budgets; `view`
+    /// spends `--upload-budget` per drawn frame.
+    #[arg(long, default_value_t = 60.0, value_parser = parse_hz)]
+    display_hz: f32,
     /// Resident cell data kept before LRU eviction, in MiB.
     #[arg(long, default_value_t = 512)]
     memory_budget_mib: u64,
@@ -45,6 +51,16 @@ struct StreamArgs {
 }
 
 impl StreamArgs {
+    /// The stream settings for a headless walk of `path`: the upload budget of
+    /// display_hz / frame_rate drawn frames per path frame (at least one).
+    fn path_config(&self, path: &format::path::CameraPath) -> StreamConfig {
+        let frames_per_step = (self.display_hz as f64 / path.frame_rate as f64).max(1.0);
+        StreamConfig {
+            upload_budget_bytes: (self.upload_budget as f64 * frames_per_step) as u64,
+            ..self.config()
+        }
+    }
+
     fn config(&self) -> StreamConfig {
         StreamConfig {
             prefetch: !self.no_prefetch,
@@ -54,6 +70,13 @@ impl StreamArgs {
             ..Default::default()
         }
     }
+}
+
+fn parse_hz(s: &str) -> Result<f32, String> {
+    s.parse::<f32>()
+        .ok()
+        .filter(|v| v.is_finite() && *v > 0.0)
+        .ok_or_else(|| format!("{s:?}: expected a positive number of frames per second"))
 }
 
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
@@ -165,7 +188,7 @@ fn main() -> ExitCode {
                     mode,
                     frames_dir: frames.clone(),
                     png,
-                    stream: stream.config(),
+                    stream: stream.path_config(&p),
                     size: stream.size,
                     lod_pixel_error: stream.lod_pixel_error,
                 };
@@ -236,7 +259,7 @@ fn main() -> ExitCode {
                         worst_count,
                         size: stream.size,
                         crossings: !no_crossings,
-                        stream: stream.config(),
+                        stream: stream.path_config(&p),
                         mode,
                         lod_pixel_error: stream.lod_pixel_error,
                     },
@@ -304,5 +327,45 @@ fn restore_default_sigpipe() {
     // signal's disposition to SIG_DFL has no other precondition.
     unsafe {
         libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn stream_args(args: &[&str]) -> Result<StreamArgs, clap::Error> {
+        let mut argv = vec![
+            "player", "render", "out", "--path", "p.ron", "--frames", "f",
+        ];
+        argv.extend_from_slice(args);
+        match Cli::try_parse_from(argv)?.command {
+            Command::Render { stream, .. } => Ok(stream),
+            _ => unreachable!("parsed a render command"),
+        }
+    }
+
+    #[test]
+    fn a_path_frame_gets_the_budget_of_the_display_frames_it_stands_for() {
+        let path = format::path::CameraPath::parse(
+            "(eye_height: 8.0, fov_y_deg: 60.0, resolution: (8, 8), max_speed: 30.0, \
+             max_turn_deg_per_s: 45.0, frame_rate: 10.0, waypoints: [(0.0, 0.0), (9.0, 0.0)])",
+            std::path::Path::new("p.ron"),
+        )
+        .unwrap();
+        let s = stream_args(&[]).unwrap();
+        assert_eq!(s.config().upload_budget_bytes, 4 << 20);
+        assert_eq!(s.path_config(&path).upload_budget_bytes, 6 * (4 << 20));
+        let s = stream_args(&["--display-hz", "5", "--upload-budget", "1000"]).unwrap();
+        assert_eq!(
+            s.path_config(&path).upload_budget_bytes,
+            1000,
+            "never below one frame's"
+        );
+        for bad in ["0", "-60", "nan", "fast"] {
+            let arg = format!("--display-hz={bad}");
+            let e = stream_args(&[&arg]).err().expect("refused");
+            assert!(e.to_string().contains("frames per second"), "{e}");
+        }
     }
 }
