@@ -30,8 +30,8 @@ struct StreamArgs {
     upload_budget: u64,
     /// `render`/`compare`: the display rate a path stands for. A path frame is
     /// 1 / frame_rate seconds of walking (0.1 s on the parks' walk), in which a
-    /// player drawing at this rate uploads display_hz / frame_rate budgets; `view`
-    /// spends `--upload-budget` per drawn frame.
+    /// player drawing at this rate draws display_hz / frame_rate frames, each with
+    /// its own upload budget: the frames not drawn advance the streaming only.
     #[arg(long, default_value_t = 60.0, value_parser = parse_hz)]
     display_hz: f32,
     /// Resident cell data kept before LRU eviction, in MiB.
@@ -51,12 +51,12 @@ struct StreamArgs {
 }
 
 impl StreamArgs {
-    /// The stream settings for a headless walk of `path`: the upload budget of
-    /// display_hz / frame_rate drawn frames per path frame (at least one).
+    /// The stream settings for a headless walk of `path`: display_hz / frame_rate
+    /// display frames per path frame (rounded, at least one).
     fn path_config(&self, path: &format::path::CameraPath) -> StreamConfig {
-        let frames_per_step = (self.display_hz as f64 / path.frame_rate as f64).max(1.0);
+        let frames_per_step = (self.display_hz as f64 / path.frame_rate as f64).round();
         StreamConfig {
-            upload_budget_bytes: (self.upload_budget as f64 * frames_per_step) as u64,
+            display_frames_per_step: frames_per_step.clamp(1.0, 1e4) as u32,
             ..self.config()
         }
     }
@@ -346,7 +346,7 @@ mod tests {
     }
 
     #[test]
-    fn a_path_frame_gets_the_budget_of_the_display_frames_it_stands_for() {
+    fn a_path_frame_stands_for_the_display_frames_of_its_time_step() {
         let path = format::path::CameraPath::parse(
             "(eye_height: 8.0, fov_y_deg: 60.0, resolution: (8, 8), max_speed: 30.0, \
              max_turn_deg_per_s: 45.0, frame_rate: 10.0, waypoints: [(0.0, 0.0), (9.0, 0.0)])",
@@ -354,13 +354,17 @@ mod tests {
         )
         .unwrap();
         let s = stream_args(&[]).unwrap();
-        assert_eq!(s.config().upload_budget_bytes, 4 << 20);
-        assert_eq!(s.path_config(&path).upload_budget_bytes, 6 * (4 << 20));
-        let s = stream_args(&["--display-hz", "5", "--upload-budget", "1000"]).unwrap();
+        assert_eq!(s.config().display_frames_per_step, 1);
+        let c = s.path_config(&path);
         assert_eq!(
-            s.path_config(&path).upload_budget_bytes,
-            1000,
-            "never below one frame's"
+            (c.display_frames_per_step, c.upload_budget_bytes),
+            (6, 4 << 20)
+        );
+        let s = stream_args(&["--display-hz", "5"]).unwrap();
+        assert_eq!(
+            s.path_config(&path).display_frames_per_step,
+            1,
+            "at least the drawn one"
         );
         for bad in ["0", "-60", "nan", "fast"] {
             let arg = format!("--display-hz={bad}");

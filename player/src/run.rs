@@ -188,6 +188,7 @@ impl Player {
                 let list = hybrid_list(&self.bake, camera, &current, pending);
                 let (tris, tex) = list_stats(&list, &self.models);
                 let ms = self.renderer.render(camera, &self.models, &list);
+                s.undrawn_frames(&self.renderer, &self.bake, camera);
                 (ms, tris, tex, stats)
             }
             (Mode::Lod, _) => {

@@ -61,6 +61,13 @@ pub struct StreamConfig {
     pub step_angle_deg: f32,
     /// How a proxy whose textures are still queued is drawn.
     pub pending: PendingDraw,
+    /// Display frames each drawn frame stands for (headless path renders: a path
+    /// frame is 1 / frame_rate s of walking, in which a 60 Hz player draws 6
+    /// frames). After a drawn hybrid frame, the other display frames advance the
+    /// streaming (prefetch results, uploads under the per-frame budget) at the same
+    /// pose without drawing; their time is not counted, as each costs what the drawn
+    /// frame, its sample, costs. 1: every frame is drawn (`player view`).
+    pub display_frames_per_step: u32,
 }
 
 /// How the hybrid draws a proxy whose textures are not resident yet (never a hole).
@@ -93,6 +100,7 @@ impl Default for StreamConfig {
             step_distance: None,
             step_angle_deg: 15.0,
             pending: PendingDraw::Originals,
+            display_frames_per_step: 1,
         }
     }
 }
@@ -371,6 +379,14 @@ impl Streamer {
             }
         };
         (current, self.stats)
+    }
+
+    /// The display frames after a drawn one ([`StreamConfig::display_frames_per_step`]):
+    /// streaming advances at `camera` without drawing.
+    pub fn undrawn_frames(&mut self, renderer: &Renderer, bake: &Bake, camera: &Camera) {
+        for _ in 1..self.config.display_frames_per_step.max(1) {
+            self.begin_frame(renderer, bake, camera);
+        }
     }
 
     fn step_timestamp(&mut self, bake: &Bake, camera: &Camera, cell: Option<u32>) {

@@ -636,6 +636,25 @@ fn proxies_waiting_for_textures_are_drawn_as_originals() {
     let waiting = p.renderer.read_pixels().unwrap();
     assert_eq!(stats.uploaded_bytes, 32 * 32 * 4, "one texture per frame");
     assert!(stats.pending_proxies > 0);
+    // A drawn frame standing for 4 display frames (headless paths, `--display-hz`):
+    // the 3 undrawn ones upload one texture each after it, at the same pose.
+    let mut four = Streamer::new(
+        &p.bake,
+        StreamConfig {
+            prefetch: false,
+            upload_budget_bytes: 1,
+            display_frames_per_step: 4,
+            ..Default::default()
+        },
+    );
+    let (_, _, _, stats_four) = p.draw(&cam, Mode::Hybrid, Some(&mut four));
+    assert_eq!(
+        stats_four.uploaded_bytes,
+        32 * 32 * 4,
+        "the drawn frame's own upload"
+    );
+    assert!(tiny.queued_uploads() >= 4, "{}", tiny.queued_uploads());
+    assert_eq!(four.queued_uploads() + 3, tiny.queued_uploads());
     let mut big = stream(&p, 1 << 30, PendingDraw::Originals);
     let (_, tris_ready, _, stats_big) = p.draw(&cam, Mode::Hybrid, Some(&mut big));
     let ready = p.renderer.read_pixels().unwrap();
