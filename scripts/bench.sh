@@ -86,7 +86,7 @@ if [ "$FULL" = 1 ]; then
     MODE=full
 else
     : "${BENCH_FULL_SCENES=}"
-    : "${BENCH_PATH_SCENES:=park-2m park-4m}"
+    : "${BENCH_PATH_SCENES=park-2m park-4m}"
     : "${BENCH_LOD_ERRORS:=1 4}"
     MODE=default
 fi
