@@ -343,24 +343,25 @@ if [ -n "$BENCH_SWEEP_SCENE" ]; then
     BAKE_META=("sweep=T_s:$BENCH_BASE_TS" "sweep=T_l:$BENCH_BASE_TL" "sweep=cell_size:$BENCH_BASE_CELL")
     bake sweep-base "$BENCH_SWEEP_SCENE" "$sweep_out/base" --cells "$spec" --set cells_per_job=1
     sweep_compare sweep-base "$sweep_out/base"
-    for v in $BENCH_TS; do
-        [ "$v" = "$BENCH_BASE_TS" ] && continue
-        BAKE_META=("sweep=T_s:$v")
-        bake "sweep-ts$v" "$BENCH_SWEEP_SCENE" "$sweep_out/ts$v" --cells "$spec" --set cells_per_job=1 --set "T_s=$v"
-        sweep_compare "sweep-ts$v" "$sweep_out/ts$v"
-    done
-    for v in $BENCH_TL; do
-        [ "$v" = "$BENCH_BASE_TL" ] && continue
-        BAKE_META=("sweep=T_l:$v")
-        bake "sweep-tl$v" "$BENCH_SWEEP_SCENE" "$sweep_out/tl$v" --cells "$spec" --set cells_per_job=1 --set "T_l=$v"
-        sweep_compare "sweep-tl$v" "$sweep_out/tl$v"
-    done
-    for v in $BENCH_CELL_SIZES; do
-        [ "$v" = "$BENCH_BASE_CELL" ] && continue
-        BAKE_META=("sweep=cell_size:$v")
-        bake "sweep-c$v" "$BENCH_SWEEP_SCENE" "$sweep_out/c$v" --cells "$spec" --set cells_per_job=1 --set "cells.cell_size=$v"
-        sweep_compare "sweep-c$v" "$sweep_out/c$v"
-    done
+    # sweep_points PARAM LABEL-PREFIX SET-KEY BASE VALUES...: one bake + compare per
+    # value other than the base.
+    sweep_points() {
+        local param=$1 prefix=$2 key=$3 base=$4 v
+        shift 4
+        for v in "$@"; do
+            [ "$v" = "$base" ] && continue
+            BAKE_META=("sweep=$param:$v")
+            bake "sweep-$prefix$v" "$BENCH_SWEEP_SCENE" "$sweep_out/$prefix$v" --cells "$spec" \
+                --set cells_per_job=1 --set "$key=$v"
+            sweep_compare "sweep-$prefix$v" "$sweep_out/$prefix$v"
+        done
+    }
+    # shellcheck disable=SC2086 # the value lists split on spaces
+    sweep_points T_s ts T_s "$BENCH_BASE_TS" $BENCH_TS
+    # shellcheck disable=SC2086
+    sweep_points T_l tl T_l "$BENCH_BASE_TL" $BENCH_TL
+    # shellcheck disable=SC2086
+    sweep_points cell_size c cells.cell_size "$BENCH_BASE_CELL" $BENCH_CELL_SIZES
 fi
 
 # 6. Results and tables.

@@ -768,7 +768,7 @@ pub fn pooled_psnr_y(c: &CompareSummary) -> f64 {
             .iter()
             .map(|f| 255.0 * 255.0 / 10f64.powf(f.psnr_y / 10.0)),
     );
-    10.0 * (255.0 * 255.0 / mse).log10()
+    worker::check::psnr_of_mse(mse)
 }
 
 /// Tables 6–7: the player along the path.

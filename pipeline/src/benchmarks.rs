@@ -338,14 +338,8 @@ pub fn check_view_path(
     let base_path = out.join("base.pack");
     let base = BasePack::read(&base_path).with_context(|| base_path.display().to_string())?;
     let g = &base.grid;
-    let grid = worker::grid::HexGrid::try_new(
-        format::Ground {
-            min: g.ground_min,
-            max: g.ground_max,
-        },
-        g.cell_size,
-    )
-    .with_context(|| format!("{}: grid", base_path.display()))?;
+    let grid = worker::grid::HexGrid::from_params(g)
+        .with_context(|| format!("{}: grid", base_path.display()))?;
     let cells = match cells {
         Some(c) => c,
         None => {

@@ -5,7 +5,6 @@
 
 use crate::report::CellLine;
 use format::pack::GridParams;
-use format::Ground;
 use tiny_skia::{Color, FillRule, Paint, PathBuilder, Pixmap, Rect, Stroke, Transform};
 use worker::grid::HexGrid;
 use worker::picture::ramp;
@@ -20,13 +19,7 @@ type Metric = (&'static str, fn(&CellLine) -> f64);
 
 /// Renders the three panels; returns PNG bytes.
 pub fn render(grid_params: &GridParams, lines: &[CellLine]) -> anyhow::Result<Vec<u8>> {
-    let grid = HexGrid::new(
-        Ground {
-            min: grid_params.ground_min,
-            max: grid_params.ground_max,
-        },
-        grid_params.cell_size,
-    );
+    let grid = HexGrid::from_params(grid_params)?;
     // Fit the cells themselves (they reach past the ground rectangle).
     let (mut cmin, mut cmax) = (
         glam::Vec2::splat(f32::INFINITY),
