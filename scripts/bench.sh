@@ -25,7 +25,8 @@
 #      (corners) of the 50-unit grid, mapped by position onto other grids (grid:50:ID);
 #      each setting's bake is then measured by `player compare` over `worker check`'s
 #      16 viewpoints in each sampled cell (`pipeline benchmarks views`): the FPS, PSNR
-#      and triangles rows of Tables 3–5
+#      and triangles rows of Tables 3–5; and our deviation bound (not in the paper)
+#      bake.max_deviation_px ∈ {0 (the paper's algorithm), 0.5, 1, 2}
 #   6. cell load times; one JSON of raw results in docs/bench/run-<UTC time>.json
 #      (machine, commands, reports, player output); BENCHMARKS.md regenerated between
 #      its <!-- bench:NAME --> markers, plots in docs/bench/.
@@ -43,6 +44,7 @@
 #   BENCH_SWEEP_VIEWS   player views per sampled cell (default 16; 0: no sweep compares)
 #   BENCH_TS / BENCH_TL / BENCH_CELL_SIZES            (defaults "3 5 7" / "3.0 4.5 6.0" / "50 100")
 #   BENCH_BASE_TS / BENCH_BASE_TL / BENCH_BASE_CELL   the manifest's values (5 / 4.5 / 50)
+#   BENCH_DEVIATIONS / BENCH_BASE_DEV                 (defaults "0 0.5 1 2" / the manifest's 0.5)
 #   BENCH_OUT           bake outputs: $BENCH_OUT/<scene> (default out)
 #   BENCH_RESULTS       run files and plots            (default docs/bench)
 #   BENCH_DOC           document to regenerate         (default BENCHMARKS.md)
@@ -102,6 +104,8 @@ fi
 : "${BENCH_BASE_TS:=5}"
 : "${BENCH_BASE_TL:=4.5}"
 : "${BENCH_BASE_CELL:=50}"
+: "${BENCH_DEVIATIONS:=0 0.5 1 2}"
+: "${BENCH_BASE_DEV:=0.5}"
 : "${BENCH_OUT:=out}"
 : "${BENCH_RESULTS:=docs/bench}"
 : "${BENCH_DOC:=BENCHMARKS.md}"
@@ -340,7 +344,8 @@ if [ -n "$BENCH_SWEEP_SCENE" ]; then
     spec=$(echo "$BENCH_SAMPLE" | tr ',' '\n' | sed "s/^ *//; s/^/grid:$BENCH_SAMPLE_GRID:/" | paste -sd, -)
     sweep_out=$BENCH_OUT/bench-sweeps/$sweep_name
     # The base setting is a point of every sweep.
-    BAKE_META=("sweep=T_s:$BENCH_BASE_TS" "sweep=T_l:$BENCH_BASE_TL" "sweep=cell_size:$BENCH_BASE_CELL")
+    BAKE_META=("sweep=T_s:$BENCH_BASE_TS" "sweep=T_l:$BENCH_BASE_TL" "sweep=cell_size:$BENCH_BASE_CELL"
+        "sweep=deviation:$BENCH_BASE_DEV")
     bake sweep-base "$BENCH_SWEEP_SCENE" "$sweep_out/base" --cells "$spec" --set cells_per_job=1
     sweep_compare sweep-base "$sweep_out/base"
     # sweep_points PARAM LABEL-PREFIX SET-KEY BASE VALUES...: one bake + compare per
@@ -362,6 +367,8 @@ if [ -n "$BENCH_SWEEP_SCENE" ]; then
     sweep_points T_l tl T_l "$BENCH_BASE_TL" $BENCH_TL
     # shellcheck disable=SC2086
     sweep_points cell_size c cells.cell_size "$BENCH_BASE_CELL" $BENCH_CELL_SIZES
+    # shellcheck disable=SC2086
+    sweep_points deviation dev bake.max_deviation_px "$BENCH_BASE_DEV" $BENCH_DEVIATIONS
 fi
 
 # 6. Results and tables.

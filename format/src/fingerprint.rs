@@ -20,8 +20,9 @@ pub type Fingerprint = [u8; 32];
 /// the bytes a bake writes (an algorithm, a default, the writer's compression), so
 /// that `pipeline run` on an old output rebakes instead of keeping stale packs.
 /// History: 1 — session 1; 2 — zstd level 6, the one-pixel visibility tolerance;
-/// 3 — the MVMesh's l′ also looks from the prism point nearest each edge.
-pub const BAKE_REVISION: u32 = 3;
+/// 3 — the MVMesh's l′ also looks from the prism point nearest each edge;
+/// 4 — the deviation bound of the edge collapse (`bake.max_deviation_px`).
+pub const BAKE_REVISION: u32 = 4;
 
 /// Hex form for file names, logs and reports.
 pub fn to_hex(f: &Fingerprint) -> String {
@@ -69,6 +70,7 @@ pub fn params_fingerprint(bake: &BakeParams, cells: &CellParams) -> Fingerprint 
         t_c1,
         clustering,
         occlusion_culling,
+        max_deviation_px,
     } = bake;
     h.update(&image_res.to_le_bytes());
     f32s(
@@ -78,6 +80,7 @@ pub fn params_fingerprint(bake: &BakeParams, cells: &CellParams) -> Fingerprint 
             *edge_length_tolerance,
             *t_c0,
             *t_c1,
+            *max_deviation_px,
         ],
     );
     h.update(&[*clustering as u8, *occlusion_culling as u8]);
@@ -134,6 +137,7 @@ mod tests {
             |b, _| b.t_c1 = 1e-3,
             |b, _| b.clustering = false,
             |b, _| b.occlusion_culling = true,
+            |b, _| b.max_deviation_px = 0.0,
             |_, c| c.cell_size = 100.0,
             |_, c| c.min_eye_height = 2.0,
             |_, c| c.max_eye_height = 20.0,

@@ -59,7 +59,15 @@ pub struct BakeParams {
     pub clustering: bool,
     /// Regional occlusion culling. Default off.
     pub occlusion_culling: bool,
+    /// Deviation bound of the edge collapse in pixels (not in the paper; worker
+    /// `simplify.rs`, "Deviation bound"): no collapse may move the surface farther
+    /// than this, seen from anywhere in the cell. 0 = off (the paper's algorithm as
+    /// written). Default 0.5.
+    pub max_deviation_px: f32,
 }
+
+/// Default of [`BakeParams::max_deviation_px`].
+pub const DEFAULT_MAX_DEVIATION_PX: f32 = 0.5;
 
 impl Default for BakeParams {
     fn default() -> Self {
@@ -71,6 +79,7 @@ impl Default for BakeParams {
             t_c1: 1.28e-4,
             clustering: true,
             occlusion_culling: false,
+            max_deviation_px: DEFAULT_MAX_DEVIATION_PX,
         }
     }
 }
@@ -318,6 +327,7 @@ struct RawBake {
     t_c1: f32,
     clustering: bool,
     occlusion_culling: bool,
+    max_deviation_px: f32,
 }
 
 impl Default for RawBake {
@@ -331,6 +341,7 @@ impl Default for RawBake {
             t_c1: d.t_c1,
             clustering: d.clustering,
             occlusion_culling: d.occlusion_culling,
+            max_deviation_px: d.max_deviation_px,
         }
     }
 }
@@ -465,6 +476,14 @@ impl Validator<'_> {
             Ok(v)
         } else {
             Err(self.error(field, format!("must be > 0, found {v}")))
+        }
+    }
+
+    fn non_negative(&self, field: &str, v: f32) -> Result<f32, ManifestError> {
+        if v.is_finite() && v >= 0.0 {
+            Ok(v)
+        } else {
+            Err(self.error(field, format!("must be >= 0, found {v}")))
         }
     }
 
@@ -669,6 +688,7 @@ impl Validator<'_> {
             t_c1: self.positive("bake.t_c1", b.t_c1)?,
             clustering: b.clustering,
             occlusion_culling: b.occlusion_culling,
+            max_deviation_px: self.non_negative("bake.max_deviation_px", b.max_deviation_px)?,
         };
 
         let cells_per_job = raw.cells_per_job.unwrap_or(DEFAULT_CELLS_PER_JOB);

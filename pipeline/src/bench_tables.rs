@@ -389,6 +389,7 @@ pub fn sections(m: &Merged, plot_prefix: &str) -> BTreeMap<String, String> {
     s.insert("sweep-ts".to_string(), sweep(&ctx, "T_s"));
     s.insert("sweep-tl".to_string(), sweep(&ctx, "T_l"));
     s.insert("sweep-cell".to_string(), sweep(&ctx, "cell_size"));
+    s.insert("sweep-deviation".to_string(), sweep(&ctx, "deviation"));
     s.insert("runtime".to_string(), runtime(&ctx));
     s.insert("hybrid-vs-lod".to_string(), hybrid_vs_lod(&ctx));
     s.insert("crossings".to_string(), crossings(&ctx));
@@ -517,17 +518,30 @@ fn sweep(ctx: &Ctx, param: &str) -> String {
     if points.is_empty() {
         return NOT_MEASURED.into();
     }
+    // The deviation bound is ours (worker simplify.rs): no paper columns.
     let (table, paper_values, symbol): (&str, &[f64], &str) = match param {
         "T_s" => ("Table 3", &table3::T_S, "T_s"),
         "T_l" => ("Table 4", &table4::T_L, "T_l"),
+        "deviation" => ("not in the paper", &[], "deviation px"),
         _ => ("Table 5", &table5::CELL_SIZE, "cell size"),
     };
+    let has_paper = !paper_values.is_empty();
     let paper_col = |v: f64| paper_values.iter().position(|p| (p - v).abs() < 1e-6);
+    // One point's two cells (paper, ours), or only ours.
+    let pair = |cells: &mut Vec<String>, paper: String, ours: String| {
+        if has_paper {
+            cells.push(paper);
+        }
+        cells.push(ours);
+    };
     let mut cols = vec![format!("4M, {symbol} ({table})")];
     for (v, b) in &points {
         let cells = b.report.as_ref().map_or(0, |r| r.cells);
-        cols.push(format!("{symbol} {v} paper"));
-        cols.push(format!("{symbol} {v} ours ({cells} cells)"));
+        pair(
+            &mut cols,
+            format!("{symbol} {v} paper"),
+            format!("{symbol} {v} ours ({cells} cells)"),
+        );
     }
     let mut m = String::new();
     table_header(&mut m, &cols);
@@ -576,7 +590,7 @@ fn sweep(ctx: &Ctx, param: &str) -> String {
                 ratio,
             ),
         ],
-        "T_l" => vec![
+        "T_l" | "deviation" => vec![
             (
                 "polygons inside a cell",
                 table4::POLYGONS_INSIDE_A_VIEWCELL.to_vec(),
@@ -648,16 +662,20 @@ fn sweep(ctx: &Ctx, param: &str) -> String {
     for (name, paper, pick, fmt) in paper_rows {
         let mut cells = vec![name.to_string()];
         for (v, b) in &points {
-            cells.push(paper_col(*v).map_or("–".into(), |i| fmt(paper[i])));
-            cells.push(b.report.as_ref().map_or("–".into(), |r| fmt(pick(r))));
+            pair(
+                &mut cells,
+                paper_col(*v).map_or("–".into(), |i| fmt(paper[i])),
+                b.report.as_ref().map_or("–".into(), |r| fmt(pick(r))),
+            );
         }
         row(&mut m, &cells);
     }
     // The other Tables 3–5 rows where we have a counterpart.
     let mut cells = vec!["culled objects %".to_string()];
     for (_, b) in &points {
-        cells.push("–".into());
-        cells.push(
+        pair(
+            &mut cells,
+            "–".into(),
             b.report
                 .as_ref()
                 .map_or("–".into(), |r| fixed(r.per_cell.culled_percent, 1)),
@@ -712,12 +730,13 @@ fn sweep(ctx: &Ctx, param: &str) -> String {
         for (name, paper, pick, fmt) in perf_rows {
             let mut cells = vec![name.to_string()];
             for ((v, _), summary) in points.iter().zip(&summaries) {
-                cells.push(
+                pair(
+                    &mut cells,
                     paper
                         .and_then(|p| paper_col(*v).map(|i| fmt(p[i])))
                         .unwrap_or("–".into()),
+                    summary.map_or("–".into(), |c| fmt(pick(c))),
                 );
-                cells.push(summary.map_or("–".into(), |c| fmt(pick(c))));
             }
             row(&mut m, &cells);
         }

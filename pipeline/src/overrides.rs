@@ -45,6 +45,7 @@ const KEYS: &[(&str, &[&str])] = &[
     ("bake.t_c1", &["T_C1", "bake.T_C1"]),
     ("bake.clustering", &[]),
     ("bake.occlusion_culling", &[]),
+    ("bake.max_deviation_px", &["deviation"]),
     ("cells.cell_size", &["cell_size"]),
     ("cells.min_eye_height", &[]),
     ("cells.max_eye_height", &[]),
@@ -147,6 +148,7 @@ pub fn apply_overrides(plan: &mut Plan, overrides: &[Override]) -> Result<(), Ov
             "bake.t_c1" => plan.bake.t_c1 = o.positive()?,
             "bake.clustering" => plan.bake.clustering = o.boolean()?,
             "bake.occlusion_culling" => plan.bake.occlusion_culling = o.boolean()?,
+            "bake.max_deviation_px" => plan.bake.max_deviation_px = o.non_negative()?,
             "cells.cell_size" => {
                 let c = o.positive()?;
                 HexGrid::try_new(plan.ground, c).map_err(|e| o.bad(e.to_string()))?;

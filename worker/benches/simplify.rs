@@ -74,6 +74,7 @@ fn bench_simplify(c: &mut Criterion) {
             eye: centre,
             pixels_per_radian: ppr,
         },
+        deviation: None,
     };
     let sv = SimplifyInput {
         positions: &bunny.positions,
@@ -136,6 +137,7 @@ fn bench_simplify(c: &mut Criterion) {
             eyes: corners,
             pixels_per_radian: ppr,
         },
+        deviation: None,
     };
     let mv = SimplifyInput {
         positions: &bunny.positions,

@@ -185,7 +185,7 @@ pub fn bake_cell(
     let prism = grid.prism(cell, cells.min_eye_height, cells.max_eye_height);
     let corners = prism.corners();
     let centre = cell_eye(grid, cell, cells);
-    let settings = ProxySettings::new(params, grid.cell_size());
+    let settings = ProxySettings::for_cell(params, grid.cell_size(), prism);
 
     // Steps 1–3: split, cull, self-occluding error (parallel, collected in order).
     let t = Instant::now();

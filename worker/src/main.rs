@@ -53,6 +53,9 @@ enum Command {
         /// Override T_l (edge-length tolerance) of the manifest.
         #[arg(long)]
         edge_length_tolerance: Option<f32>,
+        /// Override the deviation bound (pixels; 0 = the paper's algorithm as written).
+        #[arg(long)]
+        max_deviation_px: Option<f32>,
         #[arg(long)]
         json: bool,
     },
@@ -198,11 +201,20 @@ fn run(cli: Cli) -> Result<(), Failure> {
             res,
             out,
             edge_length_tolerance,
+            max_deviation_px,
             json,
         } => {
             let mut plan = format::manifest::parse_manifest(&manifest).map_err(bad_input)?;
             if let Some(t) = edge_length_tolerance {
                 plan.bake.edge_length_tolerance = t;
+            }
+            if let Some(d) = max_deviation_px {
+                if !(d.is_finite() && d >= 0.0) {
+                    return Err(bad_input(anyhow::anyhow!(
+                        "--max-deviation-px must be >= 0, found {d}"
+                    )));
+                }
+                plan.bake.max_deviation_px = d;
             }
             let scene = plan.load_scene().map_err(bad_input)?;
             let grid = worker::grid::HexGrid::new(scene.ground, plan.cells.cell_size);

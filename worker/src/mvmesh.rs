@@ -170,6 +170,7 @@ pub fn derive_mvmesh(
                 prism: *prism,
                 pixels_per_radian: pixels_per_radian(settings.image_res),
             },
+            deviation: settings.deviation,
         },
     )
     .map_err(|source| ProxyError::Simplify { instance, source })?;

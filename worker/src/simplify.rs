@@ -61,6 +61,26 @@
 //!   adjacency is index-based; output triangles are the surviving input triangles in
 //!   input order, with their corners renamed.
 //!
+//! **Deviation bound (not in the paper; `bake.max_deviation_px`, default 0.5 px).**
+//! The paper's cost lets a flat silhouette edge of up to 18 px collapse (exterior
+//! silhouette weight 0.5 on both ends, n_i·n_j ≈ 1: cost = 0.25 · l · 1 < 4.5), and the
+//! viewer anywhere in the cell then sees ears, tails and limbs cut back against the
+//! sky. On park-2m that was ~90% of the check's squared error (cell 275, worst view:
+//! 3,956 pixels where exactly one of reference and proxy shows the sky). With a bound
+//! of `max_px` pixels, a collapse is also rejected unless every point it moves stays
+//! within `max_px / ppr × d(p)` of the new fan of v, d(p) being the distance from the
+//! point to the nearest point of the cell's prism (so the bound holds in pixels seen
+//! from anywhere in the cell, for SVMeshes too). "Every point it moves" is u and all
+//! earlier removed vertices carried by u's triangles: each removed vertex is carried
+//! by the surviving triangle nearest to it, and is re-assigned whenever that
+//! triangle changes, so the bound holds for every original vertex at the end, not
+//! just per step (tests/simplify.rs checks exactly that). It changes no cost and no
+//! order; it only refuses collapses. `None` (bake.max_deviation_px = 0) is the
+//! paper's algorithm as written; the bunny table of Fig. 4/6 is measured that way.
+//! Measured on five park-2m cells (`worker check`, pooled PSNR(Y)): unbounded
+//! 35.2–40.3 dB with 9,277–14,681 proxy triangles per cell; 1 px 39.9–44.2 dB with
+//! 14,022–30,148; 0.5 px 42.8–46.6 dB with 21,886–53,371 (BENCHMARKS.md).
+//!
 //! [`validate`] checks every output (every test calls it).
 
 use glam::Vec3;
@@ -202,6 +222,29 @@ pub struct SimplifyParams {
     pub edge_length_tolerance: f32,
     /// How l is measured (SV: from the cell centre; MV: max over the corners).
     pub length: ProjectedLength,
+    /// Optional bound on the geometric deviation (our addition, module docs);
+    /// `None` runs the paper's algorithm as written.
+    pub deviation: Option<DeviationBound>,
+}
+
+/// A bound on how far the simplified surface may move, in pixels seen from
+/// anywhere in a view region (not in the paper; see the module docs, "Deviation
+/// bound").
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DeviationBound {
+    /// Largest allowed deviation in pixels (of [`ProjectedLength`]'s pixels per
+    /// radian); must be positive and finite.
+    pub max_px: f32,
+    /// Where the viewer may stand (the cell's prism).
+    pub region: crate::grid::Prism,
+}
+
+impl DeviationBound {
+    /// World-space tolerance at `p`: `max_px / ppr` radians at the distance of the
+    /// region's nearest point (0 inside the region).
+    pub fn world_tolerance(&self, p: Vec3, pixels_per_radian: f32) -> f32 {
+        self.max_px / pixels_per_radian * p.distance(self.region.closest_point(p))
+    }
 }
 
 /// One half-edge collapse, in the order performed.
@@ -257,6 +300,8 @@ pub enum SimplifyError {
     NoEyes,
     #[error("too many vertices ({0}) for u32 ids")]
     TooManyVertices(usize),
+    #[error("deviation bound {0} px is not positive and finite")]
+    BadDeviation(f32),
 }
 
 /// A broken simplified mesh, found by [`validate`].
@@ -317,6 +362,19 @@ pub fn simplify(
         return Err(SimplifyError::NoEyes);
     }
     check_input(input, params.edge_length_tolerance)?;
+    let tolerances = match &params.deviation {
+        None => None,
+        Some(bound) if !(bound.max_px.is_finite() && bound.max_px > 0.0) => {
+            return Err(SimplifyError::BadDeviation(bound.max_px))
+        }
+        Some(bound) => Some(
+            input
+                .positions
+                .iter()
+                .map(|&p| bound.world_tolerance(p, ppr))
+                .collect::<Vec<f32>>(),
+        ),
+    };
     // Unit directions from every eye to every vertex the triangles use, computed
     // once: an edge's l is then one chord per eye (the same arithmetic as
     // `ProjectedLength::pixels`). `slot` maps a vertex id to its row.
@@ -353,7 +411,9 @@ pub fn simplify(
         }
         chord_to_angle(chord) * ppr
     };
-    Ok(Collapser::new(input).run(params.edge_length_tolerance, length))
+    let mut collapser = Collapser::new(input);
+    collapser.deviation = tolerances.map(|t| Deviation::new(t, input.triangles.len()));
+    Ok(collapser.run(params.edge_length_tolerance, length))
 }
 
 /// [`simplify`] with a caller-supplied projected length: `length_px(a, b)` gives l
@@ -475,6 +535,34 @@ struct Collapser<'a> {
     scratch_v: Vec<u32>,
     scratch_edges: Vec<(u32, u32)>,
     scratch_fan: Vec<u32>,
+    /// The deviation bound's bookkeeping (`None`: the paper's algorithm).
+    deviation: Option<Deviation>,
+}
+
+/// Deviation bookkeeping: every removed vertex is carried by the surviving triangle
+/// nearest to its original position; a collapse must keep every point it moves
+/// (u and the points carried around u) within its tolerance of the new fan of v.
+struct Deviation {
+    /// Per vertex: allowed world distance from the simplified surface.
+    tolerance: Vec<f32>,
+    /// Per triangle: removed vertices it carries.
+    carried: Vec<Vec<u32>>,
+    /// Set by a successful `can_collapse`: (point, triangle) assignments.
+    pending: Vec<(u32, u32)>,
+    scratch_points: Vec<u32>,
+    scratch_fan: Vec<(u32, [u32; 3])>,
+}
+
+impl Deviation {
+    fn new(tolerance: Vec<f32>, triangles: usize) -> Self {
+        Deviation {
+            tolerance,
+            carried: vec![Vec::new(); triangles],
+            pending: Vec::new(),
+            scratch_points: Vec::new(),
+            scratch_fan: Vec::new(),
+        }
+    }
 }
 
 impl<'a> Collapser<'a> {
@@ -519,6 +607,7 @@ impl<'a> Collapser<'a> {
             scratch_v: Vec::new(),
             scratch_edges: Vec::new(),
             scratch_fan: Vec::new(),
+            deviation: None,
         }
     }
 
@@ -847,11 +936,70 @@ impl<'a> Collapser<'a> {
             ok = edges.windows(2).all(|w| w[0] != w[1]);
         }
         self.scratch_edges = edges;
+        ok && self.deviation_allows(u, v)
+    }
+
+    /// Deviation bound: u and every point carried by u's triangles must lie within
+    /// its tolerance of some triangle around v after the collapse; records the
+    /// nearest such triangle of each point for [`Collapser::collapse`].
+    fn deviation_allows(&mut self, u: u32, v: u32) -> bool {
+        let Some(dev) = self.deviation.as_mut() else {
+            return true;
+        };
+        let positions = self.input.positions;
+        // v's fan after the collapse.
+        let mut fan = std::mem::take(&mut dev.scratch_fan);
+        fan.clear();
+        for &t in &self.fans[v as usize] {
+            let tri = self.triangles[t as usize];
+            if !tri.contains(&u) {
+                fan.push((t, tri));
+            }
+        }
+        let mut points = std::mem::take(&mut dev.scratch_points);
+        points.clear();
+        points.push(u);
+        for &t in &self.fans[u as usize] {
+            let tri = self.triangles[t as usize];
+            if !tri.contains(&v) {
+                fan.push((t, tri.map(|x| if x == u { v } else { x })));
+            }
+            points.extend_from_slice(&dev.carried[t as usize]);
+        }
+        dev.pending.clear();
+        let mut ok = !fan.is_empty();
+        for &p in &points {
+            if !ok {
+                break;
+            }
+            let q = positions[p as usize];
+            let mut best = (f32::INFINITY, u32::MAX);
+            for &(t, tri) in &fan {
+                let [a, b, c] = tri.map(|x| positions[x as usize]);
+                let d = point_triangle_distance_squared(q, a, b, c);
+                if d < best.0 {
+                    best = (d, t);
+                }
+            }
+            let tol = dev.tolerance[p as usize];
+            ok = best.0 <= tol * tol;
+            dev.pending.push((p, best.1));
+        }
+        dev.scratch_fan = fan;
+        dev.scratch_points = points;
         ok
     }
 
     /// Performs the half-edge collapse u → v (checked by `can_collapse`).
     fn collapse(&mut self, u: u32, v: u32) {
+        if let Some(dev) = self.deviation.as_mut() {
+            for &t in &self.fans[u as usize] {
+                dev.carried[t as usize].clear();
+            }
+            for &(p, t) in &dev.pending {
+                dev.carried[t as usize].push(p);
+            }
+        }
         let fan_u = std::mem::take(&mut self.fans[u as usize]);
         for t in fan_u {
             let ti = t as usize;
@@ -890,6 +1038,56 @@ fn opposite_edge(tri: &[u32; 3], v: u32) -> (u32, u32) {
 fn sorted(mut tri: [u32; 3]) -> [u32; 3] {
     tri.sort_unstable();
     tri
+}
+
+/// Squared distance from `p` to the triangle `abc` (closest point by Voronoi
+/// regions, Ericson, *Real-Time Collision Detection* §5.1.5).
+pub fn point_triangle_distance_squared(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> f32 {
+    let (ab, ac, ap) = (b - a, c - a, p - a);
+    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return ap.length_squared();
+    }
+    let bp = p - b;
+    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
+    if d3 >= 0.0 && d4 <= d3 {
+        return bp.length_squared();
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        let t = d1 / (d1 - d3);
+        return (ap - t * ab).length_squared();
+    }
+    let cp = p - c;
+    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
+    if d6 >= 0.0 && d5 <= d6 {
+        return cp.length_squared();
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        let t = d2 / (d2 - d6);
+        return (ap - t * ac).length_squared();
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+        let t = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        return (bp - t * (c - b)).length_squared();
+    }
+    let denom = va + vb + vc;
+    if denom.abs() <= f32::MIN_POSITIVE {
+        // Degenerate triangle: nearest of its edges.
+        return [(a, b), (b, c), (c, a)]
+            .iter()
+            .map(|&(x, y)| {
+                let e = y - x;
+                let t =
+                    ((p - x).dot(e) / e.length_squared().max(f32::MIN_POSITIVE)).clamp(0.0, 1.0);
+                (p - x - t * e).length_squared()
+            })
+            .fold(f32::INFINITY, f32::min);
+    }
+    let (v, w) = (vb / denom, vc / denom);
+    (ap - ab * v - ac * w).length_squared()
 }
 
 fn triangle_cross(positions: &[Vec3], tri: [u32; 3]) -> Vec3 {

@@ -27,10 +27,11 @@
 use crate::backface::front_facing_from;
 use crate::capture::{capture_objects, CaptureError};
 use crate::classify::{classify_objects, WindowDepth};
+use crate::grid::Prism;
 use crate::raster::{DrawItem, ProjectedTexture, BACKGROUND_ID};
 use crate::simplify::{
-    pixels_per_radian, simplify, ProjectedLength, Simplified, SimplifyError, SimplifyInput,
-    SimplifyParams,
+    pixels_per_radian, simplify, DeviationBound, ProjectedLength, Simplified, SimplifyError,
+    SimplifyInput, SimplifyParams,
 };
 use crate::visibility::DepthTolerance;
 use crate::weights::{vertex_states, VertexState};
@@ -55,6 +56,8 @@ pub struct ProxySettings {
     /// Pieces of at most this many triangles are tidied away from the selection
     /// before simplifying ([`tidy_selection`]; 0 = off).
     pub speck_triangles: usize,
+    /// The collapse's deviation bound (`None`: the paper's algorithm as written).
+    pub deviation: Option<DeviationBound>,
 }
 
 impl ProxySettings {
@@ -67,6 +70,19 @@ impl ProxySettings {
             cell_size,
             depth_tolerance: DepthTolerance::default(),
             speck_triangles: SPECK_TRIANGLES,
+            deviation: None,
+        }
+    }
+
+    /// [`ProxySettings::new`] plus the bake's deviation bound over the cell's prism
+    /// (`bake.max_deviation_px`; 0 = none).
+    pub fn for_cell(params: &BakeParams, cell_size: f32, prism: Prism) -> ProxySettings {
+        ProxySettings {
+            deviation: (params.max_deviation_px > 0.0).then_some(DeviationBound {
+                max_px: params.max_deviation_px,
+                region: prism,
+            }),
+            ..ProxySettings::new(params, cell_size)
         }
     }
 }
@@ -268,6 +284,7 @@ pub fn derive_svmesh(
             &SimplifyParams {
                 edge_length_tolerance: settings.edge_length_tolerance,
                 length: length.clone(),
+                deviation: settings.deviation,
             },
         )
         .map_err(|source| ProxyError::Simplify {

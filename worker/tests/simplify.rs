@@ -1,13 +1,16 @@
 //! Tests of the weighted half-edge collapse (paper 000 §3.1.3.3, §3.1.4).
 //! Every output goes through `validate()`.
 
+use glam::Vec2;
 use glam::Vec3;
 use proptest::prelude::*;
 use std::f32::consts::PI;
 use std::path::PathBuf;
+use worker::grid::Prism;
 use worker::simplify::{
-    pixels_per_radian, simplify, simplify_with, validate, validate_view_masks, ProjectedLength,
-    Simplified, SimplifyError, SimplifyInput, SimplifyParams, ValidationError,
+    pixels_per_radian, point_triangle_distance_squared, simplify, simplify_with, validate,
+    validate_view_masks, DeviationBound, ProjectedLength, Simplified, SimplifyError, SimplifyInput,
+    SimplifyParams, ValidationError,
 };
 
 // ---------------------------------------------------------------- mesh helpers
@@ -98,6 +101,7 @@ fn sv_params(eye: Vec3, tolerance: f32) -> SimplifyParams {
             eye,
             pixels_per_radian: pixels_per_radian(1024),
         },
+        deviation: None,
     }
 }
 
@@ -308,6 +312,7 @@ proptest! {
         let params = SimplifyParams {
             edge_length_tolerance: tolerance,
             length: ProjectedLength::MaxOverPoints { eyes, pixels_per_radian: pixels_per_radian(1024) },
+            deviation: None,
         };
         let out = simplify(&input, &params).unwrap();
         check_log(&mesh, &w, tolerance, &out);
@@ -317,6 +322,159 @@ proptest! {
             prop_assert!(su & sv != 0 || (su == 0 && sv == 0), "{:?} sets {:#x} {:#x}", c, su, sv);
         }
     }
+}
+
+// ---------------------------------------------------------------- deviation bound
+
+/// Distance from `p` to the nearest triangle of `triangles`.
+fn distance_to_surface(positions: &[Vec3], triangles: &[[u32; 3]], p: Vec3) -> f32 {
+    triangles
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| positions[i as usize]);
+            point_triangle_distance_squared(p, a, b, c)
+        })
+        .fold(f32::INFINITY, f32::min)
+        .sqrt()
+}
+
+fn arb_prism() -> impl Strategy<Value = Prism> {
+    (
+        -30.0f32..30.0,
+        -30.0f32..30.0,
+        2.0f32..15.0,
+        0.0f32..4.0,
+        0.5f32..6.0,
+    )
+        .prop_map(|(x, z, size, y0, dy)| Prism {
+            centre: Vec2::new(x, z),
+            cell_size: size,
+            min_y: y0,
+            max_y: y0 + dy,
+        })
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+
+    /// The bound's promise: every vertex the input used lies within
+    /// `max_px / ppr × (its distance from the prism)` of the simplified surface, even
+    /// with a T_l so large that only the bound stops the collapse; and the bounded
+    /// output is still a valid simplification of the input.
+    #[test]
+    fn deviation_bound_holds_for_every_input_vertex(
+        mesh in arb_mesh(),
+        weights in prop::collection::vec(prop::sample::select(vec![0.05f32, 0.125, 0.25, 0.5]), 1..8),
+        prism in arb_prism(),
+        max_px in prop_oneof![0.25f32..2.0, 2.0f32..200.0],
+    ) {
+        let w: Vec<f32> = (0..mesh.positions.len()).map(|i| weights[i % weights.len()]).collect();
+        let input = SimplifyInput {
+            positions: &mesh.positions,
+            normals: &mesh.normals,
+            triangles: &mesh.triangles,
+            weights: &w,
+            view_sets: None,
+        };
+        let ppr = pixels_per_radian(1024);
+        let bound = DeviationBound { max_px, region: prism };
+        let params = SimplifyParams {
+            edge_length_tolerance: 1e6,
+            length: ProjectedLength::MaxOverPrism { prism, pixels_per_radian: ppr },
+            deviation: Some(bound),
+        };
+        let out = simplify(&input, &params).unwrap();
+        validate(mesh.positions.len(), &mesh.triangles, &out).unwrap();
+        check_no_fold(&mesh, &out);
+        let mut used: Vec<u32> = mesh.triangles.iter().flatten().copied().collect();
+        used.sort_unstable();
+        used.dedup();
+        for v in used {
+            let p = mesh.positions[v as usize];
+            let tolerance = bound.world_tolerance(p, ppr);
+            let d = distance_to_surface(&mesh.positions, &out.triangles, p);
+            prop_assert!(
+                d <= tolerance * 1.0001 + 1e-5,
+                "vertex {} is {} from the surface, tolerance {}", v, d, tolerance
+            );
+        }
+    }
+
+    /// The closest-point distance is never more than the distance to any point of
+    /// the triangle, and a fine barycentric grid gets within its spacing of it.
+    #[test]
+    fn point_triangle_distance_is_the_minimum(
+        p in prop::array::uniform3(-10.0f32..10.0),
+        a in prop::array::uniform3(-5.0f32..5.0),
+        b in prop::array::uniform3(-5.0f32..5.0),
+        c in prop::array::uniform3(-5.0f32..5.0),
+    ) {
+        let [p, a, b, c] = [p, a, b, c].map(Vec3::from_array);
+        let d = point_triangle_distance_squared(p, a, b, c).sqrt();
+        let n = 60;
+        let mut best = f32::INFINITY;
+        for i in 0..=n {
+            for j in 0..=(n - i) {
+                let (u, v) = (i as f32 / n as f32, j as f32 / n as f32);
+                let q = a + u * (b - a) + v * (c - a);
+                let e = p.distance(q);
+                prop_assert!(d <= e + 1e-3, "closest {} but a point of the triangle is {}", d, e);
+                best = best.min(e);
+            }
+        }
+        let spacing = (b - a).length().max((c - a).length()).max((c - b).length()) / n as f32;
+        prop_assert!(best <= d + spacing + 1e-3, "closest {} but the grid's best is {}", d, best);
+    }
+}
+
+#[test]
+fn deviation_bound_rejects_bad_values_and_only_adds_triangles_on_a_sphere() {
+    let mesh = icosphere(3, Vec3::new(0.0, 5.0, 60.0), 4.0, &[0.3, -0.2, 0.1]);
+    let w = vec![0.125f32; mesh.positions.len()];
+    let input = SimplifyInput {
+        positions: &mesh.positions,
+        normals: &mesh.normals,
+        triangles: &mesh.triangles,
+        weights: &w,
+        view_sets: None,
+    };
+    let prism = Prism {
+        centre: Vec2::ZERO,
+        cell_size: 10.0,
+        min_y: 2.0,
+        max_y: 8.0,
+    };
+    let ppr = pixels_per_radian(1024);
+    let with = |max_px: Option<f32>| SimplifyParams {
+        edge_length_tolerance: 4.5,
+        length: ProjectedLength::MaxOverPrism {
+            prism,
+            pixels_per_radian: ppr,
+        },
+        deviation: max_px.map(|max_px| DeviationBound {
+            max_px,
+            region: prism,
+        }),
+    };
+    for bad in [0.0, -1.0, f32::NAN, f32::INFINITY] {
+        assert!(matches!(
+            simplify(&input, &with(Some(bad))),
+            Err(SimplifyError::BadDeviation(_))
+        ));
+    }
+    // Tighter bounds keep more of the sphere; the paper's rule alone keeps least.
+    let counts: Vec<usize> = [Some(0.25), Some(1.0), Some(4.0), None]
+        .iter()
+        .map(|&d| {
+            let out = simplify(&input, &with(d)).unwrap();
+            validate(mesh.positions.len(), &mesh.triangles, &out).unwrap();
+            out.triangles.len()
+        })
+        .collect();
+    assert!(
+        counts.windows(2).all(|w| w[0] >= w[1]) && counts[0] > counts[3],
+        "triangles at 0.25 / 1 / 4 px / unbounded: {counts:?}"
+    );
 }
 
 // ---------------------------------------------------------------- unit tests
@@ -627,6 +785,7 @@ fn bad_input_is_an_error_not_a_panic() {
             eyes: Vec::new(),
             pixels_per_radian: 100.0,
         },
+        deviation: None,
     };
     assert_eq!(simplify(&ok, &no_eyes), Err(SimplifyError::NoEyes));
 }
@@ -922,6 +1081,7 @@ fn bunny_mv(mesh: &TestMesh, k: u32, variant: Variant) -> BunnyRun {
             eyes: corners.clone(),
             pixels_per_radian: pixels_per_radian(1024),
         },
+        deviation: None,
     };
     let out = simplify(&input, &params).unwrap();
     validate(n, &triangles, &out).unwrap();
