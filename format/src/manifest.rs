@@ -62,7 +62,9 @@ pub struct BakeParams {
     /// Deviation bound of the edge collapse in pixels (not in the paper; worker
     /// `simplify.rs`, "Deviation bound"): no collapse may move the surface farther
     /// than this, seen from anywhere in the cell. 0 = off (the paper's algorithm as
-    /// written). Default 0.5.
+    /// written). Default 0.5. Plans and reports written before the bound existed
+    /// read as 0 (they were baked without it).
+    #[serde(default)]
     pub max_deviation_px: f32,
 }
 
@@ -758,5 +760,25 @@ mod lexical_tests {
         assert_eq!(n("./../out"), "../out");
         assert_eq!(n("/a/../../b"), "/b");
         assert_eq!(n("a/.."), ".");
+    }
+}
+
+#[cfg(test)]
+mod bake_params_tests {
+    use super::{BakeParams, DEFAULT_MAX_DEVIATION_PX};
+
+    /// Plans and reports written before the deviation bound existed still read, as
+    /// bakes without it; new ones round-trip.
+    #[test]
+    fn old_bake_params_read_without_the_deviation_bound() {
+        let old = r#"{"image_res":1024,"self_occluding_tolerance_px":5.0,
+            "edge_length_tolerance":4.5,"t_c0":0.00034,"t_c1":0.000128,
+            "clustering":true,"occlusion_culling":false}"#;
+        let p: BakeParams = serde_json::from_str(old).unwrap();
+        assert_eq!(p.max_deviation_px, 0.0);
+        let d = BakeParams::default();
+        assert_eq!(d.max_deviation_px, DEFAULT_MAX_DEVIATION_PX);
+        let back: BakeParams = serde_json::from_str(&serde_json::to_string(&d).unwrap()).unwrap();
+        assert_eq!(back, d);
     }
 }

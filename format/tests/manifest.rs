@@ -189,6 +189,11 @@ fn out_of_range_values_name_their_field() {
             "scene.models[1].target_height",
         ),
         ("image_res: 256", "image_res: 3", "bake.image_res"),
+        (
+            "clustering: false",
+            "clustering: false, max_deviation_px: -0.5",
+            "bake.max_deviation_px",
+        ),
         ("cells_per_job: 2", "cells_per_job: 0", "cells_per_job"),
         ("max: (300.0, 260.0)", "max: (300.0, -1.0)", "ground.max"),
         (

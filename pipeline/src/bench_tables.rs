@@ -751,9 +751,14 @@ fn sweep(ctx: &Ctx, param: &str) -> String {
     let scenes: BTreeSet<&str> = points.iter().map(|(_, b)| b.scene.as_str()).collect();
     let _ = writeln!(
         &mut m,
-        "\nPaper: averages over all cells of the 4M scene. Ours: averages over the cells \
+        "\n{}Ours: averages over the cells \
          baked with `--cells {}` on `{}` (one job per cell), i.e. a fixed sample of \
          centre, edge and corner cells, not the whole grid.",
+        if has_paper {
+            "Paper: averages over all cells of the 4M scene. "
+        } else {
+            ""
+        },
         sample.into_iter().collect::<Vec<_>>().join("` / `"),
         scenes.into_iter().collect::<Vec<_>>().join("`, `")
     );
