@@ -94,6 +94,17 @@ fn icosphere(levels: u32, centre: Vec3, radius: f32, bumps: &[f32]) -> TestMesh 
     }
 }
 
+/// The whole of `mesh` with weights `w`, no view sets.
+fn input_of<'a>(mesh: &'a TestMesh, w: &'a [f32]) -> SimplifyInput<'a> {
+    SimplifyInput {
+        positions: &mesh.positions,
+        normals: &mesh.normals,
+        triangles: &mesh.triangles,
+        weights: w,
+        view_sets: None,
+    }
+}
+
 fn sv_params(eye: Vec3, tolerance: f32) -> SimplifyParams {
     SimplifyParams {
         edge_length_tolerance: tolerance,
@@ -222,13 +233,7 @@ proptest! {
         tolerance in prop_oneof![0.0f32..5.0, 5.0f32..500.0],
     ) {
         let w: Vec<f32> = (0..mesh.positions.len()).map(|i| weights[i % weights.len()]).collect();
-        let input = SimplifyInput {
-            positions: &mesh.positions,
-            normals: &mesh.normals,
-            triangles: &mesh.triangles,
-            weights: &w,
-            view_sets: None,
-        };
+        let input = input_of(&mesh, &w);
         let out = simplify(&input, &sv_params(eye, tolerance)).unwrap();
         check_log(&mesh, &w, tolerance, &out);
         check_no_fold(&mesh, &out);
@@ -244,13 +249,7 @@ proptest! {
         eye in arb_eye(),
     ) {
         let w: Vec<f32> = (0..mesh.positions.len()).map(|i| weights[i % weights.len()]).collect();
-        let input = SimplifyInput {
-            positions: &mesh.positions,
-            normals: &mesh.normals,
-            triangles: &mesh.triangles,
-            weights: &w,
-            view_sets: None,
-        };
+        let input = input_of(&mesh, &w);
         let out = simplify(&input, &sv_params(eye, 0.0)).unwrap();
         validate(mesh.positions.len(), &mesh.triangles, &out).unwrap();
         prop_assert_eq!(&out.triangles, &mesh.triangles);
@@ -267,13 +266,7 @@ proptest! {
         tolerance in 0.0f32..200.0,
     ) {
         let w: Vec<f32> = (0..mesh.positions.len()).map(|i| weights[i % weights.len()]).collect();
-        let input = SimplifyInput {
-            positions: &mesh.positions,
-            normals: &mesh.normals,
-            triangles: &mesh.triangles,
-            weights: &w,
-            view_sets: None,
-        };
+        let input = input_of(&mesh, &w);
         let params = sv_params(eye, tolerance);
         let first = simplify(&input, &params).unwrap();
         let second = simplify(&input, &params).unwrap();
@@ -369,13 +362,7 @@ proptest! {
         max_px in prop_oneof![0.25f32..2.0, 2.0f32..200.0],
     ) {
         let w: Vec<f32> = (0..mesh.positions.len()).map(|i| weights[i % weights.len()]).collect();
-        let input = SimplifyInput {
-            positions: &mesh.positions,
-            normals: &mesh.normals,
-            triangles: &mesh.triangles,
-            weights: &w,
-            view_sets: None,
-        };
+        let input = input_of(&mesh, &w);
         let ppr = pixels_per_radian(1024);
         let bound = DeviationBound { max_px, region: prism };
         let params = SimplifyParams {
@@ -431,13 +418,7 @@ proptest! {
 fn deviation_bound_rejects_bad_values_and_only_adds_triangles_on_a_sphere() {
     let mesh = icosphere(3, Vec3::new(0.0, 5.0, 60.0), 4.0, &[0.3, -0.2, 0.1]);
     let w = vec![0.125f32; mesh.positions.len()];
-    let input = SimplifyInput {
-        positions: &mesh.positions,
-        normals: &mesh.normals,
-        triangles: &mesh.triangles,
-        weights: &w,
-        view_sets: None,
-    };
+    let input = input_of(&mesh, &w);
     let prism = Prism {
         centre: Vec2::ZERO,
         cell_size: 10.0,
@@ -609,13 +590,7 @@ fn cost_follows_the_paper() {
 fn closed_sphere_simplifies_to_a_valid_closed_mesh() {
     let mesh = icosphere(3, Vec3::new(0.0, 5.0, 0.0), 4.0, &[0.0]);
     let weights = vec![0.125; mesh.positions.len()];
-    let input = SimplifyInput {
-        positions: &mesh.positions,
-        normals: &mesh.normals,
-        triangles: &mesh.triangles,
-        weights: &weights,
-        view_sets: None,
-    };
+    let input = input_of(&mesh, &weights);
     let out = simplify(&input, &sv_params(Vec3::new(0.0, 5.0, 40.0), 1e9)).unwrap();
     check_log(&mesh, &weights, 1e9, &out);
     // Closed and manifold still: every edge used exactly twice.
@@ -644,13 +619,7 @@ fn heavy_border_vertices_only_slide_along_the_border() {
     let weights: Vec<f32> = (0..mesh.positions.len() as u32)
         .map(|v| if on_border(v) { 0.5 } else { 0.125 })
         .collect();
-    let input = SimplifyInput {
-        positions: &mesh.positions,
-        normals: &mesh.normals,
-        triangles: &mesh.triangles,
-        weights: &weights,
-        view_sets: None,
-    };
+    let input = input_of(&mesh, &weights);
     let out = simplify(&input, &sv_params(Vec3::new(5.0, 40.0, 5.0), 1e9)).unwrap();
     check_log(&mesh, &weights, 1e9, &out);
     check_no_fold(&mesh, &out);
@@ -687,13 +656,7 @@ fn non_manifold_input_stays_valid() {
     mesh.normals = smooth_normals(&mesh.positions, &mesh.triangles);
     let weights = vec![0.125; mesh.positions.len()];
     for tolerance in [4.5, 1e3, 1e9] {
-        let input = SimplifyInput {
-            positions: &mesh.positions,
-            normals: &mesh.normals,
-            triangles: &mesh.triangles,
-            weights: &weights,
-            view_sets: None,
-        };
+        let input = input_of(&mesh, &weights);
         let out = simplify(&input, &sv_params(Vec3::new(4.0, 30.0, 4.0), tolerance)).unwrap();
         check_log(&mesh, &weights, tolerance, &out);
         check_no_fold(&mesh, &out);
