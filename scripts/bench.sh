@@ -2,12 +2,12 @@
 # scripts/bench.sh [--full]: re-run the paper's experiments (000 §4: Tables 3–8,
 # Fig. 14) on hexbake and regenerate BENCHMARKS.md's measured tables (issue 8).
 #
-# Default run, sized for a 2-core machine: 42 min measured (BENCHMARKS.md, run
-# 20261121T123503Z): park-2m and park-4m baked along the walk only (5 and 10 min,
-# 104 cells each), 20 min player (1024², lavapipe), 8 min sweeps (6 settings × 5
-# cells, each baked and measured by the player), plus the release build. The player part dominates: per
-# scene one compare (full, frustum and hybrid per frame, plus a no-prefetch pass),
-# two renders, and on park-2m two lod compares.
+# Default run, sized for a 2-core machine: 68 min measured (BENCHMARKS.md, run
+# 20261121T140328Z, with the 0.5 px deviation bound): park-2m and park-4m baked along
+# the walk only (10–16 and 19 min, 104 cells each), 19 min player (1024², lavapipe),
+# 15 min sweeps (9 settings × 5 cells, each baked and measured by the player), plus
+# the release build. Per scene the player runs one compare (full, frustum and hybrid
+# per frame, plus a no-prefetch pass), two renders, and on park-2m two lod compares.
 # BENCH_SIZE=512x512 makes the player part ~2× faster (PSNR then differs a little).
 #   1. scripts/fetch-models.sh; cargo build --release -p pipeline -p player
 #   2. bake the BENCH_FULL_SCENES fully (default none; --full: all three parks;
