@@ -175,7 +175,7 @@ fn main() -> ExitCode {
     match run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(f) => {
-            eprintln!("error: {:#}", f.error);
+            eprintln!("error: {}", worker::error_text(f.error.as_ref()));
             ExitCode::from(f.code)
         }
     }

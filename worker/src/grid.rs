@@ -67,7 +67,6 @@ impl HexGrid {
         }
     }
 
-    /// Builds the grid, or says why the ground / cell size cannot make one.
     /// The grid a bake was made on, from its `base.pack` parameters.
     pub fn from_params(params: &format::pack::GridParams) -> Result<HexGrid, GridError> {
         HexGrid::try_new(
@@ -79,6 +78,7 @@ impl HexGrid {
         )
     }
 
+    /// Builds the grid, or says why the ground / cell size cannot make one.
     pub fn try_new(ground: Ground, cell_size: f32) -> Result<HexGrid, GridError> {
         if !(cell_size.is_finite() && cell_size > 0.0) {
             return Err(GridError::BadCellSize { cell_size });

@@ -128,7 +128,7 @@ fn main() -> ExitCode {
     match run(Cli::parse()) {
         Ok(()) => ExitCode::SUCCESS,
         Err(f) => {
-            eprintln!("error: {:#}", f.error);
+            eprintln!("error: {}", worker::error_text(f.error.as_ref()));
             ExitCode::from(f.code)
         }
     }
@@ -209,11 +209,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
                 plan.bake.edge_length_tolerance = t;
             }
             if let Some(d) = max_deviation_px {
-                if !(d.is_finite() && d >= 0.0) {
-                    return Err(bad_input(anyhow::anyhow!(
-                        "--max-deviation-px must be >= 0, found {d}"
-                    )));
-                }
+                // A bad value fails in the bake (SimplifyError::BadDeviation).
                 plan.bake.max_deviation_px = d;
             }
             let scene = plan.load_scene().map_err(bad_input)?;

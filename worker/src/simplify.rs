@@ -550,7 +550,8 @@ struct Deviation {
     /// Set by a successful `can_collapse`: (point, triangle) assignments.
     pending: Vec<(u32, u32)>,
     scratch_points: Vec<u32>,
-    scratch_fan: Vec<(u32, [u32; 3])>,
+    /// v's fan after the candidate collapse: (triangle id, corner positions).
+    scratch_fan: Vec<(u32, [Vec3; 3])>,
 }
 
 impl Deviation {
@@ -947,13 +948,14 @@ impl<'a> Collapser<'a> {
             return true;
         };
         let positions = self.input.positions;
-        // v's fan after the collapse.
+        let corners = |tri: [u32; 3]| tri.map(|x| positions[x as usize]);
+        // v's fan after the collapse, with corner positions looked up once.
         let mut fan = std::mem::take(&mut dev.scratch_fan);
         fan.clear();
         for &t in &self.fans[v as usize] {
             let tri = self.triangles[t as usize];
             if !tri.contains(&u) {
-                fan.push((t, tri));
+                fan.push((t, corners(tri)));
             }
         }
         let mut points = std::mem::take(&mut dev.scratch_points);
@@ -962,29 +964,28 @@ impl<'a> Collapser<'a> {
         for &t in &self.fans[u as usize] {
             let tri = self.triangles[t as usize];
             if !tri.contains(&v) {
-                fan.push((t, tri.map(|x| if x == u { v } else { x })));
+                fan.push((t, corners(tri.map(|x| if x == u { v } else { x }))));
             }
             points.extend_from_slice(&dev.carried[t as usize]);
         }
         dev.pending.clear();
-        let mut ok = !fan.is_empty();
-        for &p in &points {
-            if !ok {
-                break;
-            }
-            let q = positions[p as usize];
-            let mut best = (f32::INFINITY, u32::MAX);
-            for &(t, tri) in &fan {
-                let [a, b, c] = tri.map(|x| positions[x as usize]);
-                let d = point_triangle_distance_squared(q, a, b, c);
-                if d < best.0 {
-                    best = (d, t);
-                }
-            }
-            let tol = dev.tolerance[p as usize];
-            ok = best.0 <= tol * tol;
-            dev.pending.push((p, best.1));
-        }
+        let ok = !fan.is_empty()
+            && points.iter().all(|&p| {
+                let q = positions[p as usize];
+                let (d, t) = fan
+                    .iter()
+                    .map(|&(t, [a, b, c])| (point_triangle_distance_squared(q, a, b, c), t))
+                    .fold((f32::INFINITY, u32::MAX), |best, x| {
+                        if x.0 < best.0 {
+                            x
+                        } else {
+                            best
+                        }
+                    });
+                dev.pending.push((p, t));
+                let tol = dev.tolerance[p as usize];
+                d <= tol * tol
+            });
         dev.scratch_fan = fan;
         dev.scratch_points = points;
         ok

@@ -75,10 +75,11 @@ impl ProxySettings {
     }
 
     /// [`ProxySettings::new`] plus the bake's deviation bound over the cell's prism
-    /// (`bake.max_deviation_px`; 0 = none).
+    /// (`bake.max_deviation_px`; exactly 0 = none; a negative or non-finite value is
+    /// passed on, and [`simplify`] refuses it with [`SimplifyError::BadDeviation`]).
     pub fn for_cell(params: &BakeParams, cell_size: f32, prism: Prism) -> ProxySettings {
         ProxySettings {
-            deviation: (params.max_deviation_px > 0.0).then_some(DeviationBound {
+            deviation: (params.max_deviation_px != 0.0).then_some(DeviationBound {
                 max_px: params.max_deviation_px,
                 region: prism,
             }),

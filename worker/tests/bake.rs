@@ -593,3 +593,31 @@ fn tidy_selection_fills_small_holes_and_drops_small_specks() {
     assert_eq!(tidy_selection(&triangles, &mut again, 0), 0);
     assert_eq!(again, before);
 }
+
+/// 0 turns the deviation bound off; any other value reaches `simplify`, which
+/// refuses a negative or non-finite one (so a bad value is an error, never a
+/// silently unbounded bake).
+#[test]
+fn deviation_setting_is_off_only_at_zero() {
+    let prism = worker::grid::Prism {
+        centre: glam::Vec2::ZERO,
+        cell_size: 50.0,
+        min_y: 5.0,
+        max_y: 15.0,
+    };
+    let with = |d: f32| {
+        let params = BakeParams {
+            max_deviation_px: d,
+            ..BakeParams::default()
+        };
+        ProxySettings::for_cell(&params, 50.0, prism).deviation
+    };
+    assert_eq!(with(0.0), None);
+    assert_eq!(with(0.5).map(|b| (b.max_px, b.region)), Some((0.5, prism)));
+    assert_eq!(with(-1.0).map(|b| b.max_px), Some(-1.0));
+    assert!(with(f32::NAN).is_some_and(|b| b.max_px.is_nan()));
+    assert_eq!(
+        ProxySettings::new(&BakeParams::default(), 50.0).deviation,
+        None
+    );
+}
