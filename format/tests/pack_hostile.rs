@@ -318,6 +318,61 @@ fn atomic_write_replaces_and_leaves_no_temp_files() {
     ));
 }
 
+/// A run killed between creating a temp file and renaming it leaves the temp file;
+/// the next run (holding the lock) removes it when its writer on this host is gone or
+/// when it is old, and keeps everything else.
+#[test]
+fn stale_temp_files_are_removed_and_nothing_else() {
+    use format::pack::{remove_stale_temps, temp_name};
+    use std::time::{Duration, SystemTime};
+    let dir = tempfile::tempdir().unwrap();
+    let touch = |name: &str| {
+        std::fs::write(dir.path().join(name), b"x").unwrap();
+        name.to_string()
+    };
+    // No process has a pid this large (Linux caps pids at 2^22).
+    let dead_here = touch(&temp_name("1.pack", 999_999_999, 3));
+    let alive_here = touch(&temp_name("2.pack", std::process::id(), 0));
+    let other_host = touch(".3.pack.tmp-elsewhere-12-0");
+    let old_other_host = touch(".4.pack.tmp-elsewhere-12-1");
+    let legacy_old = touch(".5.pack.tmp-77-2");
+    let keep = [
+        touch("0.pack"),
+        touch(".lock"),
+        touch(".notes.tmp-x"),
+        alive_here.clone(),
+        other_host.clone(),
+    ];
+    let two_hours_ago = SystemTime::now() - Duration::from_secs(7200);
+    for name in [&old_other_host, &legacy_old] {
+        std::fs::File::options()
+            .write(true)
+            .open(dir.path().join(name))
+            .unwrap()
+            .set_modified(two_hours_ago)
+            .unwrap();
+    }
+    let removed = remove_stale_temps(dir.path(), Duration::from_secs(3600)).unwrap();
+    let mut expected: Vec<_> = [dead_here, old_other_host, legacy_old]
+        .iter()
+        .map(|n| dir.path().join(n))
+        .collect();
+    expected.sort();
+    assert_eq!(removed, expected);
+    let mut left: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    left.sort();
+    let mut keep = keep.to_vec();
+    keep.sort();
+    assert_eq!(left, keep);
+    // A missing directory has nothing to remove.
+    assert!(remove_stale_temps(&dir.path().join("none"), Duration::ZERO)
+        .unwrap()
+        .is_empty());
+}
+
 #[test]
 fn index_entry_for_file_and_verify() {
     let dir = tempfile::tempdir().unwrap();

@@ -26,16 +26,6 @@ pub enum LockError {
     },
 }
 
-fn pid_alive(pid: u32) -> bool {
-    Path::new(&format!("/proc/{pid}")).exists()
-        && !std::fs::read_to_string(format!("/proc/{pid}/status"))
-            .map(|s| {
-                s.lines()
-                    .any(|l| l.starts_with("State:") && l.contains('Z'))
-            })
-            .unwrap_or(false)
-}
-
 impl OutputLock {
     pub fn acquire(out: &Path) -> Result<OutputLock, LockError> {
         let path = out.join(".lock");
@@ -59,7 +49,7 @@ impl OutputLock {
                     let mut parts = text.split_whitespace();
                     let pid: u32 = parts.next().and_then(|p| p.parse().ok()).unwrap_or(0);
                     let holder = parts.next().unwrap_or("").to_string();
-                    if holder == host && (pid == 0 || !pid_alive(pid)) {
+                    if holder == host && (pid == 0 || !format::pack::process_alive(pid)) {
                         // Stale: its process is gone. Take it over.
                         let _ = std::fs::remove_file(&path);
                         continue;

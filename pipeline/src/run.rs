@@ -4,6 +4,7 @@
 //! packs and record atomically (worker::job), so a rerun redoes only what is missing.
 
 use crate::lock::OutputLock;
+use anyhow::Context;
 use format::fingerprint::build_fingerprint;
 use format::manifest::Plan;
 use format::pack::{BasePack, GridParams, Index, IndexEntry};
@@ -300,11 +301,32 @@ impl RunSummary {
     }
 }
 
+/// Temp files older than this are removed whoever wrote them (a pack's temp file
+/// lives for the seconds of one write).
+const STALE_TEMP_AGE: std::time::Duration = std::time::Duration::from_secs(3600);
+
+/// Takes the output lock and removes the temp files an interrupted run left in the
+/// output, its `cells/` and `jobs/` ([`format::pack::remove_stale_temps`]).
+pub fn lock_output(out: &Path) -> Result<OutputLock, RunError> {
+    std::fs::create_dir_all(out).map_err(failed)?;
+    let lock = OutputLock::acquire(out).map_err(failed)?;
+    for dir in [out.to_path_buf(), out.join("cells"), out.join("jobs")] {
+        format::pack::remove_stale_temps(&dir, STALE_TEMP_AGE)
+            .with_context(|| {
+                format!(
+                    "{}: removing temp files of an interrupted run",
+                    dir.display()
+                )
+            })
+            .map_err(failed)?;
+    }
+    Ok(lock)
+}
+
 /// Takes the output lock, (re)writes plan and base, removes job records when
 /// `force`, and returns the lock and the jobs still to bake.
 pub fn prepare(l: &Loaded, force: bool) -> Result<(OutputLock, Vec<Job>), RunError> {
-    std::fs::create_dir_all(&l.out).map_err(failed)?;
-    let lock = OutputLock::acquire(&l.out).map_err(failed)?;
+    let lock = lock_output(&l.out)?;
     write_plan_and_base(l)?;
     if force {
         for job in &l.build.jobs {
@@ -397,8 +419,7 @@ pub fn run_local_selected(
 ) -> Result<(RunSummary, Option<Partial>), RunError> {
     let start = std::time::Instant::now();
     // 1. Lock, plan and base, as for a full run.
-    std::fs::create_dir_all(&l.out).map_err(failed)?;
-    let _lock = OutputLock::acquire(&l.out).map_err(failed)?;
+    let _lock = lock_output(&l.out)?;
     write_plan_and_base(l)?;
     // 2. The selected jobs; with --force their records go.
     let selected = crate::subset::jobs_for_cells(&l.build.jobs, &selection.cells);

@@ -227,12 +227,7 @@ pub fn process_cpu_seconds() -> f64 {
 
 /// The machine's short host name (for records and lock files).
 pub fn hostname() -> String {
-    std::fs::read_to_string("/proc/sys/kernel/hostname")
-        .map(|s| s.trim().to_string())
-        .ok()
-        .filter(|s| !s.is_empty())
-        .or_else(|| std::env::var("HOSTNAME").ok())
-        .unwrap_or_else(|| "unknown".into())
+    format::pack::hostname()
 }
 
 mod hex32 {

@@ -26,7 +26,7 @@ pub use index::{Index, IndexEntry};
 pub use layout::{Codec, FileKind, SectionKind, FORMAT_VERSION};
 pub use reader::{scan, PackFile, PackScan, SectionInfo};
 pub use texture::{Texture, TextureEncoding};
-pub use writer::write_atomic;
+pub use writer::{hostname, process_alive, remove_stale_temps, temp_name, write_atomic};
 
 use std::path::Path;
 

@@ -117,6 +117,112 @@ pub fn assemble(file_kind: FileKind, sections: &[SectionData]) -> Result<Vec<u8>
 
 static TEMP_COUNTER: AtomicU64 = AtomicU64::new(0);
 
+/// What separates a temp file's target name from its owner:
+/// `.<name>.tmp-<host>-<pid>-<counter>`.
+const TEMP_MARK: &str = ".tmp-";
+
+/// This machine's host name: `/proc/sys/kernel/hostname`, else `$HOSTNAME`, else
+/// `unknown`.
+pub fn hostname() -> String {
+    std::fs::read_to_string("/proc/sys/kernel/hostname")
+        .map(|s| s.trim().to_string())
+        .ok()
+        .filter(|s| !s.is_empty())
+        .or_else(|| std::env::var("HOSTNAME").ok())
+        .unwrap_or_else(|| "unknown".into())
+}
+
+/// The host name as it appears in temp file names (characters other than
+/// `[A-Za-z0-9._]` become `_`, so the name splits unambiguously at `-`).
+fn temp_host() -> String {
+    hostname()
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '.' || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
+}
+
+/// The name of [`write_atomic`]'s temp file for `target` (a file name) written by
+/// process `pid` of this host: `.<target>.tmp-<host>-<pid>-<counter>`.
+pub fn temp_name(target: &str, pid: u32, counter: u64) -> String {
+    format!(".{target}{TEMP_MARK}{}-{pid}-{counter}", temp_host())
+}
+
+/// Whether process `pid` of this host is running (Linux `/proc`; a zombie counts as
+/// gone). Where `/proc` does not exist every pid counts as alive, which only makes
+/// callers more careful.
+pub fn process_alive(pid: u32) -> bool {
+    if !Path::new("/proc/self").exists() {
+        return true;
+    }
+    match std::fs::read_to_string(format!("/proc/{pid}/status")) {
+        Ok(s) => !s
+            .lines()
+            .any(|l| l.starts_with("State:") && l.contains('Z')),
+        Err(_) => false,
+    }
+}
+
+/// Removes the temp files [`write_atomic`] left in `dir` when its process was killed
+/// between creating the temp file and renaming it (SIGKILL, a node lost, `scancel`).
+/// A temp file is stale when its writer was on this host and is no longer running, or
+/// when it has not been modified for `max_age` (a writer on another host, or a pid
+/// reused since). Call it only while holding the output's lock. Returns the files
+/// removed; a missing `dir` has none.
+pub fn remove_stale_temps(
+    dir: &Path,
+    max_age: std::time::Duration,
+) -> std::io::Result<Vec<PathBuf>> {
+    let entries = match std::fs::read_dir(dir) {
+        Ok(e) => e,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Vec::new()),
+        Err(e) => return Err(e),
+    };
+    let host = temp_host();
+    let mut removed = Vec::new();
+    for entry in entries {
+        let entry = entry?;
+        let name = entry.file_name();
+        let name = name.to_string_lossy();
+        let Some(owner) = name
+            .strip_prefix('.')
+            .and_then(|n| n.rfind(TEMP_MARK).map(|at| &n[at + TEMP_MARK.len()..]))
+        else {
+            continue;
+        };
+        // `<host>-<pid>-<counter>`, read from the right (older files lack the host).
+        let mut parts = owner.rsplitn(3, '-');
+        let (Some(_counter), Some(pid)) = (parts.next(), parts.next()) else {
+            continue;
+        };
+        let Ok(pid) = pid.parse::<u32>() else {
+            continue;
+        };
+        let writer_gone = parts.next() == Some(host.as_str()) && !process_alive(pid);
+        let old = entry
+            .metadata()?
+            .modified()
+            .ok()
+            .and_then(|t| t.elapsed().ok())
+            .is_some_and(|age| age > max_age);
+        if writer_gone || old {
+            let path = entry.path();
+            match std::fs::remove_file(&path) {
+                Ok(()) => removed.push(path),
+                Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+                Err(e) => return Err(e),
+            }
+        }
+    }
+    removed.sort();
+    Ok(removed)
+}
+
 /// Writes `bytes` to `path` atomically: a temp file next to it, fsync, rename over
 /// `path`, fsync of the directory. Packs are never modified in place, which is what
 /// makes memory-mapping them sound (see `PackFile::open`).
@@ -132,11 +238,10 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), PackError> {
     let name = path.file_name().ok_or_else(|| PackError::Invalid {
         what: format!("{}: not a file path", path.display()),
     })?;
-    let tmp = dir.join(format!(
-        ".{}.tmp-{}-{}",
-        name.to_string_lossy(),
+    let tmp = dir.join(temp_name(
+        &name.to_string_lossy(),
         std::process::id(),
-        TEMP_COUNTER.fetch_add(1, Ordering::Relaxed)
+        TEMP_COUNTER.fetch_add(1, Ordering::Relaxed),
     ));
     let result = (|| {
         let mut f = std::fs::OpenOptions::new()
