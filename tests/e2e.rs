@@ -408,6 +408,16 @@ fn slurm_resubmits_only_the_cancelled_task() {
     let fin = sub["finalize_job"].as_str().unwrap().to_string();
     let jobs = sub["jobs"].as_array().unwrap().len();
     assert!(jobs >= 3, "{sub}");
+    // While its tasks are queued, no other run may start on that output.
+    for extra in [&[][..], &["--executor", "slurm"][..]] {
+        let o = run_tiny(&out, extra);
+        assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+        assert!(
+            stderr(&o).contains(&format!("tasks of Slurm array job {array}")),
+            "{}",
+            stderr(&o)
+        );
+    }
     assert!(Command::new("scancel")
         .arg(format!("{array}_2"))
         .status()

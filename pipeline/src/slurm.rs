@@ -106,6 +106,35 @@ fn sbatch(args: &[&str]) -> Result<String, RunError> {
     Ok(text.trim().split(';').next().unwrap_or("").to_string())
 }
 
+/// Refuses to start a run on `out` while tasks of its last Slurm submission are
+/// queued or running: they write into the output, so a second run would bake their
+/// jobs twice and could not tell their temp files from those of a killed run. The
+/// finalize job is not counted: where a task failed and the cluster lacks
+/// `kill_invalid_depend` it stays pending forever, and running it twice is harmless.
+/// Where `squeue` cannot run (no Slurm here) nothing is refused.
+pub fn refuse_while_queued(out: &Path) -> Result<(), RunError> {
+    let Ok(text) = std::fs::read(out.join("slurm/submitted.json")) else {
+        return Ok(());
+    };
+    let Ok(sub) = serde_json::from_slice::<Submission>(&text) else {
+        return Ok(());
+    };
+    let Ok(tasks) = queued(&[&sub.array_job]) else {
+        return Ok(());
+    };
+    if tasks.is_empty() {
+        return Ok(());
+    }
+    Err(failed(anyhow::anyhow!(
+        "{}: tasks of Slurm array job {} (the last submission for this output) are still queued or running ({}); wait for them (`pipeline status {}`) or cancel them (`scancel {}`), then run again",
+        out.display(),
+        sub.array_job,
+        tasks.join(" "),
+        out.display(),
+        sub.array_job
+    )))
+}
+
 /// Ids among `ids` that squeue still lists (pending, running, completing).
 pub fn queued(ids: &[&str]) -> Result<Vec<String>, RunError> {
     let out = Command::new("squeue")
