@@ -256,6 +256,17 @@ fn run_is_identical_for_one_and_two_threads() {
     for f in ["report.md", "report.json", "report.png"] {
         assert!(a.join(f).exists(), "{f} written");
     }
+    // One thread: each job has the process to itself and a CPU time of its own. Two:
+    // jobs bake side by side, and the report says it has no per-job CPU.
+    let cpu = |out: &Path| {
+        let r: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
+        r["job_cpu_s"].clone()
+    };
+    assert!(cpu(&a).as_f64().is_some_and(|s| s > 0.0), "{}", cpu(&a));
+    assert!(cpu(&b).is_null(), "{}", cpu(&b));
+    let md = std::fs::read_to_string(b.join("report.md")).unwrap();
+    assert!(md.contains("CPU not measured per job"), "{md}");
     // A second run skips every job and changes nothing.
     let o = run_tiny(&a, &["--json"]);
     assert!(o.status.success(), "{}", stderr(&o));

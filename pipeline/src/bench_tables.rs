@@ -1371,8 +1371,8 @@ fn bake_time(ctx: &Ctx) -> String {
             },
             format!("{}{}", r.cells, coverage(r)),
             fixed(r.job_wall_s, 1),
-            fixed(r.job_cpu_s, 1),
-            fixed(r.job_cpu_s / r.cells.max(1) as f64, 2),
+            fixed(r.job_cpu_s.unwrap_or(f64::NAN), 1),
+            fixed(r.job_cpu_s.unwrap_or(f64::NAN) / r.cells.max(1) as f64, 2),
         ];
         let total: f64 = r.stage_s.values().sum();
         for s in &stages {
@@ -1388,8 +1388,12 @@ fn bake_time(ctx: &Ctx) -> String {
     let _ = writeln!(
         &mut m,
         "\nJob wall and CPU are summed over the jobs' records (a resumed bake keeps the times \
-         of the run that baked each job); stage seconds are CPU summed over cells. The paper \
-         gives no preprocessing times."
+         of the run that baked each job). Job CPU is the process's CPU while the job ran: \
+         where jobs baked side by side in one process (local executor, several threads) it \
+         is not theirs, and reports now show – there; run files made before hexbake recorded \
+         that (all up to 2026-11-21) count each concurrent job's CPU too (about 2× on 2 \
+         threads). Stage seconds are \
+         summed over cells, one thread per cell. The paper gives no preprocessing times."
     );
     m
 }

@@ -88,8 +88,11 @@ pub struct Report {
     pub scene_triangles: u64,
     /// Sum over jobs of their wall time (s): the bake's cost on one worker.
     pub job_wall_s: f64,
-    /// Sum over jobs of their process CPU time (s).
-    pub job_cpu_s: f64,
+    /// Sum over jobs of their CPU time (s); `None` when a job shared its process with
+    /// other jobs (local executor with several threads: no job has a CPU time of its
+    /// own; the stage times, per cell and per thread, stand in).
+    #[serde(default)]
+    pub job_cpu_s: Option<f64>,
     /// Per-stage bake time summed over cells (s).
     pub stage_s: BTreeMap<String, f64>,
     pub storage: Storage,
@@ -132,13 +135,15 @@ pub fn build_report(out: &Path) -> anyhow::Result<Report> {
     report.storage.index_bytes = std::fs::metadata(out.join("index.pack"))
         .map(|m| m.len())
         .unwrap_or(0);
+    let (mut cpu_s, mut shared_process) = (0.0, false);
     for job in &plan.jobs {
         let Ok(text) = std::fs::read(record_path(out, job.id)) else {
             continue;
         };
         let record: JobRecord = serde_json::from_slice(&text)?;
         report.job_wall_s += record.wall_s;
-        report.job_cpu_s += record.cpu_s;
+        cpu_s += record.cpu_s;
+        shared_process |= record.shared_process;
         for c in &record.cells {
             let r = &c.report;
             let mut line = CellLine {
@@ -176,6 +181,7 @@ pub fn build_report(out: &Path) -> anyhow::Result<Report> {
             report.cell_lines.push(line);
         }
     }
+    report.job_cpu_s = (!shared_process).then_some(cpu_s);
     report.cell_lines.sort_by_key(|l| l.cell);
     report.cells = report.cell_lines.len();
     let s = &mut report.storage;
@@ -300,10 +306,16 @@ pub fn to_markdown(r: &Report) -> String {
     }
     let _ = writeln!(m, "| per cell (average) | {:.0} |", s.per_cell_bytes);
     let _ = writeln!(m, "\n## Time\n");
+    let cpu = match r.job_cpu_s {
+        Some(cpu) => format!("{cpu:.1} s CPU"),
+        None => "CPU not measured per job (jobs baked side by side in one process; the \
+                 stage times below are per cell and thread)"
+            .into(),
+    };
     let _ = writeln!(
         m,
-        "Jobs: {:.1} s wall, {:.1} s CPU (summed over jobs).\n\n| stage | seconds (summed over cells) |\n|---|---|",
-        r.job_wall_s, r.job_cpu_s
+        "Jobs: {:.1} s wall, {cpu} (summed over jobs).\n\n| stage | seconds (summed over cells) |\n|---|---|",
+        r.job_wall_s
     );
     for (k, v) in &r.stage_s {
         let _ = writeln!(m, "| {k} | {v:.2} |");

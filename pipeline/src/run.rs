@@ -176,10 +176,13 @@ pub fn bake_local(l: &Loaded, jobs: &[Job], opts: &LocalOptions) -> Result<BakeO
         done: Vec::new(),
         failed: Vec::new(),
     });
+    // With several threads, several jobs bake side by side in this process and none
+    // has a CPU time of its own.
+    let shared_process = pool.current_num_threads() > 1 && jobs.len() > 1;
     pool.install(|| {
         jobs.par_iter().for_each(|job| {
             let _ = std::fs::remove_file(error_path(&l.out, job.id));
-            let result = run_job(&l.out, job, |cell, fp| {
+            let result = run_job(&l.out, job, shared_process, |cell, fp| {
                 let r = bake_cell_pack(&l.plan, &l.scene, &l.build.grid, cell, fp);
                 bar.inc(1);
                 r

@@ -100,9 +100,15 @@ pub struct JobRecord {
     pub cells: Vec<CellRecord>,
     /// Wall time of the job in seconds.
     pub wall_s: f64,
-    /// CPU time of the whole process while the job ran, in seconds (all threads: only
-    /// the job's own when one job runs per process, as in a Slurm task).
+    /// CPU time of the whole process while the job ran, in seconds (all threads). It is
+    /// the job's own only when the job had the process to itself (`worker job`, a Slurm
+    /// task, or a local run with one thread); see `shared_process`.
     pub cpu_s: f64,
+    /// Other jobs ran in the same process at the same time (the local executor with
+    /// more than one thread), so `cpu_s` also counts theirs and is not this job's.
+    /// Records written before this field read as `false`.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub shared_process: bool,
     /// Where it ran.
     pub host: String,
 }
@@ -151,8 +157,14 @@ pub fn done_record(out: &Path, job: &Job) -> Option<JobRecord> {
 
 /// Runs one job: bakes each cell with `bake` (which returns the cell's pack content
 /// and its report), writes the packs atomically, then the record. Stops at the first
-/// failing cell, naming it.
-pub fn run_job<F>(out: &Path, job: &Job, mut bake: F) -> Result<JobRecord, JobError>
+/// failing cell, naming it. `shared_process`: other jobs run in this process at the
+/// same time (recorded, see [`JobRecord::shared_process`]).
+pub fn run_job<F>(
+    out: &Path,
+    job: &Job,
+    shared_process: bool,
+    mut bake: F,
+) -> Result<JobRecord, JobError>
 where
     F: FnMut(u32, &Fingerprint) -> Result<(CellPack, CellReport), String>,
 {
@@ -195,6 +207,7 @@ where
         cells,
         wall_s: start.elapsed().as_secs_f64(),
         cpu_s: (process_cpu_seconds() - cpu_start).max(0.0),
+        shared_process,
         host: hostname(),
     };
     let path = record_path(out, job.id);

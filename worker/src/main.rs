@@ -173,7 +173,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
             let error_file = out.join("jobs").join(format!("{id}.error"));
             let _ = std::fs::remove_file(&error_file);
             let result = pool.install(|| {
-                worker::job::run_job(&out, job, |cell, fp| {
+                worker::job::run_job(&out, job, false, |cell, fp| {
                     worker::job::bake_cell_pack(&plan, &scene, &build.grid, cell, fp)
                 })
             });
