@@ -306,16 +306,20 @@ pub fn to_markdown(r: &Report) -> String {
     }
     let _ = writeln!(m, "| per cell (average) | {:.0} |", s.per_cell_bytes);
     let _ = writeln!(m, "\n## Time\n");
-    let cpu = match r.job_cpu_s {
-        Some(cpu) => format!("{cpu:.1} s CPU"),
-        None => "CPU not measured per job (jobs baked side by side in one process; the \
-                 stage times below are per cell and thread)"
-            .into(),
+    let jobs_line = match r.job_cpu_s {
+        Some(cpu) => format!(
+            "Jobs: {:.1} s wall, {cpu:.1} s CPU (summed over jobs).",
+            r.job_wall_s
+        ),
+        None => format!(
+            "Jobs: {:.1} s wall (summed over jobs); CPU not measured per job (jobs baked side \
+             by side in one process; the stage times below are per cell and thread).",
+            r.job_wall_s
+        ),
     };
     let _ = writeln!(
         m,
-        "Jobs: {:.1} s wall, {cpu} (summed over jobs).\n\n| stage | seconds (summed over cells) |\n|---|---|",
-        r.job_wall_s
+        "{jobs_line}\n\n| stage | seconds (summed over cells) |\n|---|---|"
     );
     for (k, v) in &r.stage_s {
         let _ = writeln!(m, "| {k} | {v:.2} |");
