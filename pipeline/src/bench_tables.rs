@@ -1358,6 +1358,8 @@ fn bake_time(ctx: &Ctx) -> String {
     for b in bakes {
         ctx.bake(&b.label);
         let r = b.report.as_ref().expect("filtered");
+        // No per-job CPU (jobs shared a process) prints as –.
+        let cpu = r.job_cpu_s.unwrap_or(f64::NAN);
         let mut settings = b.set.clone();
         if let Some(c) = &b.cells {
             settings.push(format!("--cells {c}"));
@@ -1371,8 +1373,8 @@ fn bake_time(ctx: &Ctx) -> String {
             },
             format!("{}{}", r.cells, coverage(r)),
             fixed(r.job_wall_s, 1),
-            fixed(r.job_cpu_s.unwrap_or(f64::NAN), 1),
-            fixed(r.job_cpu_s.unwrap_or(f64::NAN) / r.cells.max(1) as f64, 2),
+            fixed(cpu, 1),
+            fixed(cpu / r.cells.max(1) as f64, 2),
         ];
         let total: f64 = r.stage_s.values().sum();
         for s in &stages {
@@ -1392,8 +1394,7 @@ fn bake_time(ctx: &Ctx) -> String {
          where jobs baked side by side in one process (local executor, several threads) it \
          is not theirs, and reports now show – there; run files made before hexbake recorded \
          that (all up to 2026-11-21) count each concurrent job's CPU too (about 2× on 2 \
-         threads). Stage seconds are \
-         summed over cells, one thread per cell. The paper gives no preprocessing times."
+         threads). Stage seconds are summed over cells, one thread per cell. The paper gives no preprocessing times."
     );
     m
 }

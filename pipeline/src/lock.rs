@@ -30,7 +30,7 @@ impl OutputLock {
     pub fn acquire(out: &Path) -> Result<OutputLock, LockError> {
         let path = out.join(".lock");
         let me = std::process::id();
-        let host = worker::job::hostname();
+        let host = format::pack::hostname();
         for _ in 0..2 {
             match std::fs::OpenOptions::new()
                 .write(true)

@@ -45,6 +45,11 @@ pub struct Submission {
     pub jobs: Vec<u32>,
 }
 
+/// The output's last Slurm submission, if it has a readable one.
+pub fn read_submission(out: &Path) -> Option<Submission> {
+    serde_json::from_slice(&std::fs::read(out.join("slurm/submitted.json")).ok()?).ok()
+}
+
 fn failed(e: impl Into<anyhow::Error>) -> RunError {
     RunError::Failed(e.into())
 }
@@ -113,10 +118,7 @@ fn sbatch(args: &[&str]) -> Result<String, RunError> {
 /// `kill_invalid_depend` it stays pending forever, and running it twice is harmless.
 /// Where `squeue` cannot run (no Slurm here) nothing is refused.
 pub fn refuse_while_queued(out: &Path) -> Result<(), RunError> {
-    let Ok(text) = std::fs::read(out.join("slurm/submitted.json")) else {
-        return Ok(());
-    };
-    let Ok(sub) = serde_json::from_slice::<Submission>(&text) else {
+    let Some(sub) = read_submission(out) else {
         return Ok(());
     };
     let Ok(tasks) = queued(&[&sub.array_job]) else {

@@ -3,7 +3,7 @@
 //! Slurm answers, from `squeue`.
 
 use crate::run::{error_path, PlanFile};
-use crate::slurm::{queued, Submission};
+use crate::slurm::{queued, read_submission};
 use serde::Serialize;
 use std::path::Path;
 use worker::job::done_record;
@@ -80,10 +80,8 @@ pub fn status(out: &Path) -> anyhow::Result<Status> {
             status.pending.push(job.id);
         }
     }
-    if let Ok(text) = std::fs::read(out.join("slurm/submitted.json")) {
-        if let Ok(sub) = serde_json::from_slice::<Submission>(&text) {
-            status.slurm_queued = queued(&[&sub.array_job, &sub.finalize_job]).unwrap_or_default();
-        }
+    if let Some(sub) = read_submission(out) {
+        status.slurm_queued = queued(&[&sub.array_job, &sub.finalize_job]).unwrap_or_default();
     }
     Ok(status)
 }

@@ -208,7 +208,7 @@ where
         wall_s: start.elapsed().as_secs_f64(),
         cpu_s: (process_cpu_seconds() - cpu_start).max(0.0),
         shared_process,
-        host: hostname(),
+        host: format::pack::hostname(),
     };
     let path = record_path(out, job.id);
     std::fs::create_dir_all(path.parent().unwrap()).map_err(|e| io(&path, &e))?;
@@ -236,11 +236,6 @@ pub fn process_cpu_seconds() -> f64 {
     };
     // utime and stime are fields 14 and 15 of stat, i.e. 11 and 12 after the name.
     (ticks(11) + ticks(12)) / 100.0
-}
-
-/// The machine's short host name (for records and lock files).
-pub fn hostname() -> String {
-    format::pack::hostname()
 }
 
 mod hex32 {
