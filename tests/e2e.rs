@@ -308,9 +308,22 @@ fn killed_runs_resume_to_identical_output() {
     std::fs::create_dir_all(&cells).unwrap();
     let planted = cells.join(format::pack::temp_name("1.pack", 999_999_999, 0));
     std::fs::write(&planted, b"half a pack").unwrap();
+    // Likewise the lock's temp file (the lock itself is published whole by a link).
+    let lock_tmp = out.join(format::pack::temp_name(".lock", 999_999_999, 0));
+    std::fs::write(&lock_tmp, b"999999999 ").unwrap();
     let o = run_tiny(&out, &[]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert_same_bake(&reference, &out);
+    for d in [out.clone(), cells, out.join("jobs")] {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let name = e.unwrap().file_name().to_string_lossy().into_owned();
+            assert!(
+                !name.contains(".tmp-") && name != ".lock",
+                "{}: {name} left behind",
+                d.display()
+            );
+        }
+    }
 }
 
 #[test]
@@ -319,17 +332,17 @@ fn a_second_run_on_the_same_output_is_refused() {
     let out = dir.path().join("o");
     std::fs::create_dir_all(&out).unwrap();
     // This test process is alive: its pid in the lock means "held".
-    let host = std::fs::read_to_string("/proc/sys/kernel/hostname").unwrap();
+    let host = format::pack::hostname();
     std::fs::write(
         out.join(".lock"),
-        format!("{} {}\n", std::process::id(), host.trim()),
+        format!("{} {host}\n", std::process::id()),
     )
     .unwrap();
     let o = run_tiny(&out, &[]);
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
     assert!(stderr(&o).contains("holds this output"), "{}", stderr(&o));
     // A lock left by a dead process is taken over.
-    std::fs::write(out.join(".lock"), format!("999999999 {}\n", host.trim())).unwrap();
+    std::fs::write(out.join(".lock"), format!("999999999 {host}\n")).unwrap();
     let o = run_tiny(&out, &[]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(!out.join(".lock").exists(), "lock released");

@@ -1,10 +1,16 @@
 //! The output directory's lock: one `pipeline run` at a time per output directory.
-//! `<out>/.lock` holds the holder's pid and host; it is created with `create_new`
-//! (atomic), removed on drop, and a lock left by a dead process on this host is
-//! taken over (a crash must not block the next run).
+//! `<out>/.lock` holds the holder's pid and host. It is published whole: the text
+//! is written to a temp file first, which is then hard-linked to `.lock` (the link
+//! fails atomically when `.lock` exists). A SIGKILL at any moment therefore leaves
+//! either no lock or a complete one, never a torn one, and a lock left by a dead
+//! process on this host is taken over (a crash must not block the next run). The
+//! temp file a kill may leave is swept with the other stale temp files.
+//! On a file system without hard links the lock is created with `create_new` and
+//! written in one `write`.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
+use std::time::Duration;
 
 #[derive(Debug)]
 pub struct OutputLock {
@@ -19,6 +25,8 @@ pub enum LockError {
         pid: u32,
         host: String,
     },
+    #[error("{path}: a lock file is being written right now (its text {text:?} is not yet `<pid> <host>`); if no `pipeline run` uses this output, remove it")]
+    Unreadable { path: PathBuf, text: String },
     #[error("{path}: cannot create the lock file: {source}")]
     Io {
         path: PathBuf,
@@ -26,38 +34,105 @@ pub enum LockError {
     },
 }
 
+/// A lock whose text does not parse and that has not changed for this long was torn
+/// by a kill (only possible on the `create_new` fallback, or from an older hexbake).
+const TORN_LOCK_AGE: Duration = Duration::from_secs(10);
+
+/// What an existing lock file says about its holder.
+enum Holder {
+    /// `pid` on `host`.
+    Process { pid: u32, host: String },
+    /// The text does not parse; `age` since it was last modified.
+    Torn { text: String, age: Duration },
+}
+
+fn read_holder(path: &Path) -> std::io::Result<Holder> {
+    let text = std::fs::read_to_string(path)?;
+    let mut parts = text.split_whitespace();
+    let pid = parts.next().and_then(|p| p.parse::<u32>().ok());
+    let host = parts.next();
+    Ok(match (pid, host, parts.next()) {
+        (Some(pid), Some(host), None) if pid != 0 => Holder::Process {
+            pid,
+            host: host.to_string(),
+        },
+        _ => {
+            let age = std::fs::metadata(path)?
+                .modified()?
+                .elapsed()
+                .unwrap_or_default();
+            Holder::Torn { text, age }
+        }
+    })
+}
+
+/// Creates `path` holding `text`, failing with `AlreadyExists` when it exists. The
+/// file appears with all of its text or not at all (see the module doc).
+fn create_whole(path: &Path, text: &str) -> std::io::Result<()> {
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let name = path.file_name().unwrap_or_default().to_string_lossy();
+    static COUNTER: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+    let n = COUNTER.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let tmp = dir.join(format::pack::temp_name(&name, std::process::id(), n));
+    let linked = (|| {
+        let mut f = std::fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(&tmp)?;
+        f.write_all(text.as_bytes())?;
+        drop(f);
+        std::fs::hard_link(&tmp, path)
+    })();
+    let _ = std::fs::remove_file(&tmp);
+    match linked {
+        Err(e) if e.kind() != std::io::ErrorKind::AlreadyExists => {
+            // No hard links here (or the temp file could not be made): one write.
+            let mut f = std::fs::OpenOptions::new()
+                .write(true)
+                .create_new(true)
+                .open(path)?;
+            f.write_all(text.as_bytes())
+        }
+        other => other,
+    }
+}
+
 impl OutputLock {
     pub fn acquire(out: &Path) -> Result<OutputLock, LockError> {
         let path = out.join(".lock");
         let me = std::process::id();
         let host = format::pack::hostname();
-        for _ in 0..2 {
-            match std::fs::OpenOptions::new()
-                .write(true)
-                .create_new(true)
-                .open(&path)
-            {
-                Ok(mut f) => {
-                    writeln!(f, "{me} {host}").map_err(|source| LockError::Io {
-                        path: path.clone(),
-                        source,
-                    })?;
-                    return Ok(OutputLock { path });
-                }
+        let io = |path: &Path| {
+            let path = path.to_path_buf();
+            move |source| LockError::Io { path, source }
+        };
+        for _ in 0..3 {
+            match create_whole(&path, &format!("{me} {host}\n")) {
+                Ok(()) => return Ok(OutputLock { path }),
                 Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
-                    let text = std::fs::read_to_string(&path).unwrap_or_default();
-                    let mut parts = text.split_whitespace();
-                    let pid: u32 = parts.next().and_then(|p| p.parse().ok()).unwrap_or(0);
-                    let holder = parts.next().unwrap_or("").to_string();
-                    if holder == host && (pid == 0 || !format::pack::process_alive(pid)) {
-                        // Stale: its process is gone. Take it over.
-                        let _ = std::fs::remove_file(&path);
-                        continue;
+                    let holder = match read_holder(&path) {
+                        Ok(h) => h,
+                        // Released between our attempt and the read: try again.
+                        Err(e) if e.kind() == std::io::ErrorKind::NotFound => continue,
+                        Err(e) => return Err(io(&path)(e)),
+                    };
+                    let stale = match &holder {
+                        Holder::Process { pid, host: h } => {
+                            *h == host && !format::pack::process_alive(*pid)
+                        }
+                        Holder::Torn { age, .. } => *age >= TORN_LOCK_AGE,
+                    };
+                    if stale {
+                        // Its process is gone. Take it over.
+                        match std::fs::remove_file(&path) {
+                            Ok(()) => continue,
+                            Err(e) if e.kind() == std::io::ErrorKind::NotFound => continue,
+                            Err(e) => return Err(io(&path)(e)),
+                        }
                     }
-                    return Err(LockError::Held {
-                        path,
-                        pid,
-                        host: holder,
+                    return Err(match holder {
+                        Holder::Process { pid, host } => LockError::Held { path, pid, host },
+                        Holder::Torn { text, .. } => LockError::Unreadable { path, text },
                     });
                 }
                 Err(source) => return Err(LockError::Io { path, source }),
@@ -73,5 +148,76 @@ impl OutputLock {
 impl Drop for OutputLock {
     fn drop(&mut self) {
         let _ = std::fs::remove_file(&self.path);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lock_is_exclusive_and_released() {
+        let dir = tempfile::tempdir().unwrap();
+        let a = OutputLock::acquire(dir.path()).unwrap();
+        let text = std::fs::read_to_string(dir.path().join(".lock")).unwrap();
+        assert_eq!(
+            text,
+            format!("{} {}\n", std::process::id(), format::pack::hostname())
+        );
+        assert!(matches!(
+            OutputLock::acquire(dir.path()),
+            Err(LockError::Held { .. })
+        ));
+        drop(a);
+        assert!(!dir.path().join(".lock").exists());
+        // Nothing but the lock was ever left in the directory.
+        let _b = OutputLock::acquire(dir.path()).unwrap();
+        let names: Vec<_> = std::fs::read_dir(dir.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        assert_eq!(names, vec![std::ffi::OsString::from(".lock")]);
+    }
+
+    #[test]
+    fn torn_locks_block_while_fresh_and_are_taken_over_when_old() {
+        let dir = tempfile::tempdir().unwrap();
+        let lock = dir.path().join(".lock");
+        // What a kill between writing the pid and the host used to leave.
+        for torn in ["", "3313", "3313 ", "0 host", "x y"] {
+            std::fs::write(&lock, torn).unwrap();
+            assert!(
+                matches!(
+                    OutputLock::acquire(dir.path()),
+                    Err(LockError::Unreadable { .. })
+                ),
+                "{torn:?}"
+            );
+            let old = std::time::SystemTime::now() - TORN_LOCK_AGE - Duration::from_secs(1);
+            std::fs::File::options()
+                .write(true)
+                .open(&lock)
+                .unwrap()
+                .set_modified(old)
+                .unwrap();
+            let l = OutputLock::acquire(dir.path()).unwrap();
+            drop(l);
+        }
+    }
+
+    #[test]
+    fn a_dead_holder_here_is_taken_over_a_live_or_remote_one_is_not() {
+        let dir = tempfile::tempdir().unwrap();
+        let lock = dir.path().join(".lock");
+        let host = format::pack::hostname();
+        std::fs::write(&lock, format!("999999999 {host}\n")).unwrap();
+        drop(OutputLock::acquire(dir.path()).unwrap());
+        std::fs::write(&lock, format!("{} {host}\n", std::process::id())).unwrap();
+        assert!(OutputLock::acquire(dir.path()).is_err());
+        std::fs::write(&lock, "999999999 some-other-node\n").unwrap();
+        assert!(matches!(
+            OutputLock::acquire(dir.path()),
+            Err(LockError::Held { pid: 999999999, .. })
+        ));
     }
 }

@@ -121,14 +121,17 @@ static TEMP_COUNTER: AtomicU64 = AtomicU64::new(0);
 /// `.<name>.tmp-<host>-<pid>-<counter>`.
 const TEMP_MARK: &str = ".tmp-";
 
-/// This machine's host name: `/proc/sys/kernel/hostname`, else `$HOSTNAME`, else
-/// `unknown`.
+/// This machine's host name (non-empty, no white space): `/proc/sys/kernel/hostname`,
+/// else `$HOSTNAME`, else `unknown`.
 pub fn hostname() -> String {
+    let usable = |s: String| {
+        let s = s.trim().to_string();
+        (!s.is_empty() && !s.contains(char::is_whitespace)).then_some(s)
+    };
     std::fs::read_to_string("/proc/sys/kernel/hostname")
-        .map(|s| s.trim().to_string())
         .ok()
-        .filter(|s| !s.is_empty())
-        .or_else(|| std::env::var("HOSTNAME").ok())
+        .and_then(usable)
+        .or_else(|| std::env::var("HOSTNAME").ok().and_then(usable))
         .unwrap_or_else(|| "unknown".into())
 }
 
