@@ -647,3 +647,21 @@ fn raw_sections_are_zero_copy_and_aligned() {
         assert_eq!(BasePack::decode(&pack).unwrap(), base);
     }
 }
+
+/// `create_new_atomic` creates a file whole, never replaces one, and leaves no temp
+/// file either way.
+#[test]
+fn create_new_atomic_creates_whole_and_never_replaces() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join(".lock");
+    format::pack::create_new_atomic(&path, b"12 host\n").unwrap();
+    assert_eq!(std::fs::read(&path).unwrap(), b"12 host\n");
+    let e = format::pack::create_new_atomic(&path, b"34 other\n").unwrap_err();
+    assert_eq!(e.kind(), std::io::ErrorKind::AlreadyExists);
+    assert_eq!(std::fs::read(&path).unwrap(), b"12 host\n", "not replaced");
+    let names: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(names, vec![std::ffi::OsString::from(".lock")]);
+}

@@ -1,14 +1,11 @@
 //! The output directory's lock: one `pipeline run` at a time per output directory.
-//! `<out>/.lock` holds the holder's pid and host. It is published whole: the text
-//! is written to a temp file first, which is then hard-linked to `.lock` (the link
-//! fails atomically when `.lock` exists). A SIGKILL at any moment therefore leaves
-//! either no lock or a complete one, never a torn one, and a lock left by a dead
-//! process on this host is taken over (a crash must not block the next run). The
-//! temp file a kill may leave is swept with the other stale temp files.
-//! On a file system without hard links the lock is created with `create_new` and
-//! written in one `write`.
+//! `<out>/.lock` holds the holder's pid and host. It is published whole
+//! ([`format::pack::create_new_atomic`]: a temp file hard-linked to `.lock`, which
+//! fails when `.lock` exists), so a SIGKILL at any moment leaves either no lock or a
+//! complete one, never a torn one. A lock left by a dead process on this host is
+//! taken over (a crash must not block the next run). The temp file a kill may leave
+//! is swept with the other stale temp files.
 
-use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
@@ -66,37 +63,6 @@ fn read_holder(path: &Path) -> std::io::Result<Holder> {
     })
 }
 
-/// Creates `path` holding `text`, failing with `AlreadyExists` when it exists. The
-/// file appears with all of its text or not at all (see the module doc).
-fn create_whole(path: &Path, text: &str) -> std::io::Result<()> {
-    let dir = path.parent().unwrap_or(Path::new("."));
-    let name = path.file_name().unwrap_or_default().to_string_lossy();
-    static COUNTER: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
-    let n = COUNTER.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-    let tmp = dir.join(format::pack::temp_name(&name, std::process::id(), n));
-    let linked = (|| {
-        let mut f = std::fs::OpenOptions::new()
-            .write(true)
-            .create_new(true)
-            .open(&tmp)?;
-        f.write_all(text.as_bytes())?;
-        drop(f);
-        std::fs::hard_link(&tmp, path)
-    })();
-    let _ = std::fs::remove_file(&tmp);
-    match linked {
-        Err(e) if e.kind() != std::io::ErrorKind::AlreadyExists => {
-            // No hard links here (or the temp file could not be made): one write.
-            let mut f = std::fs::OpenOptions::new()
-                .write(true)
-                .create_new(true)
-                .open(path)?;
-            f.write_all(text.as_bytes())
-        }
-        other => other,
-    }
-}
-
 impl OutputLock {
     pub fn acquire(out: &Path) -> Result<OutputLock, LockError> {
         let path = out.join(".lock");
@@ -107,7 +73,7 @@ impl OutputLock {
             move |source| LockError::Io { path, source }
         };
         for _ in 0..3 {
-            match create_whole(&path, &format!("{me} {host}\n")) {
+            match format::pack::create_new_atomic(&path, format!("{me} {host}\n").as_bytes()) {
                 Ok(()) => return Ok(OutputLock { path }),
                 Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
                     let holder = match read_holder(&path) {

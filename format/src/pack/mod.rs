@@ -26,7 +26,9 @@ pub use index::{Index, IndexEntry};
 pub use layout::{Codec, FileKind, SectionKind, FORMAT_VERSION};
 pub use reader::{scan, PackFile, PackScan, SectionInfo};
 pub use texture::{Texture, TextureEncoding};
-pub use writer::{hostname, process_alive, remove_stale_temps, temp_name, write_atomic};
+pub use writer::{
+    create_new_atomic, hostname, process_alive, remove_stale_temps, temp_name, write_atomic,
+};
 
 use std::path::Path;
 

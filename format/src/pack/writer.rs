@@ -226,6 +226,40 @@ pub fn remove_stale_temps(
     Ok(removed)
 }
 
+/// `path`'s directory and this process's next temp file for it there
+/// ([`temp_name`]); `None` when `path` names no file.
+fn temp_file_for(path: &Path) -> Option<(PathBuf, PathBuf)> {
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let name = path.file_name()?.to_string_lossy();
+    let tmp = dir.join(temp_name(
+        &name,
+        std::process::id(),
+        TEMP_COUNTER.fetch_add(1, Ordering::Relaxed),
+    ));
+    Some((dir, tmp))
+}
+
+/// Creates the new file `tmp` holding `bytes`, synced to disk.
+fn write_synced(tmp: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    let mut f = std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(tmp)?;
+    f.write_all(bytes)?;
+    f.sync_all()
+}
+
+/// Makes a rename or link in `dir` durable. Directories cannot be opened on every
+/// platform; where they can, sync them.
+fn sync_dir(dir: &Path) {
+    if let Ok(d) = std::fs::File::open(dir) {
+        let _ = d.sync_all();
+    }
+}
+
 /// Writes `bytes` to `path` atomically: a temp file next to it, fsync, rename over
 /// `path`, fsync of the directory. Packs are never modified in place, which is what
 /// makes memory-mapping them sound (see `PackFile::open`).
@@ -234,37 +268,46 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), PackError> {
         let file = file.to_path_buf();
         move |source| PackError::Io { file, source }
     };
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    let name = path.file_name().ok_or_else(|| PackError::Invalid {
+    let (dir, tmp) = temp_file_for(path).ok_or_else(|| PackError::Invalid {
         what: format!("{}: not a file path", path.display()),
     })?;
-    let tmp = dir.join(temp_name(
-        &name.to_string_lossy(),
-        std::process::id(),
-        TEMP_COUNTER.fetch_add(1, Ordering::Relaxed),
-    ));
     let result = (|| {
-        let mut f = std::fs::OpenOptions::new()
-            .write(true)
-            .create_new(true)
-            .open(&tmp)
-            .map_err(io(&tmp))?;
-        f.write_all(bytes).map_err(io(&tmp))?;
-        f.sync_all().map_err(io(&tmp))?;
-        drop(f);
+        write_synced(&tmp, bytes).map_err(io(&tmp))?;
         std::fs::rename(&tmp, path).map_err(io(path))?;
-        // Make the rename itself durable. Directories cannot be opened on every
-        // platform; where they can, sync them.
-        if let Ok(d) = std::fs::File::open(&dir) {
-            let _ = d.sync_all();
-        }
+        sync_dir(&dir);
         Ok(())
     })();
     if result.is_err() {
         let _ = std::fs::remove_file(&tmp);
     }
     result
+}
+
+/// Creates the new file `path` holding `bytes`, failing with `AlreadyExists` when it
+/// exists (like `create_new`), and atomically: the file appears with all of `bytes`
+/// or not at all, whenever the process is killed. A temp file is written as for
+/// [`write_atomic`] and hard-linked to `path` (a link never replaces a file). On a
+/// file system without hard links it falls back to `create_new` and one `write_all`.
+pub fn create_new_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    let (dir, tmp) = temp_file_for(path).ok_or_else(|| {
+        std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            format!("{}: not a file path", path.display()),
+        )
+    })?;
+    let linked = write_synced(&tmp, bytes).and_then(|()| std::fs::hard_link(&tmp, path));
+    let _ = std::fs::remove_file(&tmp);
+    match linked {
+        Ok(()) => {
+            sync_dir(&dir);
+            Ok(())
+        }
+        Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => Err(e),
+        // No hard links here (or no temp file could be made): one write.
+        Err(_) => std::fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(path)?
+            .write_all(bytes),
+    }
 }
