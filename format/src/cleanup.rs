@@ -3,8 +3,8 @@
 //! normals and albedo.
 //!
 //! [`finish_mesh`] reads as its steps:
-//! 1. reject NaN/inf coordinates (naming the vertex) and out-of-range indices (naming
-//!    the face);
+//! 1. reject NaN/inf coordinates and coordinates beyond ±[`MAX_MODEL_COORDINATE`]
+//!    (naming the vertex) and out-of-range indices (naming the face);
 //! 2. weld vertices whose position is bit-identical (after `-0.0 → 0.0`) *and* whose
 //!    file colour is equal — a colour seam stays a seam; new indices follow first use,
 //!    so the result is deterministic (the hash map is only looked up, never iterated);
@@ -19,6 +19,12 @@
 
 use crate::mesh::Mesh;
 use std::collections::{HashMap, HashSet};
+
+/// Largest absolute coordinate a model file may have, in the file's units (10¹²).
+/// Normalising works in f64 and would take more, but f32 differences and squared
+/// distances of such coordinates (up to ~10²⁵, far below f32's 3.4·10³⁸) stay finite
+/// in every kernel, and no real model needs more: a city in micrometres is 10¹⁰.
+pub const MAX_MODEL_COORDINATE: f32 = 1.0e12;
 
 /// A mesh as a loader reads it, before clean-up.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -35,6 +41,8 @@ pub struct RawMesh {
 pub enum CleanupError {
     #[error("vertex {vertex} has a non-finite coordinate {position:?}")]
     NonFinite { vertex: usize, position: [f32; 3] },
+    #[error("vertex {vertex} has a coordinate beyond ±{MAX_MODEL_COORDINATE}: {position:?}")]
+    TooFar { vertex: usize, position: [f32; 3] },
     /// `face` counts triangles after the loader's triangulation.
     #[error("face {face} uses vertex {index}, but there are only {vertex_count} vertices")]
     IndexOutOfRange {
@@ -98,6 +106,16 @@ pub fn finish_mesh(raw: RawMesh) -> Result<(Mesh, CleanupStats), CleanupError> {
         .find(|(_, p)| !p.iter().all(|x| x.is_finite()))
     {
         return Err(CleanupError::NonFinite {
+            vertex,
+            position: *p,
+        });
+    }
+    if let Some((vertex, p)) = positions
+        .iter()
+        .enumerate()
+        .find(|(_, p)| p.iter().any(|x| x.abs() > MAX_MODEL_COORDINATE))
+    {
+        return Err(CleanupError::TooFar {
             vertex,
             position: *p,
         });

@@ -36,6 +36,25 @@
 //!     output: "../out/demo",                           // optional, default ../out/<name>
 //! )
 //! ```
+//!
+//! **Limits** (issue 19, "Trust nothing read from disk"). A manifest that validates
+//! can be baked: besides types and ranges, the validator refuses values that f32
+//! rasterising, the hex grid or memory cannot handle, each with file:line:column of
+//! the field.
+//!
+//! | what | limit |
+//! |---|---|
+//! | the file | at most [`MAX_MANIFEST_BYTES`] (16 MiB) and brackets nested at most [`MAX_NESTING`] (64) deep |
+//! | every coordinate: `ground.min`/`max`, an instance's `translation` | \|x\| ≤ [`MAX_COORDINATE`] (10⁶ units) |
+//! | lengths: `target_height` (× `scale` for an instance), `cells.cell_size`, eye heights | ≤ [`MAX_COORDINATE`]; object heights ≥ [`MIN_LENGTH`] (10⁻³ units) |
+//! | the grid: `cells.cell_size` on the ground | at most [`MAX_CELLS`] (1,000,000) cells |
+//! | tints | components in 0..=[`MAX_TINT`] (100) |
+//!
+//! 10⁶ units keep f32 precise to 0.06 units or better anywhere in a scene (its spacing
+//! at 10⁶ is 2⁻⁴), and squared distances far from overflow; a million cells is 40
+//! times the paper's largest park grid (22 × 24) and bounds the plan, the job
+//! journal and the index. `pipeline run --set` checks its overrides with the same
+//! functions ([`check_ground`], [`check_cells`]).
 
 use crate::field_positions::{FieldPositions, TextPosition};
 use crate::scene::Ground;
@@ -209,10 +228,23 @@ impl ManifestError {
 
 /// Reads, parses and validates the manifest at `path`.
 pub fn parse_manifest(path: &Path) -> Result<Plan, ManifestError> {
-    let text = std::fs::read_to_string(path).map_err(|source| ManifestError::Read {
+    use std::io::Read;
+    let read_error = |source| ManifestError::Read {
         path: path.to_path_buf(),
         source,
-    })?;
+    };
+    // Read at most one byte past the limit, so a huge file is refused, not read.
+    let file = std::fs::File::open(path).map_err(read_error)?;
+    let mut text = String::new();
+    file.take(MAX_MANIFEST_BYTES + 1)
+        .read_to_string(&mut text)
+        .map_err(read_error)?;
+    if text.len() as u64 > MAX_MANIFEST_BYTES {
+        return Err(read_error(std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            format!("the file is larger than the manifest limit of {MAX_MANIFEST_BYTES} bytes"),
+        )));
+    }
     parse_manifest_str(&text, path)
 }
 
@@ -223,6 +255,16 @@ pub fn parse_manifest_str(text: &str, path: &Path) -> Result<Plan, ManifestError
     let options =
         ron::Options::default().with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME);
     let positions = FieldPositions::scan(text);
+    if let Some(at) = positions.too_deep() {
+        // Refused before ron sees it: deep nesting is what exhausts parsers.
+        return Err(ManifestError::At {
+            path: path.to_path_buf(),
+            line: at.line,
+            column: at.column,
+            field: positions.path_at(at).unwrap_or_default(),
+            message: format!("brackets nested more than {MAX_NESTING} deep"),
+        });
+    }
     let raw: RawManifest = options
         .from_str(text)
         .map_err(|e| ron_error(path, &positions, e))?;
@@ -236,6 +278,143 @@ pub fn parse_manifest_str(text: &str, path: &Path) -> Result<Plan, ManifestError
 
 /// Default number of cells baked by one job.
 pub const DEFAULT_CELLS_PER_JOB: u32 = 4;
+
+/// Largest manifest file read, in bytes (16 MiB; the paper's 8M park is 2 KB).
+pub const MAX_MANIFEST_BYTES: u64 = 16 << 20;
+
+/// Deepest bracket nesting a manifest may have (a real one nests about 5 deep).
+pub const MAX_NESTING: usize = crate::field_positions::MAX_NESTING;
+
+/// Largest absolute value of any coordinate or length in a manifest, in scene units.
+pub const MAX_COORDINATE: f32 = 1.0e6;
+
+/// Smallest object height (`target_height`, times `scale` for an instance).
+pub const MIN_LENGTH: f32 = 1.0e-3;
+
+/// Most cells a grid may have.
+pub const MAX_CELLS: u64 = 1_000_000;
+
+/// Largest tint component.
+pub const MAX_TINT: f32 = 100.0;
+
+/// A value outside the manifest's rules: the dotted path of the field and what is
+/// wrong with it. The manifest validator turns it into a positioned
+/// [`ManifestError`]; `pipeline run --set` into an override error.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("`{field}` {message}")]
+pub struct Violation {
+    pub field: String,
+    pub message: String,
+}
+
+impl Violation {
+    fn new(field: &str, message: String) -> Violation {
+        Violation {
+            field: field.to_string(),
+            message,
+        }
+    }
+}
+
+/// Checks the ground rectangle: finite, within ±[`MAX_COORDINATE`], `min < max` on
+/// both axes.
+pub fn check_ground(ground: &Ground) -> Result<(), Violation> {
+    for (field, v) in [("ground.min", ground.min), ("ground.max", ground.max)] {
+        for x in v {
+            check_coordinate(field, x)?;
+        }
+    }
+    if !(ground.min[0] < ground.max[0] && ground.min[1] < ground.max[1]) {
+        return Err(Violation::new(
+            "ground.max",
+            format!(
+                "must exceed `ground.min` on both axes, found min {:?} max {:?}",
+                ground.min, ground.max
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Checks the cell parameters on a (checked) ground: a cell size > 0 and at most
+/// [`MAX_COORDINATE`] whose grid has at most [`MAX_CELLS`] cells, and eye heights with
+/// `0 <= min_eye_height <= max_eye_height <= MAX_COORDINATE`.
+pub fn check_cells(ground: &Ground, cells: &CellParams) -> Result<(), Violation> {
+    let c = cells.cell_size;
+    if !(c.is_finite() && c > 0.0) {
+        return Err(Violation::new(
+            "cells.cell_size",
+            format!("must be > 0, found {c}"),
+        ));
+    }
+    if c > MAX_COORDINATE {
+        return Err(Violation::new(
+            "cells.cell_size",
+            format!("must be at most {MAX_COORDINATE} units, found {c}"),
+        ));
+    }
+    match ground.hex_grid_dims(c) {
+        Some([n_cols, n_rows]) if n_cols.saturating_mul(n_rows) <= MAX_CELLS => {}
+        dims => {
+            let found = dims.map_or("too many".to_string(), |[n, m]| {
+                format!("{n} × {m} = {}", n.saturating_mul(m))
+            });
+            return Err(Violation::new(
+                "cells.cell_size",
+                format!(
+                    "is too small for the ground ({:?} to {:?}): its grid would have \
+                     {found} cells, more than {MAX_CELLS}",
+                    ground.min, ground.max
+                ),
+            ));
+        }
+    }
+    let (min, max) = (cells.min_eye_height, cells.max_eye_height);
+    for (field, v) in [("cells.min_eye_height", min), ("cells.max_eye_height", max)] {
+        if !v.is_finite() {
+            return Err(Violation::new(
+                field,
+                format!("must be a finite number, found {v}"),
+            ));
+        }
+        if v > MAX_COORDINATE {
+            return Err(Violation::new(
+                field,
+                format!("must be at most {MAX_COORDINATE} units, found {v}"),
+            ));
+        }
+    }
+    if min < 0.0 {
+        return Err(Violation::new(
+            "cells.min_eye_height",
+            format!("must be >= 0 (eyes above the ground), found {min}"),
+        ));
+    }
+    if min > max {
+        return Err(Violation::new(
+            "cells.max_eye_height",
+            format!("must be >= `min_eye_height` ({min}), found {max}"),
+        ));
+    }
+    Ok(())
+}
+
+/// A coordinate: finite and within ±[`MAX_COORDINATE`].
+fn check_coordinate(field: &str, v: f32) -> Result<f32, Violation> {
+    if !v.is_finite() {
+        return Err(Violation::new(
+            field,
+            format!("must be a finite number, found {v}"),
+        ));
+    }
+    if v.abs() > MAX_COORDINATE {
+        return Err(Violation::new(
+            field,
+            format!("must be within ±{MAX_COORDINATE} units, found {v}"),
+        ));
+    }
+    Ok(v)
+}
 
 // ---------------------------------------------------------------------------------
 // Stage 1: the raw mirror of the file.
@@ -465,6 +644,31 @@ impl Validator<'_> {
         }
     }
 
+    /// A [`Violation`] of a shared rule, at its field.
+    fn violation(&self, v: Violation) -> ManifestError {
+        self.error(&v.field, v.message)
+    }
+
+    /// An object height: > 0, at least [`MIN_LENGTH`], at most [`MAX_COORDINATE`].
+    fn height(&self, field: &str, v: f32) -> Result<f32, ManifestError> {
+        let v = self.positive(field, v)?;
+        if !(MIN_LENGTH..=MAX_COORDINATE).contains(&v) {
+            return Err(self.error(
+                field,
+                format!("must be in {MIN_LENGTH}..={MAX_COORDINATE} units, found {v}"),
+            ));
+        }
+        Ok(v)
+    }
+
+    /// A position: finite components within ±[`MAX_COORDINATE`].
+    fn coordinates3(&self, field: &str, v: [f32; 3]) -> Result<[f32; 3], ManifestError> {
+        for x in v {
+            check_coordinate(field, x).map_err(|e| self.violation(e))?;
+        }
+        Ok(v)
+    }
+
     fn finite(&self, field: &str, v: f32) -> Result<f32, ManifestError> {
         if v.is_finite() {
             Ok(v)
@@ -497,12 +701,14 @@ impl Validator<'_> {
     }
 
     fn tint(&self, field: &str, v: [f32; 3]) -> Result<[f32; 3], ManifestError> {
-        if v.iter().all(|x| x.is_finite() && *x >= 0.0) {
+        if v.iter()
+            .all(|x| x.is_finite() && (0.0..=MAX_TINT).contains(x))
+        {
             Ok(v)
         } else {
             Err(self.error(
                 field,
-                format!("must have finite components >= 0, found {v:?}"),
+                format!("must have components in 0..={MAX_TINT}, found {v:?}"),
             ))
         }
     }
@@ -575,23 +781,11 @@ impl Validator<'_> {
         };
 
         // Ground rectangle.
-        for k in 0..2 {
-            self.finite("ground.min", raw.ground.min[k])?;
-            self.finite("ground.max", raw.ground.max[k])?;
-        }
-        if !(raw.ground.min[0] < raw.ground.max[0] && raw.ground.min[1] < raw.ground.max[1]) {
-            return Err(self.error(
-                "ground.max",
-                format!(
-                    "must exceed `ground.min` on both axes, found min {:?} max {:?}",
-                    raw.ground.min, raw.ground.max
-                ),
-            ));
-        }
         let ground = Ground {
             min: raw.ground.min,
             max: raw.ground.max,
         };
+        check_ground(&ground).map_err(|e| self.violation(e))?;
 
         // Scene.
         let scene = match raw.scene {
@@ -607,7 +801,7 @@ impl Validator<'_> {
                         pre_rotation_deg: self
                             .finite3(&f("pre_rotation_deg"), m.pre_rotation_deg)?,
                         count: m.count,
-                        target_height: self.positive(&f("target_height"), m.target_height)?,
+                        target_height: self.height(&f("target_height"), m.target_height)?,
                     });
                 }
                 if models.iter().all(|m| m.count == 0) {
@@ -638,37 +832,41 @@ impl Validator<'_> {
                 let mut instances = Vec::with_capacity(list.len());
                 for (i, inst) in list.into_iter().enumerate() {
                     let f = |name: &str| format!("scene[{i}].{name}");
-                    instances.push(InstanceSpec {
+                    let spec = InstanceSpec {
                         model: self.model(&f("model"), inst.model)?,
                         pre_rotation_deg: self
                             .finite3(&f("pre_rotation_deg"), inst.pre_rotation_deg)?,
-                        target_height: self.positive(&f("target_height"), inst.target_height)?,
-                        translation: self.finite3(&f("translation"), inst.translation)?,
+                        target_height: self.height(&f("target_height"), inst.target_height)?,
+                        translation: self.coordinates3(&f("translation"), inst.translation)?,
                         rotation_y_deg: self.finite(&f("rotation_y_deg"), inst.rotation_y_deg)?,
                         scale: self.positive(&f("scale"), inst.scale)?,
                         tint: self.tint(&f("tint"), inst.tint)?,
-                    });
+                    };
+                    // The placed object's height, in f64 so the product cannot overflow.
+                    let height = f64::from(spec.target_height) * f64::from(spec.scale);
+                    if !(f64::from(MIN_LENGTH)..=f64::from(MAX_COORDINATE)).contains(&height) {
+                        return Err(self.error(
+                            &f("scale"),
+                            format!(
+                                "makes the object {height} units tall (target_height {} × \
+                                 scale {}), outside {MIN_LENGTH}..={MAX_COORDINATE}",
+                                spec.target_height, spec.scale
+                            ),
+                        ));
+                    }
+                    instances.push(spec);
                 }
                 SceneSpec::Instances(instances)
             }
         };
 
-        // Cells.
-        let cell_size = self.positive("cells.cell_size", raw.cells.cell_size)?;
-        let min_eye_height = self.finite("cells.min_eye_height", raw.cells.min_eye_height)?;
-        let max_eye_height = self.finite("cells.max_eye_height", raw.cells.max_eye_height)?;
-        if min_eye_height < 0.0 {
-            return Err(self.error(
-                "cells.min_eye_height",
-                format!("must be >= 0 (eyes above the ground), found {min_eye_height}"),
-            ));
-        }
-        if min_eye_height > max_eye_height {
-            return Err(self.error(
-                "cells.max_eye_height",
-                format!("must be >= `min_eye_height` ({min_eye_height}), found {max_eye_height}"),
-            ));
-        }
+        // Cells: the grid on the ground, eye heights.
+        let cells = CellParams {
+            cell_size: raw.cells.cell_size,
+            min_eye_height: raw.cells.min_eye_height,
+            max_eye_height: raw.cells.max_eye_height,
+        };
+        check_cells(&ground, &cells).map_err(|e| self.violation(e))?;
 
         // Bake parameters.
         let b = raw.bake;
@@ -709,11 +907,7 @@ impl Validator<'_> {
             name,
             scene,
             ground,
-            cells: CellParams {
-                cell_size,
-                min_eye_height,
-                max_eye_height,
-            },
+            cells,
             bake,
             cells_per_job,
             output,

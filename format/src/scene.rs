@@ -41,6 +41,28 @@ impl Ground {
     pub fn size(&self) -> [f32; 2] {
         [self.max[0] - self.min[0], self.max[1] - self.min[1]]
     }
+
+    /// `[N, M]`, the columns and rows of the hex grid of cell size `cell_size` on this
+    /// ground (DESIGN.md "Hex grid"): `N = ceil(W / 1.5c)`, `M = ceil(H / √3c + 1/2)`,
+    /// each at least 1. The one home of the count: the worker's `HexGrid`, the
+    /// manifest's limits and the base-pack reader all use it. Computed in f64 with a
+    /// 1e-6 tolerance so an exact fit (1650 / 75 = 22) does not round up through float
+    /// noise; counts beyond `u64` saturate. `None` when the cell size is not positive
+    /// and finite or the ground is not a finite, non-empty rectangle.
+    pub fn hex_grid_dims(&self, cell_size: f32) -> Option<[u64; 2]> {
+        let [w, h] = self.size();
+        let finite = self.min.iter().chain(&self.max).all(|v| v.is_finite());
+        if !(cell_size.is_finite() && cell_size > 0.0 && finite && w > 0.0 && h > 0.0) {
+            return None;
+        }
+        let c = f64::from(cell_size);
+        let eps = 1e-6;
+        let n_cols = ((f64::from(w) / (1.5 * c)) - eps).ceil().max(1.0) as u64;
+        let n_rows = ((f64::from(h) / (3f64.sqrt() * c)) + 0.5 - eps)
+            .ceil()
+            .max(1.0) as u64;
+        Some([n_cols, n_rows])
+    }
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

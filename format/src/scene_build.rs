@@ -41,6 +41,14 @@ pub enum NormaliseError {
     Flat { height: f32 },
     #[error("the model has no vertices")]
     Empty,
+    /// Scaled to its target height, the model would reach beyond the manifest's
+    /// coordinate limit (a very flat, very wide model).
+    #[error(
+        "scaled to height {target_height}, the model would be {extent} units wide, beyond \
+         the limit of {}",
+        crate::manifest::MAX_COORDINATE
+    )]
+    TooWide { target_height: f32, extent: f64 },
 }
 
 impl Plan {
@@ -87,6 +95,14 @@ pub fn normalise(
         });
     }
     let scale = f64::from(target_height) / height;
+    let extent = (hi.x - lo.x).max(hi.z - lo.z) * scale;
+    // NaN counts as too wide.
+    if extent.is_nan() || extent > f64::from(crate::manifest::MAX_COORDINATE) {
+        return Err(NormaliseError::TooWide {
+            target_height,
+            extent,
+        });
+    }
     let base = glam::DVec3::new((lo.x + hi.x) * 0.5, lo.y, (lo.z + hi.z) * 0.5);
     for (p, r) in mesh.positions.iter_mut().zip(rotated) {
         *p = ((r - base) * scale).as_vec3().to_array();

@@ -355,6 +355,52 @@ fn obj_with_nan_names_the_vertex() {
     assert!(e.to_string().contains("non-finite"), "{e}");
 }
 
+/// Issue 19: finite but absurd coordinates (beyond ±1e12 file units) are refused,
+/// naming the file and the vertex (the line too, where the format has lines the
+/// loader reads itself).
+#[test]
+fn absurd_coordinates_name_the_file_and_the_vertex() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = "v 0 0 0\nv 1 0 0\nv 0 3e38 0\nf 1 2 3\n";
+    let path = write(dir.path(), "far.obj", text.as_bytes());
+    let e = expect_error(&path);
+    assert_eq!(e.location(), Location::Element("vertex 2".into()), "{e}");
+    let shown = e.to_string();
+    assert!(shown.starts_with(&path.display().to_string()), "{shown}");
+    assert!(
+        shown.contains("vertex 2 has a coordinate beyond"),
+        "{shown}"
+    );
+
+    let text = TETRA_OFF.replace("0 0 1\n", "0 0 -2e12\n");
+    let e = expect_error(&write(dir.path(), "far.off", text.as_bytes()));
+    assert_eq!(e.location(), Location::Line(7), "{e}");
+    assert!(
+        e.to_string().contains("vertex 3 has a coordinate beyond"),
+        "{e}"
+    );
+
+    // A binary STL: the clean-up names the vertex after welding's input order.
+    let mut bin = vec![b' '; 80];
+    bin.extend_from_slice(&1u32.to_le_bytes());
+    for v in [
+        [0.0f32, 0.0, 1.0],
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [0.0, 1e30, 0.0],
+    ] {
+        for x in v {
+            bin.extend_from_slice(&x.to_le_bytes());
+        }
+    }
+    bin.extend_from_slice(&[0, 0]);
+    let e = expect_error(&write(dir.path(), "far.stl", &bin));
+    assert_eq!(e.location(), Location::Element("vertex 2".into()), "{e}");
+    // 1e12 itself is allowed.
+    let text = "v 0 0 0\nv 1e12 0 0\nv 0 1 0\nf 1 2 3\n";
+    load_ok(&write(dir.path(), "edge.obj", text.as_bytes()));
+}
+
 #[test]
 fn obj_with_bad_index_is_rejected() {
     let dir = tempfile::tempdir().unwrap();

@@ -221,6 +221,31 @@ fn out_of_range_values_name_their_field() {
             "pre_rotation_deg: (-90.0, inf, 0.0)",
             "scene.models[1].pre_rotation_deg",
         ),
+        // Issue 19: values that parse but cannot be baked.
+        ("cell_size: 50.0", "cell_size: 0.001", "cells.cell_size"),
+        ("cell_size: 50.0", "cell_size: 1e30", "cells.cell_size"),
+        (
+            "max_eye_height: 12.0",
+            "max_eye_height: 1e30",
+            "cells.max_eye_height",
+        ),
+        ("max: (300.0, 260.0)", "max: (300.0, 1e7)", "ground.max"),
+        ("min: (0.0, 0.0)", "min: (-3e38, 0.0)", "ground.min"),
+        (
+            "target_height: 43.2",
+            "target_height: 1e30",
+            "scene.models[1].target_height",
+        ),
+        (
+            "target_height: 43.2",
+            "target_height: 1e-9",
+            "scene.models[1].target_height",
+        ),
+        (
+            "tint_max: (1.0, 1.0, 1.0)",
+            "tint_max: (1.0, 1e38, 1.0)",
+            "scene.tint_max",
+        ),
     ];
     for (from, to, field) in cases {
         let text = GOOD.replace(from, to);
@@ -240,6 +265,133 @@ fn out_of_range_values_name_their_field() {
         assert!(eline >= line && (eline > line || ecol >= col), "{shown}");
         assert!(shown.contains(&format!("`{field}`")), "{shown}");
     }
+}
+
+/// An `Instances` scene of one instance: `{FIELDS}` stands for extra fields.
+const INSTANCES: &str = r#"(
+    ground: (min: (0.0, 0.0), max: (300.0, 260.0)),
+    scene: Instances([
+        (model: Procedural("box"), target_height: 10.0, translation: (5.0, 0.0, 7.0),
+         rotation_y_deg: 30.0{FIELDS}),
+    ]),
+    cells: (cell_size: 50.0, min_eye_height: 6.0, max_eye_height: 12.0),
+)
+"#;
+
+/// Issue 19: an instance placed or sized beyond what f32 rasterising handles is
+/// refused at its field, with the manifest's line and column.
+#[test]
+fn instances_beyond_the_coordinate_limit_are_refused_at_their_field() {
+    let good = INSTANCES.replace("{FIELDS}", "");
+    parse_manifest_str(&good, Path::new("i.ron")).unwrap();
+    for (from, to, field, key, says) in [
+        (
+            "translation: (5.0, 0.0, 7.0)",
+            "translation: (5.0, 0.0, 1e38)",
+            "scene[0].translation",
+            "translation:",
+            "within ±1000000",
+        ),
+        (
+            "translation: (5.0, 0.0, 7.0)",
+            "translation: (-2e6, 0.0, 7.0)",
+            "scene[0].translation",
+            "translation:",
+            "within ±1000000",
+        ),
+        (
+            "{FIELDS}",
+            ", scale: 1e30",
+            "scene[0].scale",
+            "scale:",
+            "units tall",
+        ),
+        (
+            "{FIELDS}",
+            ", scale: 1e-7",
+            "scene[0].scale",
+            "scale:",
+            "units tall",
+        ),
+        (
+            "target_height: 10.0",
+            "target_height: 2e6",
+            "scene[0].target_height",
+            "target_height:",
+            "1000000",
+        ),
+        (
+            "{FIELDS}",
+            ", tint: (1.0, inf, 1.0)",
+            "scene[0].tint",
+            "tint:",
+            "components in 0..=100",
+        ),
+    ] {
+        let text = INSTANCES.replace(from, to).replace("{FIELDS}", "");
+        let err = parse_manifest_str(&text, Path::new("i.ron")).unwrap_err();
+        assert_eq!(err.field(), Some(field), "{err}");
+        assert_eq!(err.line_column(), Some(position_of(&text, key)), "{err}");
+        let shown = err.to_string();
+        assert!(shown.starts_with("i.ron:"), "{shown}");
+        assert!(shown.contains(says), "{to}: {shown}");
+    }
+}
+
+/// Issue 19: `cell_size: 0.001` on the demo's ground (a 200,000 × 150,000 grid)
+/// panicked in the worker's grid; it is refused at the field, naming the limit.
+#[test]
+fn a_grid_too_large_for_the_ground_is_refused_at_the_cell_size() {
+    let text = GOOD.replace("cell_size: 50.0", "cell_size: 0.001");
+    let (err, shown) = parse_err(&text);
+    assert_eq!(err.field(), Some("cells.cell_size"));
+    assert_eq!(err.line_column(), Some(position_of(&text, "cell_size")));
+    assert!(shown.contains("more than 1000000"), "{shown}");
+    // The rule is one function, which `pipeline run --set` also calls.
+    let ground = format::Ground {
+        min: [0.0, 0.0],
+        max: [300.0, 260.0],
+    };
+    let mut cells = format::manifest::CellParams {
+        cell_size: 0.001,
+        min_eye_height: 6.0,
+        max_eye_height: 12.0,
+    };
+    let v = format::manifest::check_cells(&ground, &cells).unwrap_err();
+    assert_eq!(v.field, "cells.cell_size");
+    // A grid under the limit is accepted: 1000 × 752 cells.
+    cells.cell_size = 0.2;
+    assert_eq!(ground.hex_grid_dims(0.2), Some([1000, 752]));
+    format::manifest::check_cells(&ground, &cells).unwrap();
+}
+
+/// Issue 19: 100,000 `[` exhausted memory in the field scan before ron parsed a
+/// thing; it is refused at the first bracket nested too deep.
+#[test]
+fn deep_nesting_is_refused_with_its_position() {
+    let mut text = "(\n  name: ".to_string();
+    text.push_str(&"[".repeat(100_000));
+    let err = parse_manifest_str(&text, Path::new("deep.ron")).unwrap_err();
+    let depth = format::manifest::MAX_NESTING;
+    // `(` is the first level; the `[` at column 9 + depth − 1 is one too many.
+    assert_eq!(err.line_column(), Some((2, 9 + depth - 1)), "{err}");
+    assert!(
+        err.to_string().contains("nested more than 64 deep"),
+        "{err}"
+    );
+}
+
+/// A manifest file larger than the limit is refused before it is read whole.
+#[test]
+fn a_huge_manifest_file_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("huge.ron");
+    let file = std::fs::File::create(&path).unwrap();
+    file.set_len(format::manifest::MAX_MANIFEST_BYTES + 1)
+        .unwrap();
+    let err = parse_manifest(&path).unwrap_err();
+    assert!(matches!(err, ManifestError::Read { .. }), "{err}");
+    assert!(err.to_string().contains("larger than"), "{err}");
 }
 
 #[test]

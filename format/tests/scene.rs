@@ -114,6 +114,26 @@ fn flat_model_cannot_be_normalised() {
     assert!(normalise(&mut m, [0.0; 3], 5.0).is_err());
 }
 
+/// Issue 19: a nearly flat model scaled to its target height would reach beyond the
+/// coordinate limit (f32 positions of 10¹⁰ and worse); it is refused, not baked.
+#[test]
+fn nearly_flat_wide_model_is_refused_when_normalised() {
+    let mut m = format::Mesh {
+        positions: vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1e-6, 1.0]],
+        normals: vec![[0.0, 1.0, 0.0]; 3],
+        albedo: vec![[255; 4]; 3],
+        triangles: vec![[0, 2, 1]],
+    };
+    let before = m.clone();
+    let e = normalise(&mut m, [0.0; 3], 10.0).unwrap_err();
+    assert!(
+        matches!(e, format::scene_build::NormaliseError::TooWide { .. }),
+        "{e}"
+    );
+    assert!(e.to_string().contains("units wide"), "{e}");
+    assert_eq!(m, before, "a refused model is left as it was");
+}
+
 #[test]
 fn explicit_instances_and_shared_models() {
     let text = r#"(

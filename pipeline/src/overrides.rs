@@ -5,11 +5,13 @@
 //! Keys are the manifest's dotted field names (`bake.self_occluding_tolerance_px`,
 //! `cells.cell_size`, `cells_per_job`, ...) plus the paper's short names `T_s`, `T_l`,
 //! `T_C0`, `T_C1` (with or without `bake.`). Values are range-checked like the
-//! manifest's (format::manifest). Job fingerprints include every parameter, so a bake
-//! with overrides never passes for one without: give it its own `--out`.
+//! manifest's (format::manifest); the cell parameters by the manifest's own rule,
+//! `format::manifest::check_cells` (grid size, eye heights), so `--set cell_size=0.001`
+//! is refused exactly as the same value in the manifest is. Job fingerprints include
+//! every parameter, so a bake with overrides never passes for one without: give it
+//! its own `--out`.
 
-use format::manifest::Plan;
-use worker::grid::HexGrid;
+use format::manifest::{check_cells, Plan};
 
 /// One `KEY=VALUE`.
 #[derive(Clone, Debug, PartialEq)]
@@ -135,7 +137,7 @@ impl Override {
 }
 
 /// Applies the overrides in order to `plan` and re-checks what the manifest checks
-/// (eye heights ordered, a grid can be built on the ground).
+/// (`check_cells`: the grid's size on the ground, eye heights in range and ordered).
 pub fn apply_overrides(plan: &mut Plan, overrides: &[Override]) -> Result<(), OverrideError> {
     for o in overrides {
         match o.key {
@@ -149,27 +151,28 @@ pub fn apply_overrides(plan: &mut Plan, overrides: &[Override]) -> Result<(), Ov
             "bake.clustering" => plan.bake.clustering = o.boolean()?,
             "bake.occlusion_culling" => plan.bake.occlusion_culling = o.boolean()?,
             "bake.max_deviation_px" => plan.bake.max_deviation_px = o.non_negative()?,
-            "cells.cell_size" => {
-                let c = o.positive()?;
-                HexGrid::try_new(plan.ground, c).map_err(|e| o.bad(e.to_string()))?;
-                plan.cells.cell_size = c;
-            }
+            "cells.cell_size" => plan.cells.cell_size = o.positive()?,
             "cells.min_eye_height" => plan.cells.min_eye_height = o.non_negative()?,
             "cells.max_eye_height" => plan.cells.max_eye_height = o.non_negative()?,
             "cells_per_job" => plan.cells_per_job = o.count(1..=u32::MAX)?,
             other => unreachable!("parse_override only yields known keys, got {other}"),
         }
     }
-    if plan.cells.min_eye_height > plan.cells.max_eye_height {
-        let last = overrides
-            .iter()
-            .rev()
-            .find(|o| o.key.ends_with("eye_height"));
-        if let Some(o) = last {
-            return Err(o.bad(format!(
-                "eye heights out of order: min {} > max {}",
-                plan.cells.min_eye_height, plan.cells.max_eye_height
-            )));
+    // The manifest's rule for the cells, charged to the override that set the field
+    // it names, else to the last cell override (eye heights out of order name the
+    // max, but setting the min may be what broke them).
+    if let Err(v) = check_cells(&plan.ground, &plan.cells) {
+        let cell_overrides = || {
+            overrides
+                .iter()
+                .rev()
+                .filter(|o| o.key.starts_with("cells."))
+        };
+        let culprit = cell_overrides()
+            .find(|o| o.key == v.field)
+            .or_else(|| cell_overrides().next());
+        if let Some(o) = culprit {
+            return Err(o.bad(v.to_string()));
         }
     }
     Ok(())
@@ -225,7 +228,31 @@ mod tests {
         }
         let o = parse_override("cells.min_eye_height=100").unwrap();
         let e = apply_overrides(&mut p, &[o]).unwrap_err();
-        assert!(e.to_string().contains("out of order"), "{e}");
+        assert!(e.to_string().contains("must be >= `min_eye_height`"), "{e}");
+    }
+
+    /// Issue 19: `--set` obeys the manifest's cell rule (`format::manifest::check_cells`):
+    /// a cell size too small for the ground (which panicked in the worker's grid) and
+    /// absurd eye heights are refused, naming the override.
+    #[test]
+    fn cell_overrides_obey_the_manifest_limits() {
+        for (bad, says) in [
+            ("cell_size=0.001", "more than 1000000"),
+            ("cells.cell_size=1e30", "at most"),
+            ("cells.max_eye_height=1e30", "at most"),
+        ] {
+            let mut p = demo();
+            let o = parse_override(bad).unwrap();
+            let e = apply_overrides(&mut p, std::slice::from_ref(&o)).unwrap_err();
+            let OverrideError::BadValue { key, .. } = &e else {
+                panic!("{bad}: {e:?}")
+            };
+            assert_eq!(key, o.key, "{bad}");
+            assert!(e.to_string().contains(says), "{bad}: {e}");
+        }
+        // A cell size only just small enough is accepted.
+        let mut p = demo();
+        apply_overrides(&mut p, &[parse_override("cell_size=1").unwrap()]).unwrap();
     }
 
     #[test]

@@ -95,15 +95,16 @@ impl HexGrid {
                 max: ground.max,
             });
         }
-        // Counts in f64 with a small tolerance so that an exact fit (1650 / 75 = 22)
-        // does not round up through float noise.
-        let c = cell_size as f64;
-        let eps = 1e-6;
-        let n_cols = ((w as f64 / (1.5 * c)) - eps).ceil().max(1.0) as u64;
-        let n_rows = ((h as f64 / (3f64.sqrt() * c)) + 0.5 - eps).ceil().max(1.0) as u64;
+        let Some([n_cols, n_rows]) = ground.hex_grid_dims(cell_size) else {
+            return Err(GridError::BadGround {
+                min: ground.min,
+                max: ground.max,
+            });
+        };
         if n_cols.saturating_mul(n_rows) > (1u64 << 31) {
             return Err(GridError::TooManyCells { n_cols, n_rows });
         }
+        let c = cell_size as f64;
         let strip_width = (n_cols - 1) as f64 * 1.5 * c;
         let origin_x = ground.min[0] as f64 + (w as f64 - strip_width) / 2.0;
         Ok(HexGrid {

@@ -4,8 +4,9 @@
 //! One file per format, each turning the file's bytes into a
 //! [`RawMesh`] (positions, optional sRGB8 colours,
 //! triangles); [`load_model`] then runs the common clean-up
-//! ([`cleanup::finish_mesh`](crate::cleanup::finish_mesh): reject NaN/inf and bad
-//! indices, weld, drop degenerate and duplicate triangles, smooth normals, albedo).
+//! ([`cleanup::finish_mesh`](crate::cleanup::finish_mesh): reject NaN/inf, absurd
+//! coordinates (beyond ±10¹², [`MAX_MODEL_COORDINATE`](crate::cleanup::MAX_MODEL_COORDINATE))
+//! and bad indices, weld, drop degenerate and duplicate triangles, smooth normals, albedo).
 //!
 //! Readers never trust input (STYLE.md habit 5): the whole file is read into memory,
 //! every count is checked against the bytes there are, and crate parsers run under
@@ -118,7 +119,7 @@ impl LoadError {
         match self {
             LoadError::Parse { at, .. } => at.clone(),
             LoadError::Invalid { source, .. } => match source {
-                CleanupError::NonFinite { vertex, .. } => {
+                CleanupError::NonFinite { vertex, .. } | CleanupError::TooFar { vertex, .. } => {
                     Location::Element(format!("vertex {vertex}"))
                 }
                 CleanupError::IndexOutOfRange { face, .. } => {

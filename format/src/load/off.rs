@@ -2,10 +2,10 @@
 //! `vertices faces edges`, one vertex per line (`x y z`, then `nx ny nz` for NOFF,
 //! then `r g b [a]` for COFF: integers 0–255 or floats 0–1), one face per line
 //! (`n i1 … in`, fan-triangulated; trailing face colours ignored). `#` starts a
-//! comment. Every error names its line; non-finite coordinates are rejected here.
+//! comment. Every error names its line; non-finite and absurd coordinates are rejected here.
 
 use super::{fan, parse_error, unit_to_u8, Location, ModelFormat, Parsed};
-use crate::cleanup::RawMesh;
+use crate::cleanup::{RawMesh, MAX_MODEL_COORDINATE};
 use crate::load::LoadError;
 use std::path::Path;
 
@@ -89,6 +89,12 @@ pub(crate) fn parse(path: &Path, bytes: &[u8]) -> Result<Parsed, LoadError> {
         if !p.iter().all(|x| x.is_finite()) {
             return Err(err(
                 format!("vertex {v} has a non-finite coordinate {p:?}"),
+                line,
+            ));
+        }
+        if p.iter().any(|x| x.abs() > MAX_MODEL_COORDINATE) {
+            return Err(err(
+                format!("vertex {v} has a coordinate beyond ±{MAX_MODEL_COORDINATE}: {p:?}"),
                 line,
             ));
         }
