@@ -295,6 +295,256 @@ fn inconsistent_cell_content_is_rejected_by_the_writer_and_check_against() {
     assert!(cell.check_against(&sample::small_base()).is_err());
 }
 
+/// `bytes` (a sample pack of `kind`) with `value` written at `offset` of section
+/// `section`'s decoded content, re-assembled: every checksum is valid, so only the
+/// content rules can refuse it.
+fn with_value(
+    kind: FileKind,
+    bytes: &[u8],
+    section: SectionKind,
+    offset: usize,
+    value: &[u8],
+) -> Vec<u8> {
+    let mut sections = sections_of(bytes);
+    let s = sections
+        .iter_mut()
+        .find(|s| s.kind == section)
+        .expect("section present");
+    s.raw[offset..offset + value.len()].copy_from_slice(value);
+    assemble(kind, &sections).unwrap()
+}
+
+fn f32s(v: f32) -> Vec<u8> {
+    v.to_le_bytes().to_vec()
+}
+
+fn u32s(v: u32) -> Vec<u8> {
+    v.to_le_bytes().to_vec()
+}
+
+/// A content case: section, byte offset of the edit, new bytes, the offset the error
+/// must name, and words its message must contain.
+type Case = (SectionKind, usize, Vec<u8>, u64, &'static str);
+
+fn assert_refused(kind: FileKind, bytes: &[u8], cases: Vec<Case>) {
+    for (section, at, value, offset, says) in cases {
+        let bad = with_value(kind, bytes, section, at, &value);
+        let e = decode(kind, &bad).expect_err(says);
+        match &e {
+            PackError::Malformed {
+                section: s,
+                offset: o,
+                what,
+                ..
+            } => {
+                assert_eq!((*s, *o), (section, offset), "{says}: {e}");
+                assert!(what.contains(says), "expected {says:?} in {e}");
+            }
+            other => panic!("{says}: expected a content error, got {other}"),
+        }
+    }
+}
+
+/// Issue 19: `BasePack::decode` checks every value, not only the structure: the grid
+/// by the manifest's own rules and against its ground and cell size, finite and
+/// bounded positions, finite normals and transforms, tints in range, reserved 0.
+#[test]
+fn base_pack_values_are_validated() {
+    let bytes = sample::small_base().encode().unwrap();
+    let meta = SectionKind::BASE_META;
+    let cases: Vec<Case> = vec![
+        (
+            meta,
+            48,
+            f32s(0.0),
+            48,
+            "`cells.cell_size` must be > 0, found 0",
+        ),
+        (
+            meta,
+            48,
+            f32s(f32::NAN),
+            48,
+            "`cells.cell_size` must be > 0",
+        ),
+        (meta, 48, f32s(0.001), 48, "more than 1000000"),
+        (
+            meta,
+            64,
+            u32s(5),
+            60,
+            "grid of 7 × 5 cells, but cell size 10",
+        ),
+        (meta, 60, u32s(70), 60, "makes 7 × 6"),
+        (
+            meta,
+            40,
+            f32s(f32::INFINITY),
+            40,
+            "`ground.max` must be a finite",
+        ),
+        (meta, 32, f32s(-1e30), 32, "`ground.min` must be within"),
+        (meta, 52, f32s(5.0), 56, "must be >= `min_eye_height` (5)"),
+        (
+            meta,
+            56,
+            f32s(1e30),
+            56,
+            "`cells.max_eye_height` must be at most",
+        ),
+        (meta, 76, u32s(1), 76, "reserved field is 1"),
+        (
+            SectionKind::POSITIONS,
+            16,
+            f32s(f32::NAN),
+            12,
+            "vertex 1: position",
+        ),
+        (
+            SectionKind::POSITIONS,
+            0,
+            f32s(1e30),
+            0,
+            "vertex 0: position",
+        ),
+        (
+            SectionKind::NORMALS,
+            24,
+            f32s(f32::NEG_INFINITY),
+            24,
+            "vertex 2: normal",
+        ),
+        (
+            SectionKind::INSTANCES,
+            80,
+            f32s(f32::NAN),
+            80,
+            "instance 1: transform",
+        ),
+        (
+            SectionKind::INSTANCES,
+            48,
+            f32s(1e30),
+            0,
+            "translates beyond",
+        ),
+        (
+            SectionKind::INSTANCES,
+            160 + 64,
+            f32s(-1.0),
+            224,
+            "instance 2: tint",
+        ),
+    ];
+    assert_refused(FileKind::Base, &bytes, cases);
+    // The writer refuses what the reader would.
+    let mut base = sample::small_base();
+    base.grid.cell_size = 0.0;
+    assert!(matches!(base.encode(), Err(PackError::Invalid { .. })));
+    let mut base = sample::small_base();
+    base.grid.n_rows += 1;
+    assert!(matches!(base.encode(), Err(PackError::Invalid { .. })));
+    let mut base = sample::small_base();
+    base.models[1].mesh.positions[3][1] = f32::NAN;
+    assert!(matches!(base.encode(), Err(PackError::Invalid { .. })));
+}
+
+/// Issue 19: the cell pack's reserved fields are 0 and its views finite; its id lies
+/// in the base pack's grid.
+#[test]
+fn cell_pack_values_are_validated() {
+    let bytes = sample::small_cell().encode().unwrap();
+    let cases: Vec<Case> = vec![
+        (
+            SectionKind::CELL_META,
+            56,
+            u32s(1),
+            52,
+            "reserved fields are [0, 1, 0]",
+        ),
+        (
+            SectionKind::PROXIES,
+            16 + 12,
+            u32s(7),
+            28,
+            "record 1: reserved",
+        ),
+        (SectionKind::MEMBERS, 12, u32s(7), 12, "record 0: reserved"),
+        (
+            SectionKind::VIEWS,
+            64,
+            f32s(f32::NAN),
+            0,
+            "proxy 0 view 0: eye",
+        ),
+        (
+            SectionKind::VIEWS,
+            2 * 96 + 8,
+            f32s(f32::INFINITY),
+            192,
+            "view 2: texture matrix",
+        ),
+    ];
+    assert_refused(FileKind::Cell, &bytes, cases);
+    let mut cell = sample::small_cell();
+    cell.proxies[0].views[0].eye[1] = f32::NAN;
+    assert!(matches!(cell.encode(), Err(PackError::Invalid { .. })));
+    // 7 × 6 cells: 41 is the last, 42 is outside.
+    let base = sample::small_base();
+    let mut cell = sample::small_cell();
+    cell.cell_id = 41;
+    cell.check_against(&base).unwrap();
+    cell.cell_id = 42;
+    let e = cell.check_against(&base).unwrap_err();
+    assert!(
+        e.to_string().contains("outside the base pack's grid"),
+        "{e}"
+    );
+}
+
+/// Issue 19: index entries name real cells: ids within the largest grid, packs at
+/// least a header long, at most six distinct neighbours that are not the cell itself.
+#[test]
+fn index_values_are_validated() {
+    let bytes = sample::small_index().encode().unwrap();
+    let cells = SectionKind::INDEX_CELLS;
+    let cases: Vec<Case> = vec![
+        (
+            SectionKind::INDEX_META,
+            40,
+            u32s(9),
+            36,
+            "reserved fields are [0, 9, 0]",
+        ),
+        (
+            cells,
+            88 + 8,
+            10u64.to_le_bytes().to_vec(),
+            88,
+            "shorter than its header",
+        ),
+        (
+            SectionKind::INDEX_NEIGHBOURS,
+            0,
+            u32s(5),
+            0,
+            "neighbour 5 is the cell itself",
+        ),
+        (
+            SectionKind::INDEX_NEIGHBOURS,
+            4,
+            u32s(6),
+            4,
+            "neighbour 6 is the cell itself, repeated",
+        ),
+        (cells, 3 * 88, u32s(2_000_000), 264, "past the largest grid"),
+    ];
+    assert_refused(FileKind::Index, &bytes, cases);
+    let mut index = sample::small_index();
+    index.cells[2].neighbours.push(12);
+    assert!(matches!(index.encode(), Err(PackError::Invalid { .. })));
+}
+
 #[test]
 fn atomic_write_replaces_and_leaves_no_temp_files() {
     let dir = tempfile::tempdir().unwrap();
@@ -442,8 +692,8 @@ fn arb_base() -> impl Strategy<Value = BasePack> {
                         cell_size: 5.0,
                         min_eye_height: 1.0,
                         max_eye_height: 2.0,
-                        n_cols: 6,
-                        n_rows: 7,
+                        n_cols: 8,
+                        n_rows: 9,
                     },
                     models: models
                         .into_iter()
@@ -542,10 +792,10 @@ fn arb_index() -> impl Strategy<Value = Index> {
     (
         any::<[u8; 32]>(),
         prop::collection::btree_map(
-            any::<u32>(),
+            0..format::manifest::MAX_CELLS as u32,
             (
-                prop::collection::vec(any::<u32>(), 0..7),
-                any::<u64>(),
+                prop::collection::btree_set(0..format::manifest::MAX_CELLS as u32, 0..7),
+                64..u64::MAX,
                 "[a-z]{1,8}(/[a-z0-9.]{1,8})?",
             ),
             0..10,
@@ -561,7 +811,12 @@ fn arb_index() -> impl Strategy<Value = Index> {
                     file,
                     bytes,
                     checksum: *blake3::hash(&bytes.to_le_bytes()).as_bytes(),
-                    neighbours,
+                    // Distinct (a set), never the cell itself, at most six.
+                    neighbours: neighbours
+                        .into_iter()
+                        .filter(|&n| n != cell_id)
+                        .take(format::pack::index::MAX_NEIGHBOURS)
+                        .collect(),
                     fingerprint: [cell_id as u8; 32],
                 })
                 .collect(),

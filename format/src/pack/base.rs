@@ -12,8 +12,9 @@ use super::writer::{
     assemble, write_atomic, SectionData, RAW_ONLY, TRY_INDICES, TRY_ZSTD, TRY_ZSTD_PREFER_RAW,
 };
 use super::{invalid, malformed};
+use crate::manifest::{check_cells, check_ground, CellParams, MAX_COORDINATE, MAX_TINT};
 use crate::mesh::Mesh;
-use crate::scene::Scene;
+use crate::scene::{Ground, Scene};
 use bytemuck::{Pod, Zeroable};
 use std::path::Path;
 
@@ -29,6 +30,113 @@ pub struct GridParams {
     pub max_eye_height: f32,
     pub n_cols: u32,
     pub n_rows: u32,
+}
+
+impl GridParams {
+    /// Checks the grid as the manifest's own rules do (`format::manifest::check_ground`
+    /// and `check_cells`: finite, bounded ground; cell size > 0 with at most
+    /// `MAX_CELLS` cells; `0 <= min_eye_height <= max_eye_height`, all within
+    /// `MAX_COORDINATE`) and that `n_cols × n_rows` is the grid they make
+    /// (`Ground::hex_grid_dims`). On failure: the byte offset in `base-meta` of the
+    /// offending field and what is wrong.
+    pub fn validate(&self) -> Result<(), (u64, String)> {
+        let ground = Ground {
+            min: self.ground_min,
+            max: self.ground_max,
+        };
+        let offset_of = |field: &str| match field {
+            "ground.min" => 32,
+            "ground.max" => 40,
+            "cells.cell_size" => 48,
+            "cells.min_eye_height" => 52,
+            _ => 56,
+        };
+        check_ground(&ground).map_err(|v| (offset_of(&v.field), format!("grid: {v}")))?;
+        let cells = CellParams {
+            cell_size: self.cell_size,
+            min_eye_height: self.min_eye_height,
+            max_eye_height: self.max_eye_height,
+        };
+        check_cells(&ground, &cells).map_err(|v| (offset_of(&v.field), format!("grid: {v}")))?;
+        let expected = ground.hex_grid_dims(self.cell_size);
+        if expected != Some([u64::from(self.n_cols), u64::from(self.n_rows)]) {
+            let [n, m] = expected.unwrap_or_default();
+            return Err((
+                60,
+                format!(
+                    "grid of {} × {} cells, but cell size {} on the ground {:?}..{:?} \
+                     makes {n} × {m}",
+                    self.n_cols, self.n_rows, self.cell_size, self.ground_min, self.ground_max
+                ),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// A value of a base pack that breaks a content rule: the section, the byte offset
+/// in it, and what is wrong. The writer refuses it ([`PackError::Invalid`]), the
+/// reader reports it as [`PackError::Malformed`].
+struct BadValue(SectionKind, u64, String);
+
+/// Positions are finite and within ±`MAX_COORDINATE` (normalised models are at most
+/// that tall and wide); normals are finite. `first` is the index of `positions[0]` in
+/// the whole `positions` section.
+fn check_vertices(
+    positions: &[[f32; 3]],
+    normals: &[[f32; 3]],
+    first: usize,
+) -> Result<(), BadValue> {
+    if let Some((k, p)) = positions
+        .iter()
+        .enumerate()
+        .find(|(_, p)| !p.iter().all(|x| x.is_finite() && x.abs() <= MAX_COORDINATE))
+    {
+        let v = first + k;
+        return Err(BadValue(
+            SectionKind::POSITIONS,
+            (v * 12) as u64,
+            format!("vertex {v}: position {p:?} is not finite or beyond ±{MAX_COORDINATE}"),
+        ));
+    }
+    if let Some((k, n)) = normals
+        .iter()
+        .enumerate()
+        .find(|(_, n)| !n.iter().all(|x| x.is_finite()))
+    {
+        let v = first + k;
+        return Err(BadValue(
+            SectionKind::NORMALS,
+            (v * 12) as u64,
+            format!("vertex {v}: normal {n:?} is not finite"),
+        ));
+    }
+    Ok(())
+}
+
+/// An instance's transform is finite with a translation within ±`MAX_COORDINATE`;
+/// its tint components are in `0..=MAX_TINT`.
+fn check_instance(i: usize, transform: &[f32; 16], tint: &[f32; 3]) -> Result<(), BadValue> {
+    let record = (i * std::mem::size_of::<InstanceRecord>()) as u64;
+    let translation_ok = transform[12..15].iter().all(|x| x.abs() <= MAX_COORDINATE);
+    if !(transform.iter().all(|x| x.is_finite()) && translation_ok) {
+        return Err(BadValue(
+            SectionKind::INSTANCES,
+            record,
+            format!(
+                "instance {i}: transform {transform:?} is not finite or translates beyond \
+                 ±{MAX_COORDINATE}"
+            ),
+        ));
+    }
+    if !tint.iter().all(|x| (0.0..=MAX_TINT).contains(x)) {
+        return Err(BadValue(
+            SectionKind::INSTANCES,
+            record + 64,
+            format!("instance {i}: tint {tint:?} outside 0..={MAX_TINT}"),
+        ));
+    }
+    Ok(())
 }
 
 /// One model: its name, content hash and mesh (model space).
@@ -132,7 +240,11 @@ impl BasePack {
 
     /// The pack's bytes (deterministic).
     pub fn encode(&self) -> Result<Vec<u8>, PackError> {
-        // 1. Check what the format cannot express.
+        // 1. Check what the format cannot express, and what the reader would refuse.
+        let refuse = |BadValue(section, _, what): BadValue| invalid(format!("{section}: {what}"));
+        self.grid
+            .validate()
+            .map_err(|(_, what)| invalid(format!("base-meta: {what}")))?;
         let model_count =
             u32::try_from(self.models.len()).map_err(|_| invalid("more than 2^32 models"))?;
         let instance_count =
@@ -164,6 +276,7 @@ impl BasePack {
                     m.name
                 )));
             }
+            check_vertices(&mesh.positions, &mesh.normals, positions.len() / 12).map_err(refuse)?;
             records.push(ModelRecord {
                 vertex_count,
                 triangle_count: u32::try_from(mesh.triangles.len())
@@ -190,6 +303,9 @@ impl BasePack {
                 "instance {i} refers to model {} of {model_count}",
                 inst.model
             )));
+        }
+        for (i, inst) in self.instances.iter().enumerate() {
+            check_instance(i, &inst.transform, &inst.tint).map_err(refuse)?;
         }
         let g = &self.grid;
         let meta = BaseMetaRecord {
@@ -263,7 +379,9 @@ impl BasePack {
         )
     }
 
-    /// Decodes a validated pack (every reference is checked; unknown sections are skipped).
+    /// Decodes a validated pack (every reference and value is checked — the grid
+    /// against the manifest's rules, positions, normals, transforms and tints — and
+    /// unknown sections are skipped).
     pub fn decode(pack: &PackFile) -> Result<BasePack, PackError> {
         pack.expect_kind(FileKind::Base)?;
         let file = pack.path();
@@ -278,6 +396,27 @@ impl BasePack {
             ));
         }
         let meta: BaseMetaRecord = bytemuck::pod_read_unaligned(&meta_bytes);
+        if meta.reserved != 0 {
+            return Err(malformed(
+                file,
+                SectionKind::BASE_META,
+                76,
+                format!("reserved field is {}, expected 0", meta.reserved),
+            ));
+        }
+        let grid = GridParams {
+            ground_min: meta.ground_min,
+            ground_max: meta.ground_max,
+            cell_size: meta.cell_size,
+            min_eye_height: meta.min_eye_height,
+            max_eye_height: meta.max_eye_height,
+            n_cols: meta.n_cols,
+            n_rows: meta.n_rows,
+        };
+        grid.validate()
+            .map_err(|(offset, what)| malformed(file, SectionKind::BASE_META, offset, what))?;
+        let reject =
+            |BadValue(section, offset, what): BadValue| malformed(file, section, offset, what);
         // 2. Tables, checked against the counts.
         let records: Vec<ModelRecord> = pack.section_vec(SectionKind::MODEL_TABLE)?;
         if records.len() != meta.model_count as usize {
@@ -337,6 +476,8 @@ impl BasePack {
                 ),
             ));
         }
+
+        check_vertices(&positions, &normals, 0).map_err(reject)?;
 
         // 3. Models: split the shared arrays, check names and vertex references.
         let mut models = Vec::with_capacity(records.len());
@@ -407,6 +548,7 @@ impl BasePack {
                     ),
                 ));
             }
+            check_instance(i, &r.transform, &r.tint).map_err(reject)?;
             out_instances.push(PackedInstance {
                 model: r.model,
                 transform: r.transform,
@@ -415,15 +557,7 @@ impl BasePack {
         }
         Ok(BasePack {
             scene_fingerprint: meta.scene_fingerprint,
-            grid: GridParams {
-                ground_min: meta.ground_min,
-                ground_max: meta.ground_max,
-                cell_size: meta.cell_size,
-                min_eye_height: meta.min_eye_height,
-                max_eye_height: meta.max_eye_height,
-                n_cols: meta.n_cols,
-                n_rows: meta.n_rows,
-            },
+            grid,
             models,
             instances: out_instances,
         })

@@ -151,6 +151,17 @@ pub struct ViewRecord {
 }
 const _: () = assert!(std::mem::size_of::<ViewRecord>() == 96);
 
+/// A view's eye and matrix are finite (the player divides by them).
+fn check_view(eye: &[f32; 3], matrix: &[f32; 16]) -> Result<(), String> {
+    if !eye.iter().all(|x| x.is_finite()) {
+        return Err(format!("eye {eye:?} is not finite"));
+    }
+    if !matrix.iter().all(|x| x.is_finite()) {
+        return Err(format!("texture matrix {matrix:?} is not finite"));
+    }
+    Ok(())
+}
+
 fn check_masks(kind: ProxyKind, member: &ProxyMember, view_count: usize) -> Result<(), String> {
     match kind {
         ProxyKind::MvMesh => {
@@ -222,6 +233,8 @@ impl CellPack {
             for (v, view) in proxy.views.iter().enumerate() {
                 view.texture
                     .validate()
+                    .map_err(|e| invalid(format!("proxy {p} view {v}: {e}")))?;
+                check_view(&view.eye, &view.matrix)
                     .map_err(|e| invalid(format!("proxy {p} view {v}: {e}")))?;
                 views.push(ViewRecord {
                     matrix: view.matrix,
@@ -306,6 +319,14 @@ impl CellPack {
             ));
         }
         let meta: CellMetaRecord = bytemuck::pod_read_unaligned(&meta_bytes);
+        if meta.reserved != [0; 3] {
+            return Err(malformed(
+                file,
+                SectionKind::CELL_META,
+                52,
+                format!("reserved fields are {:?}, expected 0", meta.reserved),
+            ));
+        }
         let originals: Vec<u32> = pack.section_vec(SectionKind::ORIGINALS)?;
         let proxies: Vec<ProxyRecord> = pack.section_vec(SectionKind::PROXIES)?;
         let members: Vec<MemberRecord> = pack.section_vec(SectionKind::MEMBERS)?;
@@ -322,6 +343,27 @@ impl CellPack {
                     kind,
                     0,
                     format!("{len} records, cell-meta says {expected}"),
+                ));
+            }
+        }
+        for (kind, size, reserved) in [
+            (
+                SectionKind::PROXIES,
+                std::mem::size_of::<ProxyRecord>(),
+                proxies.iter().map(|r| r.reserved).position(|r| r != 0),
+            ),
+            (
+                SectionKind::MEMBERS,
+                std::mem::size_of::<MemberRecord>(),
+                members.iter().map(|r| r.reserved).position(|r| r != 0),
+            ),
+        ] {
+            if let Some(i) = reserved {
+                return Err(malformed(
+                    file,
+                    kind,
+                    (i * size + 12) as u64,
+                    format!("record {i}: reserved field is not 0"),
                 ));
             }
         }
@@ -408,6 +450,15 @@ impl CellPack {
             }
             let mut proxy_views = Vec::with_capacity(view_recs.len());
             for v in view_recs {
+                let view_index = next_view - view_recs.len() + proxy_views.len();
+                check_view(&v.eye, &v.matrix).map_err(|e| {
+                    malformed(
+                        file,
+                        SectionKind::VIEWS,
+                        (view_index * std::mem::size_of::<ViewRecord>()) as u64,
+                        format!("proxy {p} view {view_index}: {e}"),
+                    )
+                })?;
                 let len = usize::try_from(v.data_len).ok();
                 let data = len
                     .and_then(|l| take(&textures, &mut next_tex, l))
@@ -484,6 +535,13 @@ impl CellPack {
     /// Checks every instance id and vertex index against the base pack (what the
     /// player does before uploading index buffers).
     pub fn check_against(&self, base: &BasePack) -> Result<(), PackError> {
+        let cells = u64::from(base.grid.n_cols) * u64::from(base.grid.n_rows);
+        if u64::from(self.cell_id) >= cells {
+            return Err(invalid(format!(
+                "cell {} is outside the base pack's grid of {} × {} cells",
+                self.cell_id, base.grid.n_cols, base.grid.n_rows
+            )));
+        }
         let instance = |id: u32, what: &str| -> Result<u32, PackError> {
             let inst = base.instances.get(id as usize).ok_or_else(|| {
                 invalid(format!(

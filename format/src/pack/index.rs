@@ -79,6 +79,55 @@ pub fn check_relative_path(file: &str) -> Result<(), String> {
     Ok(())
 }
 
+/// Most neighbours a hexagonal cell has.
+pub const MAX_NEIGHBOURS: usize = 6;
+
+/// Checks an entry's values: a cell id below `format::manifest::MAX_CELLS` and a
+/// pack at least a header long.
+pub fn check_entry(cell_id: u32, bytes: u64) -> Result<(), String> {
+    let max_cells = crate::manifest::MAX_CELLS;
+    if u64::from(cell_id) >= max_cells {
+        return Err(format!(
+            "cell id {cell_id} is past the largest grid ({max_cells} cells)"
+        ));
+    }
+    if bytes < super::layout::HEADER_SIZE as u64 {
+        return Err(format!(
+            "cell {cell_id}: a pack of {bytes} bytes is shorter than its header"
+        ));
+    }
+    Ok(())
+}
+
+/// Checks a cell's neighbours: at most [`MAX_NEIGHBOURS`], each below `MAX_CELLS`,
+/// none repeated and none the cell itself. On failure: the position in the list.
+pub fn check_neighbours(cell_id: u32, neighbours: &[u32]) -> Result<(), (usize, String)> {
+    if neighbours.len() > MAX_NEIGHBOURS {
+        return Err((
+            MAX_NEIGHBOURS,
+            format!(
+                "cell {cell_id}: {} neighbours, a hexagon has at most {MAX_NEIGHBOURS}",
+                neighbours.len()
+            ),
+        ));
+    }
+    for (k, &n) in neighbours.iter().enumerate() {
+        if n == cell_id
+            || u64::from(n) >= crate::manifest::MAX_CELLS
+            || neighbours[..k].contains(&n)
+        {
+            return Err((
+                k,
+                format!(
+                    "cell {cell_id}: neighbour {n} is the cell itself, repeated or past the \
+                     largest grid"
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
 impl IndexEntry {
     /// The entry of the cell pack at `dir/file`: its size and blake3 are read from disk.
     pub fn for_file(
@@ -153,6 +202,8 @@ impl Index {
             }
             check_relative_path(&c.file)
                 .map_err(|e| invalid(format!("cell {}: {e}", c.cell_id)))?;
+            check_entry(c.cell_id, c.bytes).map_err(invalid)?;
+            check_neighbours(c.cell_id, &c.neighbours).map_err(|(_, e)| invalid(e))?;
             records.push(CellRecord {
                 cell_id: c.cell_id,
                 neighbour_count: u32::try_from(c.neighbours.len())
@@ -213,6 +264,14 @@ impl Index {
             ));
         }
         let meta: IndexMetaRecord = bytemuck::pod_read_unaligned(&meta_bytes);
+        if meta.reserved != [0; 3] {
+            return Err(malformed(
+                file,
+                SectionKind::INDEX_META,
+                36,
+                format!("reserved fields are {:?}, expected 0", meta.reserved),
+            ));
+        }
         let records: Vec<CellRecord> = pack.section_vec(SectionKind::INDEX_CELLS)?;
         if records.len() != meta.cell_count as usize {
             return Err(malformed(
@@ -273,6 +332,16 @@ impl Index {
                         format!("cell {}: neighbour count past index-neighbours", r.cell_id),
                     )
                 })?;
+            check_entry(r.cell_id, r.bytes)
+                .map_err(|e| malformed(file, SectionKind::INDEX_CELLS, off, e))?;
+            check_neighbours(r.cell_id, nb).map_err(|(k, e)| {
+                malformed(
+                    file,
+                    SectionKind::INDEX_NEIGHBOURS,
+                    ((next + k) * 4) as u64,
+                    e,
+                )
+            })?;
             next += nb.len();
             cells.push(IndexEntry {
                 cell_id: r.cell_id,

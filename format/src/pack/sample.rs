@@ -185,7 +185,7 @@ pub fn small_base() -> BasePack {
             min_eye_height: 1.5,
             max_eye_height: 2.0,
             n_cols: 7,
-            n_rows: 5,
+            n_rows: 6,
         },
         models: vec![
             PackedModel {
