@@ -273,6 +273,14 @@ fn run(cli: Cli) -> Result<(), Failure> {
             let r =
                 pipeline::report::write_report(&out).map_err(|error| Failure { code: 1, error })?;
             print_json_or_text(json, &r, || pipeline::report::to_markdown(&r));
+            if let Some(jobs) = r.jobs_line() {
+                eprintln!(
+                    "note: the bake is not finished ({jobs}); the report covers its {} baked \
+                     cell(s) only; `pipeline status {}` lists the jobs",
+                    r.cells,
+                    out.display()
+                );
+            }
             Ok(())
         }
         Command::Finalize { manifest, out } => {

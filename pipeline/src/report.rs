@@ -3,14 +3,17 @@
 //! Tables 3–8 (000 §4.3) and heat maps of the hex grid (tiny-skia).
 //!
 //! Everything is read back from the output directory (plan, job records, packs), so
-//! `pipeline report <out>` works on any finished bake, local or Slurm.
+//! `pipeline report <out>` works on any finished bake, local or Slurm. On a bake that
+//! is not finished it says so first — how many jobs are done, which failed, which are
+//! pending — and gives averages only over the cells that are baked: with none baked,
+//! there are none (`per_cell` is `null` in JSON, and the Markdown says why).
 
 use crate::run::PlanFile;
 use format::pack::{BasePack, PackFile, SectionKind};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::Path;
-use worker::job::{record_path, JobRecord};
+use worker::job::done_record;
 
 /// Numbers of one cell (from its job record and pack).
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -84,6 +87,13 @@ pub struct Report {
     pub bake: Option<format::manifest::BakeParams>,
     pub cell_params: Option<format::manifest::CellParams>,
     pub jobs: usize,
+    /// Jobs with a valid done record (the same test as `pipeline status`).
+    pub jobs_done: usize,
+    /// Jobs whose last attempt failed (an error file, no done record).
+    pub jobs_failed: Vec<u32>,
+    /// Jobs neither done nor failed: not run yet, running, or outside a `--cells`
+    /// selection.
+    pub jobs_pending: Vec<u32>,
     pub instances: usize,
     pub scene_triangles: u64,
     /// Sum over jobs of their wall time (s): the bake's cost on one worker.
@@ -96,8 +106,63 @@ pub struct Report {
     /// Per-stage bake time summed over cells (s).
     pub stage_s: BTreeMap<String, f64>,
     pub storage: Storage,
-    pub per_cell: PaperTable,
+    /// Averages over the baked cells; `None` when no cell is baked (there is nothing
+    /// to average).
+    pub per_cell: Option<PaperTable>,
     pub cell_lines: Vec<CellLine>,
+}
+
+impl Report {
+    /// The per-cell averages, or NaN for every statistic when no cell is baked (what
+    /// tables show as "–").
+    pub fn averages(&self) -> PaperTable {
+        self.per_cell.clone().unwrap_or(PaperTable {
+            polygons_inside_a_cell: f64::NAN,
+            sv_single_percent: f64::NAN,
+            sv_clustered_percent: f64::NAN,
+            mv_percent: f64::NAN,
+            culled_percent: f64::NAN,
+            polygons_sv_and_mv: f64::NAN,
+            polygons_for_a_cell: f64::NAN,
+            simplified_to_original: f64::NAN,
+            texture_kb: f64::NAN,
+        })
+    }
+
+    /// Whether some job is failed or pending.
+    pub fn incomplete(&self) -> bool {
+        !self.jobs_failed.is_empty() || !self.jobs_pending.is_empty()
+    }
+
+    /// One plain sentence on the jobs of an unfinished bake, e.g. "3 of 5 jobs done;
+    /// 1 failed (job 2); 1 pending (job 4)"; `None` when every job is done.
+    pub fn jobs_line(&self) -> Option<String> {
+        if !self.incomplete() {
+            return None;
+        }
+        let list = |v: &[u32]| {
+            let shown: Vec<String> = v.iter().take(20).map(|j| j.to_string()).collect();
+            let more = if v.len() > 20 { " …" } else { "" };
+            let noun = if v.len() == 1 { "job" } else { "jobs" };
+            format!("{noun} {}{more}", shown.join(", "))
+        };
+        let mut line = format!("{} of {} jobs done", self.jobs_done, self.jobs);
+        if !self.jobs_failed.is_empty() {
+            line += &format!(
+                "; {} failed ({})",
+                self.jobs_failed.len(),
+                list(&self.jobs_failed)
+            );
+        }
+        if !self.jobs_pending.is_empty() {
+            line += &format!(
+                "; {} pending ({})",
+                self.jobs_pending.len(),
+                list(&self.jobs_pending)
+            );
+        }
+        Some(line)
+    }
 }
 
 fn num(v: &serde_json::Value, key: &str) -> f64 {
@@ -137,10 +202,16 @@ pub fn build_report(out: &Path) -> anyhow::Result<Report> {
         .unwrap_or(0);
     let (mut cpu_s, mut shared_process) = (0.0, false);
     for job in &plan.jobs {
-        let Ok(text) = std::fs::read(record_path(out, job.id)) else {
+        // Only valid done records count (a stale or torn record is not a baked cell).
+        let Some(record) = done_record(out, job) else {
+            if crate::run::error_path(out, job.id).exists() {
+                report.jobs_failed.push(job.id);
+            } else {
+                report.jobs_pending.push(job.id);
+            }
             continue;
         };
-        let record: JobRecord = serde_json::from_slice(&text)?;
+        report.jobs_done += 1;
         report.job_wall_s += record.wall_s;
         cpu_s += record.cpu_s;
         shared_process |= record.shared_process;
@@ -187,13 +258,22 @@ pub fn build_report(out: &Path) -> anyhow::Result<Report> {
     let s = &mut report.storage;
     s.mesh_bytes = s.cell_bytes - s.texture_bytes.min(s.cell_bytes);
     s.total_bytes = s.base_bytes + s.index_bytes + s.cell_bytes;
-    s.per_cell_bytes = s.cell_bytes as f64 / report.cells.max(1) as f64;
+    // Averages over the baked cells; over none there are none.
+    s.per_cell_bytes = if report.cells > 0 {
+        s.cell_bytes as f64 / report.cells as f64
+    } else {
+        0.0
+    };
     report.per_cell = paper_table(&report.cell_lines);
     Ok(report)
 }
 
-fn paper_table(lines: &[CellLine]) -> PaperTable {
-    let n = lines.len().max(1) as f64;
+/// The per-cell averages of `lines`; `None` for no lines.
+fn paper_table(lines: &[CellLine]) -> Option<PaperTable> {
+    if lines.is_empty() {
+        return None;
+    }
+    let n = lines.len() as f64;
     let avg = |f: &dyn Fn(&CellLine) -> f64| lines.iter().map(f).sum::<f64>() / n;
     let outside = |l: &CellLine| l.sv_objects + l.mv_objects + l.cluster_objects + l.culled_objects;
     let pct = |f: &dyn Fn(&CellLine) -> f64| {
@@ -208,7 +288,7 @@ fn paper_table(lines: &[CellLine]) -> PaperTable {
     };
     let simplified = avg(&|l| l.sv_polygons + l.mv_polygons + l.cluster_polygons);
     let original = avg(&|l| l.outside_original_polygons);
-    PaperTable {
+    Some(PaperTable {
         polygons_inside_a_cell: avg(&|l| l.polygons_inside),
         sv_single_percent: pct(&|l| l.sv_objects),
         sv_clustered_percent: pct(&|l| l.cluster_objects),
@@ -222,14 +302,13 @@ fn paper_table(lines: &[CellLine]) -> PaperTable {
             0.0
         },
         texture_kb: avg(&|l| l.texture_bytes) / 1024.0,
-    }
+    })
 }
 
 /// The report as Markdown.
 pub fn to_markdown(r: &Report) -> String {
     use std::fmt::Write;
     let mut m = String::new();
-    let t = &r.per_cell;
     let s = &r.storage;
     let _ = writeln!(m, "# Bake report: {}\n", r.scene);
     let _ = writeln!(
@@ -243,6 +322,20 @@ pub fn to_markdown(r: &Report) -> String {
             "**{}**: the averages below are over the baked cells only.\n",
             p.line()
         );
+        if !r.jobs_failed.is_empty() {
+            let _ = writeln!(
+                m,
+                "**{} job(s) failed**; `pipeline status` lists them.\n",
+                r.jobs_failed.len()
+            );
+        }
+    } else if let Some(jobs) = r.jobs_line() {
+        let _ = writeln!(
+            m,
+            "**The bake is not finished: {jobs}.** The numbers below cover only the baked \
+             cells ({} of {}); `pipeline status` lists the jobs.\n",
+            r.cells, r.grid_cells
+        );
     }
     if !r.overrides.is_empty() {
         let _ = writeln!(
@@ -252,6 +345,32 @@ pub fn to_markdown(r: &Report) -> String {
         );
     }
     let _ = writeln!(m, "## Per-cell averages (paper 000, Tables 3–8)\n");
+    match &r.per_cell {
+        Some(t) => averages_table(&mut m, t),
+        None => {
+            let _ = writeln!(m, "No cell is baked yet: there is nothing to average.");
+        }
+    }
+    let _ = writeln!(m, "\n## Storage\n\n| kind | bytes |\n|---|---|");
+    for (k, v) in [
+        ("base (models, instances)", s.base_bytes),
+        ("cell meshes (indices, masks, tables)", s.mesh_bytes),
+        ("cell textures", s.texture_bytes),
+        ("index", s.index_bytes),
+        ("total", s.total_bytes),
+    ] {
+        let _ = writeln!(m, "| {k} | {v} |");
+    }
+    if r.cells > 0 {
+        let _ = writeln!(m, "| per cell (average) | {:.0} |", s.per_cell_bytes);
+    }
+    time_section(&mut m, r);
+    m
+}
+
+/// The rows of the paper's Tables 3–8 for averages `t`.
+fn averages_table(m: &mut String, t: &PaperTable) {
+    use std::fmt::Write;
     let _ = writeln!(m, "| statistic | value |\n|---|---|");
     let rows = [
         (
@@ -294,17 +413,11 @@ pub fn to_markdown(r: &Report) -> String {
     for (k, v) in rows {
         let _ = writeln!(m, "| {k} | {v} |");
     }
-    let _ = writeln!(m, "\n## Storage\n\n| kind | bytes |\n|---|---|");
-    for (k, v) in [
-        ("base (models, instances)", s.base_bytes),
-        ("cell meshes (indices, masks, tables)", s.mesh_bytes),
-        ("cell textures", s.texture_bytes),
-        ("index", s.index_bytes),
-        ("total", s.total_bytes),
-    ] {
-        let _ = writeln!(m, "| {k} | {v} |");
-    }
-    let _ = writeln!(m, "| per cell (average) | {:.0} |", s.per_cell_bytes);
+}
+
+/// The Time section of [`to_markdown`].
+fn time_section(m: &mut String, r: &Report) {
+    use std::fmt::Write;
     let _ = writeln!(m, "\n## Time\n");
     let jobs_line = match r.job_cpu_s {
         Some(cpu) => format!(
@@ -328,7 +441,6 @@ pub fn to_markdown(r: &Report) -> String {
         m,
         "\n![heat maps: polygons, bytes, bake time per cell](report.png)"
     );
-    m
 }
 
 /// Writes `report.json`, `report.md` and `report.png` into `out`.
