@@ -21,8 +21,10 @@ pub type Fingerprint = [u8; 32];
 /// that `pipeline run` on an old output rebakes instead of keeping stale packs.
 /// History: 1 — session 1; 2 — zstd level 6, the one-pixel visibility tolerance;
 /// 3 — the MVMesh's l′ also looks from the prism point nearest each edge;
-/// 4 — the deviation bound of the edge collapse (`bake.max_deviation_px`).
-pub const BAKE_REVISION: u32 = 4;
+/// 4 — the deviation bound of the edge collapse (`bake.max_deviation_px`);
+/// 5 — collapses start from the models' LOD chains (`worker::lod_chain`), a moved
+/// carrier stays when within tolerance.
+pub const BAKE_REVISION: u32 = 5;
 
 /// Hex form for file names, logs and reports.
 pub fn to_hex(f: &Fingerprint) -> String {

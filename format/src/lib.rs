@@ -20,6 +20,7 @@ pub mod cleanup;
 mod field_positions;
 pub mod fingerprint;
 pub mod load;
+pub mod lod;
 pub mod manifest;
 pub mod mesh;
 pub mod mesh_ext;

@@ -15,6 +15,7 @@ use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 use worker::job::{bake_cell_pack, done_record, plan_jobs, run_job, BuildPlan, Job, JobRecord};
+use worker::lod_chain::LodChains;
 
 /// `<out>/plan.json`: what the run planned, for `pipeline status` and Slurm tasks.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -179,11 +180,21 @@ pub fn bake_local(l: &Loaded, jobs: &[Job], opts: &LocalOptions) -> Result<BakeO
     // With several threads, several jobs bake side by side in this process and none
     // has a CPU time of its own.
     let shared_process = pool.current_num_threads() > 1 && jobs.len() > 1;
+    if jobs.is_empty() {
+        return Ok(BakeOutcome {
+            done: Vec::new(),
+            failed: Vec::new(),
+        });
+    }
+    // Each model's LOD chain once, from `<out>/lod/` or built and cached there.
+    bar.set_message("lod chains");
+    let chains = pool.install(|| prepare_chains(l))?;
+    bar.set_message("baking");
     pool.install(|| {
         jobs.par_iter().for_each(|job| {
             let _ = std::fs::remove_file(error_path(&l.out, job.id));
             let result = run_job(&l.out, job, shared_process, |cell, fp| {
-                let r = bake_cell_pack(&l.plan, &l.scene, &l.build.grid, cell, fp);
+                let r = bake_cell_pack(&l.plan, &l.scene, &chains, &l.build.grid, cell, fp);
                 bar.inc(1);
                 r
             });
@@ -203,6 +214,14 @@ pub fn bake_local(l: &Loaded, jobs: &[Job], opts: &LocalOptions) -> Result<BakeO
     o.done.sort_by_key(|r| r.job);
     o.failed.sort();
     Ok(o)
+}
+
+/// The scene's per-model LOD chains (`worker::lod_chain`): loaded from `<out>/lod/`
+/// or built there, once per model, before any job needs them.
+pub fn prepare_chains(l: &Loaded) -> Result<LodChains, RunError> {
+    let (chains, _) =
+        LodChains::prepare(&l.scene, Some(&worker::job::lod_dir(&l.out))).map_err(failed)?;
+    Ok(chains)
 }
 
 /// Writes `index.pack` from the done jobs (all must be done), checking each pack

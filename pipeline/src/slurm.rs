@@ -168,6 +168,8 @@ pub fn run_slurm(
     std::fs::create_dir_all(&dir).map_err(failed)?;
 
     if !missing.is_empty() {
+        // 0. The models' LOD chains, once, here: every task loads them from <out>/lod/.
+        crate::run::prepare_chains(l)?;
         // 1. Scripts.
         let worker = sibling_binary("worker")?;
         let pipeline = sibling_binary("pipeline")?;

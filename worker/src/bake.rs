@@ -29,6 +29,7 @@ use crate::backface::regional_backface_cull;
 use crate::capture::{matrix_array, pack_texture};
 use crate::cluster::{greedy_clusters, ClusterCandidate, ClusterSettings};
 use crate::grid::HexGrid;
+use crate::lod_chain::LodChains;
 use crate::mvmesh::derive_mvmesh;
 use crate::raster::ProjectedTexture;
 use crate::selfocc::{choose_representation, object_self_occluding_error, Representation};
@@ -166,9 +167,24 @@ enum Job {
     Mv(u32),
 }
 
-/// Bakes one cell (module docs).
+/// Bakes one cell (module docs) with every collapse starting from the full meshes
+/// (the paper as written; [`bake_cell_with`] starts from the models' LOD chains).
 pub fn bake_cell(
     scene: &Scene,
+    grid: &HexGrid,
+    cell: u32,
+    cells: &CellParams,
+    params: &BakeParams,
+) -> Result<CellBake, BakeError> {
+    bake_cell_with(scene, &LodChains::none(), grid, cell, cells, params)
+}
+
+/// Bakes one cell (module docs); each proxy's collapse starts from the coarsest level
+/// of its model's chain in `chains` that the cell's region allows
+/// ([`crate::lod_chain`]).
+pub fn bake_cell_with(
+    scene: &Scene,
+    chains: &LodChains,
     grid: &HexGrid,
     cell: u32,
     cells: &CellParams,
@@ -287,7 +303,8 @@ pub fn bake_cell(
             let wrap = |source| BakeError::Proxy { cell, source };
             match job {
                 Job::Sv(group) => {
-                    let sv = derive_svmesh(scene, group, centre, &settings).map_err(wrap)?;
+                    let sv =
+                        derive_svmesh(scene, chains, group, centre, &settings).map_err(wrap)?;
                     let kind = if group.len() > 1 {
                         ProxyKind::Cluster
                     } else {
@@ -314,7 +331,8 @@ pub fn bake_cell(
                     ))
                 }
                 Job::Mv(i) => {
-                    let mv = derive_mvmesh(scene, *i, &eyes, &prism, &settings).map_err(wrap)?;
+                    let mv =
+                        derive_mvmesh(scene, chains, *i, &eyes, &prism, &settings).map_err(wrap)?;
                     Ok((
                         BakedProxy {
                             kind: ProxyKind::MvMesh,

@@ -19,6 +19,7 @@
 //! a done job or one that will be redone, and the bytes of a redone job are the same.
 
 use crate::grid::HexGrid;
+use crate::lod_chain::LodChains;
 use format::fingerprint::{job_fingerprint, params_fingerprint, scene_fingerprint, Fingerprint};
 use format::manifest::Plan;
 use format::pack::CellPack;
@@ -89,6 +90,11 @@ pub struct CellRecord {
     #[serde(with = "hex32")]
     pub checksum: [u8; 32],
     pub report: CellReport,
+}
+
+/// `<out>/lod/`: the per-model LOD chain cache ([`crate::lod_chain`]).
+pub fn lod_dir(out: &Path) -> PathBuf {
+    out.join("lod")
 }
 
 /// `jobs/<id>.json`.
@@ -264,11 +270,12 @@ mod hex32 {
 pub fn bake_cell_pack(
     plan: &Plan,
     scene: &Scene,
+    chains: &LodChains,
     grid: &HexGrid,
     cell: u32,
     fingerprint: &Fingerprint,
 ) -> Result<(CellPack, CellReport), String> {
-    let bake = crate::bake::bake_cell(scene, grid, cell, &plan.cells, &plan.bake)
+    let bake = crate::bake::bake_cell_with(scene, chains, grid, cell, &plan.cells, &plan.bake)
         .map_err(|e| e.to_string())?;
     let pack = bake.to_pack(*fingerprint).map_err(|e| e.to_string())?;
     let s = &bake.stats;

@@ -10,6 +10,7 @@ pub mod cluster;
 pub mod diagnostics;
 pub mod grid;
 pub mod job;
+pub mod lod_chain;
 pub mod mvmesh;
 pub mod picture;
 pub mod raster;

@@ -56,6 +56,10 @@ enum Command {
         /// Override the deviation bound (pixels; 0 = the paper's algorithm as written).
         #[arg(long)]
         max_deviation_px: Option<f32>,
+        /// Start every collapse from the full meshes instead of the models' LOD chains
+        /// (the paper as written; for comparing the two).
+        #[arg(long)]
+        no_lod_chain: bool,
         #[arg(long)]
         json: bool,
     },
@@ -173,8 +177,17 @@ fn run(cli: Cli) -> Result<(), Failure> {
             let error_file = out.join("jobs").join(format!("{id}.error"));
             let _ = std::fs::remove_file(&error_file);
             let result = pool.install(|| {
+                // The chains `pipeline run` prepared (or this task builds and caches).
+                let (chains, _) = worker::lod_chain::LodChains::prepare(
+                    &scene,
+                    Some(&worker::job::lod_dir(&out)),
+                )
+                .map_err(|e| worker::job::JobError::Cell {
+                    cell: job.cells.first().copied().unwrap_or(0),
+                    message: e.to_string(),
+                })?;
                 worker::job::run_job(&out, job, false, |cell, fp| {
-                    worker::job::bake_cell_pack(&plan, &scene, &build.grid, cell, fp)
+                    worker::job::bake_cell_pack(&plan, &scene, &chains, &build.grid, cell, fp)
                 })
             });
             match result {
@@ -202,6 +215,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
             out,
             edge_length_tolerance,
             max_deviation_px,
+            no_lod_chain,
             json,
         } => {
             let mut plan = format::manifest::parse_manifest(&manifest).map_err(bad_input)?;
@@ -214,8 +228,36 @@ fn run(cli: Cli) -> Result<(), Failure> {
             }
             let scene = plan.load_scene().map_err(bad_input)?;
             let grid = worker::grid::HexGrid::new(scene.ground, plan.cells.cell_size);
-            let bake = worker::bake::bake_cell(&scene, &grid, cell, &plan.cells, &plan.bake)
-                .map_err(bad_input)?;
+            // The chains of the manifest's output, as the bake uses them.
+            let chains = if no_lod_chain {
+                worker::lod_chain::LodChains::none()
+            } else {
+                let t = std::time::Instant::now();
+                let (chains, stats) = worker::lod_chain::LodChains::prepare(
+                    &scene,
+                    Some(&worker::job::lod_dir(&plan.output)),
+                )
+                .map_err(failed)?;
+                eprintln!(
+                    "lod chains: {} built, {} loaded in {:.1} s",
+                    stats.built,
+                    stats.loaded,
+                    t.elapsed().as_secs_f64()
+                );
+                chains
+            };
+            let t = std::time::Instant::now();
+            let bake =
+                worker::bake::bake_cell_with(&scene, &chains, &grid, cell, &plan.cells, &plan.bake)
+                    .map_err(bad_input)?;
+            let s = &bake.stats;
+            eprintln!(
+                "bake of cell {cell}: {:.2} s wall ({:.0} ms capture, {:.0} ms weights, {:.0} ms simplify, summed over proxies)",
+                t.elapsed().as_secs_f64(),
+                s.times.capture_ms,
+                s.times.weights_ms,
+                s.times.simplify_ms
+            );
             let r = worker::check::check_cell(
                 &scene,
                 &grid,

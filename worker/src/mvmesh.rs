@@ -31,13 +31,14 @@ use crate::backface::regional_backface_cull;
 use crate::capture::{capture_objects, CaptureError};
 use crate::classify::{classify_objects, WindowDepth};
 use crate::grid::Prism;
+use crate::lod_chain::LodChains;
 use crate::raster::ProjectedTexture;
 use crate::simplify::{
-    pixels_per_radian, simplify, ProjectedLength, SimplifyInput, SimplifyParams, MAX_VIEWS,
+    pixels_per_radian, simplify_seeded, ProjectedLength, SimplifyInput, SimplifyParams, MAX_VIEWS,
 };
 use crate::svmesh::{
     draw_item, ms_since, tidy_selection, world_vertices, MemberMesh, ProxyError, ProxySettings,
-    StageTimes,
+    StageTimes, StartMesh,
 };
 use crate::weights::{vertex_states, VertexState, BACK_FACING_WEIGHT};
 use format::Scene;
@@ -63,6 +64,7 @@ pub struct MvMesh {
 /// most [`MAX_VIEWS`] are used).
 pub fn derive_mvmesh(
     scene: &Scene,
+    chains: &LodChains,
     instance: u32,
     eyes: &[Vec3],
     prism: &Prism,
@@ -71,7 +73,10 @@ pub fn derive_mvmesh(
     let prism_corners = &prism.corners();
     let mut times = StageTimes::default();
     let item = draw_item(scene, instance)?;
-    let mesh = item.mesh;
+    // The collapse starts from a level of the model's LOD chain (crate::lod_chain):
+    // selection, states and weights are those of its vertices and triangles.
+    let start = StartMesh::of(scene, chains, &item, settings);
+    let mesh = start.mesh;
     let eyes = &eyes[..eyes.len().min(MAX_VIEWS as usize)];
 
     // Step 1: polygons not back-facing for the whole cell.
@@ -81,13 +86,7 @@ pub fn derive_mvmesh(
         .map(|culled| !culled)
         .collect();
     tidy_selection(&mesh.triangles, &mut kept, settings.speck_triangles);
-    let input_triangles: Vec<[u32; 3]> = mesh
-        .triangles
-        .iter()
-        .zip(&kept)
-        .filter(|(_, &k)| k)
-        .map(|(t, _)| *t)
-        .collect();
+    let (input_triangles, carried) = start.select(&kept);
     times.weights_ms += ms_since(t);
 
     // Steps 2–4: captures, per-view states, max weight and view sets.
@@ -156,7 +155,7 @@ pub fn derive_mvmesh(
     // Step 5: weighted edge collapse with l′ and the view-set constraint.
     let t = Instant::now();
     let (positions, normals) = world_vertices(mesh, item.transform);
-    let mut simplified = simplify(
+    let mut simplified = simplify_seeded(
         &SimplifyInput {
             positions: &positions,
             normals: &normals,
@@ -172,6 +171,7 @@ pub fn derive_mvmesh(
             },
             deviation: settings.deviation,
         },
+        carried.as_deref(),
     )
     .map_err(|source| ProxyError::Simplify { instance, source })?;
     times.simplify_ms += ms_since(t);

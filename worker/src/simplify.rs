@@ -354,6 +354,20 @@ pub fn simplify(
     input: &SimplifyInput,
     params: &SimplifyParams,
 ) -> Result<Simplified, SimplifyError> {
+    simplify_seeded(input, params, None)
+}
+
+/// [`simplify`] starting from a coarser level of the model ([`crate::lod_chain`]):
+/// `carried[t]` lists the original vertices that input triangle `t` already carries
+/// (removed by the chain's collapses). The deviation bound then covers them too, so
+/// it holds for every original vertex under the input triangles, end to end, as if
+/// the collapse had started from the full model. Ignored without a bound.
+pub fn simplify_seeded(
+    input: &SimplifyInput,
+    params: &SimplifyParams,
+    carried: Option<&[Vec<u32>]>,
+) -> Result<Simplified, SimplifyError> {
+    check_carried(input, carried)?;
     let ppr = params.length.pixels_per_radian();
     if !(ppr.is_finite() && ppr > 0.0) {
         return Err(SimplifyError::BadPixelsPerRadian(ppr));
@@ -413,7 +427,79 @@ pub fn simplify(
     };
     let mut collapser = Collapser::new(input);
     collapser.deviation = tolerances.map(|t| Deviation::new(t, input.triangles.len()));
+    if let Some(dev) = collapser.deviation.as_mut() {
+        dev.seed(carried);
+    }
     Ok(collapser.run(params.edge_length_tolerance, length))
+}
+
+/// Checks the carried lists of [`simplify_seeded`] / [`collapse_within`].
+fn check_carried(input: &SimplifyInput, carried: Option<&[Vec<u32>]>) -> Result<(), SimplifyError> {
+    let Some(carried) = carried else {
+        return Ok(());
+    };
+    if carried.len() != input.triangles.len() {
+        return Err(SimplifyError::LengthMismatch {
+            what: "carried lists",
+            expected: input.triangles.len(),
+            found: carried.len(),
+        });
+    }
+    for (t, list) in carried.iter().enumerate() {
+        if let Some(&vertex) = list.iter().find(|&&v| v as usize >= input.positions.len()) {
+            return Err(SimplifyError::IndexOutOfRange {
+                triangle: t,
+                vertex,
+                vertex_count: input.positions.len(),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// What [`collapse_within`] returns: the simplified triangles and, per surviving
+/// triangle (in output order), the removed vertices it carries.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Tracked {
+    pub simplified: Simplified,
+    pub carried: Vec<Vec<u32>>,
+}
+
+/// The collapse with a plain world-space tolerance per vertex instead of a bound
+/// in pixels (the per-model LOD chain, [`crate::lod_chain`]): every collapse the
+/// module's rules allow is taken, cheapest `cost` first (`length(a, b)` is l), while
+/// every removed vertex (and every vertex `carried` already lists, e.g. from a finer
+/// level) stays within `tolerance[v]` of the surviving surface; returns the result
+/// and the final carriers, so a coarser level or a cell can continue from it.
+pub fn collapse_within(
+    input: &SimplifyInput,
+    length: impl Fn(u32, u32) -> f32,
+    tolerance: Vec<f32>,
+    carried: Option<&[Vec<u32>]>,
+) -> Result<Tracked, SimplifyError> {
+    check_input(input, f32::INFINITY)?;
+    check_carried(input, carried)?;
+    if tolerance.len() != input.positions.len() {
+        return Err(SimplifyError::LengthMismatch {
+            what: "tolerances",
+            expected: input.positions.len(),
+            found: tolerance.len(),
+        });
+    }
+    let mut collapser = Collapser::new(input);
+    let mut dev = Deviation::new(tolerance, input.triangles.len());
+    dev.seed(carried);
+    collapser.deviation = Some(dev);
+    let simplified = collapser.run(f32::INFINITY, length);
+    let mut dev = collapser.deviation.take().expect("set above");
+    let carried = (0..input.triangles.len())
+        .filter(|&t| collapser.alive[t])
+        .map(|t| std::mem::take(&mut dev.carried[t]))
+        .collect();
+    Ok(Tracked {
+        simplified,
+        carried,
+    })
 }
 
 /// [`simplify`] with a caller-supplied projected length: `length_px(a, b)` gives l
@@ -549,7 +635,8 @@ struct Deviation {
     carried: Vec<Vec<u32>>,
     /// Set by a successful `can_collapse`: (point, triangle) assignments.
     pending: Vec<(u32, u32)>,
-    scratch_points: Vec<u32>,
+    /// (point, index in `scratch_fan` of its carrier after the collapse).
+    scratch_points: Vec<(u32, usize)>,
     /// v's fan after the candidate collapse: (triangle id, corner positions).
     scratch_fan: Vec<(u32, [Vec3; 3])>,
 }
@@ -562,6 +649,13 @@ impl Deviation {
             pending: Vec::new(),
             scratch_points: Vec::new(),
             scratch_fan: Vec::new(),
+        }
+    }
+
+    /// Starts from carried lists of a coarser level (checked by `check_carried`).
+    fn seed(&mut self, carried: Option<&[Vec<u32>]>) {
+        if let Some(carried) = carried {
+            self.carried = carried.to_vec();
         }
     }
 }
@@ -612,7 +706,7 @@ impl<'a> Collapser<'a> {
         }
     }
 
-    fn run(mut self, tolerance: f32, length_px: impl Fn(u32, u32) -> f32) -> Simplified {
+    fn run(&mut self, tolerance: f32, length_px: impl Fn(u32, u32) -> f32) -> Simplified {
         let weights = self.input.weights;
         let normals = self.input.normals;
         let cost_of = |a: u32, b: u32| -> f32 {
@@ -958,20 +1052,49 @@ impl<'a> Collapser<'a> {
                 fan.push((t, corners(tri)));
             }
         }
+        // Points to check, each with the index in `fan` of its carrier after the
+        // collapse (usize::MAX: its carrier disappears, or u itself).
         let mut points = std::mem::take(&mut dev.scratch_points);
         points.clear();
-        points.push(u);
+        points.push((u, usize::MAX));
         for &t in &self.fans[u as usize] {
             let tri = self.triangles[t as usize];
-            if !tri.contains(&v) {
+            let moved = if tri.contains(&v) {
+                // The corner opposite the edge loses its last triangle when all of
+                // its triangles are on the edge: it leaves the mesh like u and must
+                // be carried like u.
+                for &w in &tri {
+                    if w != u
+                        && w != v
+                        && self.fans[w as usize].iter().all(|&s| {
+                            let other = &self.triangles[s as usize];
+                            other.contains(&u) && other.contains(&v)
+                        })
+                    {
+                        points.push((w, usize::MAX));
+                    }
+                }
+                usize::MAX
+            } else {
                 fan.push((t, corners(tri.map(|x| if x == u { v } else { x }))));
-            }
-            points.extend_from_slice(&dev.carried[t as usize]);
+                fan.len() - 1
+            };
+            points.extend(dev.carried[t as usize].iter().map(|&p| (p, moved)));
         }
         dev.pending.clear();
         let ok = !fan.is_empty()
-            && points.iter().all(|&p| {
+            && points.iter().all(|&(p, moved)| {
                 let q = positions[p as usize];
+                let tol = dev.tolerance[p as usize];
+                // A point whose carrier only moves is usually still close to it:
+                // keep it there when it is within tolerance (any carrier within
+                // tolerance keeps the bound; the nearest is searched otherwise).
+                if let Some(&(t, [a, b, c])) = fan.get(moved) {
+                    if point_triangle_distance_squared(q, a, b, c) <= tol * tol {
+                        dev.pending.push((p, t));
+                        return true;
+                    }
+                }
                 let (d, t) = fan
                     .iter()
                     .map(|&(t, [a, b, c])| (point_triangle_distance_squared(q, a, b, c), t))
@@ -983,7 +1106,6 @@ impl<'a> Collapser<'a> {
                         }
                     });
                 dev.pending.push((p, t));
-                let tol = dev.tolerance[p as usize];
                 d <= tol * tol
             });
         dev.scratch_fan = fan;

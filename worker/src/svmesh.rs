@@ -28,9 +28,10 @@ use crate::backface::front_facing_from;
 use crate::capture::{capture_objects, CaptureError};
 use crate::classify::{classify_objects, WindowDepth};
 use crate::grid::Prism;
+use crate::lod_chain::{LodChains, START_FRACTION, UNBOUNDED_START_PX};
 use crate::raster::{DrawItem, ProjectedTexture, BACKGROUND_ID};
 use crate::simplify::{
-    pixels_per_radian, simplify, DeviationBound, ProjectedLength, Simplified, SimplifyError,
+    pixels_per_radian, simplify_seeded, DeviationBound, ProjectedLength, Simplified, SimplifyError,
     SimplifyInput, SimplifyParams,
 };
 use crate::visibility::DepthTolerance;
@@ -58,6 +59,9 @@ pub struct ProxySettings {
     pub speck_triangles: usize,
     /// The collapse's deviation bound (`None`: the paper's algorithm as written).
     pub deviation: Option<DeviationBound>,
+    /// The region the proxy serves, for choosing the LOD chain level a collapse
+    /// starts from ([`crate::lod_chain`]); `None`: always from the full mesh.
+    pub lod_region: Option<Prism>,
 }
 
 impl ProxySettings {
@@ -71,6 +75,7 @@ impl ProxySettings {
             depth_tolerance: DepthTolerance::default(),
             speck_triangles: SPECK_TRIANGLES,
             deviation: None,
+            lod_region: None,
         }
     }
 
@@ -83,6 +88,7 @@ impl ProxySettings {
                 max_px: params.max_deviation_px,
                 region: prism,
             }),
+            lod_region: Some(prism),
             ..ProxySettings::new(params, cell_size)
         }
     }
@@ -107,6 +113,57 @@ pub enum ProxyError {
         #[source]
         source: SimplifyError,
     },
+}
+
+/// The mesh a member's collapse starts from: the coarsest level of its model's LOD
+/// chain that the region allows ([`crate::lod_chain::LodChain::start_for`]), or the model itself.
+pub(crate) struct StartMesh<'a> {
+    pub mesh: &'a format::Mesh,
+    /// Per triangle of `mesh`, the original vertices it carries (chain levels only).
+    pub carried: Option<&'a [Vec<u32>]>,
+}
+
+impl<'a> StartMesh<'a> {
+    pub(crate) fn of(
+        scene: &Scene,
+        chains: &'a LodChains,
+        item: &DrawItem<'a>,
+        settings: &ProxySettings,
+    ) -> StartMesh<'a> {
+        let level = settings.lod_region.as_ref().and_then(|region| {
+            let model = scene.instances.get(item.object_id as usize)?.model;
+            let budget_px = settings
+                .deviation
+                .map_or(UNBOUNDED_START_PX, |d| d.max_px * START_FRACTION);
+            chains.get(model)?.start_for(
+                item.transform,
+                scene.instance_bounds(item.object_id as usize),
+                region,
+                budget_px,
+                pixels_per_radian(settings.image_res),
+            )
+        });
+        match level {
+            Some(l) => StartMesh {
+                mesh: &l.mesh,
+                carried: Some(&l.carried),
+            },
+            None => StartMesh {
+                mesh: item.mesh,
+                carried: None,
+            },
+        }
+    }
+
+    /// The selected triangles and their carried lists, in mesh order.
+    pub(crate) fn select(&self, selected: &[bool]) -> (Vec<[u32; 3]>, Option<Vec<Vec<u32>>>) {
+        let picked = || (0..self.mesh.triangles.len()).filter(|&t| selected[t]);
+        let triangles = picked().map(|t| self.mesh.triangles[t]).collect();
+        let carried = self
+            .carried
+            .map(|c| picked().map(|t| c[t].clone()).collect());
+        (triangles, carried)
+    }
 }
 
 /// Time spent per stage, in milliseconds (never written to packs).
@@ -202,6 +259,7 @@ pub(crate) fn draw_item(scene: &Scene, instance: u32) -> Result<DrawItem<'_>, Pr
 /// centre `centre` (module docs). Members come out in the order given.
 pub fn derive_svmesh(
     scene: &Scene,
+    chains: &LodChains,
     instances: &[u32],
     centre: Vec3,
     settings: &ProxySettings,
@@ -240,7 +298,8 @@ pub fn derive_svmesh(
     let mut members = Vec::with_capacity(items.len());
     for item in &items {
         let t = Instant::now();
-        let mesh = item.mesh;
+        let start = StartMesh::of(scene, chains, item, settings);
+        let mesh = start.mesh;
         let states = vertex_states(
             mesh,
             item.transform,
@@ -253,12 +312,29 @@ pub fn derive_svmesh(
         // Step 1 (and 4 for clusters): the triangles to simplify.
         let mut front = front_facing_from(mesh, item.transform, centre);
         tidy_selection(&mesh.triangles, &mut front, settings.speck_triangles);
-        let seen = (items.len() > 1).then(|| seen_triangles(&capture.capture, item));
-        let input_triangles: Vec<[u32; 3]> = mesh
+        let seen = (items.len() > 1).then(|| {
+            let seen = seen_triangles(&capture.capture, item);
+            if start.carried.is_none() {
+                return seen;
+            }
+            // A chain level: a level triangle counts as shown when one of its
+            // vertices belongs to a shown original triangle.
+            let mut shown = vec![false; mesh.positions.len()];
+            for (tri, _) in item.mesh.triangles.iter().zip(&seen).filter(|(_, &s)| s) {
+                for &v in tri {
+                    shown[v as usize] = true;
+                }
+            }
+            mesh.triangles
+                .iter()
+                .map(|tri| tri.iter().any(|&v| shown[v as usize]))
+                .collect()
+        });
+        let selected: Vec<bool> = mesh
             .triangles
             .iter()
             .enumerate()
-            .filter(|&(t, tri)| {
+            .map(|(t, tri)| {
                 front[t]
                     && seen.as_ref().is_none_or(|seen| {
                         seen[t]
@@ -267,14 +343,14 @@ pub fn derive_svmesh(
                             })
                     })
             })
-            .map(|(_, tri)| *tri)
             .collect();
+        let (input_triangles, carried) = start.select(&selected);
         times.weights_ms += ms_since(t);
 
         // Step 5: weighted edge collapse.
         let t = Instant::now();
         let (positions, normals) = world_vertices(mesh, item.transform);
-        let simplified = simplify(
+        let simplified = simplify_seeded(
             &SimplifyInput {
                 positions: &positions,
                 normals: &normals,
@@ -287,6 +363,7 @@ pub fn derive_svmesh(
                 length: length.clone(),
                 deviation: settings.deviation,
             },
+            carried.as_deref(),
         )
         .map_err(|source| ProxyError::Simplify {
             instance: item.object_id,

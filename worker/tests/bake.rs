@@ -5,9 +5,10 @@ use format::manifest::{parse_manifest, BakeParams, CellParams};
 use format::{Ground, Instance, Model, Scene};
 use glam::{Mat4, Vec3};
 use std::path::PathBuf;
-use worker::bake::{bake_cell, Assignment, CellBake};
+use worker::bake::{bake_cell, bake_cell_with, Assignment, CellBake};
 use worker::check::{check_cell, psnr_y};
 use worker::grid::HexGrid;
+use worker::lod_chain::LodChains;
 use worker::mvmesh::derive_mvmesh;
 use worker::raster::{
     render, render_with, CullMode, DrawItem, ProjectiveSurface, ProjectiveTextures, Shading, View,
@@ -136,6 +137,54 @@ fn demo_bake_is_identical_for_one_and_two_threads() {
     let other = (cell + 1) % grid.cell_count();
     let b = bake_cell(&scene, &grid, other, &cells, &params).unwrap();
     assert_ne!(b.to_pack(fp).unwrap().encode().unwrap(), one);
+}
+
+/// The output-sensitive path (issue 13): collapses that start from the models' LOD
+/// chains give valid proxies, the same pack for one and two threads and for chains
+/// built or loaded from the cache, fewer collapse inputs than the full meshes, and a
+/// PSNR within 1 dB of the full-mesh bake.
+#[test]
+fn demo_bake_from_lod_chains_is_valid_deterministic_and_close() {
+    let (scene, grid, cells, params) = demo();
+    let cell = busy_cell(&scene, &grid);
+    let cache = tempfile::tempdir().unwrap();
+    let (built, stats) = LodChains::prepare(&scene, Some(cache.path())).unwrap();
+    assert_eq!(stats.built as usize, scene.models.len());
+    let (loaded, stats) = LodChains::prepare(&scene, Some(cache.path())).unwrap();
+    assert_eq!(stats.loaded as usize, scene.models.len());
+    let fp = [7u8; 32];
+    let pack = |chains: &LodChains, threads| {
+        in_pool(threads, || {
+            let b = bake_cell_with(&scene, chains, &grid, cell, &cells, &params).unwrap();
+            validate_bake(&scene, &b);
+            (b.to_pack(fp).unwrap().encode().unwrap(), b)
+        })
+    };
+    let (one, chained) = pack(&built, 1);
+    let (two, _) = pack(&loaded, 2);
+    assert_eq!(one, two);
+    let full = bake_cell(&scene, &grid, cell, &cells, &params).unwrap();
+    let inputs = |b: &CellBake| -> usize {
+        b.proxies
+            .iter()
+            .flat_map(|p| &p.members)
+            .map(|m| m.input_triangles.len())
+            .sum()
+    };
+    assert!(
+        inputs(&chained) < inputs(&full),
+        "{} vs {}",
+        inputs(&chained),
+        inputs(&full)
+    );
+    let psnr = |b: &CellBake| {
+        check_cell(&scene, &grid, cell, &cells, &params, b, 6, 256)
+            .unwrap()
+            .pooled_psnr_y
+    };
+    let (with, without) = (psnr(&chained), psnr(&full));
+    eprintln!("demo cell {cell}: chains {with:.2} dB, full meshes {without:.2} dB");
+    assert!(with > without - 1.0, "{with} vs {without}");
 }
 
 #[test]
@@ -296,7 +345,7 @@ fn bunny_proxy(
                 .into_iter()
                 .map(|c| worker::bake::cell_eye(grid, c, cells)),
         );
-        let mv = derive_mvmesh(scene, 0, &eyes, &prism, settings).unwrap();
+        let mv = derive_mvmesh(scene, &LodChains::none(), 0, &eyes, &prism, settings).unwrap();
         validate(n, &mv.member.input_triangles, &mv.member.simplified).unwrap();
         validate_view_masks(&mv.vertex_view_sets, &mv.member.simplified).unwrap();
         let s = &mv.member.simplified;
@@ -311,7 +360,7 @@ fn bunny_proxy(
             s.triangles.clone(),
         )
     } else {
-        let sv = derive_svmesh(scene, &[0], centre, settings).unwrap();
+        let sv = derive_svmesh(scene, &LodChains::none(), &[0], centre, settings).unwrap();
         let m = &sv.members[0];
         validate(n, &m.input_triangles, &m.simplified).unwrap();
         (

@@ -8,9 +8,9 @@ use std::f32::consts::PI;
 use std::path::PathBuf;
 use worker::grid::Prism;
 use worker::simplify::{
-    pixels_per_radian, point_triangle_distance_squared, simplify, simplify_with, validate,
-    validate_view_masks, DeviationBound, ProjectedLength, Simplified, SimplifyError, SimplifyInput,
-    SimplifyParams, ValidationError,
+    pixels_per_radian, point_triangle_distance_squared, simplify, simplify_seeded, simplify_with,
+    validate, validate_view_masks, DeviationBound, ProjectedLength, Simplified, SimplifyError,
+    SimplifyInput, SimplifyParams, ValidationError,
 };
 
 // ---------------------------------------------------------------- mesh helpers
@@ -1110,4 +1110,155 @@ fn bunny_counts_next_to_the_paper() {
     for w in whole.windows(2).filter(|w| w[0].0 == w[1].0) {
         assert!(w[1].1 <= w[0].1, "{whole:?}");
     }
+}
+
+// ------------------------------------------------- per-model LOD chains (issue 13)
+
+fn model_of(mesh: &TestMesh) -> format::Model {
+    let m = format::Mesh {
+        positions: mesh.positions.iter().map(|p| p.to_array()).collect(),
+        normals: mesh.normals.iter().map(|n| n.to_array()).collect(),
+        albedo: vec![[200, 200, 200, 255]; mesh.positions.len()],
+        triangles: mesh.triangles.clone(),
+    };
+    format::Model {
+        name: "test".into(),
+        source: "test".into(),
+        content_hash: [1; 32],
+        mesh: m,
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(48))]
+
+    /// Each level of a model's chain is a valid simplification of the model, nested
+    /// (never more triangles than the finer level), and its error bound is
+    /// conservative: every vertex the model's triangles use lies within `max_error`
+    /// (≤ the level's ε) of the level's surface, and its carriers say the same.
+    #[test]
+    fn lod_chain_levels_bound_every_original_vertex(mesh in arb_mesh()) {
+        let model = model_of(&mesh);
+        let chain = worker::lod_chain::LodChain::build(&model).unwrap();
+        prop_assert_eq!(chain.levels.len() as u32, worker::lod_chain::CHAIN_LEVELS);
+        let mut used: Vec<u32> = mesh.triangles.iter().flatten().copied().collect();
+        used.sort_unstable();
+        used.dedup();
+        let mut finer = mesh.triangles.len();
+        for (k, level) in chain.levels.iter().enumerate() {
+            let tris = &level.mesh.triangles;
+            prop_assert!(tris.len() <= finer, "level {} grew", k);
+            finer = tris.len();
+            prop_assert!(level.max_error <= level.bound * 1.0001, "level {}: {} > ε {}", k, level.max_error, level.bound);
+            prop_assert_eq!(level.carried.len(), tris.len());
+            let as_output = Simplified { triangles: tris.clone(), ..Simplified::default() };
+            validate(mesh.positions.len(), &mesh.triangles, &as_output).unwrap();
+            for &v in &used {
+                let d = distance_to_surface(&mesh.positions, tris, mesh.positions[v as usize]);
+                prop_assert!(d <= level.max_error * 1.0001 + 1e-5,
+                    "level {}: vertex {} is {} from the surface, max_error {}", k, v, d, level.max_error);
+            }
+            let carried = worker::lod_chain::max_carried_distance(&mesh.positions, tris, &level.carried);
+            prop_assert!(carried <= level.max_error);
+            // Every original vertex is on the level or carried by exactly one triangle.
+            let mut count = vec![0u32; mesh.positions.len()];
+            tris.iter().flatten().for_each(|&v| count[v as usize] = 1);
+            level.carried.iter().flatten().for_each(|&v| count[v as usize] += 1);
+            for &v in &used {
+                prop_assert_eq!(count[v as usize], 1, "level {}: vertex {}", k, v);
+            }
+        }
+    }
+
+    /// End to end: a cell's bounded collapse that starts from any chain level, with
+    /// the level's carriers, keeps every vertex of the *original* model within the
+    /// pixel bound seen from the prism — as if it had started from the full mesh.
+    #[test]
+    fn deviation_bound_holds_end_to_end_from_a_chain_level(
+        mesh in arb_mesh(),
+        prism in arb_prism(),
+        max_px in prop_oneof![0.25f32..2.0, 2.0f32..200.0],
+        level in 0usize..8,
+    ) {
+        let model = model_of(&mesh);
+        let chain = worker::lod_chain::LodChain::build(&model).unwrap();
+        let start = &chain.levels[level];
+        // Only a level whose own error the bound allows can be a start (LodChain::start_for).
+        let ppr = pixels_per_radian(1024);
+        let bound = DeviationBound { max_px, region: prism };
+        let allowed = mesh.triangles.iter().flatten().all(|&v| {
+            let p = mesh.positions[v as usize];
+            let d = distance_to_surface(&mesh.positions, &start.mesh.triangles, p);
+            d <= bound.world_tolerance(p, ppr)
+        });
+        prop_assume!(allowed);
+        {
+            let mut count = vec![0u32; mesh.positions.len()];
+            start.mesh.triangles.iter().flatten().for_each(|&v| count[v as usize] = 1);
+            start.carried.iter().flatten().for_each(|&v| count[v as usize] += 1);
+            for &v in mesh.triangles.iter().flatten() {
+                prop_assert_eq!(count[v as usize], 1, "vertex {}", v);
+            }
+        }
+        let w = vec![0.25f32; mesh.positions.len()];
+        let input = SimplifyInput { triangles: &start.mesh.triangles, ..input_of(&mesh, &w) };
+        let params = SimplifyParams {
+            edge_length_tolerance: 1e6,
+            length: ProjectedLength::MaxOverPrism { prism, pixels_per_radian: ppr },
+            deviation: Some(bound),
+        };
+        let out = simplify_seeded(&input, &params, Some(&start.carried)).unwrap();
+        validate(mesh.positions.len(), &start.mesh.triangles, &out).unwrap();
+        let mut used: Vec<u32> = mesh.triangles.iter().flatten().copied().collect();
+        used.sort_unstable();
+        used.dedup();
+        for v in used {
+            let p = mesh.positions[v as usize];
+            let tolerance = bound.world_tolerance(p, ppr);
+            let d = distance_to_surface(&mesh.positions, &out.triangles, p);
+            prop_assert!(d <= tolerance * 1.0001 + 1e-5,
+                "vertex {} is {} from the surface, tolerance {}", v, d, tolerance);
+        }
+    }
+
+    /// The transform's largest stretch is never below what it does to any vector.
+    #[test]
+    fn max_stretch_bounds_every_vector(
+        cols in prop::array::uniform9(-3.0f32..3.0),
+        v in prop::array::uniform3(-1.0f32..1.0),
+    ) {
+        let m = glam::Mat3::from_cols_array(&cols);
+        let t = glam::Mat4::from_mat3(m);
+        let v = Vec3::from_array(v);
+        prop_assert!((m * v).length() <= worker::lod_chain::max_stretch(t) * v.length() * 1.0001 + 1e-6);
+    }
+}
+
+/// A chain file round-trips and is refused once damaged, or when made for another
+/// model.
+#[test]
+fn lod_chain_file_round_trips_and_refuses_damage() {
+    let mesh = icosphere(2, Vec3::ZERO, 3.0, &[0.3, -0.2, 0.1]);
+    let model = model_of(&mesh);
+    let chain = worker::lod_chain::LodChain::build(&model).unwrap();
+    assert!(chain.levels.last().unwrap().mesh.triangles.len() < mesh.triangles.len());
+    let bytes = chain.to_file(mesh.positions.len() as u32).encode();
+    let file = format::lod::LodChainFile::decode(&bytes).unwrap();
+    let back = worker::lod_chain::LodChain::from_file(file.clone(), &model).unwrap();
+    assert_eq!(back, chain);
+    let other = format::Model {
+        content_hash: [2; 32],
+        ..model.clone()
+    };
+    assert!(worker::lod_chain::LodChain::from_file(file, &other).is_none());
+    for cut in [0, 10, 95, bytes.len() - 1] {
+        assert!(
+            format::lod::LodChainFile::decode(&bytes[..cut]).is_err(),
+            "cut {cut}"
+        );
+    }
+    let mut flipped = bytes.clone();
+    let last = flipped.len() - 1;
+    flipped[last] ^= 1;
+    assert!(format::lod::LodChainFile::decode(&flipped).is_err());
 }
