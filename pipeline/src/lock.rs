@@ -5,6 +5,10 @@
 //! complete one, never a torn one. A lock left by a dead process on this host is
 //! taken over (a crash must not block the next run). The temp file a kill may leave
 //! is swept with the other stale temp files.
+//!
+//! Before the lock, [`create_output_dir`] makes the directory itself, with errors that
+//! name the path and say what hexbake was doing (issue 19: `--out` inside `/proc` or
+//! naming a regular file printed a bare "No such file or directory" / "File exists").
 
 use std::path::{Path, PathBuf};
 use std::time::Duration;
@@ -29,6 +33,46 @@ pub enum LockError {
         path: PathBuf,
         source: std::io::Error,
     },
+}
+
+/// Why the output directory cannot be made.
+#[derive(Debug, thiserror::Error)]
+pub enum OutputDirError {
+    #[error(
+        "{}: cannot write the bake there: {} is a file, not a directory (the output is a \
+         directory of packs; choose a new or existing directory for --out or the \
+         manifest's `output`)",
+        out.display(), file.display()
+    )]
+    NotADirectory { out: PathBuf, file: PathBuf },
+    #[error("{}: cannot create the output directory: {source}", out.display())]
+    Create {
+        out: PathBuf,
+        source: std::io::Error,
+    },
+}
+
+/// Creates the output directory `out` and its parents (nothing when it exists), or
+/// says why not, naming the path: `out` or one of its ancestors is a file, or the
+/// system refuses the directory (inside `/proc`, a read-only file system, no
+/// permission).
+pub fn create_output_dir(out: &Path) -> Result<(), OutputDirError> {
+    // The nearest existing ancestor (or `out` itself) must be a directory.
+    if let Some(file) = out
+        .ancestors()
+        .filter(|a| !a.as_os_str().is_empty())
+        .find(|a| a.symlink_metadata().is_ok())
+        .filter(|a| !a.is_dir())
+    {
+        return Err(OutputDirError::NotADirectory {
+            out: out.to_path_buf(),
+            file: file.to_path_buf(),
+        });
+    }
+    std::fs::create_dir_all(out).map_err(|source| OutputDirError::Create {
+        out: out.to_path_buf(),
+        source,
+    })
 }
 
 /// A lock whose text does not parse and that has not changed for this long was torn
@@ -185,5 +229,36 @@ mod tests {
             OutputLock::acquire(dir.path()),
             Err(LockError::Held { pid: 999999999, .. })
         ));
+    }
+
+    /// Issue 19: the errors name the path and what was being done.
+    #[test]
+    fn output_dir_errors_name_the_path() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("a-file");
+        std::fs::write(&file, "x").unwrap();
+        for out in [file.clone(), file.join("sub/deeper")] {
+            let e = create_output_dir(&out).unwrap_err();
+            assert!(
+                matches!(&e, OutputDirError::NotADirectory { file: f, .. } if *f == file),
+                "{e}"
+            );
+            let shown = e.to_string();
+            assert!(
+                shown.starts_with(&format!("{}: ", out.display())),
+                "{shown}"
+            );
+            assert!(shown.contains("is a file, not a directory"), "{shown}");
+        }
+        let e = create_output_dir(std::path::Path::new("/proc/hexbake-out")).unwrap_err();
+        let shown = e.to_string();
+        assert!(
+            shown.starts_with("/proc/hexbake-out: cannot create the output directory: "),
+            "{shown}"
+        );
+        // New and existing directories are fine.
+        let new = dir.path().join("x/y");
+        create_output_dir(&new).unwrap();
+        create_output_dir(&new).unwrap();
     }
 }

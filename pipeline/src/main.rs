@@ -216,6 +216,8 @@ fn run(cli: Cli) -> Result<(), Failure> {
             }
             let loaded = pipeline::run::load_with(&manifest, out.as_deref(), &overrides)
                 .map_err(from_run)?;
+            // An output path that cannot hold a directory is bad input; the error names it.
+            pipeline::lock::create_output_dir(&loaded.out).map_err(bad_input)?;
             if let Some(spec) = cells {
                 let selection = pipeline::subset::Selection::new(&spec, &loaded.build.grid)
                     .map_err(bad_input)?;

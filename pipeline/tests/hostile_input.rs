@@ -130,3 +130,38 @@ fn scene_refuses_deep_nesting_quickly() {
     let out = pipeline(&["scene", m.to_str().unwrap()]);
     assert_bad_input(&out, &["deep.ron:1:65: ", "nested more than 64 deep"]);
 }
+
+/// `--out` inside /proc printed a bare "No such file or directory", and `--out`
+/// naming a regular file a bare "File exists": both now name the path and what
+/// hexbake was doing.
+#[test]
+fn run_names_an_output_path_it_cannot_use() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("a-file");
+    std::fs::write(&file, "not a directory").unwrap();
+    let file_s = file.to_str().unwrap().to_string();
+    let below = format!("{file_s}/out");
+    for (out, says) in [
+        (
+            "/proc/hexbake-out".to_string(),
+            "/proc/hexbake-out: cannot create the output directory: No such file or directory"
+                .to_string(),
+        ),
+        (
+            file_s.clone(),
+            format!("{file_s}: cannot write the bake there: {file_s} is a file, not a directory"),
+        ),
+        (
+            below.clone(),
+            format!("{below}: cannot write the bake there: {file_s} is a file"),
+        ),
+    ] {
+        let o = pipeline(&["run", "manifests/demo.ron", "--quiet", "--out", &out]);
+        assert_bad_input(&o, &[&says]);
+    }
+    assert_eq!(
+        std::fs::read_to_string(&file).unwrap(),
+        "not a directory",
+        "the file is left alone"
+    );
+}
