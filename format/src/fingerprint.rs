@@ -31,6 +31,18 @@ pub fn to_hex(f: &Fingerprint) -> String {
     f.iter().map(|b| format!("{b:02x}")).collect()
 }
 
+/// The fingerprint of its [`to_hex`] form (exactly 64 hex digits), else `None`.
+pub fn from_hex(text: &str) -> Option<Fingerprint> {
+    if text.len() != 64 || !text.is_ascii() {
+        return None;
+    }
+    let mut out = [0u8; 32];
+    for (i, b) in out.iter_mut().enumerate() {
+        *b = u8::from_str_radix(&text[2 * i..2 * i + 2], 16).ok()?;
+    }
+    Some(out)
+}
+
 fn f32s(h: &mut blake3::Hasher, values: &[f32]) {
     for v in values {
         h.update(&v.to_le_bytes());

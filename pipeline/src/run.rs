@@ -193,8 +193,12 @@ pub fn bake_local(l: &Loaded, jobs: &[Job], opts: &LocalOptions) -> Result<BakeO
     pool.install(|| {
         jobs.par_iter().for_each(|job| {
             let _ = std::fs::remove_file(error_path(&l.out, job.id));
+            // Proxies of the job's earlier bake whose keys still match are reused.
+            let reuse = worker::job::previous_proxies(&l.out, job);
+            let none = worker::bake::ProxyReuse::new();
             let result = run_job(&l.out, job, shared_process, |cell, fp| {
-                let r = bake_cell_pack(&l.plan, &l.scene, &chains, &l.build.grid, cell, fp);
+                let reuse = reuse.get(&cell).unwrap_or(&none);
+                let r = bake_cell_pack(&l.plan, &l.scene, &chains, reuse, &l.build.grid, cell, fp);
                 bar.inc(1);
                 r
             });

@@ -39,6 +39,7 @@ use format::pack::{CellPack, Proxy, ProxyKind, ProxyMember, ProxyView};
 use format::Scene;
 use glam::Vec3;
 use rayon::prelude::*;
+use std::collections::BTreeMap;
 use std::time::Instant;
 use thiserror::Error;
 
@@ -90,13 +91,119 @@ pub struct BakedMember {
 pub struct BakedProxy {
     pub kind: ProxyKind,
     pub members: Vec<BakedMember>,
+    /// The captures (empty for a proxy reused from an earlier bake: see `packed`).
     pub views: Vec<ProjectedTexture>,
+    /// Content key: the hash of exactly what the proxy depends on ([`proxy_key`]).
+    pub key: ProxyKey,
+    /// Reused from an earlier bake of the cell (its key matched): the pack form,
+    /// written as it is. Its members carry triangles and masks, no collapse inputs.
+    pub packed: Option<Proxy>,
 }
 
 impl BakedProxy {
     pub fn triangle_count(&self) -> u64 {
         self.members.iter().map(|m| m.triangles.len() as u64).sum()
     }
+
+    pub fn view_count(&self) -> usize {
+        self.packed
+            .as_ref()
+            .map_or(self.views.len(), |p| p.views.len())
+    }
+
+    /// Decoded RGBA8 bytes of the proxy's textures.
+    pub fn texture_bytes(&self) -> u64 {
+        match &self.packed {
+            Some(p) => p
+                .views
+                .iter()
+                .map(|v| u64::from(v.texture.width) * u64::from(v.texture.height) * 4)
+                .sum(),
+            None => self.views.iter().map(|v| v.rgba.len() as u64).sum(),
+        }
+    }
+
+    /// A proxy of an earlier bake whose key matches.
+    fn reused(packed: &Proxy, key: ProxyKey) -> BakedProxy {
+        BakedProxy {
+            kind: packed.kind,
+            members: packed
+                .members
+                .iter()
+                .map(|m| BakedMember {
+                    instance: m.instance,
+                    input_triangles: Vec::new(),
+                    triangles: m.triangles.clone(),
+                    view_masks: m.view_masks.clone(),
+                    vertex_view_sets: Vec::new(),
+                })
+                .collect(),
+            views: Vec::new(),
+            key,
+            packed: Some(packed.clone()),
+        }
+    }
+}
+
+/// A proxy's content key (issue 13, "per-proxy content-addressed cache").
+pub type ProxyKey = [u8; 32];
+
+/// Proxies of an earlier bake of a cell, by key: a proxy whose key is here is taken
+/// as it is instead of derived again.
+pub type ProxyReuse = BTreeMap<ProxyKey, Proxy>;
+
+/// The key of a proxy: blake3 of exactly what its derivation reads — the bake and
+/// cell parameters with the format version and bake revision
+/// ([`format::fingerprint::params_fingerprint`]), its kind, the region it serves
+/// (the prism) and the eyes it is captured from, and per member (in order) the
+/// instance id, its model's content hash (which also decides the model's LOD
+/// chain), transform and tint. A proxy's derivation reads nothing else: captures show
+/// its members alone, and collapses see only their own meshes. So equal keys mean
+/// byte-equal proxies, and a rebake after a manifest change derives only proxies
+/// whose key changed.
+pub fn proxy_key(
+    scene: &Scene,
+    params: &format::fingerprint::Fingerprint,
+    kind: ProxyKind,
+    members: &[u32],
+    prism: &crate::grid::Prism,
+    eyes: &[Vec3],
+) -> ProxyKey {
+    let mut h = blake3::Hasher::new();
+    h.update(b"hexbake proxy v1\0");
+    h.update(params);
+    h.update(&[kind as u8]);
+    let floats = |h: &mut blake3::Hasher, values: &[f32]| {
+        for v in values {
+            h.update(&v.to_le_bytes());
+        }
+    };
+    floats(
+        &mut h,
+        &[
+            prism.centre.x,
+            prism.centre.y,
+            prism.cell_size,
+            prism.min_y,
+            prism.max_y,
+        ],
+    );
+    h.update(&(eyes.len() as u32).to_le_bytes());
+    for e in eyes {
+        floats(&mut h, &e.to_array());
+    }
+    h.update(&(members.len() as u32).to_le_bytes());
+    for &i in members {
+        h.update(&i.to_le_bytes());
+        if let Some(inst) = scene.instances.get(i as usize) {
+            if let Some(model) = scene.models.get(inst.model as usize) {
+                h.update(&model.content_hash);
+            }
+            floats(&mut h, &inst.transform.to_cols_array());
+            floats(&mut h, &inst.tint.to_array());
+        }
+    }
+    *h.finalize().as_bytes()
 }
 
 /// Time per stage (milliseconds; proxy stages summed over proxies).
@@ -136,6 +243,8 @@ pub struct CellStats {
     /// Decoded RGBA8 bytes of all proxy textures.
     pub texture_bytes: u64,
     pub views: u32,
+    /// Proxies taken from an earlier bake by key instead of derived.
+    pub reused_proxies: u32,
     pub times: CellTimes,
 }
 
@@ -176,15 +285,25 @@ pub fn bake_cell(
     cells: &CellParams,
     params: &BakeParams,
 ) -> Result<CellBake, BakeError> {
-    bake_cell_with(scene, &LodChains::none(), grid, cell, cells, params)
+    bake_cell_with(
+        scene,
+        &LodChains::none(),
+        &ProxyReuse::new(),
+        grid,
+        cell,
+        cells,
+        params,
+    )
 }
 
 /// Bakes one cell (module docs); each proxy's collapse starts from the coarsest level
 /// of its model's chain in `chains` that the cell's region allows
-/// ([`crate::lod_chain`]).
+/// ([`crate::lod_chain`]), and a proxy whose key ([`proxy_key`]) is in `reuse` is
+/// taken from there instead of derived.
 pub fn bake_cell_with(
     scene: &Scene,
     chains: &LodChains,
+    reuse: &ProxyReuse,
     grid: &HexGrid,
     cell: u32,
     cells: &CellParams,
@@ -297,10 +416,26 @@ pub fn bake_cell_with(
             .into_iter()
             .map(|n| cell_eye(grid, n, cells)),
     );
+    let params_fp = format::fingerprint::params_fingerprint(params, cells);
     let built: Vec<Result<(BakedProxy, StageTimes), BakeError>> = jobs
         .par_iter()
         .map(|(_, job)| {
             let wrap = |source| BakeError::Proxy { cell, source };
+            // The proxy's key; an earlier bake's proxy with the same key is reused.
+            let key = match job {
+                Job::Sv(group) => {
+                    let kind = if group.len() > 1 {
+                        ProxyKind::Cluster
+                    } else {
+                        ProxyKind::SvMesh
+                    };
+                    proxy_key(scene, &params_fp, kind, group, &prism, &[centre])
+                }
+                Job::Mv(i) => proxy_key(scene, &params_fp, ProxyKind::MvMesh, &[*i], &prism, &eyes),
+            };
+            if let Some(packed) = reuse.get(&key) {
+                return Ok((BakedProxy::reused(packed, key), StageTimes::default()));
+            }
             match job {
                 Job::Sv(group) => {
                     let sv =
@@ -326,6 +461,8 @@ pub fn bake_cell_with(
                             kind,
                             members,
                             views: vec![sv.view],
+                            key,
+                            packed: None,
                         },
                         sv.times,
                     ))
@@ -344,6 +481,8 @@ pub fn bake_cell_with(
                                 vertex_view_sets: mv.vertex_view_sets,
                             }],
                             views: mv.views,
+                            key,
+                            packed: None,
                         },
                         mv.times,
                     ))
@@ -399,8 +538,9 @@ pub fn bake_cell_with(
         }
         stats.proxied_original_polygons +=
             p.members.iter().map(|m| tris_of(m.instance)).sum::<u64>();
-        stats.views += p.views.len() as u32;
-        stats.texture_bytes += p.views.iter().map(|v| v.rgba.len() as u64).sum::<u64>();
+        stats.views += p.view_count() as u32;
+        stats.texture_bytes += p.texture_bytes();
+        stats.reused_proxies += u32::from(p.packed.is_some());
     }
     let proxy_polygons = stats.sv_polygons + stats.mv_polygons + stats.cluster_polygons;
     stats.simplified_ratio = if stats.proxied_original_polygons > 0 {
@@ -426,6 +566,9 @@ impl CellBake {
             .proxies
             .iter()
             .map(|p| {
+                if let Some(packed) = &p.packed {
+                    return Ok(packed.clone());
+                }
                 let views = p
                     .views
                     .iter()

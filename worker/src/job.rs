@@ -18,6 +18,7 @@
 //! with temp-file + rename and the record last, a SIGKILL at any moment leaves either
 //! a done job or one that will be redone, and the bytes of a redone job are the same.
 
+use crate::bake::ProxyReuse;
 use crate::grid::HexGrid;
 use crate::lod_chain::LodChains;
 use format::fingerprint::{job_fingerprint, params_fingerprint, scene_fingerprint, Fingerprint};
@@ -253,16 +254,48 @@ mod hex32 {
 
     pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<[u8; 32], D::Error> {
         let text = String::deserialize(d)?;
-        let mut out = [0u8; 32];
-        if text.len() != 64 || !text.is_ascii() {
-            return Err(serde::de::Error::custom("expected 64 hex digits"));
-        }
-        for (i, b) in out.iter_mut().enumerate() {
-            *b = u8::from_str_radix(&text[2 * i..2 * i + 2], 16)
-                .map_err(|_| serde::de::Error::custom("expected 64 hex digits"))?;
-        }
-        Ok(out)
+        format::fingerprint::from_hex(&text)
+            .ok_or_else(|| serde::de::Error::custom("expected 64 hex digits"))
     }
+}
+
+/// The proxies of the job's earlier bake, per cell, by key (issue 13, per-proxy
+/// content-addressed cache): read from the job's previous record (whatever its
+/// fingerprint) and the packs it lists, taking only packs whose size and checksum
+/// still match the record and that decode, with one key per proxy. Anything else
+/// gives no proxies for that cell (they are derived again).
+pub fn previous_proxies(out: &Path, job: &Job) -> std::collections::BTreeMap<u32, ProxyReuse> {
+    let mut reuse = std::collections::BTreeMap::new();
+    let Ok(text) = std::fs::read_to_string(record_path(out, job.id)) else {
+        return reuse;
+    };
+    let Ok(record) = serde_json::from_str::<JobRecord>(&text) else {
+        return reuse;
+    };
+    for c in record.cells.iter().filter(|c| job.cells.contains(&c.cell)) {
+        let Ok(bytes) = std::fs::read(out.join(&c.file)) else {
+            continue;
+        };
+        if bytes.len() as u64 != c.bytes || *blake3::hash(&bytes).as_bytes() != c.checksum {
+            continue;
+        }
+        let Ok(pack) = CellPack::from_bytes(&bytes) else {
+            continue;
+        };
+        let keys: Vec<Fingerprint> = c.report["proxy_keys"]
+            .as_array()
+            .map(|a| {
+                a.iter()
+                    .filter_map(|k| k.as_str().and_then(format::fingerprint::from_hex))
+                    .collect()
+            })
+            .unwrap_or_default();
+        if pack.cell_id != c.cell || keys.len() != pack.proxies.len() {
+            continue;
+        }
+        reuse.insert(c.cell, keys.into_iter().zip(pack.proxies).collect());
+    }
+    reuse
 }
 
 /// Bakes one cell of `job` into its pack and report (the function every executor
@@ -271,12 +304,14 @@ pub fn bake_cell_pack(
     plan: &Plan,
     scene: &Scene,
     chains: &LodChains,
+    reuse: &ProxyReuse,
     grid: &HexGrid,
     cell: u32,
     fingerprint: &Fingerprint,
 ) -> Result<(CellPack, CellReport), String> {
-    let bake = crate::bake::bake_cell_with(scene, chains, grid, cell, &plan.cells, &plan.bake)
-        .map_err(|e| e.to_string())?;
+    let bake =
+        crate::bake::bake_cell_with(scene, chains, reuse, grid, cell, &plan.cells, &plan.bake)
+            .map_err(|e| e.to_string())?;
     let pack = bake.to_pack(*fingerprint).map_err(|e| e.to_string())?;
     let s = &bake.stats;
     let t = &s.times;
@@ -297,6 +332,14 @@ pub fn bake_cell_pack(
         "simplified_ratio": s.simplified_ratio,
         "texture_bytes": s.texture_bytes,
         "views": s.views,
+        "reused_proxies": s.reused_proxies,
+        // Per proxy, in pack order: its content key (crate::bake::proxy_key), read
+        // back by `previous_proxies` when the job is baked again.
+        "proxy_keys": bake
+            .proxies
+            .iter()
+            .map(|p| format::fingerprint::to_hex(&p.key))
+            .collect::<Vec<_>>(),
         "total_ms": t.total_ms,
         "stage_ms": {
             "split": t.split_ms,

@@ -186,8 +186,19 @@ fn run(cli: Cli) -> Result<(), Failure> {
                     cell: job.cells.first().copied().unwrap_or(0),
                     message: e.to_string(),
                 })?;
+                let reuse = worker::job::previous_proxies(&out, job);
+                let none = worker::bake::ProxyReuse::new();
                 worker::job::run_job(&out, job, false, |cell, fp| {
-                    worker::job::bake_cell_pack(&plan, &scene, &chains, &build.grid, cell, fp)
+                    let reuse = reuse.get(&cell).unwrap_or(&none);
+                    worker::job::bake_cell_pack(
+                        &plan,
+                        &scene,
+                        &chains,
+                        reuse,
+                        &build.grid,
+                        cell,
+                        fp,
+                    )
                 })
             });
             match result {
@@ -247,9 +258,16 @@ fn run(cli: Cli) -> Result<(), Failure> {
                 chains
             };
             let t = std::time::Instant::now();
-            let bake =
-                worker::bake::bake_cell_with(&scene, &chains, &grid, cell, &plan.cells, &plan.bake)
-                    .map_err(bad_input)?;
+            let bake = worker::bake::bake_cell_with(
+                &scene,
+                &chains,
+                &worker::bake::ProxyReuse::new(),
+                &grid,
+                cell,
+                &plan.cells,
+                &plan.bake,
+            )
+            .map_err(bad_input)?;
             let s = &bake.stats;
             eprintln!(
                 "bake of cell {cell}: {:.2} s wall ({:.0} ms capture, {:.0} ms weights, {:.0} ms simplify, summed over proxies)",

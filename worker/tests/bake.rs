@@ -155,7 +155,8 @@ fn demo_bake_from_lod_chains_is_valid_deterministic_and_close() {
     let fp = [7u8; 32];
     let pack = |chains: &LodChains, threads| {
         in_pool(threads, || {
-            let b = bake_cell_with(&scene, chains, &grid, cell, &cells, &params).unwrap();
+            let reuse = worker::bake::ProxyReuse::new();
+            let b = bake_cell_with(&scene, chains, &reuse, &grid, cell, &cells, &params).unwrap();
             validate_bake(&scene, &b);
             (b.to_pack(fp).unwrap().encode().unwrap(), b)
         })
