@@ -11,6 +11,7 @@
 //! each triangle's view mask and centroid (flat attributes), one draw per proxy.
 
 use crate::camera::Camera;
+use crate::metrics::srgb_to_linear;
 use bytemuck::{Pod, Zeroable};
 use format::pack::BasePack;
 use glam::{Mat3, Mat4, Vec3};
@@ -252,15 +253,8 @@ pub struct Renderer {
     sampler: wgpu::Sampler,
     dummy_view: wgpu::TextureView,
     instances: wgpu::Buffer,
-}
-
-fn srgb_to_linear(c: u8) -> f64 {
-    let c = c as f64 / 255.0;
-    if c <= 0.04045 {
-        c / 12.92
-    } else {
-        ((c + 0.055) / 1.055).powf(2.4)
-    }
+    /// Clear the sky with alpha 0 instead of 1 ([`Renderer::set_coverage_alpha`]).
+    coverage_alpha: bool,
 }
 
 /// Opens an adapter: `WGPU_BACKEND` and the like from the environment,
@@ -568,7 +562,29 @@ impl Renderer {
             sampler,
             dummy_view,
             instances,
+            coverage_alpha: false,
         })
+    }
+
+    /// With `on`, the sky is cleared with alpha 0 instead of 1; every pipeline writes
+    /// alpha 1 without blending, so the alpha of [`Renderer::read_pixels`] is then a
+    /// coverage mask (255 where a triangle was drawn, 0 on the sky) — what
+    /// `player compare` tells object pixels by. Off by default: frames for PNGs and
+    /// the window stay opaque.
+    pub fn set_coverage_alpha(&mut self, on: bool) {
+        self.coverage_alpha = on;
+    }
+
+    /// A second renderer on this one's device with a `width × height` target (e.g. a
+    /// supersampled reference): models uploaded by either can be drawn by both.
+    pub fn sibling(&self, width: u32, height: u32) -> Result<Renderer, GpuError> {
+        Renderer::with_device(
+            self.device.clone(),
+            self.queue.clone(),
+            self.adapter.clone(),
+            width,
+            height,
+        )
     }
 
     pub fn adapter(&self) -> &AdapterSummary {
@@ -833,7 +849,7 @@ impl Renderer {
                             r: sky(SKY[0]),
                             g: sky(SKY[1]),
                             b: sky(SKY[2]),
-                            a: 1.0,
+                            a: if self.coverage_alpha { 0.0 } else { 1.0 },
                         }),
                         store: wgpu::StoreOp::Store,
                     },

@@ -13,7 +13,9 @@
 //!   worker); [`camera`]: camera, frustum culling.
 //! - [`lod`]: the distance-LOD baseline (`--mode lod`, issue 8): meshoptimizer
 //!   chains per model, level chosen by projected pixel error.
-//! - [`metrics`]: PSNR on luminance and SSIM; [`run`]: the `render`/`compare` commands.
+//! - [`metrics`]: PSNR on luminance and SSIM, over whole frames and over object
+//!   pixels; the anti-aliased reference's linear-light downsampling.
+//! - [`run`]: the `render`/`compare` commands.
 //! - [`testdata`]: synthetic bakes for tests (`write_synthetic_bake`, `write_quad_bake`).
 //!
 //! Conventions the bake must follow (what the player assumes):
@@ -31,7 +33,7 @@
 //! CLI: `player render <out> --path <path.ron> --frames DIR
 //! [--mode hybrid|full|frustum|lod] [--lod-pixel-error PX] [--png] [--no-prefetch]
 //! [--size WxH]`, `player compare <out> --path <path.ron> [--mode hybrid|lod] [--json]
-//! [--worst DIR] [--worst-count N] [--no-crossings] [--size WxH]`,
+//! [--worst DIR] [--worst-count N] [--no-crossings] [--reference-ss N] [--size WxH]`,
 //! `player synth <out>` (a synthetic bake of `manifests/demo.ron`).
 
 pub mod bake;

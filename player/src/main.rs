@@ -1,6 +1,6 @@
 //! `player`: walks through a bake (paper 000 §3.2) — `render` a camera path headless
 //! in one configuration (A full, B frustum, C hybrid, or the distance-LOD baseline),
-//! `compare` the hybrid (or the LOD baseline) with the full-geometry reference (PSNR on luminance, SSIM, triangle and frame-time ratios).
+//! `compare` the hybrid (or the LOD baseline) with the full-geometry reference (PSNR on luminance, SSIM, over whole frames and over object pixels, also against an anti-aliased reference; triangle and frame-time ratios).
 
 use clap::{Parser, Subcommand};
 use player::frame::Mode;
@@ -156,7 +156,8 @@ enum Command {
         /// Print the report as JSON on stdout.
         #[arg(long)]
         json: bool,
-        /// Write the worst frames (reference, hybrid, difference) here.
+        /// Write the worst frames by object-pixel PSNR (reference, hybrid,
+        /// difference, anti-aliased reference) here.
         #[arg(long)]
         worst: Option<PathBuf>,
         /// How many worst frames to write.
@@ -165,6 +166,11 @@ enum Command {
         /// Skip the extra no-prefetch pass (crossing frame times).
         #[arg(long)]
         no_crossings: bool,
+        /// Supersampling per axis of the anti-aliased reference (full geometry
+        /// rendered N times wider and higher, box-filtered in linear light); 1 = none.
+        #[arg(long, default_value_t = player::run::DEFAULT_REFERENCE_SS,
+              value_parser = clap::value_parser!(u32).range(1..=player::run::MAX_REFERENCE_SS as i64))]
+        reference_ss: u32,
         #[command(flatten)]
         stream: StreamArgs,
     },
@@ -247,6 +253,7 @@ fn main() -> ExitCode {
             worst,
             worst_count,
             no_crossings,
+            reference_ss,
             stream,
         } => format::path::CameraPath::load(&path)
             .map_err(player::run::RunError::from)
@@ -262,6 +269,7 @@ fn main() -> ExitCode {
                         stream: stream.path_config(&p),
                         mode,
                         lod_pixel_error: stream.lod_pixel_error,
+                        reference_ss,
                     },
                 )
             })
@@ -272,13 +280,24 @@ fn main() -> ExitCode {
                         serde_json::to_string_pretty(&r).unwrap_or_else(|e| e.to_string())
                     );
                 } else {
+                    let db = |v: Option<f64>| v.map_or("      –".to_string(), |v| format!("{v:7.2}"));
                     for f in &r.per_frame {
+                        let aa = f.aa_reference.as_ref().map_or(String::new(), |a| {
+                            format!(
+                                " | vs AA: object {} dB (full geometry {} dB)",
+                                db(a.compared.object_psnr_y_db),
+                                db(a.full.object_psnr_y_db)
+                            )
+                        });
                         println!(
-                            "frame {:4} cell {:>4} psnr_y {:7.2} dB ssim {:.4} triangles {} / {}",
+                            "frame {:4} cell {:>4} psnr_y {:7.2} dB ssim {:.4} object {} dB ssim {} ({} px) triangles {} / {}{aa}",
                             f.frame,
                             f.cell.map_or(-1, |c| c as i64),
                             f.psnr_y,
                             f.ssim,
+                            db(f.object_psnr_y_db),
+                            f.object_ssim.map_or("     –".to_string(), |s| format!("{s:.4}")),
+                            f.object_pixels,
                             f.triangles,
                             f.reference_triangles
                         );
@@ -296,6 +315,29 @@ fn main() -> ExitCode {
                         r.frame_time_ratio,
                         r.frame_time_ratio_frustum
                     );
+                    let object = |o: &player::metrics::ObjectQuality| {
+                        format!(
+                            "object pixels ({:.1}% of all): PSNR(Y) {:.2} dB pooled, worst frame {} at {:.2} dB, mean SSIM {:.4}",
+                            100.0 * o.object_pixel_fraction,
+                            o.object_psnr_y_db,
+                            o.worst_object_frame.map_or(-1, |f| f as i64),
+                            o.min_object_psnr_y_db,
+                            o.mean_object_ssim
+                        )
+                    };
+                    println!("{} vs full geometry: {}", r.mode, object(&r.object));
+                    if let Some(aa) = &r.aa_reference {
+                        for (name, q) in [(r.mode.as_str(), &aa.compared), ("full geometry", &aa.full)] {
+                            println!(
+                                "{name} vs anti-aliased reference ({0}×{0} samples): mean PSNR(Y) {1:.2} dB (min {2:.2}), mean SSIM {3:.4}; {4}",
+                                aa.supersampling_factor,
+                                q.mean_psnr_y_db,
+                                q.min_psnr_y_db,
+                                q.mean_ssim,
+                                object(&q.object)
+                            );
+                        }
+                    }
                     for (name, c) in [
                         ("prefetch on", &r.crossing_prefetch),
                         ("prefetch off", &r.crossing_no_prefetch),

@@ -6,7 +6,7 @@ use crate::camera::Camera;
 use crate::frame::{hybrid_list, list_stats, lod_list, originals_list, Mode};
 use crate::gpu::{GpuError, GpuModels, Renderer};
 use crate::lod::LodSet;
-use crate::metrics::{diff_image, psnr_y, ssim_y};
+use crate::metrics::{diff_image, downsample_linear, opaque, FrameQuality, ObjectQuality};
 use crate::stream::{StreamConfig, Streamer};
 use format::path::{CameraPath, PathFrame};
 use glam::Vec2;
@@ -26,6 +26,8 @@ pub enum RunError {
     Write { path: PathBuf, what: String },
     #[error("the camera path has no frames")]
     NoFrames,
+    #[error("--reference-ss {0} outside 1..={MAX_REFERENCE_SS}")]
+    ReferenceSs(u32),
 }
 
 impl From<crate::bake::BakeError> for RunError {
@@ -370,17 +372,31 @@ pub fn crossing_stats(records: &[FrameRecord]) -> CrossingStats {
     }
 }
 
-/// PSNR reported for identical frames (and the cap of every PSNR in reports, so
-/// JSON never holds infinity).
-pub const PSNR_CAP: f64 = 100.0;
+pub use crate::metrics::PSNR_CAP;
+
+/// `--reference-ss`: the anti-aliased reference is rendered this many times wider
+/// and higher (4 × 4 = 16 samples per pixel).
+pub const DEFAULT_REFERENCE_SS: u32 = 4;
+/// The largest `--reference-ss`.
+pub const MAX_REFERENCE_SS: u32 = 8;
 
 /// One frame of `player compare`.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct CompareFrame {
     pub frame: usize,
     pub cell: Option<u32>,
+    /// Full-frame PSNR(Y) against the full-geometry frame, dB (capped).
     pub psnr_y: f64,
+    /// Full-frame mean SSIM against the full-geometry frame.
     pub ssim: f64,
+    /// Pixels where either frame is not sky.
+    pub object_pixels: usize,
+    /// PSNR(Y) over the object pixels, dB (capped); `None` without object pixels.
+    pub object_psnr_y_db: Option<f64>,
+    /// Mean SSIM over the windows centred on object pixels.
+    pub object_ssim: Option<f64>,
+    /// Both frames against the anti-aliased reference (`--reference-ss` > 1).
+    pub aa_reference: Option<AaFrame>,
     pub triangles: u64,
     pub reference_triangles: u64,
     pub frame_ms: f64,
@@ -388,13 +404,73 @@ pub struct CompareFrame {
     pub frustum_frame_ms: f64,
 }
 
+/// One frame against the anti-aliased reference.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct AaFrame {
+    /// The compared mode's frame (hybrid or lod).
+    pub compared: FrameQuality,
+    /// The full-geometry frame rendered at one sample per pixel (aliased).
+    pub full: FrameQuality,
+}
+
+/// One configuration's frames against the anti-aliased reference, over the path.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct AaQuality {
+    /// Mean of the per-frame full-frame PSNR(Y), dB.
+    pub mean_psnr_y_db: f64,
+    pub min_psnr_y_db: f64,
+    pub mean_ssim: f64,
+    #[serde(flatten)]
+    pub object: ObjectQuality,
+}
+
+impl AaQuality {
+    fn summarize<'a>(frames: impl Iterator<Item = (usize, &'a FrameQuality)> + Clone) -> AaQuality {
+        AaQuality {
+            mean_psnr_y_db: mean(frames.clone().map(|(_, q)| q.psnr_y_db)),
+            min_psnr_y_db: frames
+                .clone()
+                .map(|(_, q)| q.psnr_y_db)
+                .fold(PSNR_CAP, f64::min),
+            mean_ssim: mean(frames.clone().map(|(_, q)| q.ssim)),
+            object: ObjectQuality::summarize(frames),
+        }
+    }
+}
+
+/// The anti-aliased reference (DESIGN.md "Measuring quality honestly"): full
+/// geometry rendered `supersampling_factor` times wider and higher and box-filtered
+/// in linear light. `compared` minus `full` is the error of the proxies (or LOD
+/// levels) beyond the aliasing that the one-sample full-geometry frame already has.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct AaReference {
+    /// Per axis (`--reference-ss`).
+    pub supersampling_factor: u32,
+    /// supersampling_factor².
+    pub samples_per_pixel: u32,
+    /// The compared mode (hybrid or lod) against it.
+    pub compared: AaQuality,
+    /// The aliased full-geometry frame against it: the sampling noise alone.
+    pub full: AaQuality,
+}
+
 /// The result of `player compare`.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct CompareReport {
     pub frames: usize,
+    /// Full-frame figures against the aliased full-geometry frame: mean and minimum
+    /// of the per-frame PSNR(Y) in dB, mean SSIM.
     pub mean_psnr_y: f64,
     pub min_psnr_y: f64,
     pub mean_ssim: f64,
+    /// The same over object pixels (where either frame is not sky): pooled
+    /// `object_psnr_y_db`, `min_object_psnr_y_db`, `worst_object_frame`,
+    /// `mean_object_ssim`, `object_pixel_fraction`.
+    #[serde(flatten)]
+    pub object: ObjectQuality,
+    /// Both frames against the anti-aliased reference; `None` with
+    /// `--reference-ss 1`.
+    pub aa_reference: Option<AaReference>,
     pub mean_triangles: f64,
     pub reference_triangles: f64,
     /// Mean frame time of the compared mode (hybrid or lod) / mean full-geometry
@@ -431,6 +507,9 @@ pub struct CompareOptions {
     pub mode: Mode,
     /// `--lod-pixel-error` of `lod` mode.
     pub lod_pixel_error: f32,
+    /// `--reference-ss`: supersampling per axis of the anti-aliased reference;
+    /// 1 (or 0) renders none.
+    pub reference_ss: u32,
 }
 
 impl Default for CompareOptions {
@@ -443,6 +522,7 @@ impl Default for CompareOptions {
             stream: StreamConfig::default(),
             mode: Mode::Hybrid,
             lod_pixel_error: crate::lod::DEFAULT_PIXEL_ERROR,
+            reference_ss: DEFAULT_REFERENCE_SS,
         }
     }
 }
@@ -458,7 +538,9 @@ fn mean(v: impl Iterator<Item = f64>) -> f64 {
 
 /// Renders the reference (config A) and the hybrid (C, or the mode of
 /// `opts.mode`, e.g. the LOD baseline) for every frame of the path (and B for
-/// timing); PSNR(Y) and SSIM against A.
+/// timing); PSNR(Y) and SSIM against A, over the whole frame and over object pixels;
+/// both A and C against the anti-aliased reference (A supersampled
+/// `opts.reference_ss` per axis, [`AaReference`]).
 pub fn compare(
     out: &Path,
     path: &CameraPath,
@@ -469,32 +551,74 @@ pub fn compare(
     if frames.is_empty() {
         return Err(RunError::NoFrames);
     }
+    if opts.reference_ss > MAX_REFERENCE_SS {
+        return Err(RunError::ReferenceSs(opts.reference_ss));
+    }
+    let ss = opts.reference_ss.max(1);
     let mut player = Player::open(out, size)?;
     eprintln!("player: adapter {}", player.renderer.adapter());
     player.lod_pixel_error = opts.lod_pixel_error;
     let lod_build_ms = (opts.mode == Mode::Lod).then(|| player.prepare_lod().build_ms);
     let far = player.bake.extent;
     player.warm_up(&camera_for(&frames[0], path, size, far));
+    // Alpha tells object pixels from sky in every frame compared (metrics.rs).
+    player.renderer.set_coverage_alpha(true);
+    let mut aa_renderer = if ss > 1 {
+        let mut r = player.renderer.sibling(size.0 * ss, size.1 * ss)?;
+        r.set_coverage_alpha(true);
+        Some(r)
+    } else {
+        None
+    };
+    let (w, h) = (size.0 as usize, size.1 as usize);
     let mut streamer = Streamer::new(&player.bake, opts.stream.clone());
     let mut per_frame = Vec::with_capacity(frames.len());
+    let mut quality = Vec::with_capacity(frames.len());
     let mut hybrid_records = Vec::with_capacity(frames.len());
-    // (psnr, frame, reference, hybrid) of the worst frames.
-    let mut worst: Vec<(f64, usize, Vec<u8>, Vec<u8>)> = Vec::new();
+    // (object psnr, frame, reference, hybrid, aa reference) of the worst frames.
+    type Worst = (f64, usize, Vec<u8>, Vec<u8>, Option<Vec<u8>>);
+    let mut worst: Vec<Worst> = Vec::new();
     let mut prev: Option<Option<u32>> = None;
     for (i, f) in frames.iter().enumerate() {
+        // 1. The reference (A), B for timing, the compared mode (C or lod).
         let cam = camera_for(f, path, size, far);
         let (ref_ms, ref_tris, _, _) = player.draw(&cam, Mode::Full, None);
         let reference = player.renderer.read_pixels()?;
         let (fr_ms, _, _, _) = player.draw(&cam, Mode::Frustum, None);
         let (ms, tris, tex, stats) = player.draw(&cam, opts.mode, Some(&mut streamer));
         let hybrid = player.renderer.read_pixels()?;
-        let psnr = psnr_y(&reference, &hybrid);
-        let ssim = ssim_y(&reference, &hybrid, size.0 as usize, size.1 as usize);
+        // 2. The anti-aliased reference: A at ss × ss samples, box-filtered in
+        //    linear light.
+        let aa_reference = match aa_renderer.as_mut() {
+            Some(r) => {
+                let big = camera_for(f, path, (size.0 * ss, size.1 * ss), far);
+                let list = originals_list(&player.bake, &big, false);
+                r.render(&big, &player.models, &list);
+                let px = r.read_pixels()?;
+                Some(downsample_linear(
+                    &px,
+                    w * ss as usize,
+                    h * ss as usize,
+                    ss as usize,
+                ))
+            }
+            None => None,
+        };
+        // 3. The metrics: full frame and object pixels, against A and the AA reference.
+        let q = FrameQuality::measure(&reference, &hybrid, w, h);
+        let aa = aa_reference.as_ref().map(|aa| AaFrame {
+            compared: FrameQuality::measure(aa, &hybrid, w, h),
+            full: FrameQuality::measure(aa, &reference, w, h),
+        });
         per_frame.push(CompareFrame {
             frame: i,
             cell: stats.cell,
-            psnr_y: psnr.min(PSNR_CAP),
-            ssim,
+            psnr_y: q.psnr_y_db,
+            ssim: q.ssim,
+            object_pixels: q.object_pixels,
+            object_psnr_y_db: q.object_psnr_y_db,
+            object_ssim: q.object_ssim,
+            aa_reference: aa,
             triangles: tris,
             reference_triangles: ref_tris,
             frame_ms: ms,
@@ -503,11 +627,14 @@ pub fn compare(
         });
         hybrid_records.push(FrameRecord::new(i, f.time_s, &stats, prev, (ms, tris, tex)));
         prev = Some(stats.cell);
+        // 4. The worst frames by object-pixel PSNR (frames without objects last).
         if opts.worst_dir.is_some() && opts.worst_count > 0 {
-            worst.push((psnr, i, reference, hybrid));
+            let key = q.object_psnr_y_db.unwrap_or(f64::INFINITY);
+            worst.push((key, i, reference, hybrid, aa_reference));
             worst.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
             worst.truncate(opts.worst_count);
         }
+        quality.push(q);
     }
     drop(streamer);
     let crossing_no_prefetch = if opts.crossings && opts.mode == Mode::Hybrid {
@@ -532,19 +659,27 @@ pub fn compare(
     };
     if let Some(dir) = &opts.worst_dir {
         std::fs::create_dir_all(dir).map_err(|e| write_err(dir, e))?;
-        for (_, i, r, h) in &worst {
+        for (_, i, r, h, aa) in &worst {
             write_png(
                 &dir.join(format!("{i:05}-reference.png")),
                 size.0,
                 size.1,
-                r,
+                &opaque(r),
             )?;
             write_png(
                 &dir.join(format!("{i:05}-{}.png", opts.mode.name())),
                 size.0,
                 size.1,
-                h,
+                &opaque(h),
             )?;
+            if let Some(aa) = aa {
+                write_png(
+                    &dir.join(format!("{i:05}-aa-reference.png")),
+                    size.0,
+                    size.1,
+                    &opaque(aa),
+                )?;
+            }
             write_png(
                 &dir.join(format!("{i:05}-diff.png")),
                 size.0,
@@ -563,6 +698,20 @@ pub fn compare(
         mean_psnr_y: mean(per_frame.iter().map(|f| f.psnr_y)),
         min_psnr_y: finite_min.min(PSNR_CAP),
         mean_ssim: mean(per_frame.iter().map(|f| f.ssim)),
+        object: ObjectQuality::summarize(quality.iter().enumerate()),
+        aa_reference: (ss > 1).then(|| {
+            let aa = || {
+                per_frame
+                    .iter()
+                    .filter_map(|f| f.aa_reference.as_ref().map(|a| (f.frame, a)))
+            };
+            AaReference {
+                supersampling_factor: ss,
+                samples_per_pixel: ss * ss,
+                compared: AaQuality::summarize(aa().map(|(i, a)| (i, &a.compared))),
+                full: AaQuality::summarize(aa().map(|(i, a)| (i, &a.full))),
+            }
+        }),
         mean_triangles: mean(per_frame.iter().map(|f| f.triangles as f64)),
         reference_triangles: mean(per_frame.iter().map(|f| f.reference_triangles as f64)),
         frame_time_ratio: mean(per_frame.iter().map(|f| f.frame_ms))

@@ -226,9 +226,26 @@ fn lod_walk_of_the_demo_scene_stays_close_to_full_geometry() {
     ] {
         assert!(json.get(key).is_some(), "missing {key}");
     }
+    // Issue 14: over object pixels the LOD levels' error is not diluted by sky.
+    let aa = r.aa_reference.as_ref().expect("on by default");
+    println!(
+        "lod 1 px, object pixels ({:.1}%): {:.2} dB vs full geometry; vs the {}×{} anti-aliased reference {:.2} dB (full geometry {:.2} dB)",
+        100.0 * r.object.object_pixel_fraction,
+        r.object.object_psnr_y_db,
+        aa.supersampling_factor,
+        aa.supersampling_factor,
+        aa.compared.object.object_psnr_y_db,
+        aa.full.object.object_psnr_y_db
+    );
+    assert!(r.object.object_psnr_y_db <= r.mean_psnr_y);
+    assert!(r.object.min_object_psnr_y_db <= r.min_psnr_y);
+    assert!(aa.compared.object.object_psnr_y_db < aa.full.object.object_psnr_y_db);
     // Threshold 0 keeps every original: the frame is the reference.
     let exact = run(0.0);
     assert_eq!(exact.mean_psnr_y, player::run::PSNR_CAP);
+    assert_eq!(exact.object.object_psnr_y_db, player::run::PSNR_CAP);
+    let aa = exact.aa_reference.as_ref().unwrap();
+    assert_eq!(aa.compared, aa.full);
     assert!(
         exact.mean_triangles < exact.reference_triangles,
         "frustum-culled"

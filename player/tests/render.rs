@@ -315,11 +315,92 @@ fn render_writes_csv_and_compare_reports_quality() {
         "mean_triangles",
         "reference_triangles",
         "frame_time_ratio",
+        "object_psnr_y_db",
+        "min_object_psnr_y_db",
+        "worst_object_frame",
+        "mean_object_ssim",
+        "object_pixel_fraction",
+        "aa_reference",
     ] {
         assert!(json.get(key).is_some(), "missing {key}");
     }
+    assert_object_figures_are_sane(&report);
+    // Issue 14: the anti-aliased reference, 4 × 4 by default.
+    let aa = report.aa_reference.as_ref().expect("on by default");
+    assert_eq!((aa.supersampling_factor, aa.samples_per_pixel), (4, 16));
+    for side in ["compared", "full"] {
+        for key in [
+            "mean_psnr_y_db",
+            "min_psnr_y_db",
+            "mean_ssim",
+            "object_psnr_y_db",
+            "min_object_psnr_y_db",
+            "worst_object_frame",
+            "mean_object_ssim",
+            "object_pixel_fraction",
+        ] {
+            assert!(
+                json["aa_reference"][side].get(key).is_some(),
+                "missing aa_reference.{side}.{key}"
+            );
+        }
+    }
+    for q in [&aa.compared, &aa.full] {
+        assert!(q.object.object_psnr_y_db > 5.0 && q.object.object_psnr_y_db <= q.mean_psnr_y_db);
+        assert!(q.object.mean_object_ssim > 0.0 && q.object.mean_object_ssim <= 1.0);
+    }
+    // One sample per pixel is not the anti-aliased image: the aliased full-geometry
+    // frame has an error of its own on object pixels (edges).
+    assert!(aa.full.object.object_psnr_y_db < player::run::PSNR_CAP);
+    let json_frame = &json["per_frame"][0];
+    for key in [
+        "object_pixels",
+        "object_psnr_y_db",
+        "object_ssim",
+        "aa_reference",
+    ] {
+        assert!(json_frame.get(key).is_some(), "missing per_frame.{key}");
+    }
+    // Reference, compared mode, difference and the anti-aliased reference per frame.
     let pngs = std::fs::read_dir(&worst).unwrap().count();
-    assert_eq!(pngs, 6);
+    assert_eq!(pngs, 8);
+}
+
+/// The object-pixel figures of a report against the aliased full-geometry frame:
+/// never better than the whole frame's (the sky adds pixels without error).
+fn assert_object_figures_are_sane(report: &player::run::CompareReport) {
+    let o = &report.object;
+    println!(
+        "object pixels {:.1}%: PSNR(Y) {:.2} dB pooled (worst frame {:?} {:.2}), SSIM {:.4}",
+        100.0 * o.object_pixel_fraction,
+        o.object_psnr_y_db,
+        o.worst_object_frame,
+        o.min_object_psnr_y_db,
+        o.mean_object_ssim
+    );
+    assert!(o.object_pixel_fraction > 0.0 && o.object_pixel_fraction < 1.0);
+    assert!(o.object_psnr_y_db <= report.mean_psnr_y, "{o:?}");
+    assert!(o.min_object_psnr_y_db <= o.object_psnr_y_db, "{o:?}");
+    assert!(o.min_object_psnr_y_db <= report.min_psnr_y, "{o:?}");
+    assert!(o.mean_object_ssim <= 1.0 && o.mean_object_ssim > 0.0);
+    let worst = o.worst_object_frame.expect("objects in view");
+    assert_eq!(
+        report.per_frame[worst].object_psnr_y_db,
+        Some(o.min_object_psnr_y_db)
+    );
+    for f in &report.per_frame {
+        if let Some(p) = f.object_psnr_y_db {
+            assert!(
+                p <= f.psnr_y + 1e-9,
+                "frame {}: {p} > {}",
+                f.frame,
+                f.psnr_y
+            );
+            assert!(f.object_pixels > 0);
+        } else {
+            assert_eq!(f.object_pixels, 0);
+        }
+    }
 }
 
 #[test]
@@ -499,6 +580,14 @@ fn compare_of_a_bake_without_proxies_is_perfect() {
         report.mean_ssim
     );
     assert!(report.mean_triangles <= report.reference_triangles);
+    // Issue 14: no error on object pixels either, and the same frame scores the
+    // same against the anti-aliased reference as the reference does.
+    assert_eq!(report.object.object_psnr_y_db, player::run::PSNR_CAP);
+    assert_eq!(report.object.min_object_psnr_y_db, player::run::PSNR_CAP);
+    assert!(report.object.object_pixel_fraction > 0.0);
+    let aa = report.aa_reference.as_ref().unwrap();
+    assert_eq!(aa.compared, aa.full);
+    assert!(aa.full.object.object_psnr_y_db < player::run::PSNR_CAP);
 }
 
 /// Pixels where the reference shows an object and `img` shows sky.

@@ -226,8 +226,9 @@ pub(crate) fn parse_error(
     }
 }
 
-/// Linear [0, 1] → sRGB8 (the sRGB transfer function).
-pub(crate) fn linear_to_srgb8(x: f32) -> u8 {
+/// Linear [0, 1] → sRGB8 (the sRGB transfer function, rounded to nearest; also the
+/// player's encoder for its anti-aliased reference).
+pub fn linear_to_srgb8(x: f32) -> u8 {
     let x = if x.is_finite() {
         x.clamp(0.0, 1.0)
     } else {
