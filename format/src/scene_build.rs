@@ -128,6 +128,82 @@ fn key(source: &ModelSource, pre_rotation_deg: [f32; 3], target_height: f32) -> 
 
 /// Builds the scene of `plan` (steps in the module docs). Deterministic.
 pub fn build_scene(plan: &Plan) -> Result<Scene, SceneError> {
+    Ok(build_with_placements(plan)?.0)
+}
+
+/// The scene of `plan` as an `Instances` manifest (RON): its ground, cells, bake
+/// parameters and every instance with its model, height, pre-rotation, translation,
+/// yaw and tint, so a generated park becomes an editable list (move one statue and
+/// rebake: only its proxies are derived again, issue 13). Building the written
+/// manifest gives the same models and, for parks, the same instance transforms.
+/// Numbers are written in Rust's shortest round-trip form.
+pub fn instances_manifest(plan: &Plan) -> Result<String, SceneError> {
+    let (_, placements) = build_with_placements(plan)?;
+    let v3 = |v: [f32; 3]| format!("({:?}, {:?}, {:?})", v[0], v[1], v[2]);
+    let source = |m: &ModelSource| match m {
+        ModelSource::File(p) => format!("File({:?})", p.display().to_string()),
+        ModelSource::Procedural(n) => format!("Procedural({n:?})"),
+    };
+    let mut lines = Vec::new();
+    match (&plan.scene, placements) {
+        (SceneSpec::Park(spec), Some(placements)) => {
+            for p in placements {
+                let m = &spec.models[p.model_entry];
+                lines.push(format!(
+                    "(model: {}, target_height: {:?}, pre_rotation_deg: {}, translation: {}, rotation_y_deg: {:?}, tint: {})",
+                    source(&m.model),
+                    m.target_height,
+                    v3(m.pre_rotation_deg),
+                    v3(p.translation),
+                    p.yaw_deg,
+                    v3(p.tint)
+                ));
+            }
+        }
+        (SceneSpec::Instances(list), _) => {
+            for i in list {
+                lines.push(format!(
+                    "(model: {}, target_height: {:?}, pre_rotation_deg: {}, translation: {}, rotation_y_deg: {:?}, scale: {:?}, tint: {})",
+                    source(&i.model),
+                    i.target_height,
+                    v3(i.pre_rotation_deg),
+                    v3(i.translation),
+                    i.rotation_y_deg,
+                    i.scale,
+                    v3(i.tint)
+                ));
+            }
+        }
+        (SceneSpec::Park(_), None) => unreachable!("a park scene has placements"),
+    }
+    let b = &plan.bake;
+    let c = &plan.cells;
+    Ok(format!(
+        "// {name} as an instance list (`pipeline scene {manifest} --as-instances`).\n(\n    name: {name:?},\n    ground: (min: ({:?}, {:?}), max: ({:?}, {:?})),\n    scene: Instances([\n        {}\n    ]),\n    cells: (cell_size: {:?}, min_eye_height: {:?}, max_eye_height: {:?}),\n    bake: (image_res: {}, self_occluding_tolerance_px: {:?}, edge_length_tolerance: {:?}, t_c0: {:?}, t_c1: {:?}, clustering: {}, occlusion_culling: {}, max_deviation_px: {:?}),\n    cells_per_job: {},\n    output: {:?},\n)\n",
+        plan.ground.min[0],
+        plan.ground.min[1],
+        plan.ground.max[0],
+        plan.ground.max[1],
+        lines.join(",\n        "),
+        c.cell_size,
+        c.min_eye_height,
+        c.max_eye_height,
+        b.image_res,
+        b.self_occluding_tolerance_px,
+        b.edge_length_tolerance,
+        b.t_c0,
+        b.t_c1,
+        b.clustering,
+        b.occlusion_culling,
+        b.max_deviation_px,
+        plan.cells_per_job,
+        plan.output.display().to_string(),
+        name = plan.name,
+        manifest = plan.manifest_path.display(),
+    ))
+}
+
+fn build_with_placements(plan: &Plan) -> Result<(Scene, Option<Vec<park::Placement>>), SceneError> {
     // Step 1: distinct models in manifest order.
     let wanted: Vec<(ModelSource, [f32; 3], f32)> = match &plan.scene {
         SceneSpec::Park(p) => p
@@ -196,6 +272,7 @@ pub fn build_scene(plan: &Plan) -> Result<Scene, SceneError> {
     }
 
     // Step 4: instances.
+    let mut placed = None;
     let instances = match &plan.scene {
         SceneSpec::Instances(list) => list
             .iter()
@@ -229,6 +306,7 @@ pub fn build_scene(plan: &Plan) -> Result<Scene, SceneError> {
                 manifest: plan.manifest_path.clone(),
                 source,
             })?;
+            placed = Some(placements.clone());
             placements
                 .iter()
                 .map(|p| Instance {
@@ -239,11 +317,14 @@ pub fn build_scene(plan: &Plan) -> Result<Scene, SceneError> {
                 .collect()
         }
     };
-    Ok(Scene {
-        models,
-        instances,
-        ground: plan.ground,
-    })
+    Ok((
+        Scene {
+            models,
+            instances,
+            ground: plan.ground,
+        },
+        placed,
+    ))
 }
 
 /// Object → world transform of a park placement: translate · rotate_y.

@@ -24,6 +24,10 @@ enum Command {
         /// Print JSON instead of a table.
         #[arg(long)]
         json: bool,
+        /// Print the scene as an `Instances` manifest instead (a generated park as an
+        /// editable list of instances; the same bake).
+        #[arg(long, conflicts_with = "json")]
+        as_instances: bool,
     },
     /// Bake a manifest: plan, bake the missing jobs (locally or on Slurm), assemble
     /// the index, write the report. Resumable: a rerun redoes only missing jobs.
@@ -183,8 +187,19 @@ fn main() -> ExitCode {
 
 fn run(cli: Cli) -> Result<(), Failure> {
     match cli.command {
-        Command::Scene { manifest, json } => {
+        Command::Scene {
+            manifest,
+            json,
+            as_instances,
+        } => {
             let plan = format::manifest::parse_manifest(&manifest).map_err(bad_input)?;
+            if as_instances {
+                print!(
+                    "{}",
+                    format::scene_build::instances_manifest(&plan).map_err(bad_input)?
+                );
+                return Ok(());
+            }
             let scene = plan.load_scene().map_err(bad_input)?;
             let summary = pipeline::scene_cmd::summarize(&plan, &scene);
             print_json_or_text(json, &summary, || {

@@ -154,7 +154,8 @@ pub type ProxyReuse = BTreeMap<ProxyKey, Proxy>;
 
 /// The key of a proxy: blake3 of exactly what its derivation reads — the bake and
 /// cell parameters with the format version and bake revision
-/// ([`format::fingerprint::params_fingerprint`]), its kind, the region it serves
+/// ([`format::fingerprint::params_fingerprint`]) and the LOD chain builder's revision,
+/// its kind, the region it serves
 /// (the prism) and the eyes it is captured from, and per member (in order) the
 /// instance id, its model's content hash (which also decides the model's LOD
 /// chain), transform and tint. A proxy's derivation reads nothing else: captures show
@@ -172,6 +173,7 @@ pub fn proxy_key(
     let mut h = blake3::Hasher::new();
     h.update(b"hexbake proxy v1\0");
     h.update(params);
+    h.update(&crate::lod_chain::CHAIN_REVISION.to_le_bytes());
     h.update(&[kind as u8]);
     let floats = |h: &mut blake3::Hasher, values: &[f32]| {
         for v in values {

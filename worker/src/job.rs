@@ -9,7 +9,13 @@
 //! <out>/jobs/<job>.json      the job's record: fingerprint, cells, per-cell stats;
 //!                            written atomically AFTER all its packs (the journal's "end")
 //! <out>/index.pack           assembled once every job is done
+//! <out>/lod/<hash>.lod       per-model LOD chains (crate::lod_chain), a cache
 //! ```
+//!
+//! A record lists, per cell, the content key of each proxy in pack order
+//! (`proxy_keys`): when the job is baked again (its fingerprint changed), every
+//! proxy whose key is unchanged is taken from the previous pack instead of derived
+//! ([`previous_proxies`]).
 //!
 //! A job is done when its record exists with the job's current fingerprint and every
 //! cell pack it lists decodes, carries that fingerprint and matches the checksum in

@@ -10,8 +10,9 @@
 //!   half-edge collapse ([`crate::simplify::collapse_within`]: the same topology and
 //!   geometry rules as the paper's collapse, uniform weights, cost
 //!   `(1.5 − n_i·n_j)² · |e|`) under a plain object-space tolerance
-//!   `ε_k = 2^(k−1) · diag / 4096` (diag = the model's bounding-box diagonal), so
-//!   ε runs from diag/4096 to diag/32. Each level continues from the previous one,
+//!   `ε_k = √2^(k−1) · diag / 4096` (diag = the model's bounding-box diagonal), so
+//!   ε runs from diag/4096 to diag/91 in steps of √2 (a cell's start level is then
+//!   never more than √2 finer than its budget allows). Each level continues from the previous one,
 //!   so the chain is nested. Half-edge collapses keep original vertices: every level
 //!   indexes the model's own vertex ids.
 //! - **Conservative error.** Every removed original vertex is carried by the
@@ -52,9 +53,9 @@ use std::sync::Arc;
 
 /// Revision of the chain builder: part of every chain file; bump it with any change
 /// to the levels' bytes.
-pub const CHAIN_REVISION: u32 = 1;
+pub const CHAIN_REVISION: u32 = 2;
 /// Levels above the original.
-pub const CHAIN_LEVELS: u32 = 8;
+pub const CHAIN_LEVELS: u32 = 12;
 /// ε_1 = this × the model's bounding diagonal.
 pub const FINEST_BOUND_FRACTION: f32 = 1.0 / 4096.0;
 /// A cell's collapse starts from a level whose error projects below this fraction of
@@ -139,7 +140,7 @@ impl LodChain {
             });
         }
         for k in 0..CHAIN_LEVELS {
-            let bound = diag * FINEST_BOUND_FRACTION * (1u32 << k) as f32;
+            let bound = level_bound(diag, k);
             let input = SimplifyInput {
                 positions: &positions,
                 normals: &normals,
@@ -237,6 +238,12 @@ impl LodChain {
                 .collect(),
         })
     }
+}
+
+/// ε of level k + 1 (k = 0 … CHAIN_LEVELS − 1) of a model with bounding diagonal
+/// `diag`: `diag · FINEST_BOUND_FRACTION · √2^k`.
+pub fn level_bound(diag: f32, k: u32) -> f32 {
+    diag * FINEST_BOUND_FRACTION * 2f32.powf(k as f32 / 2.0)
 }
 
 /// The largest distance of a carried vertex from its carrying triangle.

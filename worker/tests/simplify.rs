@@ -1178,7 +1178,7 @@ proptest! {
         mesh in arb_mesh(),
         prism in arb_prism(),
         max_px in prop_oneof![0.25f32..2.0, 2.0f32..200.0],
-        level in 0usize..8,
+        level in 0usize..worker::lod_chain::CHAIN_LEVELS as usize,
     ) {
         let model = model_of(&mesh);
         let chain = worker::lod_chain::LodChain::build(&model).unwrap();
