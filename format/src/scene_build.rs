@@ -136,12 +136,19 @@ pub fn build_scene(plan: &Plan) -> Result<Scene, SceneError> {
 /// yaw and tint, so a generated park becomes an editable list (move one statue and
 /// rebake: only its proxies are derived again, issue 13). Building the written
 /// manifest gives the same models and, for parks, the same instance transforms.
-/// Numbers are written in Rust's shortest round-trip form.
+/// Numbers are written in Rust's shortest round-trip form, paths absolute.
 pub fn instances_manifest(plan: &Plan) -> Result<String, SceneError> {
     let (_, placements) = build_with_placements(plan)?;
     let v3 = |v: [f32; 3]| format!("({:?}, {:?}, {:?})", v[0], v[1], v[2]);
     let source = |m: &ModelSource| match m {
-        ModelSource::File(p) => format!("File({:?})", p.display().to_string()),
+        // Absolute, so the list works wherever it is written.
+        ModelSource::File(p) => format!(
+            "File({:?})",
+            std::path::absolute(p)
+                .unwrap_or_else(|_| p.clone())
+                .display()
+                .to_string()
+        ),
         ModelSource::Procedural(n) => format!("Procedural({n:?})"),
     };
     let mut lines = Vec::new();
@@ -197,7 +204,10 @@ pub fn instances_manifest(plan: &Plan) -> Result<String, SceneError> {
         b.occlusion_culling,
         b.max_deviation_px,
         plan.cells_per_job,
-        plan.output.display().to_string(),
+        std::path::absolute(&plan.output)
+            .unwrap_or_else(|_| plan.output.clone())
+            .display()
+            .to_string(),
         name = plan.name,
         manifest = plan.manifest_path.display(),
     ))
