@@ -102,6 +102,30 @@ pub fn regional_backface_cull(
         .collect()
 }
 
+/// Whether the whole instance is culled for the cell: every triangle is culled by
+/// [`regional_backface_cull`] (and the mesh has one). Stops at the first triangle that
+/// is not, so on a closed mesh it costs a few triangles, not the whole model (the
+/// split step of every cell asks this of every outside instance).
+pub fn all_culled(mesh: &Mesh, transform: Mat4, prism_corners: &[Vec3; 12]) -> bool {
+    let corners: Vec<DVec3> = prism_corners.iter().map(|c| c.as_dvec3()).collect();
+    let world = |v: u32| {
+        mesh.positions
+            .get(v as usize)
+            .map(|&p| transform.transform_point3(Vec3::from(p)).as_dvec3())
+    };
+    !mesh.triangles.is_empty()
+        && mesh.triangles.iter().all(|tri| {
+            let (Some(a), Some(b), Some(c)) = (world(tri[0]), world(tri[1]), world(tri[2])) else {
+                return false;
+            };
+            let plane = TrianglePlane {
+                normal: (b - a).cross(c - a),
+                centroid: (a + b + c) / 3.0,
+            };
+            corners.iter().all(|&x| plane.faces_away_from(x))
+        })
+}
+
 /// Per vertex: some incident triangle is strictly front-facing from `eye`. The others
 /// are the paper's back-facing vertices (000 §3.1.3.2: "all polygons incident to it
 /// are back-facing"), including vertices no triangle references.

@@ -25,7 +25,7 @@
 //! (MvMesh views) are at the same height. Stage times are measured per proxy and
 //! summed (CPU time, not wall time) and are never written to packs.
 
-use crate::backface::regional_backface_cull;
+use crate::backface::all_culled;
 use crate::capture::{matrix_array, pack_texture};
 use crate::cluster::{greedy_clusters, ClusterCandidate, ClusterSettings};
 use crate::grid::HexGrid;
@@ -340,8 +340,7 @@ pub fn bake_cell_with(
             if prism.intersects_aabb(lo, hi) {
                 return (None, true);
             }
-            let culled = regional_backface_cull(&model.mesh, inst.transform, &corners);
-            if culled.iter().all(|&c| c) {
+            if all_culled(&model.mesh, inst.transform, &corners) {
                 return (None, false);
             }
             let error =

@@ -12,7 +12,9 @@
 use glam::{DVec3, Mat4, Vec3};
 use proptest::prelude::*;
 use std::path::PathBuf;
-use worker::backface::{front_facing_from, front_facing_vertices, regional_backface_cull};
+use worker::backface::{
+    all_culled, front_facing_from, front_facing_vertices, regional_backface_cull,
+};
 use worker::classify::{
     classify, classify_objects, ClassCounts, PixelClass, WindowDepth, DEFAULT_T_C0, DEFAULT_T_C1,
 };
@@ -1083,6 +1085,8 @@ proptest! {
             * Mat4::from_scale(Vec3::splat(scale));
         let culled = regional_backface_cull(&mesh, transform, &corners);
         prop_assert_eq!(culled.len(), mesh.triangles.len());
+        // The split step's short-circuit agrees with the per-triangle cull.
+        prop_assert_eq!(all_culled(&mesh, transform, &corners), culled.iter().all(|&c| c));
         let mut rng = SplitMix(seed);
         let points: Vec<DVec3> = (0..10_000).map(|_| sample_prism(&corners, &mut rng)).collect();
         for (t, tri) in mesh.triangles.iter().enumerate() {
