@@ -3,24 +3,8 @@
 //! exit code 2 and a message that says where (file:line:column of the field, or the
 //! path and what hexbake was doing) — never a panic (exit 101) or an exhausted memory.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
-
-fn pipeline(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_pipeline"))
-        .args(args)
-        .current_dir(repo())
-        .output()
-        .expect("pipeline runs")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
+mod common;
+use common::*;
 
 /// The demo manifest with `from` replaced by `to`, written to `dir/m.ron`.
 fn demo_with(dir: &Path, from: &str, to: &str) -> PathBuf {

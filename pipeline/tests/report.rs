@@ -3,28 +3,8 @@
 //! baked, every average printed `-0`). Runs the real binary on `tests/data/tiny.ron`
 //! (9 cells, at most 2 per job: 6 jobs, a row of 3 cells making two).
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
-
-fn pipeline(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_pipeline"))
-        .args(args)
-        .current_dir(repo())
-        .output()
-        .expect("pipeline runs")
-}
-
-fn text(o: &Output) -> String {
-    format!(
-        "stdout:\n{}\nstderr:\n{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    )
-}
+mod common;
+use common::*;
 
 #[test]
 fn report_of_an_unfinished_bake_says_so_and_averages_only_baked_cells() {

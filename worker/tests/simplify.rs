@@ -331,6 +331,25 @@ fn distance_to_surface(positions: &[Vec3], triangles: &[[u32; 3]], p: Vec3) -> f
         .sqrt()
 }
 
+/// The first vertex the mesh's triangles use that lies farther from `surface` than
+/// the bound allows: (vertex, distance, tolerance).
+fn bound_violation(
+    mesh: &TestMesh,
+    surface: &[[u32; 3]],
+    bound: &DeviationBound,
+    ppr: f32,
+) -> Option<(u32, f32, f32)> {
+    let mut used: Vec<u32> = mesh.triangles.iter().flatten().copied().collect();
+    used.sort_unstable();
+    used.dedup();
+    used.into_iter().find_map(|v| {
+        let p = mesh.positions[v as usize];
+        let tolerance = bound.world_tolerance(p, ppr);
+        let d = distance_to_surface(&mesh.positions, surface, p);
+        (d > tolerance * 1.0001 + 1e-5).then_some((v, d, tolerance))
+    })
+}
+
 fn arb_prism() -> impl Strategy<Value = Prism> {
     (
         -30.0f32..30.0,
@@ -373,17 +392,8 @@ proptest! {
         let out = simplify(&input, &params).unwrap();
         validate(mesh.positions.len(), &mesh.triangles, &out).unwrap();
         check_no_fold(&mesh, &out);
-        let mut used: Vec<u32> = mesh.triangles.iter().flatten().copied().collect();
-        used.sort_unstable();
-        used.dedup();
-        for v in used {
-            let p = mesh.positions[v as usize];
-            let tolerance = bound.world_tolerance(p, ppr);
-            let d = distance_to_surface(&mesh.positions, &out.triangles, p);
-            prop_assert!(
-                d <= tolerance * 1.0001 + 1e-5,
-                "vertex {} is {} from the surface, tolerance {}", v, d, tolerance
-            );
+        if let Some((v, d, tolerance)) = bound_violation(&mesh, &out.triangles, &bound, ppr) {
+            prop_assert!(false, "vertex {} is {} from the surface, tolerance {}", v, d, tolerance);
         }
     }
 
@@ -1209,15 +1219,8 @@ proptest! {
         };
         let out = simplify_seeded(&input, &params, Some(&start.carried)).unwrap();
         validate(mesh.positions.len(), &start.mesh.triangles, &out).unwrap();
-        let mut used: Vec<u32> = mesh.triangles.iter().flatten().copied().collect();
-        used.sort_unstable();
-        used.dedup();
-        for v in used {
-            let p = mesh.positions[v as usize];
-            let tolerance = bound.world_tolerance(p, ppr);
-            let d = distance_to_surface(&mesh.positions, &out.triangles, p);
-            prop_assert!(d <= tolerance * 1.0001 + 1e-5,
-                "vertex {} is {} from the surface, tolerance {}", v, d, tolerance);
+        if let Some((v, d, tolerance)) = bound_violation(&mesh, &out.triangles, &bound, ppr) {
+            prop_assert!(false, "vertex {} is {} from the surface, tolerance {}", v, d, tolerance);
         }
     }
 
