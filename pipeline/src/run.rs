@@ -333,13 +333,18 @@ const STALE_TEMP_AGE: std::time::Duration = std::time::Duration::from_secs(3600)
 
 /// Takes the output lock, refuses while Slurm tasks of an earlier submission still
 /// write into the output ([`crate::slurm::refuse_while_queued`]), and removes the temp
-/// files an interrupted run left in the output, its `cells/` and `jobs/`
+/// files an interrupted run left in the output, its `cells/`, `jobs/` and `lod/`
 /// ([`format::pack::remove_stale_temps`]).
 pub fn lock_output(out: &Path) -> Result<OutputLock, RunError> {
     std::fs::create_dir_all(out).map_err(failed)?;
     let lock = OutputLock::acquire(out).map_err(failed)?;
     crate::slurm::refuse_while_queued(out)?;
-    for dir in [out.to_path_buf(), out.join("cells"), out.join("jobs")] {
+    for dir in [
+        out.to_path_buf(),
+        out.join("cells"),
+        out.join("jobs"),
+        worker::job::lod_dir(out),
+    ] {
         format::pack::remove_stale_temps(&dir, STALE_TEMP_AGE)
             .with_context(|| {
                 format!(
