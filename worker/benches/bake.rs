@@ -7,14 +7,18 @@
 //! `cargo bench -p worker --bench bake` (models from `HEXBAKE_MODELS` or
 //! `<repo>/models`; skipped with a note when absent). `HEXBAKE_BENCH_CELLS=a,b,...`
 //! picks other cells, `HEXBAKE_BENCH_VIEWS` / `HEXBAKE_BENCH_RES` the check size,
-//! `HEXBAKE_BENCH_TL` another edge-length tolerance T_l than the manifest's 4.5.
+//! `HEXBAKE_BENCH_TL` another edge-length tolerance T_l than the manifest's 4.5;
+//! `HEXBAKE_BENCH_CHAINS=1` bakes as `pipeline run` does, every collapse starting
+//! from the models' LOD chains (built here once, their time printed), instead of the
+//! paper's full meshes.
 
 use format::manifest::parse_manifest;
 use std::path::PathBuf;
 use std::time::Instant;
-use worker::bake::bake_cell;
+use worker::bake::{bake_cell_with, ProxyReuse};
 use worker::check::check_cell;
 use worker::grid::HexGrid;
+use worker::lod_chain::LodChains;
 
 fn main() {
     let repo = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..");
@@ -43,6 +47,18 @@ fn main() {
         rayon::current_num_threads()
     );
     let grid = HexGrid::new(plan.ground, plan.cells.cell_size);
+    let chains = if std::env::var("HEXBAKE_BENCH_CHAINS").is_ok_and(|v| v == "1") {
+        let t = Instant::now();
+        let (chains, _) = LodChains::prepare(&scene, None).expect("chains");
+        eprintln!(
+            "LOD chains of {} models built in {:.1} s",
+            scene.models.len(),
+            t.elapsed().as_secs_f64()
+        );
+        chains
+    } else {
+        LodChains::none()
+    };
     let (n, m) = (grid.n_cols() as i64, grid.n_rows() as i64);
     let cells: Vec<(String, u32)> = match std::env::var("HEXBAKE_BENCH_CELLS") {
         Ok(list) => list
@@ -72,7 +88,16 @@ fn main() {
     println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     let mut means = Vec::new();
     for (name, cell) in cells {
-        let bake = bake_cell(&scene, &grid, cell, &plan.cells, &plan.bake).expect("bake");
+        let bake = bake_cell_with(
+            &scene,
+            &chains,
+            &ProxyReuse::new(),
+            &grid,
+            cell,
+            &plan.cells,
+            &plan.bake,
+        )
+        .expect("bake");
         let s = &bake.stats;
         let t = Instant::now();
         let report = check_cell(
