@@ -30,6 +30,14 @@ pub enum BakeError {
         path: PathBuf,
         source: PackError,
     },
+    #[error("cell {cell}: {path}: does not belong to this bake: its {what} differs from index.pack's (pack {found}, index {expected}); rebake the cell (`pipeline run`)")]
+    NotThisBake {
+        cell: u32,
+        path: PathBuf,
+        what: &'static str,
+        found: String,
+        expected: String,
+    },
     #[error("cell {cell}: {path}: holds cell {found}")]
     WrongCell {
         cell: u32,
@@ -142,13 +150,49 @@ pub fn load_cell(
         .and_then(|i| i.cell(cell))
         .ok_or(BakeError::NotIndexed { cell })?;
     let path = dir.join(&entry.file);
-    let pack = PackFile::open(&path)
-        .and_then(|f| CellPack::decode(&f))
-        .map_err(|source| BakeError::CellPack {
-            cell,
-            path: path.clone(),
-            source,
-        })?;
+    let file = PackFile::open(&path).map_err(|source| BakeError::CellPack {
+        cell,
+        path: path.clone(),
+        source,
+    })?;
+    // The pack must be the one the index lists (issue 19): same size and checksum
+    // (a pack left from another bake or setting, or copied in, is refused), then
+    // the same job fingerprint.
+    let not_this_bake = |what, found: String, expected: String| BakeError::NotThisBake {
+        cell,
+        path: path.clone(),
+        what,
+        found,
+        expected,
+    };
+    let bytes = file.bytes();
+    if bytes.len() as u64 != entry.bytes {
+        return Err(not_this_bake(
+            "size",
+            format!("{} bytes", bytes.len()),
+            format!("{} bytes", entry.bytes),
+        ));
+    }
+    let checksum = blake3::hash(bytes);
+    if *checksum.as_bytes() != entry.checksum {
+        return Err(not_this_bake(
+            "checksum",
+            checksum.to_hex().to_string(),
+            format::fingerprint::to_hex(&entry.checksum),
+        ));
+    }
+    let pack = CellPack::decode(&file).map_err(|source| BakeError::CellPack {
+        cell,
+        path: path.clone(),
+        source,
+    })?;
+    if pack.fingerprint != entry.fingerprint {
+        return Err(not_this_bake(
+            "fingerprint",
+            format::fingerprint::to_hex(&pack.fingerprint),
+            format::fingerprint::to_hex(&entry.fingerprint),
+        ));
+    }
     if pack.cell_id != cell {
         return Err(BakeError::WrongCell {
             cell,
