@@ -271,3 +271,73 @@ mod tests {
         assert!(inspect(&path, true).is_err());
     }
 }
+
+/// What `pipeline inspect <out>` (a bake directory) found.
+#[derive(Clone, Debug, Serialize)]
+pub struct BakeCheck {
+    pub dir: String,
+    pub cells_indexed: usize,
+    pub cells_ok: usize,
+    /// One line per problem: the pack and what differs.
+    pub problems: Vec<String>,
+}
+
+/// Verifies a whole bake (issue 19): `base.pack` and `index.pack` decode, every cell
+/// the index lists exists with the listed size, checksum and job fingerprint, decodes,
+/// holds that cell and references only instances and vertices of the base pack.
+/// Returns the report; the caller exits non-zero when `problems` is not empty.
+pub fn check_bake(dir: &Path) -> anyhow::Result<BakeCheck> {
+    let base = BasePack::read(&dir.join("base.pack"))
+        .with_context(|| format!("{}: cannot read the base pack", dir.display()))?;
+    let index = Index::read(&dir.join("index.pack"))
+        .with_context(|| format!("{}: cannot read the index", dir.display()))?;
+    let mut problems = Vec::new();
+    let mut ok = 0;
+    for entry in &index.cells {
+        let path = dir.join(&entry.file);
+        let problem = (|| -> Result<(), String> {
+            entry.verify(dir).map_err(|e| e.to_string())?;
+            let pack = CellPack::read(&path).map_err(|e| e.to_string())?;
+            if pack.cell_id != entry.cell_id {
+                return Err(format!(
+                    "{}: holds cell {}, the index lists it for cell {}",
+                    path.display(),
+                    pack.cell_id,
+                    entry.cell_id
+                ));
+            }
+            if pack.fingerprint != entry.fingerprint {
+                return Err(format!(
+                    "{}: job fingerprint {} differs from the index's {} (a pack of another bake or setting)",
+                    path.display(),
+                    hex(&pack.fingerprint),
+                    hex(&entry.fingerprint)
+                ));
+            }
+            pack.check_against(&base)
+                .map_err(|e| format!("{}: {e}", path.display()))
+        })();
+        match problem {
+            Ok(()) => ok += 1,
+            Err(p) => problems.push(p),
+        }
+    }
+    Ok(BakeCheck {
+        dir: dir.display().to_string(),
+        cells_indexed: index.cells.len(),
+        cells_ok: ok,
+        problems,
+    })
+}
+
+/// Text form of [`BakeCheck`].
+pub fn render_bake_check(c: &BakeCheck) -> String {
+    let mut out = format!(
+        "{}: {} of {} indexed cell packs verified against index.pack and base.pack\n",
+        c.dir, c.cells_ok, c.cells_indexed
+    );
+    for p in &c.problems {
+        let _ = writeln!(out, "  {p}");
+    }
+    out
+}

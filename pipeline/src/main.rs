@@ -89,7 +89,8 @@ enum Command {
     Benchmarks(BenchCommand),
     /// Print a pack's header and sections and check every checksum.
     Inspect {
-        /// A `base.pack`, `cells/<id>.pack` or `index.pack`.
+        /// A `base.pack`, `cells/<id>.pack` or `index.pack`; or a bake directory, to
+        /// verify every cell pack against `index.pack` and `base.pack`.
         pack: PathBuf,
         /// Print JSON instead of text.
         #[arg(long)]
@@ -310,6 +311,25 @@ fn run(cli: Cli) -> Result<(), Failure> {
             Ok(())
         }
         Command::Benchmarks(cmd) => benchmarks(cmd).map_err(|error| Failure { code: 1, error }),
+        Command::Inspect { pack, json } if pack.is_dir() => {
+            let check = pipeline::inspect::check_bake(&pack).map_err(bad_input)?;
+            print_json_or_text(json, &check, || {
+                pipeline::inspect::render_bake_check(&check)
+            });
+            if check.problems.is_empty() {
+                Ok(())
+            } else {
+                Err(Failure {
+                    code: 1,
+                    error: anyhow::anyhow!(
+                        "{}: {} of {} cell packs do not belong to this bake or are damaged",
+                        pack.display(),
+                        check.problems.len(),
+                        check.cells_indexed
+                    ),
+                })
+            }
+        }
         Command::Inspect { pack, json } => {
             // A pack that fails validation is a failure of the data (exit 1), not of
             // the command line; the message names the file and the bad section.

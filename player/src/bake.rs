@@ -30,13 +30,12 @@ pub enum BakeError {
         path: PathBuf,
         source: PackError,
     },
-    #[error("cell {cell}: {path}: does not belong to this bake: its {what} differs from index.pack's (pack {found}, index {expected}); rebake the cell (`pipeline run`)")]
+    #[error("cell {cell}: {path}: does not belong to this bake: {differs}; rebake the cell (`pipeline run`)")]
     NotThisBake {
         cell: u32,
         path: PathBuf,
-        what: &'static str,
-        found: String,
-        expected: String,
+        /// What differs from `index.pack`, with both values.
+        differs: String,
     },
     #[error("cell {cell}: {path}: holds cell {found}")]
     WrongCell {
@@ -158,12 +157,10 @@ pub fn load_cell(
     // The pack must be the one the index lists (issue 19): same size and checksum
     // (a pack left from another bake or setting, or copied in, is refused), then
     // the same job fingerprint.
-    let not_this_bake = |what, found: String, expected: String| BakeError::NotThisBake {
+    let not_this_bake = |what: &str, found: String, expected: String| BakeError::NotThisBake {
         cell,
         path: path.clone(),
-        what,
-        found,
-        expected,
+        differs: format!("its {what} differs from index.pack's (pack {found}, index {expected})"),
     };
     let bytes = file.bytes();
     if bytes.len() as u64 != entry.bytes {
