@@ -357,6 +357,11 @@ fn moving_one_instance_rebakes_only_its_proxies_identically() {
     assert_same_bake(&inc, &fresh);
     let (reused, all) = reused_proxies(&inc);
     eprintln!("incremental rebake: {reused} of {all} proxies reused");
+    // The report says the same.
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(inc.join("report.json")).unwrap()).unwrap();
+    assert_eq!(report["proxies_reused"], reused, "{report}");
+    assert_eq!(report["proxies"], all, "{report}");
     // Per cell at most the moved object's proxy and a cluster it left change;
     // some cells' proxies of it changed, so not everything is reused.
     assert!(reused > 0 && reused < all, "{reused} of {all}");

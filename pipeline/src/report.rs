@@ -105,6 +105,10 @@ pub struct Report {
     pub job_cpu_s: Option<f64>,
     /// Per-stage bake time summed over cells (s).
     pub stage_s: BTreeMap<String, f64>,
+    /// Proxies of the baked cells, and how many of them were taken by content key
+    /// from an earlier bake of the output instead of derived (issue 13).
+    pub proxies: u64,
+    pub proxies_reused: u64,
     pub storage: Storage,
     /// Averages over the baked cells; `None` when no cell is baked (there is nothing
     /// to average).
@@ -248,6 +252,11 @@ pub fn build_report(out: &Path) -> anyhow::Result<Report> {
                     }
                 }
             }
+            report.proxies += r
+                .get("proxy_keys")
+                .and_then(|k| k.as_array())
+                .map_or(0, |k| k.len() as u64);
+            report.proxies_reused += num(r, "reused_proxies") as u64;
             report.storage.cell_bytes += c.bytes;
             report.cell_lines.push(line);
         }
@@ -432,7 +441,10 @@ fn time_section(m: &mut String, r: &Report) {
     };
     let _ = writeln!(
         m,
-        "{jobs_line}\n\n| stage | seconds (summed over cells) |\n|---|---|"
+        "{jobs_line} Proxies: {} derived, {} reused from the output's earlier bake \
+         (their content key was unchanged).\n\n| stage | seconds (summed over cells) |\n|---|---|",
+        r.proxies - r.proxies_reused.min(r.proxies),
+        r.proxies_reused
     );
     for (k, v) in &r.stage_s {
         let _ = writeln!(m, "| {k} | {v:.2} |");
