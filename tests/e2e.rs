@@ -739,3 +739,97 @@ fn player_compare_on_the_demo_bake() {
         "worst frames written (reference, hybrid, difference, anti-aliased reference)"
     );
 }
+
+mod random_manifests {
+    //! Issue 19: random values — extreme, zero, negative and non-finite included — in
+    //! every numeric field of a manifest: `pipeline scene` and a one-cell bake either
+    //! succeed or exit 2 with a message that names the manifest; never a panic
+    //! (exit 101) and never exit 1 with an internal message.
+    use super::*;
+    use proptest::prelude::*;
+
+    /// Mostly `nominal` (so that some manifests are valid and get baked), else any
+    /// value in a wide range or an extreme one.
+    fn number(nominal: &'static str) -> BoxedStrategy<String> {
+        prop_oneof![
+            20 => Just(nominal.to_string()),
+            1 => (-300.0f32..300.0).prop_map(|v| format!("{v:?}")),
+            1 => prop::sample::select(vec![
+                "0.0", "-0.0", "-1.0", "1e-30", "1e30", "-1e38", "3.4e38", "NaN", "inf", "-inf",
+                "1e7", "0.001",
+            ])
+            .prop_map(String::from),
+        ]
+        .boxed()
+    }
+
+    /// Nominal values of the 21 numeric fields of [`manifest`], in order.
+    const NOMINAL: [&str; 21] = [
+        "0.0", "0.0", "120.0", "100.0", // ground
+        "10.0", "30.0", "0.0", "30.0", "20.0", "1.0", "0.9", "0.8", "0.7", // instance
+        "40.0", "4.0", "10.0", // cells
+        "5.0", "4.5", "3.4e-4", "1.28e-4", "0.5", // bake
+    ];
+
+    fn integer() -> impl Strategy<Value = String> {
+        prop_oneof![
+            10 => Just("64".to_string()),
+            1 => (1u32..300).prop_map(|v| v.to_string()),
+            1 => prop::sample::select(vec!["0", "1", "100000", "4294967295"]).prop_map(String::from),
+        ]
+    }
+
+    fn manifest(n: &[String], i: &[String]) -> String {
+        format!(
+            "(name: \"random\", ground: (min: ({}, {}), max: ({}, {})),\n\
+             scene: Instances([\n\
+               (model: Procedural(\"sphere\"), target_height: {}, translation: ({}, {}, {}), rotation_y_deg: {}, scale: {}, tint: ({}, {}, {})),\n\
+               (model: Procedural(\"box\"), target_height: 6.0, translation: (60.0, 0.0, 40.0), rotation_y_deg: 0.0)]),\n\
+             cells: (cell_size: {}, min_eye_height: {}, max_eye_height: {}),\n\
+             bake: (image_res: {}, self_occluding_tolerance_px: {}, edge_length_tolerance: {}, t_c0: {}, t_c1: {}, max_deviation_px: {}),\n\
+             cells_per_job: {})\n",
+            n[0], n[1], n[2], n[3], n[4], n[5], n[6], n[7], n[8], n[9], n[10], n[11], n[12],
+            n[13], n[14], n[15], i[0], n[16], n[17], n[18], n[19], n[20], i[1]
+        )
+    }
+
+    fn check(o: &Output, what: &str) -> Result<(), TestCaseError> {
+        let code = o.status.code();
+        prop_assert!(
+            code == Some(0) || code == Some(2),
+            "{what}: exit {code:?}\n{}",
+            stderr(o)
+        );
+        if code == Some(2) {
+            prop_assert!(
+                stderr(o).contains("m.ron"),
+                "{what}: names no file: {}",
+                stderr(o)
+            );
+        }
+        Ok(())
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 32, failure_persistence: None, ..ProptestConfig::default() })]
+
+        #[test]
+        fn random_manifests_succeed_or_exit_2_with_a_position(
+            n in NOMINAL.iter().map(|&v| number(v)).collect::<Vec<_>>(),
+            i in prop::collection::vec(integer(), 2),
+        ) {
+            let dir = tempfile::tempdir().unwrap();
+            let m = dir.path().join("m.ron");
+            std::fs::write(&m, manifest(&n, &i)).unwrap();
+            let m = m.to_str().unwrap();
+            let o = run("pipeline", &["scene", m], &repo());
+            check(&o, "pipeline scene")?;
+            if o.status.success() {
+                eprintln!("random manifest valid: baking cell 0");
+                let out = dir.path().join("out");
+                let o = run("pipeline", &["run", m, "--cells", "0", "--quiet", "--out", out.to_str().unwrap()], &repo());
+                check(&o, "pipeline run --cells 0")?;
+            }
+        }
+    }
+}
