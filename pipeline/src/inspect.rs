@@ -282,8 +282,8 @@ pub struct BakeCheck {
     pub problems: Vec<String>,
 }
 
-/// Verifies a whole bake (issue 19): `base.pack` and `index.pack` decode, every cell
-/// the index lists exists with the listed size, checksum and job fingerprint, decodes,
+/// Verifies a whole bake (issue 19): `base.pack` and `index.pack` decode, the index's
+/// cells and neighbours lie in the base pack's grid, every cell the index lists exists with the listed size, checksum and job fingerprint, decodes,
 /// holds that cell and references only instances and vertices of the base pack.
 /// Returns the report; the caller exits non-zero when `problems` is not empty.
 pub fn check_bake(dir: &Path) -> anyhow::Result<BakeCheck> {
@@ -293,6 +293,21 @@ pub fn check_bake(dir: &Path) -> anyhow::Result<BakeCheck> {
         .with_context(|| format!("{}: cannot read the index", dir.display()))?;
     let mut problems = Vec::new();
     let mut ok = 0;
+    // The index against the base pack: every listed cell and neighbour is a cell of
+    // the base pack's grid.
+    let grid_cells = base.grid.n_cols as u64 * base.grid.n_rows as u64;
+    for entry in &index.cells {
+        if let Some(bad) = std::iter::once(entry.cell_id)
+            .chain(entry.neighbours.iter().copied())
+            .find(|&c| u64::from(c) >= grid_cells)
+        {
+            problems.push(format!(
+                "{}: lists cell {bad} (for cell {}), but base.pack's grid has {grid_cells} cells",
+                dir.join("index.pack").display(),
+                entry.cell_id
+            ));
+        }
+    }
     for entry in &index.cells {
         let path = dir.join(&entry.file);
         let problem = (|| -> Result<(), String> {

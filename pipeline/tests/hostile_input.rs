@@ -115,6 +115,36 @@ fn scene_refuses_deep_nesting_quickly() {
     assert_bad_input(&out, &["deep.ron:1:65: ", "nested more than 64 deep"]);
 }
 
+/// The four manifests (cell size 0.001, 100,000 brackets, an eye height of
+/// 1e30, a coordinate of 1e38) are refused with their position using under a second
+/// of CPU and under 100 MB of memory each.
+#[test]
+fn hostile_manifests_are_refused_quickly_and_in_little_memory() {
+    let dir = tempfile::tempdir().unwrap();
+    let deep = dir.path().join("deep.ron");
+    std::fs::write(&deep, "[".repeat(100_000)).unwrap();
+    let case = |name: &str, from: &str, to: &str| {
+        let sub = dir.path().join(name);
+        std::fs::create_dir_all(&sub).unwrap();
+        demo_with(&sub, from, to)
+    };
+    let cases = [
+        case("cell", "cell_size: 50.0", "cell_size: 0.001"),
+        deep,
+        case("eye", "max_eye_height: 12.0", "max_eye_height: 1e30"),
+        case("ground", "max: (300.0, 260.0)", "max: (300.0, 1e38)"),
+    ];
+    for m in &cases {
+        let (out, cpu_s, rss_kib) = pipeline_measured(&["scene", m.to_str().unwrap()]);
+        let err = stderr(&out);
+        eprintln!("{}: {cpu_s:.3} s CPU, {rss_kib} KiB: {err}", m.display());
+        assert_eq!(out.status.code(), Some(2), "{err}");
+        assert!(err.contains(".ron:"), "positioned: {err}");
+        assert!(cpu_s < 1.0, "{cpu_s} s CPU: {err}");
+        assert!(rss_kib < 100 * 1024, "{rss_kib} KiB: {err}");
+    }
+}
+
 /// `--out` inside /proc printed a bare "No such file or directory", and `--out`
 /// naming a regular file a bare "File exists": both now name the path and what
 /// hexbake was doing.
