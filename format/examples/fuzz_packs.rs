@@ -2,7 +2,9 @@
 //! `cargo fuzz` or nightly is missing): a deterministic random-mutation driver over
 //! the golden sample packs — bit flips, interesting bytes and header/table fields,
 //! truncations, insertions, deletions, splices of two packs, each optionally resealed
-//! (checksums recomputed) so the content decoders are reached — for SECONDS seconds.
+//! (checksums recomputed) so the content decoders are reached, and a quarter of the
+//! time a structure-aware edit (`sample::mutate_decoded`: an interesting value in a
+//! decoded field, the pack re-assembled with valid checksums) — for SECONDS seconds.
 //! Any panic is a failure: the input is written to `fuzz/artifacts/` and the driver
 //! exits 1.
 //!
@@ -70,6 +72,13 @@ fn mutate(rng: &mut SplitMix, input: &mut Vec<u8>, seeds: &[Vec<u8>]) {
     }
     if rng.below(2) == 0 {
         reseal(input);
+    }
+    // Structure-aware (issue 19): a decoded field set to an interesting value and the
+    // pack re-assembled, so the content validation itself is exercised.
+    if rng.below(4) == 0 {
+        if let Some(m) = sample::mutate_decoded(input, rng.next_u64()) {
+            *input = m;
+        }
     }
 }
 

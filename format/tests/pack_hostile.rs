@@ -920,3 +920,27 @@ fn create_new_atomic_creates_whole_and_never_replaces() {
         .collect();
     assert_eq!(names, vec![std::ffi::OsString::from(".lock")]);
 }
+
+/// The fuzz driver's structure-aware edit (`sample::mutate_decoded`) keeps every
+/// checksum valid — the pack still parses — so what refuses it is the content
+/// validation; over many edits of each sample pack some are refused that way, and
+/// none panics.
+#[test]
+fn structure_aware_edits_reach_the_content_validation() {
+    for (kind, bytes) in samples() {
+        let mut refused = 0;
+        for pick in 0..400u64 {
+            let Some(edited) = sample::mutate_decoded(&bytes, pick) else {
+                continue;
+            };
+            assert!(
+                PackFile::from_bytes(&edited).is_ok(),
+                "{kind:?}: checksums stay valid"
+            );
+            if decode(kind, &edited).is_err() {
+                refused += 1;
+            }
+        }
+        assert!(refused > 0, "{kind:?}: no edit was refused");
+    }
+}

@@ -454,3 +454,48 @@ pub fn exercise_readers(bytes: &[u8]) -> usize {
     }
     accepted
 }
+
+/// Structure-aware mutation (issue 19): `bytes` (a pack that parses) with an
+/// interesting 4-byte value — NaN, ±∞, −1.0, 0, 1e30, 1e-30, `u32::MAX`, 1 — written at a
+/// 4-aligned offset of one section's *decoded* content, re-assembled with every
+/// checksum valid, so that the content validation is what gets exercised, not the
+/// checksums. `pick` chooses section, offset and value. `None` when `bytes` does not
+/// parse, has no non-empty section, or cannot be re-assembled.
+pub fn mutate_decoded(bytes: &[u8], pick: u64) -> Option<Vec<u8>> {
+    use super::writer::{assemble, SectionData, TRY_INDICES};
+    let pack = super::PackFile::from_bytes(bytes).ok()?;
+    let mut sections: Vec<SectionData> = pack
+        .sections()
+        .iter()
+        .map(|s| {
+            Some(SectionData {
+                kind: s.kind,
+                raw: pack.section(s.kind).ok()?.into_owned(),
+                codecs: TRY_INDICES,
+            })
+        })
+        .collect::<Option<_>>()?;
+    let candidates: Vec<usize> = (0..sections.len())
+        .filter(|&i| sections[i].raw.len() >= 4)
+        .collect();
+    if candidates.is_empty() {
+        return None;
+    }
+    let mut rng = SplitMix(pick);
+    let s = &mut sections[candidates[rng.below(candidates.len() as u64) as usize]];
+    let at = (rng.below((s.raw.len() / 4) as u64) * 4) as usize;
+    let values: [u32; 9] = [
+        f32::NAN.to_bits(),
+        f32::INFINITY.to_bits(),
+        f32::NEG_INFINITY.to_bits(),
+        (-1.0f32).to_bits(),
+        0,
+        1e30f32.to_bits(),
+        1e-30f32.to_bits(),
+        u32::MAX,
+        1,
+    ];
+    let v = values[rng.below(values.len() as u64) as usize];
+    s.raw[at..at + 4].copy_from_slice(&v.to_le_bytes());
+    assemble(pack.file_kind(), &sections).ok()
+}
