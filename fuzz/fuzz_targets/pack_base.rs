@@ -17,4 +17,10 @@ fuzz_target!(|data: &[u8]| {
     if sample::reseal(&mut resealed) {
         let _ = BasePack::from_bytes(&resealed);
     }
+    // Structure-aware (issue 19): a decoded field set to an interesting value, the
+    // pack re-assembled with valid checksums.
+    let pick = data.iter().fold(0u64, |h, &b| h.rotate_left(5) ^ u64::from(b));
+    if let Some(edited) = sample::mutate_decoded(data, pick) {
+        let _ = BasePack::from_bytes(&edited);
+    }
 });
