@@ -34,7 +34,8 @@ pub enum BakeError {
     NotThisBake {
         cell: u32,
         path: PathBuf,
-        /// What differs from `index.pack`, with both values.
+        /// What differs from `index.pack` (size, checksum or job fingerprint), with
+        /// both values.
         differs: String,
     },
     #[error("cell {cell}: {path}: holds cell {found}")]
@@ -157,38 +158,25 @@ pub fn load_cell(
     // The pack must be the one the index lists (issue 19): same size and checksum
     // (a pack left from another bake or setting, or copied in, is refused), then
     // the same job fingerprint.
-    let not_this_bake = |what: &str, found: String, expected: String| BakeError::NotThisBake {
+    let not_this_bake = |differs: String| BakeError::NotThisBake {
         cell,
         path: path.clone(),
-        differs: format!("its {what} differs from index.pack's (pack {found}, index {expected})"),
+        differs,
     };
-    let bytes = file.bytes();
-    if bytes.len() as u64 != entry.bytes {
-        return Err(not_this_bake(
-            "size",
-            format!("{} bytes", bytes.len()),
-            format!("{} bytes", entry.bytes),
-        ));
-    }
-    let checksum = blake3::hash(bytes);
-    if *checksum.as_bytes() != entry.checksum {
-        return Err(not_this_bake(
-            "checksum",
-            checksum.to_hex().to_string(),
-            format::fingerprint::to_hex(&entry.checksum),
-        ));
-    }
+    entry
+        .verify_bytes(&path, file.bytes())
+        .map_err(|e| not_this_bake(e.to_string()))?;
     let pack = CellPack::decode(&file).map_err(|source| BakeError::CellPack {
         cell,
         path: path.clone(),
         source,
     })?;
     if pack.fingerprint != entry.fingerprint {
-        return Err(not_this_bake(
-            "fingerprint",
+        return Err(not_this_bake(format!(
+            "its job fingerprint {} differs from index.pack's {}",
             format::fingerprint::to_hex(&pack.fingerprint),
-            format::fingerprint::to_hex(&entry.fingerprint),
-        ));
+            format::fingerprint::to_hex(&entry.fingerprint)
+        )));
     }
     if pack.cell_id != cell {
         return Err(BakeError::WrongCell {

@@ -29,6 +29,14 @@ pub struct TrianglePlane {
 }
 
 impl TrianglePlane {
+    /// The plane of the counter-clockwise triangle `a`, `b`, `c`.
+    pub fn new(a: DVec3, b: DVec3, c: DVec3) -> TrianglePlane {
+        TrianglePlane {
+            normal: (b - a).cross(c - a),
+            centroid: (a + b + c) / 3.0,
+        }
+    }
+
     /// `N · (P − X)`: positive when the triangle faces away from `eye`, negative when it
     /// faces it, zero edge-on.
     pub fn away_from(&self, eye: DVec3) -> f64 {
@@ -70,10 +78,7 @@ pub(crate) fn planes_of(world: &[Vec3], triangles: &[[u32; 3]]) -> Vec<Option<Tr
             let a = world.get(tri[0] as usize)?.as_dvec3();
             let b = world.get(tri[1] as usize)?.as_dvec3();
             let c = world.get(tri[2] as usize)?.as_dvec3();
-            Some(TrianglePlane {
-                normal: (b - a).cross(c - a),
-                centroid: (a + b + c) / 3.0,
-            })
+            Some(TrianglePlane::new(a, b, c))
         })
         .collect()
 }
@@ -118,10 +123,7 @@ pub fn all_culled(mesh: &Mesh, transform: Mat4, prism_corners: &[Vec3; 12]) -> b
             let (Some(a), Some(b), Some(c)) = (world(tri[0]), world(tri[1]), world(tri[2])) else {
                 return false;
             };
-            let plane = TrianglePlane {
-                normal: (b - a).cross(c - a),
-                centroid: (a + b + c) / 3.0,
-            };
+            let plane = TrianglePlane::new(a, b, c);
             corners.iter().all(|&x| plane.faces_away_from(x))
         })
 }

@@ -160,12 +160,17 @@ pub fn done_record(out: &Path, job: &Job) -> Option<JobRecord> {
         // with the recorded size and blake3 is the pack this job wrote for this cell
         // with this fingerprint (checked above), so it is not decoded again here
         // (decoding every pack three times per run cost ~17 CPU s on park-2m).
-        let bytes = std::fs::read(out.join(&c.file)).ok()?;
-        if bytes.len() as u64 != c.bytes || *blake3::hash(&bytes).as_bytes() != c.checksum {
-            return None;
-        }
+        recorded_pack(out, c)?;
     }
     Some(record)
+}
+
+/// The bytes of the pack a job record lists for a cell, if the file still has the
+/// recorded size and blake3 checksum.
+fn recorded_pack(out: &Path, c: &CellRecord) -> Option<Vec<u8>> {
+    let bytes = std::fs::read(out.join(&c.file)).ok()?;
+    (bytes.len() as u64 == c.bytes && *blake3::hash(&bytes).as_bytes() == c.checksum)
+        .then_some(bytes)
 }
 
 /// Runs one job: bakes each cell with `bake` (which returns the cell's pack content
@@ -279,12 +284,9 @@ pub fn previous_proxies(out: &Path, job: &Job) -> std::collections::BTreeMap<u32
         return reuse;
     };
     for c in record.cells.iter().filter(|c| job.cells.contains(&c.cell)) {
-        let Ok(bytes) = std::fs::read(out.join(&c.file)) else {
+        let Some(bytes) = recorded_pack(out, c) else {
             continue;
         };
-        if bytes.len() as u64 != c.bytes || *blake3::hash(&bytes).as_bytes() != c.checksum {
-            continue;
-        }
         let Ok(pack) = CellPack::from_bytes(&bytes) else {
             continue;
         };

@@ -149,12 +149,16 @@ impl LodChain {
                 view_sets: None,
             };
             let length = |a: u32, b: u32| positions[a as usize].distance(positions[b as usize]);
-            let tracked =
-                collapse_within(&input, length, vec![bound; positions.len()], Some(&carried))
-                    .map_err(|source| ChainError::Simplify {
-                        model: model.name.clone(),
-                        source,
-                    })?;
+            let tracked = collapse_within(
+                &input,
+                length,
+                vec![bound; positions.len()],
+                Some(std::mem::take(&mut carried)),
+            )
+            .map_err(|source| ChainError::Simplify {
+                model: model.name.clone(),
+                source,
+            })?;
             triangles = tracked.simplified.triangles;
             carried = tracked.carried;
             let max_error = max_carried_distance(&positions, &triangles, &carried);

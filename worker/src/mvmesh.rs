@@ -171,7 +171,7 @@ pub fn derive_mvmesh(
             },
             deviation: settings.deviation,
         },
-        carried.as_deref(),
+        carried,
     )
     .map_err(|source| ProxyError::Simplify { instance, source })?;
     times.simplify_ms += ms_since(t);

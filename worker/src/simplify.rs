@@ -365,9 +365,9 @@ pub fn simplify(
 pub fn simplify_seeded(
     input: &SimplifyInput,
     params: &SimplifyParams,
-    carried: Option<&[Vec<u32>]>,
+    carried: Option<Vec<Vec<u32>>>,
 ) -> Result<Simplified, SimplifyError> {
-    check_carried(input, carried)?;
+    check_carried(input, carried.as_deref())?;
     let ppr = params.length.pixels_per_radian();
     if !(ppr.is_finite() && ppr > 0.0) {
         return Err(SimplifyError::BadPixelsPerRadian(ppr));
@@ -475,10 +475,10 @@ pub fn collapse_within(
     input: &SimplifyInput,
     length: impl Fn(u32, u32) -> f32,
     tolerance: Vec<f32>,
-    carried: Option<&[Vec<u32>]>,
+    carried: Option<Vec<Vec<u32>>>,
 ) -> Result<Tracked, SimplifyError> {
     check_input(input, f32::INFINITY)?;
-    check_carried(input, carried)?;
+    check_carried(input, carried.as_deref())?;
     if tolerance.len() != input.positions.len() {
         return Err(SimplifyError::LengthMismatch {
             what: "tolerances",
@@ -653,9 +653,9 @@ impl Deviation {
     }
 
     /// Starts from carried lists of a coarser level (checked by `check_carried`).
-    fn seed(&mut self, carried: Option<&[Vec<u32>]>) {
+    fn seed(&mut self, carried: Option<Vec<Vec<u32>>>) {
         if let Some(carried) = carried {
-            self.carried = carried.to_vec();
+            self.carried = carried;
         }
     }
 }

@@ -363,7 +363,7 @@ pub fn derive_svmesh(
                 length: length.clone(),
                 deviation: settings.deviation,
             },
-            carried.as_deref(),
+            carried,
         )
         .map_err(|source| ProxyError::Simplify {
             instance: item.object_id,

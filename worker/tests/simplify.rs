@@ -1217,7 +1217,7 @@ proptest! {
             length: ProjectedLength::MaxOverPrism { prism, pixels_per_radian: ppr },
             deviation: Some(bound),
         };
-        let out = simplify_seeded(&input, &params, Some(&start.carried)).unwrap();
+        let out = simplify_seeded(&input, &params, Some(start.carried.clone())).unwrap();
         validate(mesh.positions.len(), &start.mesh.triangles, &out).unwrap();
         if let Some((v, d, tolerance)) = bound_violation(&mesh, &out.triangles, &bound, ppr) {
             prop_assert!(false, "vertex {} is {} from the surface, tolerance {}", v, d, tolerance);

@@ -160,6 +160,13 @@ impl IndexEntry {
             file: path.clone(),
             source,
         })?;
+        self.verify_bytes(&path, &data)
+    }
+
+    /// Checks that `data`, the content of the pack at `path` (already read or
+    /// mapped), has the recorded size and checksum.
+    pub fn verify_bytes(&self, path: &Path, data: &[u8]) -> Result<(), PackError> {
+        let path = path.to_path_buf();
         if data.len() as u64 != self.bytes {
             return Err(PackError::LengthMismatch {
                 file: path,
@@ -167,7 +174,7 @@ impl IndexEntry {
                 found: data.len() as u64,
             });
         }
-        let found = blake3::hash(&data);
+        let found = blake3::hash(data);
         if *found.as_bytes() != self.checksum {
             return Err(PackError::FileChecksum {
                 file: path,
