@@ -90,6 +90,9 @@ fn main() {
         sample::small_base().encode().expect("sample base"),
         sample::small_cell().encode().expect("sample cell"),
         sample::small_index().encode().expect("sample index"),
+        sample::small_cell_v2().encode().expect("sample cell v2"),
+        sample::small_group().encode_group().expect("sample group"),
+        sample::small_index_v2().encode().expect("sample index v2"),
     ];
     for s in &seeds {
         assert_eq!(

@@ -26,6 +26,11 @@
 //!         tint_min: (0.7, 0.7, 0.7),                   // optional, default (1, 1, 1)
 //!         tint_max: (1.0, 1.0, 1.0),                   // optional, default (1, 1, 1)
 //!     )),
+//!     // or: scene: City((seed: 17, block_size: 64.0, street_width: 20.0,
+//!     //        min_height: 12.0, max_height: 60.0,
+//!     //        buildings_per_block: 2 /* optional */, floor_height: 3.5 /* optional */,
+//!     //        variants: 16 /* optional */, props: [ /* as park models */ ] /* optional */,
+//!     //        tint_min: (..), tint_max: (..) /* optional */)),
 //!     // or: scene: Instances([(model: File("a.obj"), target_height: 10.0,
 //!     //        translation: (5.0, 0.0, 7.0), rotation_y_deg: 30.0,
 //!     //        scale: 1.0 /* optional */, tint: (1.0, 0.9, 0.8) /* optional */,
@@ -143,6 +148,24 @@ pub enum ModelSource {
 pub enum SceneSpec {
     Instances(Vec<InstanceSpec>),
     Park(ParkSpec),
+    City(CitySpec),
+}
+
+/// A generated city (`city.rs`): blocks of buildings, streets, props on the pavements.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CitySpec {
+    pub seed: u64,
+    pub block_size: f32,
+    pub street_width: f32,
+    pub buildings_per_block: u32,
+    pub min_height: f32,
+    pub max_height: f32,
+    pub floor_height: f32,
+    pub variants: u32,
+    /// Statues and props from model files, placed on the pavements.
+    pub props: Vec<ParkModel>,
+    pub tint_min: [f32; 3],
+    pub tint_max: [f32; 3],
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -446,6 +469,41 @@ struct RawGround {
 enum RawScene {
     Park(RawPark),
     Instances(Vec<RawInstance>),
+    City(RawCity),
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawCity {
+    seed: u64,
+    block_size: f32,
+    street_width: f32,
+    #[serde(default = "default_buildings_per_block")]
+    buildings_per_block: u32,
+    min_height: f32,
+    max_height: f32,
+    #[serde(default = "default_floor_height")]
+    floor_height: f32,
+    #[serde(default = "default_variants")]
+    variants: u32,
+    #[serde(default)]
+    props: Vec<RawParkModel>,
+    #[serde(default = "unit_tint")]
+    tint_min: [f32; 3],
+    #[serde(default = "unit_tint")]
+    tint_max: [f32; 3],
+}
+
+fn default_buildings_per_block() -> u32 {
+    2
+}
+
+fn default_floor_height() -> f32 {
+    3.5
+}
+
+fn default_variants() -> u32 {
+    16
 }
 
 #[derive(Deserialize)]
@@ -765,6 +823,85 @@ impl Validator<'_> {
         }
     }
 
+    /// A prop list (park models on the pavements), fields under `scene.props[i]`.
+    fn props(&self, raw: Vec<RawParkModel>) -> Result<Vec<ParkModel>, ManifestError> {
+        let mut models = Vec::with_capacity(raw.len());
+        for (i, m) in raw.into_iter().enumerate() {
+            let f = |name: &str| format!("scene.props[{i}].{name}");
+            models.push(ParkModel {
+                model: self.model(&f("model"), m.model)?,
+                pre_rotation_deg: self.finite3(&f("pre_rotation_deg"), m.pre_rotation_deg)?,
+                count: m.count,
+                target_height: self.height(&f("target_height"), m.target_height)?,
+            });
+        }
+        Ok(models)
+    }
+
+    /// A `City` scene: lengths positive and within the limits, heights ordered,
+    /// whole floors, a bounded number of buildings per block and variants.
+    fn city(&self, c: RawCity) -> Result<SceneSpec, ManifestError> {
+        let block_size = self.height("scene.block_size", c.block_size)?;
+        let street_width = self.height("scene.street_width", c.street_width)?;
+        if !(1..=16).contains(&c.buildings_per_block) {
+            return Err(self.error(
+                "scene.buildings_per_block",
+                format!("must be in 1..=16, found {}", c.buildings_per_block),
+            ));
+        }
+        if !(1..=256).contains(&c.variants) {
+            return Err(self.error(
+                "scene.variants",
+                format!("must be in 1..=256, found {}", c.variants),
+            ));
+        }
+        let min_height = self.height("scene.min_height", c.min_height)?;
+        let max_height = self.height("scene.max_height", c.max_height)?;
+        if max_height < min_height {
+            return Err(self.error(
+                "scene.max_height",
+                format!("must be >= `min_height` ({min_height}), found {max_height}"),
+            ));
+        }
+        let floor_height = self.height("scene.floor_height", c.floor_height)?;
+        // Floors and windows are geometry: bound them so a building stays a mesh.
+        let floors = f64::from(max_height) / f64::from(floor_height);
+        let columns = f64::from(block_size) / f64::from(floor_height);
+        if floor_height > min_height || floors * columns > crate::city::MAX_WINDOWS_PER_FACADE as f64
+        {
+            return Err(self.error(
+                "scene.floor_height",
+                format!(
+                    "must be at most `min_height` ({min_height}) and leave at most {} windows \
+                     on a façade ({floors:.0} floors × {columns:.0} columns), found {floor_height}",
+                    crate::city::MAX_WINDOWS_PER_FACADE
+                ),
+            ));
+        }
+        let props = self.props(c.props)?;
+        let tint_min = self.tint("scene.tint_min", c.tint_min)?;
+        let tint_max = self.tint("scene.tint_max", c.tint_max)?;
+        if (0..3).any(|k| tint_min[k] > tint_max[k]) {
+            return Err(self.error(
+                "scene.tint_max",
+                format!("must be >= `tint_min` per channel, found min {tint_min:?} max {tint_max:?}"),
+            ));
+        }
+        Ok(SceneSpec::City(CitySpec {
+            seed: c.seed,
+            block_size,
+            street_width,
+            buildings_per_block: c.buildings_per_block,
+            min_height,
+            max_height,
+            floor_height,
+            variants: c.variants,
+            props,
+            tint_min,
+            tint_max,
+        }))
+    }
+
     fn plan(&self, raw: RawManifest) -> Result<Plan, ManifestError> {
         // Name: given, else the file stem.
         let name = match raw.name {
@@ -825,6 +962,7 @@ impl Validator<'_> {
                     tint_max,
                 })
             }
+            RawScene::City(city) => self.city(city)?,
             RawScene::Instances(list) => {
                 if list.is_empty() {
                     return Err(self.error("scene", "lists no instance".into()));

@@ -5,8 +5,10 @@
 //!    in manifest order;
 //! 2. load each distinct *source* once (`load::load_model` or `procedural::build`);
 //! 3. per model: pre-rotate, normalise ([`normalise`]), hash (`Mesh::content_hash`);
-//! 4. place the instances: the explicit list as given, or the park generator
-//!    (`park::place`) with the normalised footprints.
+//! 4. place the instances: the explicit list as given, the park generator
+//!    (`park::place`) with the normalised footprints, or the city generator
+//!    (`city::place`; a city's building variants are generated models, listed after
+//!    its props).
 
 use crate::load::{load_model, LoadError};
 use crate::manifest::{ModelSource, Plan, SceneSpec};
@@ -33,6 +35,18 @@ pub enum SceneError {
         manifest: PathBuf,
         source: ParkError,
     },
+    #[error("{}: {source}", manifest.display())]
+    City {
+        manifest: PathBuf,
+        source: crate::city::CityError,
+    },
+    /// `--as-instances` of a city: its buildings are generated meshes that no model
+    /// source names.
+    #[error(
+        "{}: a city's buildings are generated meshes; it cannot be written as an instance list",
+        manifest.display()
+    )]
+    CityAsInstances { manifest: PathBuf },
 }
 
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
@@ -182,6 +196,11 @@ pub fn instances_manifest(plan: &Plan) -> Result<String, SceneError> {
             }
         }
         (SceneSpec::Park(_), None) => unreachable!("a park scene has placements"),
+        (SceneSpec::City(_), _) => {
+            return Err(SceneError::CityAsInstances {
+                manifest: plan.manifest_path.clone(),
+            })
+        }
     }
     let b = &plan.bake;
     let c = &plan.cells;
@@ -224,6 +243,11 @@ fn build_with_placements(plan: &Plan) -> Result<(Scene, Option<Vec<park::Placeme
         SceneSpec::Instances(list) => list
             .iter()
             .map(|i| (i.model.clone(), i.pre_rotation_deg, i.target_height))
+            .collect(),
+        SceneSpec::City(c) => c
+            .props
+            .iter()
+            .map(|m| (m.model.clone(), m.pre_rotation_deg, m.target_height))
             .collect(),
     };
     let mut model_index: BTreeMap<ModelKey, u32> = BTreeMap::new();
@@ -281,6 +305,36 @@ fn build_with_placements(plan: &Plan) -> Result<(Scene, Option<Vec<park::Placeme
         });
     }
 
+    // Step 3b: a city's building variants, generated (models after the props).
+    let city_params = match &plan.scene {
+        SceneSpec::City(c) => Some(crate::city::CityParams {
+            seed: c.seed,
+            block_size: c.block_size,
+            street_width: c.street_width,
+            buildings_per_block: c.buildings_per_block,
+            min_height: c.min_height,
+            max_height: c.max_height,
+            floor_height: c.floor_height,
+            variants: c.variants,
+            tint_min: c.tint_min,
+            tint_max: c.tint_max,
+        }),
+        _ => None,
+    };
+    let first_building = models.len() as u32;
+    if let Some(params) = &city_params {
+        for v in 0..params.variants {
+            let mesh = crate::city::building_mesh(&crate::city::BuildingStyle::draw(params, v));
+            let content_hash = mesh.content_hash();
+            models.push(Model {
+                name: format!("building-{v}"),
+                source: format!("city:{}:building-{v}", params.seed),
+                mesh,
+                content_hash,
+            });
+        }
+    }
+
     // Step 4: instances.
     let mut placed = None;
     let instances = match &plan.scene {
@@ -322,6 +376,35 @@ fn build_with_placements(plan: &Plan) -> Result<(Scene, Option<Vec<park::Placeme
                 .map(|p| Instance {
                     model: entry_model[p.model_entry],
                     transform: park_transform(p),
+                    tint: Vec3::from(p.tint),
+                })
+                .collect()
+        }
+        SceneSpec::City(spec) => {
+            let props: Vec<crate::city::PropEntry> = spec
+                .props
+                .iter()
+                .zip(&entry_model)
+                .map(|(m, &model)| crate::city::PropEntry {
+                    count: m.count,
+                    footprint: footprint(&models[model as usize].mesh),
+                })
+                .collect();
+            let params = city_params.as_ref().expect("a city has its parameters");
+            let (_layout, placements) = crate::city::place(params, &props, &plan.ground)
+                .map_err(|source| SceneError::City {
+                    manifest: plan.manifest_path.clone(),
+                    source,
+                })?;
+            placements
+                .iter()
+                .map(|p| Instance {
+                    model: match p.kind {
+                        crate::city::PlacedKind::Building(v) => first_building + v,
+                        crate::city::PlacedKind::Prop(k) => entry_model[k],
+                    },
+                    transform: Mat4::from_translation(Vec3::from(p.translation))
+                        * Mat4::from_rotation_y(p.yaw_deg.to_radians()),
                     tint: Vec3::from(p.tint),
                 })
                 .collect()

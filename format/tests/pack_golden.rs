@@ -65,21 +65,39 @@ fn golden_index_v1_decodes_to_the_sample() {
 }
 
 #[test]
+fn golden_v2_packs_decode_to_the_samples() {
+    let cell = CellPack::read(&golden("cell-v2.pack")).unwrap();
+    assert_eq!(cell, sample::small_cell_v2());
+    cell.check_against(&sample::small_base()).unwrap();
+    let pack = PackFile::open(&golden("group-v2.pack")).unwrap();
+    assert_eq!(CellPack::decode_group(&pack).unwrap(), sample::small_group());
+    // A group pack is not a cell pack, and the other way round.
+    assert!(CellPack::decode(&pack).is_err());
+    assert!(CellPack::decode_group(&PackFile::open(&golden("cell-v2.pack")).unwrap()).is_err());
+    let index = Index::read(&golden("index-v2.pack")).unwrap();
+    assert_eq!(index, sample::small_index_v2());
+    assert_eq!(index.cell(12).unwrap().group, Some(3));
+    assert_eq!(index.group(3).unwrap().file, "groups/3.pack");
+    assert!(index.group(2).is_none());
+}
+
+#[test]
 fn regenerating_the_golden_packs_gives_the_same_bytes() {
     assert_eq!(
-        FORMAT_VERSION, 1,
-        "a new version needs new golden files; keep the v1 ones"
+        FORMAT_VERSION, 2,
+        "a new version needs new golden files; keep the old ones"
     );
-    check_or_bless("base-v1.pack", sample::small_base().encode().unwrap());
-    check_or_bless("cell-v1.pack", sample::small_cell().encode().unwrap());
-    check_or_bless("index-v1.pack", sample::small_index().encode().unwrap());
+    check_or_bless("base-v2.pack", sample::small_base().encode().unwrap());
+    check_or_bless("cell-v2.pack", sample::small_cell_v2().encode().unwrap());
+    check_or_bless("group-v2.pack", sample::small_group().encode_group().unwrap());
+    check_or_bless("index-v2.pack", sample::small_index_v2().encode().unwrap());
 }
 
 #[test]
 fn golden_packs_exercise_every_codec() {
     use format::pack::Codec;
     let mut seen = std::collections::BTreeSet::new();
-    for name in ["base-v1.pack", "cell-v1.pack", "index-v1.pack"] {
+    for name in ["base-v2.pack", "cell-v2.pack", "group-v2.pack", "index-v2.pack"] {
         for s in PackFile::read(&golden(name)).unwrap().sections() {
             seen.insert(s.codec as u32);
         }

@@ -7,7 +7,7 @@
 use format::pack::layout::{Codec, SectionKind, HEADER_SIZE};
 use format::pack::writer::{assemble, SectionData, TRY_INDICES, TRY_ZSTD};
 use format::pack::{
-    sample, BasePack, CellPack, FileKind, GridParams, Index, IndexEntry, PackError, PackFile,
+    sample, BasePack, CellPack, FileKind, FORMAT_VERSION, GridParams, Index, IndexEntry, PackError, PackFile,
     PackedInstance, PackedModel, Proxy, ProxyKind, ProxyMember, ProxyView, Texture,
     TextureEncoding,
 };
@@ -20,6 +20,7 @@ fn decode(kind: FileKind, bytes: &[u8]) -> Result<(), PackError> {
         FileKind::Base => BasePack::from_bytes(bytes).map(drop),
         FileKind::Cell => CellPack::from_bytes(bytes).map(drop),
         FileKind::Index => Index::from_bytes(bytes).map(drop),
+        FileKind::Group => CellPack::group_from_bytes(bytes).map(drop),
     }
 }
 
@@ -28,6 +29,9 @@ fn samples() -> Vec<(FileKind, Vec<u8>)> {
         (FileKind::Base, sample::small_base().encode().unwrap()),
         (FileKind::Cell, sample::small_cell().encode().unwrap()),
         (FileKind::Index, sample::small_index().encode().unwrap()),
+        (FileKind::Cell, sample::small_cell_v2().encode().unwrap()),
+        (FileKind::Group, sample::small_group().encode_group().unwrap()),
+        (FileKind::Index, sample::small_index_v2().encode().unwrap()),
     ]
 }
 
@@ -66,15 +70,16 @@ fn zeroed_header_is_rejected_as_bad_magic() {
 #[test]
 fn future_version_is_rejected_with_a_clear_error() {
     for (kind, mut bytes) in samples() {
-        bytes[12..16].copy_from_slice(&2u32.to_le_bytes());
+        let next = FORMAT_VERSION + 1;
+        bytes[12..16].copy_from_slice(&next.to_le_bytes());
         match decode(kind, &bytes) {
             Err(
                 e @ PackError::FutureVersion {
-                    found: 2,
-                    supported: 1,
+                    found,
+                    supported: FORMAT_VERSION,
                     ..
                 },
-            ) => {
+            ) if found == next => {
                 assert!(e.to_string().contains("newer than this reader"), "{e}");
             }
             other => panic!("{kind:?}: expected FutureVersion, got {other:?}"),
@@ -460,7 +465,14 @@ fn cell_pack_values_are_validated() {
             56,
             u32s(1),
             52,
-            "reserved fields are [0, 1, 0]",
+            "reserved fields are [4294967295, 1, 0]",
+        ),
+        (
+            SectionKind::CELL_META,
+            52,
+            u32s(1 << 30),
+            52,
+            "far group 1073741824 is past the largest grid",
         ),
         (
             SectionKind::PROXIES,
@@ -779,10 +791,12 @@ fn arb_cell() -> impl Strategy<Value = CellPack> {
         any::<[u8; 32]>(),
         prop::collection::vec(any::<u32>(), 0..20),
         prop::collection::vec(arb_proxy(), 0..5),
+        prop::option::of(0..format::manifest::MAX_CELLS as u32),
     )
-        .prop_map(|(cell_id, fingerprint, originals, proxies)| CellPack {
+        .prop_map(|(cell_id, fingerprint, originals, proxies, far_group)| CellPack {
             cell_id,
             fingerprint,
+            far_group,
             originals,
             proxies,
         })
@@ -800,9 +814,24 @@ fn arb_index() -> impl Strategy<Value = Index> {
             ),
             0..10,
         ),
+        prop::collection::btree_set(0..format::manifest::MAX_CELLS as u32, 0..4),
     )
-        .prop_map(|(build_fingerprint, cells)| Index {
+        .prop_map(|(build_fingerprint, cells, groups)| {
+            let groups: Vec<u32> = groups.into_iter().collect();
+            Index {
             build_fingerprint,
+            groups: groups
+                .iter()
+                .map(|&g| IndexEntry {
+                    cell_id: g,
+                    file: format!("groups/{g}.pack"),
+                    bytes: 64 + u64::from(g),
+                    checksum: [g as u8; 32],
+                    neighbours: Vec::new(),
+                    fingerprint: [!g as u8; 32],
+                    group: None,
+                })
+                .collect(),
             cells: cells
                 .into_iter()
                 .filter(|(_, (_, _, f))| format::pack::index::check_relative_path(f).is_ok())
@@ -818,9 +847,12 @@ fn arb_index() -> impl Strategy<Value = Index> {
                         .take(format::pack::index::MAX_NEIGHBOURS)
                         .collect(),
                     fingerprint: [cell_id as u8; 32],
+                    group: (!groups.is_empty())
+                        .then(|| groups[cell_id as usize % groups.len()])
+                        .filter(|_| cell_id % 3 != 0),
                 })
                 .collect(),
-        })
+        }})
 }
 
 proptest! {

@@ -168,8 +168,13 @@ fn summarize(file: &PackFile) -> Result<String, format::pack::PackError> {
                 &hex(&b.scene_fingerprint)[..16]
             )
         }
-        FileKind::Cell => {
-            let c = CellPack::decode(file)?;
+        FileKind::Cell | FileKind::Group => {
+            let group = file.file_kind() == FileKind::Group;
+            let c = if group {
+                CellPack::decode_group(file)?
+            } else {
+                CellPack::decode(file)?
+            };
             let count = |k: ProxyKind| c.proxies.iter().filter(|p| p.kind == k).count();
             let views: usize = c.proxies.iter().map(|p| p.views.len()).sum();
             let texels: u64 = c
@@ -178,8 +183,13 @@ fn summarize(file: &PackFile) -> Result<String, format::pack::PackError> {
                 .flat_map(|p| &p.views)
                 .map(|v| v.texture.width as u64 * v.texture.height as u64)
                 .sum();
+            let far = match c.far_group {
+                Some(g) => format!(" (far field: group {g})"),
+                None => String::new(),
+            };
             format!(
-                "cell {}, {} originals, {} proxies (SvMesh {}, Cluster {}, MvMesh {}, LayeredImpostor {}), {} proxy triangles, {views} views ({texels} texels), fingerprint {}",
+                "{} {}{far}, {} originals, {} proxies (SvMesh {}, Cluster {}, MvMesh {}, LayeredImpostor {}), {} proxy triangles, {views} views ({texels} texels), fingerprint {}",
+                if group { "far-field group" } else { "cell" },
                 c.cell_id,
                 c.originals.len(),
                 c.proxies.len(),
@@ -194,9 +204,11 @@ fn summarize(file: &PackFile) -> Result<String, format::pack::PackError> {
         FileKind::Index => {
             let i = Index::decode(file)?;
             let bytes: u64 = i.cells.iter().map(|c| c.bytes).sum();
+            let group_bytes: u64 = i.groups.iter().map(|c| c.bytes).sum();
             format!(
-                "{} cells ({bytes} bytes of cell packs), build fingerprint {}",
+                "{} cells ({bytes} bytes of cell packs), {} far-field groups ({group_bytes} bytes of group packs), build fingerprint {}",
                 i.cells.len(),
+                i.groups.len(),
                 &hex(&i.build_fingerprint)[..16]
             )
         }

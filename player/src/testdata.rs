@@ -139,6 +139,7 @@ fn write_index(dir: &Path, grid: &GridParams, fingerprint: [u8; 32]) -> Result<(
     Index {
         build_fingerprint: fingerprint,
         cells,
+        groups: Vec::new(),
     }
     .write(&dir.join("index.pack"))?;
     Ok(())
@@ -307,6 +308,7 @@ pub fn write_synthetic_bake_with(
         CellPack {
             cell_id: id,
             fingerprint,
+            far_group: None,
             originals,
             proxies,
         }
@@ -394,6 +396,7 @@ pub fn write_quad_bake_views(
         CellPack {
             cell_id: id,
             fingerprint,
+            far_group: None,
             originals: Vec::new(),
             proxies: vec![Proxy {
                 kind,

@@ -603,6 +603,7 @@ impl CellBake {
         Ok(CellPack {
             cell_id: self.cell,
             fingerprint,
+            far_group: None,
             originals: self.originals.clone(),
             proxies,
         })

@@ -93,10 +93,18 @@ pub struct CellPack {
     pub cell_id: u32,
     /// The bake job fingerprint this cell was built with.
     pub fingerprint: [u8; 32],
+    /// The far-field group whose pack (`groups/<id>.pack`, format version 2) holds
+    /// the proxies this cell shares with its group; `None` for a cell without one
+    /// (and for every version-1 pack). A group pack itself has `None`.
+    pub far_group: Option<u32>,
     /// Instances drawn as original geometry (they intersect the cell's prism).
     pub originals: Vec<u32>,
     pub proxies: Vec<Proxy>,
 }
+
+/// `far_group` of a cell with no far-field group (version 2; version 1 stores 0,
+/// which also reads as none).
+pub const NO_FAR_GROUP: u32 = u32::MAX;
 
 /// Section `cell-meta` (64 bytes).
 #[repr(C)]
@@ -108,7 +116,10 @@ pub struct CellMetaRecord {
     pub proxy_count: u32,
     pub member_count: u32,
     pub view_count: u32,
-    pub reserved: [u32; 3],
+    /// Version 2: the cell's far-field group or [`NO_FAR_GROUP`]; reserved (0) in
+    /// version 1.
+    pub far_group: u32,
+    pub reserved: [u32; 2],
 }
 const _: () = assert!(std::mem::size_of::<CellMetaRecord>() == 64);
 
@@ -202,6 +213,29 @@ fn check_masks(kind: ProxyKind, member: &ProxyMember, view_count: usize) -> Resu
 impl CellPack {
     /// The pack's bytes (deterministic).
     pub fn encode(&self) -> Result<Vec<u8>, PackError> {
+        self.encode_as(FileKind::Cell)
+    }
+
+    /// The bytes of a far-field group pack (`groups/<id>.pack`): the same sections as
+    /// a cell pack with file kind `group`; `cell_id` is the group id. A group has no
+    /// originals and no group of its own.
+    pub fn encode_group(&self) -> Result<Vec<u8>, PackError> {
+        if !self.originals.is_empty() || self.far_group.is_some() {
+            return Err(invalid(format!(
+                "group {}: a group pack has no originals and no far group",
+                self.cell_id
+            )));
+        }
+        self.encode_as(FileKind::Group)
+    }
+
+    fn encode_as(&self, file_kind: FileKind) -> Result<Vec<u8>, PackError> {
+        if self.far_group == Some(NO_FAR_GROUP) {
+            return Err(invalid(format!(
+                "cell {}: far group {NO_FAR_GROUP} is the 'none' value",
+                self.cell_id
+            )));
+        }
         let u32_of = |n: usize, what: &str| {
             u32::try_from(n).map_err(|_| invalid(format!("too many {what}")))
         };
@@ -254,10 +288,11 @@ impl CellPack {
             proxy_count: u32_of(proxies.len(), "proxies")?,
             member_count: u32_of(members.len(), "members")?,
             view_count: u32_of(views.len(), "views")?,
-            reserved: [0; 3],
+            far_group: self.far_group.unwrap_or(NO_FAR_GROUP),
+            reserved: [0; 2],
         };
         assemble(
-            FileKind::Cell,
+            file_kind,
             &[
                 SectionData {
                     kind: SectionKind::CELL_META,
@@ -307,6 +342,25 @@ impl CellPack {
     /// checked against the base pack: see [`CellPack::check_against`].
     pub fn decode(pack: &PackFile) -> Result<CellPack, PackError> {
         pack.expect_kind(FileKind::Cell)?;
+        CellPack::decode_any(pack)
+    }
+
+    /// Decodes a validated far-field group pack ([`CellPack::encode_group`]).
+    pub fn decode_group(pack: &PackFile) -> Result<CellPack, PackError> {
+        pack.expect_kind(FileKind::Group)?;
+        let group = CellPack::decode_any(pack)?;
+        if !group.originals.is_empty() || group.far_group.is_some() {
+            return Err(malformed(
+                pack.path(),
+                SectionKind::CELL_META,
+                36,
+                "a group pack lists originals or a far group",
+            ));
+        }
+        Ok(group)
+    }
+
+    fn decode_any(pack: &PackFile) -> Result<CellPack, PackError> {
         let file = pack.path();
         // 1. Metadata and record tables.
         let meta_bytes = pack.section(SectionKind::CELL_META)?;
@@ -319,12 +373,25 @@ impl CellPack {
             ));
         }
         let meta: CellMetaRecord = bytemuck::pod_read_unaligned(&meta_bytes);
-        if meta.reserved != [0; 3] {
+        if meta.reserved != [0; 2] || (pack.version() < 2 && meta.far_group != 0) {
             return Err(malformed(
                 file,
                 SectionKind::CELL_META,
                 52,
-                format!("reserved fields are {:?}, expected 0", meta.reserved),
+                format!(
+                    "reserved fields are {:?}, expected 0",
+                    [meta.far_group, meta.reserved[0], meta.reserved[1]]
+                ),
+            ));
+        }
+        let far_group = (pack.version() >= 2 && meta.far_group != NO_FAR_GROUP)
+            .then_some(meta.far_group);
+        if far_group.is_some_and(|g| u64::from(g) >= crate::manifest::MAX_CELLS) {
+            return Err(malformed(
+                file,
+                SectionKind::CELL_META,
+                52,
+                format!("far group {} is past the largest grid", meta.far_group),
             ));
         }
         let originals: Vec<u32> = pack.section_vec(SectionKind::ORIGINALS)?;
@@ -527,6 +594,7 @@ impl CellPack {
         Ok(CellPack {
             cell_id: meta.cell_id,
             fingerprint: meta.fingerprint,
+            far_group,
             originals,
             proxies: out,
         })
@@ -540,6 +608,13 @@ impl CellPack {
             return Err(invalid(format!(
                 "cell {} is outside the base pack's grid of {} × {} cells",
                 self.cell_id, base.grid.n_cols, base.grid.n_rows
+            )));
+        }
+        if let Some(g) = self.far_group.filter(|&g| u64::from(g) >= cells) {
+            return Err(invalid(format!(
+                "cell {}: far group {g} is past the grid's {cells} cells (a grid has at \
+                 most as many groups as cells)",
+                self.cell_id
             )));
         }
         let instance = |id: u32, what: &str| -> Result<u32, PackError> {
@@ -580,6 +655,11 @@ impl CellPack {
     /// Validates and decodes pack bytes held in memory.
     pub fn from_bytes(bytes: &[u8]) -> Result<CellPack, PackError> {
         CellPack::decode(&PackFile::from_bytes(bytes)?)
+    }
+
+    /// Validates and decodes group-pack bytes held in memory.
+    pub fn group_from_bytes(bytes: &[u8]) -> Result<CellPack, PackError> {
+        CellPack::decode_group(&PackFile::from_bytes(bytes)?)
     }
 
     /// Writes the pack atomically to `path`.

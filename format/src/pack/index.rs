@@ -27,13 +27,19 @@ pub struct IndexEntry {
     pub neighbours: Vec<u32>,
     /// The job fingerprint the cell was baked with.
     pub fingerprint: [u8; 32],
+    /// A cell's far-field group (an entry of [`Index::groups`]), `None` without one;
+    /// always `None` for a group's own entry (format version 2; `None` in version 1).
+    pub group: Option<u32>,
 }
 
-/// The content of `index.pack`. Cells are sorted by id, ids unique.
+/// The content of `index.pack`. Cells are sorted by id, ids unique; so are the
+/// far-field groups (version 2: `groups/<id>.pack`, each shared by the cells whose
+/// `group` names it; their entries have no neighbours).
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Index {
     pub build_fingerprint: [u8; 32],
     pub cells: Vec<IndexEntry>,
+    pub groups: Vec<IndexEntry>,
 }
 
 /// Section `index-meta` (48 bytes).
@@ -42,7 +48,9 @@ pub struct Index {
 pub struct IndexMetaRecord {
     pub build_fingerprint: [u8; 32],
     pub cell_count: u32,
-    pub reserved: [u32; 3],
+    /// Version 2: entries of `index-groups`; reserved (0) in version 1.
+    pub group_count: u32,
+    pub reserved: [u32; 2],
 }
 const _: () = assert!(std::mem::size_of::<IndexMetaRecord>() == 48);
 
@@ -78,6 +86,9 @@ pub fn check_relative_path(file: &str) -> Result<(), String> {
     }
     Ok(())
 }
+
+/// `index-cell-groups` value of a cell without a far-field group.
+pub const NO_GROUP: u32 = u32::MAX;
 
 /// Most neighbours a hexagonal cell has.
 pub const MAX_NEIGHBOURS: usize = 6;
@@ -150,6 +161,7 @@ impl IndexEntry {
             checksum: *blake3::hash(&data).as_bytes(),
             neighbours,
             fingerprint,
+            group: None,
         })
     }
 
@@ -195,11 +207,35 @@ impl Index {
             .map(|i| &self.cells[i])
     }
 
-    /// The pack's bytes (deterministic). Cells must be sorted by id, ids unique.
+    /// The entry of far-field group `group`, if the index has one.
+    pub fn group(&self, group: u32) -> Option<&IndexEntry> {
+        self.groups
+            .binary_search_by_key(&group, |e| e.cell_id)
+            .ok()
+            .map(|i| &self.groups[i])
+    }
+
+    /// The pack's bytes (deterministic). Cells must be sorted by id, ids unique;
+    /// likewise groups, and every cell's group must be listed.
     pub fn encode(&self) -> Result<Vec<u8>, PackError> {
         let mut records = Vec::with_capacity(self.cells.len());
         let mut names = Vec::new();
         let mut neighbours: Vec<u32> = Vec::new();
+        let mut cell_groups: Vec<u32> = Vec::with_capacity(self.cells.len());
+        for (i, g) in self.groups.iter().enumerate() {
+            if i > 0 && self.groups[i - 1].cell_id >= g.cell_id {
+                return Err(invalid(format!(
+                    "index groups not sorted by unique id at entry {i} (group {})",
+                    g.cell_id
+                )));
+            }
+            if !g.neighbours.is_empty() || g.group.is_some() {
+                return Err(invalid(format!(
+                    "group {}: a group entry has no neighbours and no group",
+                    g.cell_id
+                )));
+            }
+        }
         for (i, c) in self.cells.iter().enumerate() {
             if i > 0 && self.cells[i - 1].cell_id >= c.cell_id {
                 return Err(invalid(format!(
@@ -207,6 +243,15 @@ impl Index {
                     c.cell_id
                 )));
             }
+            if let Some(g) = c.group {
+                if self.group(g).is_none() {
+                    return Err(invalid(format!(
+                        "cell {}: its group {g} has no entry",
+                        c.cell_id
+                    )));
+                }
+            }
+            cell_groups.push(c.group.unwrap_or(NO_GROUP));
             check_relative_path(&c.file)
                 .map_err(|e| invalid(format!("cell {}: {e}", c.cell_id)))?;
             check_entry(c.cell_id, c.bytes).map_err(invalid)?;
@@ -225,10 +270,29 @@ impl Index {
             names.extend_from_slice(c.file.as_bytes());
             neighbours.extend_from_slice(&c.neighbours);
         }
+        let mut group_records = Vec::with_capacity(self.groups.len());
+        for g in &self.groups {
+            check_relative_path(&g.file)
+                .map_err(|e| invalid(format!("group {}: {e}", g.cell_id)))?;
+            check_entry(g.cell_id, g.bytes).map_err(invalid)?;
+            group_records.push(CellRecord {
+                cell_id: g.cell_id,
+                neighbour_count: 0,
+                bytes: g.bytes,
+                checksum: g.checksum,
+                fingerprint: g.fingerprint,
+                name_offset: u32::try_from(names.len())
+                    .map_err(|_| invalid("file names too long"))?,
+                name_len: u32::try_from(g.file.len()).map_err(|_| invalid("file name too long"))?,
+            });
+            names.extend_from_slice(g.file.as_bytes());
+        }
         let meta = IndexMetaRecord {
             build_fingerprint: self.build_fingerprint,
             cell_count: u32::try_from(self.cells.len()).map_err(|_| invalid("too many cells"))?,
-            reserved: [0; 3],
+            group_count: u32::try_from(self.groups.len())
+                .map_err(|_| invalid("too many groups"))?,
+            reserved: [0; 2],
         };
         assemble(
             FileKind::Index,
@@ -253,6 +317,16 @@ impl Index {
                     raw: bytemuck::cast_slice(&neighbours).to_vec(),
                     codecs: TRY_INDICES,
                 },
+                SectionData {
+                    kind: SectionKind::INDEX_GROUPS,
+                    raw: bytemuck::cast_slice(&group_records).to_vec(),
+                    codecs: TRY_ZSTD,
+                },
+                SectionData {
+                    kind: SectionKind::INDEX_CELL_GROUPS,
+                    raw: bytemuck::cast_slice(&cell_groups).to_vec(),
+                    codecs: TRY_INDICES,
+                },
             ],
         )
     }
@@ -271,12 +345,16 @@ impl Index {
             ));
         }
         let meta: IndexMetaRecord = bytemuck::pod_read_unaligned(&meta_bytes);
-        if meta.reserved != [0; 3] {
+        let v2 = pack.version() >= 2;
+        if meta.reserved != [0; 2] || (!v2 && meta.group_count != 0) {
             return Err(malformed(
                 file,
                 SectionKind::INDEX_META,
                 36,
-                format!("reserved fields are {:?}, expected 0", meta.reserved),
+                format!(
+                    "reserved fields are {:?}, expected 0",
+                    [meta.group_count, meta.reserved[0], meta.reserved[1]]
+                ),
             ));
         }
         let records: Vec<CellRecord> = pack.section_vec(SectionKind::INDEX_CELLS)?;
@@ -357,8 +435,14 @@ impl Index {
                 checksum: r.checksum,
                 neighbours: nb.to_vec(),
                 fingerprint: r.fingerprint,
+                group: None,
             });
         }
+        let groups = if v2 {
+            Index::decode_groups(pack, &meta, &names, &mut cells)?
+        } else {
+            Vec::new()
+        };
         if next != neighbours.len() {
             return Err(malformed(
                 file,
@@ -373,7 +457,91 @@ impl Index {
         Ok(Index {
             build_fingerprint: meta.build_fingerprint,
             cells,
+            groups,
         })
+    }
+
+    /// Version 2: the group entries and each cell's group.
+    fn decode_groups(
+        pack: &PackFile,
+        meta: &IndexMetaRecord,
+        names: &[u8],
+        cells: &mut [IndexEntry],
+    ) -> Result<Vec<IndexEntry>, PackError> {
+        let file = pack.path();
+        let records: Vec<CellRecord> = pack.section_vec(SectionKind::INDEX_GROUPS)?;
+        if records.len() != meta.group_count as usize {
+            return Err(malformed(
+                file,
+                SectionKind::INDEX_GROUPS,
+                0,
+                format!(
+                    "{} groups, index-meta says {}",
+                    records.len(),
+                    meta.group_count
+                ),
+            ));
+        }
+        let mut groups = Vec::with_capacity(records.len());
+        for (i, r) in records.iter().enumerate() {
+            let off = (i * std::mem::size_of::<CellRecord>()) as u64;
+            let bad = |what: String| malformed(file, SectionKind::INDEX_GROUPS, off, what);
+            if i > 0 && records[i - 1].cell_id >= r.cell_id {
+                return Err(bad(format!("group ids not increasing at entry {i}")));
+            }
+            if r.neighbour_count != 0 {
+                return Err(bad(format!("group {}: a group has no neighbours", r.cell_id)));
+            }
+            let end = (r.name_offset as usize).checked_add(r.name_len as usize);
+            let name = end
+                .and_then(|e| names.get(r.name_offset as usize..e))
+                .and_then(|n| std::str::from_utf8(n).ok())
+                .ok_or_else(|| {
+                    bad(format!(
+                        "group {}: name outside index-file-names or not UTF-8",
+                        r.cell_id
+                    ))
+                })?;
+            check_relative_path(name).map_err(bad)?;
+            check_entry(r.cell_id, r.bytes).map_err(bad)?;
+            groups.push(IndexEntry {
+                cell_id: r.cell_id,
+                file: name.to_string(),
+                bytes: r.bytes,
+                checksum: r.checksum,
+                neighbours: Vec::new(),
+                fingerprint: r.fingerprint,
+                group: None,
+            });
+        }
+        let cell_groups: Vec<u32> = pack.section_vec(SectionKind::INDEX_CELL_GROUPS)?;
+        if cell_groups.len() != cells.len() {
+            return Err(malformed(
+                file,
+                SectionKind::INDEX_CELL_GROUPS,
+                0,
+                format!(
+                    "{} entries for {} cells",
+                    cell_groups.len(),
+                    cells.len()
+                ),
+            ));
+        }
+        for (k, (cell, &g)) in cells.iter_mut().zip(&cell_groups).enumerate() {
+            if g == NO_GROUP {
+                continue;
+            }
+            if groups.binary_search_by_key(&g, |e| e.cell_id).is_err() {
+                return Err(malformed(
+                    file,
+                    SectionKind::INDEX_CELL_GROUPS,
+                    (k * 4) as u64,
+                    format!("cell {}: group {g} is not in index-groups", cell.cell_id),
+                ));
+            }
+            cell.group = Some(g);
+        }
+        Ok(groups)
     }
 
     /// Validates and decodes pack bytes held in memory.

@@ -11,7 +11,7 @@ use std::fmt;
 /// First 8 bytes of every pack.
 pub const MAGIC: [u8; 8] = *b"HEXBAKE\0";
 /// The format version this crate writes (and the newest it reads).
-pub const FORMAT_VERSION: u32 = 1;
+pub const FORMAT_VERSION: u32 = 2;
 /// Every section starts at a multiple of this many bytes from the file start, so a
 /// memory-mapped (page-aligned) raw section can be viewed as `&[f32]`, `&[[u32; 3]]`...
 pub const SECTION_ALIGN: u64 = 64;
@@ -80,8 +80,12 @@ pub enum FileKind {
     Base = 1,
     /// `cells/<id>.pack`: one cell's originals and proxies.
     Cell = 2,
-    /// `index.pack`: cell → file, size, checksum, neighbours.
+    /// `index.pack`: cell → file, size, checksum, neighbours (and, from version 2,
+    /// the far-field groups).
     Index = 3,
+    /// `groups/<id>.pack` (version 2): the far field shared by a group of cells —
+    /// the same sections as a cell pack, no originals.
+    Group = 4,
 }
 
 impl FileKind {
@@ -90,6 +94,7 @@ impl FileKind {
             1 => Some(FileKind::Base),
             2 => Some(FileKind::Cell),
             3 => Some(FileKind::Index),
+            4 => Some(FileKind::Group),
             _ => None,
         }
     }
@@ -99,6 +104,7 @@ impl FileKind {
             FileKind::Base => "base",
             FileKind::Cell => "cell",
             FileKind::Index => "index",
+            FileKind::Group => "group",
         }
     }
 }
@@ -169,6 +175,10 @@ impl SectionKind {
     pub const INDEX_CELLS: SectionKind = SectionKind(0x0302);
     pub const INDEX_FILE_NAMES: SectionKind = SectionKind(0x0303);
     pub const INDEX_NEIGHBOURS: SectionKind = SectionKind(0x0304);
+    /// Version 2: one record per far-field group pack (the layout of `index-cells`).
+    pub const INDEX_GROUPS: SectionKind = SectionKind(0x0305);
+    /// Version 2: per cell (in `index-cells` order), its far-field group or u32::MAX.
+    pub const INDEX_CELL_GROUPS: SectionKind = SectionKind(0x0306);
 
     /// The spec's name of a known kind, `None` for kinds this reader does not know.
     pub fn name(self) -> Option<&'static str> {
@@ -195,6 +205,8 @@ impl SectionKind {
             SectionKind::INDEX_CELLS => "index-cells",
             SectionKind::INDEX_FILE_NAMES => "index-file-names",
             SectionKind::INDEX_NEIGHBOURS => "index-neighbours",
+            SectionKind::INDEX_GROUPS => "index-groups",
+            SectionKind::INDEX_CELL_GROUPS => "index-cell-groups",
             _ => return None,
         })
     }

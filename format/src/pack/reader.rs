@@ -94,6 +94,13 @@ pub fn scan(bytes: &[u8], file: &Path) -> Result<PackScan, PackError> {
             found: version,
         });
     }
+    if file_kind == FileKind::Group && version < 2 {
+        // Group packs exist from version 2 on.
+        return Err(PackError::UnknownFileKind {
+            file: f(),
+            found: raw_kind,
+        });
+    }
 
     // 2. The v1 header.
     let Some(hb) = bytes.get(..HEADER_SIZE) else {

@@ -244,6 +244,7 @@ pub fn small_cell() -> CellPack {
     CellPack {
         cell_id: 12,
         fingerprint: *blake3::hash(b"hexbake sample cell 12").as_bytes(),
+        far_group: None,
         originals: vec![0],
         proxies: vec![
             Proxy {
@@ -297,6 +298,7 @@ pub fn small_index() -> Index {
         checksum: *blake3::hash(&cell_id.to_le_bytes()).as_bytes(),
         neighbours,
         fingerprint: *blake3::hash(format!("job {cell_id}").as_bytes()).as_bytes(),
+        group: None,
     };
     Index {
         build_fingerprint: *blake3::hash(b"hexbake sample build").as_bytes(),
@@ -306,7 +308,51 @@ pub fn small_index() -> Index {
             entry(12, vec![5, 6]),
             entry(13, vec![]),
         ],
+        groups: Vec::new(),
     }
+}
+
+/// The content of `tests/data/cell-v2.pack`: [`small_cell`] in far-field group 3.
+pub fn small_cell_v2() -> CellPack {
+    CellPack {
+        far_group: Some(3),
+        ..small_cell()
+    }
+}
+
+/// The content of `tests/data/group-v2.pack`: far-field group 3, the SvMesh and the
+/// Cluster of [`small_cell`].
+pub fn small_group() -> CellPack {
+    let cell = small_cell();
+    CellPack {
+        cell_id: 3,
+        fingerprint: *blake3::hash(b"hexbake sample group 3").as_bytes(),
+        far_group: None,
+        originals: Vec::new(),
+        proxies: cell.proxies[..2].to_vec(),
+    }
+}
+
+/// The content of `tests/data/index-v2.pack`: [`small_index`] plus far-field groups
+/// 1 (cells 5, 6) and 3 (cells 12, 13).
+pub fn small_index_v2() -> Index {
+    let mut index = small_index();
+    for c in &mut index.cells {
+        c.group = Some(if c.cell_id < 10 { 1 } else { 3 });
+    }
+    index.groups = [1u32, 3]
+        .iter()
+        .map(|&g| IndexEntry {
+            cell_id: g,
+            file: format!("groups/{g}.pack"),
+            bytes: 2000 + u64::from(g),
+            checksum: *blake3::hash(format!("group {g}").as_bytes()).as_bytes(),
+            neighbours: Vec::new(),
+            fingerprint: *blake3::hash(format!("group job {g}").as_bytes()).as_bytes(),
+            group: None,
+        })
+        .collect();
+    index
 }
 
 /// A base pack whose models are `model_count` grid meshes of `tris_per_model`
@@ -394,6 +440,7 @@ pub fn synthetic_cell(
     CellPack {
         cell_id: 42,
         fingerprint: *blake3::hash(b"synthetic").as_bytes(),
+        far_group: None,
         originals: (0..proxy_count).step_by(5).collect(),
         proxies,
     }
@@ -445,6 +492,7 @@ pub fn exercise_readers(bytes: &[u8]) -> usize {
     let mut accepted = 0;
     accepted += BasePack::from_bytes(bytes).is_ok() as usize;
     accepted += CellPack::from_bytes(bytes).is_ok() as usize;
+    accepted += CellPack::group_from_bytes(bytes).is_ok() as usize;
     accepted += Index::from_bytes(bytes).is_ok() as usize;
     if let Ok(pack) = PackFile::from_bytes(bytes) {
         for s in pack.sections() {
