@@ -3,6 +3,7 @@
 pub mod bench_plot;
 pub mod bench_tables;
 pub mod benchmarks;
+pub mod export;
 pub mod heatmap;
 pub mod inspect;
 pub mod lock;

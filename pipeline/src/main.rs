@@ -87,6 +87,21 @@ enum Command {
     /// regenerate BENCHMARKS.md's tables).
     #[command(hide = true, subcommand)]
     Benchmarks(BenchCommand),
+    /// Write one cell of a bake as glTF 2.0 binary (GLB): its originals and its
+    /// SV / MV / cluster proxies with their capture textures.
+    Export {
+        /// The bake directory (output of `pipeline run`).
+        out: PathBuf,
+        /// The cell id.
+        #[arg(long)]
+        cell: u32,
+        /// The GLB file to write.
+        #[arg(short = 'o', long = "output", value_name = "FILE.glb")]
+        output: PathBuf,
+        /// Print the summary as JSON.
+        #[arg(long)]
+        json: bool,
+    },
     /// Print a pack's header and sections and check every checksum.
     Inspect {
         /// A `base.pack`, `cells/<id>.pack` or `index.pack`; or a bake directory, to
@@ -308,6 +323,16 @@ fn run(cli: Cli) -> Result<(), Failure> {
             pipeline::report::write_report(&loaded.out)
                 .map_err(|error| Failure { code: 1, error })?;
             println!("assembled {}", loaded.out.join("index.pack").display());
+            Ok(())
+        }
+        Command::Export {
+            out,
+            cell,
+            output,
+            json,
+        } => {
+            let summary = pipeline::export::export_cell(&out, cell, &output).map_err(from_run)?;
+            print_json_or_text(json, &summary, || format!("{}\n", summary.line()));
             Ok(())
         }
         Command::Benchmarks(cmd) => benchmarks(cmd).map_err(|error| Failure { code: 1, error }),
