@@ -12,6 +12,7 @@ pub mod grid;
 pub mod job;
 pub mod lod_chain;
 pub mod mvmesh;
+pub mod occlusion;
 pub mod picture;
 pub mod raster;
 pub mod selfocc;
