@@ -1,8 +1,8 @@
 //! `pipeline export` (issue 18 item 3): a demo cell with originals and SV, MV and
 //! cluster proxies exported as GLB passes the Khronos glTF-Validator with 0 errors.
-//! The demo's statues stand too far apart to be clustered, so the scene is the demo
-//! as an instance list (`pipeline scene --as-instances`) plus a tight group of six
-//! small spheres, which the bake merges into Cluster proxies.
+//! The demo's statues stand too far apart to be clustered, so the scene is
+//! `manifests/demo-clustered.ron`: the demo as an instance list plus a tight group of
+//! six small spheres, which the bake merges into Cluster proxies.
 //!
 //! The validator is the npm package `gltf-validator`, installed into
 //! `tools/node_modules` by `scripts/install-gltf-validator.sh` and run by
@@ -41,34 +41,6 @@ fn validator() -> Result<PathBuf, String> {
     Ok(script)
 }
 
-/// The demo as an instance list plus six spheres 7 units apart (cluster-able SV
-/// objects), written to `dir/m.ron`.
-fn demo_with_a_sphere_group(dir: &Path) -> PathBuf {
-    let o = pipeline(&["scene", "manifests/demo.ron", "--as-instances"]);
-    assert!(o.status.success(), "{}", text(&o));
-    let listed = String::from_utf8(o.stdout).unwrap();
-    let mut spheres = String::new();
-    for (x, z) in [
-        (240, 40),
-        (247, 40),
-        (254, 40),
-        (240, 47),
-        (247, 47),
-        (254, 47),
-    ] {
-        spheres += &format!(
-            "        (model: Procedural(\"sphere\"), target_height: 6.0, \
-             pre_rotation_deg: (0.0, 0.0, 0.0), translation: ({x}.0, 0.0, {z}.0), \
-             rotation_y_deg: 0.0, tint: (0.9, 0.9, 0.9)),\n"
-        );
-    }
-    let end = listed.rfind("\n    ]),").expect("an instance list");
-    let text = format!("{},\n{spheres}{}", &listed[..end], &listed[end + 1..]);
-    let path = dir.join("m.ron");
-    std::fs::write(&path, text).unwrap();
-    path
-}
-
 /// The first cell (by id) holding originals and SvMesh, MvMesh and Cluster proxies.
 fn cell_with_every_kind(out: &Path) -> Option<u32> {
     let index = Index::read(&out.join("index.pack")).unwrap();
@@ -95,8 +67,7 @@ fn exported_demo_cell_passes_the_khronos_gltf_validator() {
     let o = pipeline(&["export", out_s, "--cell", "0", "-o", glb_s]);
     assert_bad_input(&o, &["no such bake directory"]);
 
-    let manifest = demo_with_a_sphere_group(dir.path());
-    let o = pipeline(&["run", manifest.to_str().unwrap(), "--quiet", "--out", out_s]);
+    let o = pipeline(&["run", "manifests/demo-clustered.ron", "--quiet", "--out", out_s]);
     assert!(o.status.success(), "{}", text(&o));
 
     let o = pipeline(&["export", out_s, "--cell", "100000", "-o", glb_s]);
