@@ -67,7 +67,13 @@ fn exported_demo_cell_passes_the_khronos_gltf_validator() {
     let o = pipeline(&["export", out_s, "--cell", "0", "-o", glb_s]);
     assert_bad_input(&o, &["no such bake directory"]);
 
-    let o = pipeline(&["run", "manifests/demo-clustered.ron", "--quiet", "--out", out_s]);
+    let o = pipeline(&[
+        "run",
+        "manifests/demo-clustered.ron",
+        "--quiet",
+        "--out",
+        out_s,
+    ]);
     assert!(o.status.success(), "{}", text(&o));
 
     let o = pipeline(&["export", out_s, "--cell", "100000", "-o", glb_s]);
