@@ -23,8 +23,10 @@ pub type Fingerprint = [u8; 32];
 /// 3 — the MVMesh's l′ also looks from the prism point nearest each edge;
 /// 4 — the deviation bound of the edge collapse (`bake.max_deviation_px`);
 /// 5 — collapses start from the models' LOD chains (`worker::lod_chain`), a moved
-/// carrier stays when within tolerance.
-pub const BAKE_REVISION: u32 = 5;
+/// carrier stays when within tolerance;
+/// 6 — the far field shared by 7-cell groups (`bake.far_field`, worker
+/// `far_field.rs`).
+pub const BAKE_REVISION: u32 = 6;
 
 /// Hex form for file names, logs and reports.
 pub fn to_hex(f: &Fingerprint) -> String {
@@ -85,6 +87,7 @@ pub fn params_fingerprint(bake: &BakeParams, cells: &CellParams) -> Fingerprint 
         clustering,
         occlusion_culling,
         max_deviation_px,
+        far_field,
     } = bake;
     h.update(&image_res.to_le_bytes());
     f32s(
@@ -97,7 +100,11 @@ pub fn params_fingerprint(bake: &BakeParams, cells: &CellParams) -> Fingerprint 
             *max_deviation_px,
         ],
     );
-    h.update(&[*clustering as u8, *occlusion_culling as u8]);
+    h.update(&[
+        *clustering as u8,
+        *occlusion_culling as u8,
+        *far_field as u8,
+    ]);
     let CellParams {
         cell_size,
         min_eye_height,
@@ -116,6 +123,23 @@ pub fn job_fingerprint(scene: &Fingerprint, params: &Fingerprint, cells: &[u32])
     h.update(&(cells.len() as u64).to_le_bytes());
     for c in cells {
         h.update(&c.to_le_bytes());
+    }
+    *h.finalize().as_bytes()
+}
+
+/// The fingerprint of the far-field job that bakes `groups` (ascending ids; issue 13).
+pub fn group_job_fingerprint(
+    scene: &Fingerprint,
+    params: &Fingerprint,
+    groups: &[u32],
+) -> Fingerprint {
+    let mut h = blake3::Hasher::new();
+    h.update(b"hexbake far-field job v1\0");
+    h.update(scene);
+    h.update(params);
+    h.update(&(groups.len() as u64).to_le_bytes());
+    for g in groups {
+        h.update(&g.to_le_bytes());
     }
     *h.finalize().as_bytes()
 }
@@ -152,6 +176,7 @@ mod tests {
             |b, _| b.clustering = false,
             |b, _| b.occlusion_culling = true,
             |b, _| b.max_deviation_px = 0.0,
+            |b, _| b.far_field = false,
             |_, c| c.cell_size = 100.0,
             |_, c| c.min_eye_height = 2.0,
             |_, c| c.max_eye_height = 20.0,

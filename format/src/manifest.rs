@@ -90,6 +90,13 @@ pub struct BakeParams {
     /// read as 0 (they were baked without it).
     #[serde(default)]
     pub max_deviation_px: f32,
+    /// The far field shared by 7-cell groups (issue 13; worker `far_field.rs`): an
+    /// outside object that is a single-view object for the whole group's region gets
+    /// one proxy for the group, stored once in `groups/<id>.pack`. Default on;
+    /// `false` gives every cell its own proxy of every object (the paper's layout).
+    /// Plans written before it existed read as off (they were baked without it).
+    #[serde(default)]
+    pub far_field: bool,
 }
 
 /// Default of [`BakeParams::max_deviation_px`].
@@ -106,6 +113,7 @@ impl Default for BakeParams {
             clustering: true,
             occlusion_culling: false,
             max_deviation_px: DEFAULT_MAX_DEVIATION_PX,
+            far_field: true,
         }
     }
 }
@@ -567,6 +575,7 @@ struct RawBake {
     clustering: bool,
     occlusion_culling: bool,
     max_deviation_px: f32,
+    far_field: bool,
 }
 
 impl Default for RawBake {
@@ -581,6 +590,7 @@ impl Default for RawBake {
             clustering: d.clustering,
             occlusion_culling: d.occlusion_culling,
             max_deviation_px: d.max_deviation_px,
+            far_field: d.far_field,
         }
     }
 }
@@ -1027,6 +1037,7 @@ impl Validator<'_> {
             clustering: b.clustering,
             occlusion_culling: b.occlusion_culling,
             max_deviation_px: self.non_negative("bake.max_deviation_px", b.max_deviation_px)?,
+            far_field: b.far_field,
         };
 
         let cells_per_job = raw.cells_per_job.unwrap_or(DEFAULT_CELLS_PER_JOB);
@@ -1108,6 +1119,7 @@ mod bake_params_tests {
             "clustering":true,"occlusion_culling":false}"#;
         let p: BakeParams = serde_json::from_str(old).unwrap();
         assert_eq!(p.max_deviation_px, 0.0);
+        assert!(!p.far_field);
         let d = BakeParams::default();
         assert_eq!(d.max_deviation_px, DEFAULT_MAX_DEVIATION_PX);
         let back: BakeParams = serde_json::from_str(&serde_json::to_string(&d).unwrap()).unwrap();

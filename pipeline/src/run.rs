@@ -158,12 +158,15 @@ pub fn bake_local(l: &Loaded, jobs: &[Job], opts: &LocalOptions) -> Result<BakeO
         .num_threads(opts.threads.unwrap_or(0))
         .build()
         .map_err(failed)?;
-    let total_cells: u64 = jobs.iter().map(|j| j.cells.len() as u64).sum();
+    let total_cells: u64 = jobs
+        .iter()
+        .map(|j| (j.cells.len() + j.groups.len()) as u64)
+        .sum();
     let bar = if opts.progress {
         let bar = ProgressBar::new(total_cells);
         bar.set_style(
             ProgressStyle::with_template(
-                "{msg:12} [{bar:30}] {pos}/{len} cells  {per_sec}  ETA {eta}",
+                "{msg:12} [{bar:30}] {pos}/{len} cells and groups  {per_sec}  ETA {eta}",
             )
             .expect("template")
             .progress_chars("=> "),
@@ -196,9 +199,9 @@ pub fn bake_local(l: &Loaded, jobs: &[Job], opts: &LocalOptions) -> Result<BakeO
             // Proxies of the job's earlier bake whose keys still match are reused.
             let reuse = worker::job::previous_proxies(&l.out, job);
             let none = worker::bake::ProxyReuse::new();
-            let result = run_job(&l.out, job, shared_process, |cell, fp| {
-                let reuse = reuse.get(&cell).unwrap_or(&none);
-                let r = bake_cell_pack(&l.plan, &l.scene, &chains, reuse, &l.build.grid, cell, fp);
+            let result = run_job(&l.out, job, shared_process, |unit, fp| {
+                let reuse = reuse.get(&unit).unwrap_or(&none);
+                let r = bake_cell_pack(&l.plan, &l.scene, &chains, reuse, &l.build, unit, fp);
                 bar.inc(1);
                 r
             });
@@ -263,30 +266,62 @@ pub fn assemble_available(l: &Loaded) -> Result<(Index, Vec<u32>), RunError> {
             None => not_baked.extend(job.cells.iter().copied()),
         }
     }
+    let index = write_index(l, &done)?;
+    // A baked cell whose far-field group is not baked is left out (drawn as original
+    // geometry): without its group's pack it would miss its far objects.
+    for (_, r) in &done {
+        for c in &r.cells {
+            if index.cell(c.cell).is_none() {
+                not_baked.push(c.cell);
+            }
+        }
+    }
     not_baked.sort_unstable();
-    Ok((write_index(l, &done)?, not_baked))
+    Ok((index, not_baked))
 }
 
+/// The index of the done jobs' packs. A cell is listed only when its far-field
+/// group (its record's `far_group`) is listed too.
 fn write_index(l: &Loaded, done: &[(&Job, JobRecord)]) -> Result<Index, RunError> {
     let mut entries = Vec::new();
+    let mut groups = Vec::new();
     let mut fps = Vec::new();
+    let entry = |c: &worker::job::CellRecord, neighbours, fingerprint, group| IndexEntry {
+        cell_id: c.cell,
+        file: c.file.clone(),
+        bytes: c.bytes,
+        checksum: c.checksum,
+        neighbours,
+        fingerprint,
+        group,
+    };
     for (job, record) in done {
         fps.push(job.fingerprint);
+        for c in &record.groups {
+            groups.push(entry(c, Vec::new(), job.fingerprint, None));
+        }
+    }
+    groups.sort_by_key(|e| e.cell_id);
+    let listed = |g: u32| groups.binary_search_by_key(&g, |e| e.cell_id).is_ok();
+    for (job, record) in done {
         for c in &record.cells {
-            entries.push(IndexEntry {
-                cell_id: c.cell,
-                file: c.file.clone(),
-                bytes: c.bytes,
-                checksum: c.checksum,
-                neighbours: l.build.grid.neighbours(c.cell),
-                fingerprint: job.fingerprint,
-            });
+            let group = c.report["far_group"].as_u64().map(|g| g as u32);
+            if group.is_some_and(|g| !listed(g)) {
+                continue;
+            }
+            entries.push(entry(
+                c,
+                l.build.grid.neighbours(c.cell),
+                job.fingerprint,
+                group,
+            ));
         }
     }
     entries.sort_by_key(|e| e.cell_id);
     let index = Index {
         build_fingerprint: build_fingerprint(&fps),
         cells: entries,
+        groups,
     };
     let bytes = index.encode().map_err(failed)?;
     format::pack::write_atomic(&l.out.join("index.pack"), &bytes).map_err(failed)?;
@@ -456,7 +491,9 @@ pub fn run_local_selected(
     let _lock = lock_output(&l.out)?;
     write_plan_and_base(l)?;
     // 2. The selected jobs; with --force their records go.
-    let selected = crate::subset::jobs_for_cells(&l.build.jobs, &selection.cells);
+    let groups = &l.build.groups;
+    let selected =
+        crate::subset::jobs_for_cells(&l.build.jobs, &selection.cells, |c| groups.group_of(c));
     if force {
         for job in &selected {
             let _ = std::fs::remove_file(worker::job::record_path(&l.out, job.id));

@@ -192,10 +192,18 @@ pub fn resolve_cells(
     Ok(cells)
 }
 
-/// The jobs holding at least one of `cells`, in job order.
-pub fn jobs_for_cells(jobs: &[Job], cells: &BTreeSet<u32>) -> Vec<Job> {
+/// The jobs holding at least one of `cells` or one of their far-field groups
+/// (`group_of`), in job order.
+pub fn jobs_for_cells(
+    jobs: &[Job],
+    cells: &BTreeSet<u32>,
+    group_of: impl Fn(u32) -> u32,
+) -> Vec<Job> {
+    let groups: BTreeSet<u32> = cells.iter().map(|&c| group_of(c)).collect();
     jobs.iter()
-        .filter(|j| j.cells.iter().any(|c| cells.contains(c)))
+        .filter(|j| {
+            j.cells.iter().any(|c| cells.contains(c)) || j.groups.iter().any(|g| groups.contains(g))
+        })
         .cloned()
         .collect()
 }
@@ -330,14 +338,26 @@ mod tests {
 
     #[test]
     fn jobs_for_cells_keeps_jobs_with_any_selected_cell() {
-        let jobs: Vec<Job> = (0..4)
+        let mut jobs: Vec<Job> = (0..4)
             .map(|j| Job {
                 id: j,
                 cells: vec![2 * j, 2 * j + 1],
+                groups: Vec::new(),
                 fingerprint: [0; 32],
             })
             .collect();
-        let picked = jobs_for_cells(&jobs, &BTreeSet::from([1, 6]));
-        assert_eq!(picked.iter().map(|j| j.id).collect::<Vec<_>>(), vec![0, 3]);
+        // Far-field jobs: groups {0, 1} and {2, 3}; cell c is in group c / 2.
+        for (id, groups) in [(4, vec![0, 1]), (5, vec![2, 3])] {
+            jobs.push(Job {
+                id,
+                cells: Vec::new(),
+                groups,
+                fingerprint: [0; 32],
+            });
+        }
+        let picked = jobs_for_cells(&jobs, &BTreeSet::from([1, 6]), |c| c / 2);
+        assert_eq!(picked.iter().map(|j| j.id).collect::<Vec<_>>(), vec![0, 3, 4, 5]);
+        let picked = jobs_for_cells(&jobs, &BTreeSet::from([1]), |c| c / 2);
+        assert_eq!(picked.iter().map(|j| j.id).collect::<Vec<_>>(), vec![0, 4]);
     }
 }

@@ -139,15 +139,27 @@ impl Bake {
     }
 }
 
-/// Loads cell `cell` of the bake in `dir` (usable from any thread).
+/// The streaming key of far-field group `group` (format version 2,
+/// `groups/<id>.pack`): keys below the grid's cell count are cells, the rest groups.
+pub fn group_key(base: &BasePack, group: u32) -> u32 {
+    base.grid.n_cols * base.grid.n_rows + group
+}
+
+/// Loads the pack of streaming key `cell` of the bake in `dir` (usable from any
+/// thread): a cell, or a far-field group for a key from [`group_key`].
 pub fn load_cell(
     dir: &Path,
     index: Option<&Index>,
     base: &BasePack,
     cell: u32,
 ) -> Result<PreparedCell, BakeError> {
+    let cells = base.grid.n_cols * base.grid.n_rows;
+    let group = cell.checked_sub(cells);
     let entry = index
-        .and_then(|i| i.cell(cell))
+        .and_then(|i| match group {
+            Some(g) => i.group(g),
+            None => i.cell(cell),
+        })
         .ok_or(BakeError::NotIndexed { cell })?;
     let path = dir.join(&entry.file);
     let file = PackFile::open(&path).map_err(|source| BakeError::CellPack {
@@ -166,7 +178,11 @@ pub fn load_cell(
     entry
         .verify_bytes(&path, file.bytes())
         .map_err(|e| not_this_bake(e.to_string()))?;
-    let pack = CellPack::decode(&file).map_err(|source| BakeError::CellPack {
+    let pack = match group {
+        Some(_) => CellPack::decode_group(&file),
+        None => CellPack::decode(&file),
+    }
+    .map_err(|source| BakeError::CellPack {
         cell,
         path: path.clone(),
         source,
@@ -178,12 +194,18 @@ pub fn load_cell(
             format::fingerprint::to_hex(&entry.fingerprint)
         )));
     }
-    if pack.cell_id != cell {
+    if pack.cell_id != group.unwrap_or(cell) {
         return Err(BakeError::WrongCell {
             cell,
             path,
             found: pack.cell_id,
         });
+    }
+    if group.is_none() && pack.far_group != entry.group {
+        return Err(not_this_bake(format!(
+            "its far-field group {:?} differs from index.pack's {:?}",
+            pack.far_group, entry.group
+        )));
     }
     pack.check_against(base)
         .map_err(|source| BakeError::CellPack {

@@ -9,7 +9,7 @@
 use crate::bake::Bake;
 use crate::camera::{Camera, Frustum};
 use crate::gpu::{DrawList, GpuModels, InstanceRaw};
-use crate::stream::{CurrentCell, PendingDraw, ResidentCell};
+use crate::stream::{CurrentCell, Far, PendingDraw, ResidentCell};
 use std::collections::BTreeMap;
 
 /// Rendering configuration.
@@ -112,37 +112,44 @@ pub fn hybrid_list<'a>(
 ) -> DrawList<'a> {
     match current {
         CurrentCell::Originals => originals_list(bake, camera, true),
-        CurrentCell::Pack(cell) => cell_list(bake, camera, cell, pending),
+        CurrentCell::Pack(cell, far) => cell_list(bake, camera, cell, far, pending),
     }
 }
 
-/// The cell's inside objects as originals, its ready proxies, and — while a proxy's
-/// textures are still in the upload queue — that proxy's member objects as originals
-/// (never a hole; [`ResidentCell::fallback_instances`]) or, with
-/// [`PendingDraw::Lit`], the proxy lit without textures.
+/// The cell's inside objects as originals, its ready proxies and those of its
+/// far-field group, and — while a proxy's textures are still in the upload queue —
+/// that proxy's member objects as originals (never a hole;
+/// [`ResidentCell::fallback_instances`]) or, with [`PendingDraw::Lit`], the proxy
+/// lit without textures. Without its group's pack ([`Far::Unavailable`]) every
+/// object the cell has neither as original nor as proxy is drawn as original.
 fn cell_list<'a>(
     bake: &Bake,
     camera: &Camera,
     cell: &'a ResidentCell,
+    far: &Far<'a>,
     pending: PendingDraw,
 ) -> DrawList<'a> {
     let f = camera.frustum();
-    let fallback = match pending {
-        PendingDraw::Originals => cell.fallback_instances(),
-        PendingDraw::Lit => Vec::new(),
+    let packs: Vec<&'a ResidentCell> = match far {
+        Far::Pack(g) => vec![cell, *g],
+        Far::None | Far::Unavailable => vec![cell],
     };
-    let ids: Vec<u32> = if fallback.is_empty() {
-        cell.originals.clone()
-    } else {
-        let mut all: std::collections::BTreeSet<u32> = fallback.into_iter().collect();
-        all.extend(cell.originals.iter().copied());
-        all.into_iter().collect()
-    };
+    let mut ids: std::collections::BTreeSet<u32> = cell.originals.iter().copied().collect();
+    if pending == PendingDraw::Originals {
+        for p in &packs {
+            ids.extend(p.fallback_instances());
+        }
+    }
+    if let Far::Unavailable = far {
+        let proxied: std::collections::BTreeSet<u32> =
+            cell.members.iter().flatten().copied().collect();
+        ids.extend((0..bake.base.instances.len() as u32).filter(|i| !proxied.contains(i)));
+    }
     let originals = group(bake, visible(bake, &f, ids.into_iter()));
     let in_view = || {
-        cell.proxies
+        packs
             .iter()
-            .zip(&cell.bounds)
+            .flat_map(|p| p.proxies.iter().zip(&p.bounds))
             .filter(|(_, b)| f.intersects(b))
             .map(|(p, _)| p)
     };

@@ -28,6 +28,14 @@
 //!   the current cell).
 //! - A cell whose pack is missing or corrupt is logged once and drawn as original
 //!   geometry.
+//! - **Far field** (format version 2, issue 13): a cell whose index entry names a
+//!   far-field group also draws that group's pack (`groups/<id>.pack`), shared by
+//!   the group's cells. Groups stream like cells under keys after the cell ids
+//!   ([`crate::bake::group_key`]): loaded on demand with the current cell,
+//!   prefetched with each neighbour, uploaded under the same budget, evicted LRU
+//!   (never the current cell's group). While a group is unavailable (missing or
+//!   corrupt pack) the cell draws every object it has no proxy or original for as
+//!   original geometry — never a hole.
 //!
 //! The thread is "low priority" in the paper's sense: it only does I/O and decoding
 //! and never touches the GPU; the OS priority is left as is.
@@ -232,10 +240,21 @@ impl ResidentCell {
 
 /// What the current frame draws for the hybrid configuration.
 pub enum CurrentCell<'a> {
-    /// The cell's pack is resident and uploaded.
-    Pack(&'a ResidentCell),
+    /// The cell's pack is resident and uploaded, with its far field.
+    Pack(&'a ResidentCell, Far<'a>),
     /// No usable pack (missing, corrupt, off the index): draw originals.
     Originals,
+}
+
+/// The current cell's far field.
+pub enum Far<'a> {
+    /// The cell has no far-field group (format version 1, or `bake.far_field` off).
+    None,
+    /// Its group's pack, resident.
+    Pack(&'a ResidentCell),
+    /// Its group's pack could not be loaded: the objects the cell has neither as
+    /// originals nor as proxies are drawn as original geometry.
+    Unavailable,
 }
 
 /// Per-frame streaming statistics.
@@ -269,7 +288,15 @@ pub struct Streamer {
     clock: u64,
     last_step: Option<(Vec3, Vec3)>,
     current: Option<u32>,
+    /// Streaming key of the current cell's far-field group.
+    current_group: Option<u32>,
     stats: StreamStats,
+}
+
+/// The streaming key of `cell`'s far-field group, if it has one.
+fn group_key_of(bake: &Bake, cell: u32) -> Option<u32> {
+    let g = bake.index.as_ref()?.cell(cell)?.group?;
+    Some(crate::bake::group_key(&bake.base, g))
 }
 
 impl Streamer {
@@ -305,6 +332,7 @@ impl Streamer {
             clock: 0,
             last_step: None,
             current: None,
+            current_group: None,
             stats: StreamStats::default(),
         }
     }
@@ -347,8 +375,17 @@ impl Streamer {
             .grid
             .nearest_cell(Vec2::new(camera.eye.x, camera.eye.z));
         self.current = cell;
+        self.current_group = cell.and_then(|id| group_key_of(bake, id));
         self.step_timestamp(bake, camera, cell);
-        // 3. Make the current cell resident (demand load on a miss).
+        // 3. Make the current cell and its far-field group resident (demand load on
+        //    a miss).
+        if let Some(k) = self.current_group {
+            if !self.cells.contains_key(&k) && !self.failed.contains(&k) {
+                let result = bake.load_cell(k).map_err(|e| e.to_string());
+                self.accept(renderer, k, result);
+            }
+            self.prioritise(k);
+        }
         if let Some(id) = cell {
             if self.cells.contains_key(&id) {
                 self.stats.hits += 1;
@@ -357,7 +394,8 @@ impl Streamer {
                 let result = bake.load_cell(id).map_err(|e| e.to_string());
                 self.accept(renderer, id, result);
             }
-            // The current cell's queued textures go first, under the same budget.
+            // The current cell's queued textures go first (then its group's), under
+            // the same budget.
             self.prioritise(id);
         }
         // 4. The texture queue, FIFO under the per-frame budget.
@@ -367,11 +405,21 @@ impl Streamer {
         self.stats.cell = cell;
         self.stats.stream_ms = t0.elapsed().as_secs_f64() * 1e3;
         self.stats.timestamp = self.timestamp();
-        let current = match cell.and_then(|id| self.cells.get_mut(&id)) {
+        let clock = self.clock;
+        self.stats.pending_proxies = 0;
+        for k in [cell, self.current_group].into_iter().flatten() {
+            if let Some(c) = self.cells.get_mut(&k) {
+                c.last_used = clock;
+                self.stats.pending_proxies += c.pending_proxies();
+            }
+        }
+        let current = match cell.and_then(|id| self.cells.get(&id)) {
             Some(c) => {
-                c.last_used = self.clock;
-                self.stats.pending_proxies = c.pending_proxies();
-                CurrentCell::Pack(&*c)
+                let far = match self.current_group {
+                    None => Far::None,
+                    Some(k) => self.cells.get(&k).map_or(Far::Unavailable, Far::Pack),
+                };
+                CurrentCell::Pack(c, far)
             }
             None => {
                 self.stats.pending_proxies = 0;
@@ -420,11 +468,9 @@ impl Streamer {
         };
         let g = bake.grid.params();
         let mut q = self.shared.queue.lock().unwrap_or_else(|e| e.into_inner());
+        let mut pushed = BTreeSet::new();
         for &n in &entry.neighbours {
-            if self.cells.contains_key(&n)
-                || self.failed.contains(&n)
-                || n >= bake.grid.cell_count()
-            {
+            if n >= bake.grid.cell_count() {
                 continue;
             }
             let centre = bake.grid.centre(n);
@@ -432,7 +478,16 @@ impl Streamer {
                 min: Vec3::new(centre.x - c, g.min_eye_height, centre.y - c),
                 max: Vec3::new(centre.x + c, g.max_eye_height, centre.y + c),
             };
-            q.push(ts, cell_priority(camera, &prism, c), n);
+            let priority = cell_priority(camera, &prism, c);
+            // The neighbour and its far-field group (often the current cell's own).
+            for key in std::iter::once(n).chain(group_key_of(bake, n)) {
+                if pushed.insert(key)
+                    && !self.cells.contains_key(&key)
+                    && !self.failed.contains(&key)
+                {
+                    q.push(ts, priority, key);
+                }
+            }
         }
         drop(q);
         self.shared.wake.notify_one();
@@ -556,7 +611,7 @@ impl Streamer {
             let victim = self
                 .cells
                 .values()
-                .filter(|c| Some(c.cell_id) != self.current)
+                .filter(|c| Some(c.cell_id) != self.current && Some(c.cell_id) != self.current_group)
                 .min_by_key(|c| (c.last_used, c.cell_id))
                 .map(|c| c.cell_id);
             let Some(v) = victim else {

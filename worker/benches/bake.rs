@@ -15,7 +15,7 @@
 use format::manifest::parse_manifest;
 use std::path::PathBuf;
 use std::time::Instant;
-use worker::bake::{bake_cell_with, ProxyReuse};
+use worker::bake::bake_cell_hybrid;
 use worker::check::check_cell;
 use worker::grid::HexGrid;
 use worker::lod_chain::LodChains;
@@ -47,6 +47,7 @@ fn main() {
         rayon::current_num_threads()
     );
     let grid = HexGrid::new(plan.ground, plan.cells.cell_size);
+    let groups = worker::far_field::CellGroups::new(&grid);
     let chains = if std::env::var("HEXBAKE_BENCH_CHAINS").is_ok_and(|v| v == "1") {
         let t = Instant::now();
         let (chains, _) = LodChains::prepare(&scene, None).expect("chains");
@@ -88,11 +89,12 @@ fn main() {
     println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     let mut means = Vec::new();
     for (name, cell) in cells {
-        let bake = bake_cell_with(
+        // The cell's proxies and its group's far field, as the player draws them.
+        let bake = bake_cell_hybrid(
             &scene,
             &chains,
-            &ProxyReuse::new(),
             &grid,
+            &groups,
             cell,
             &plan.cells,
             &plan.bake,

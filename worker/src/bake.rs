@@ -21,6 +21,11 @@
 //! triangles the collapse constraints leave, with a 1 × 1 texture
 //! ([`crate::capture`]).
 //!
+//! With the far field (`bake.far_field`, [`crate::far_field`]), step 1 first sets
+//! aside the far objects of the cell's 7-cell group ([`Assignment::Far`]): their
+//! proxies are derived once per group by [`bake_group`] — the same steps 4–5 from
+//! the group centre, over the group's prism — and stored in the group's pack.
+//!
 //! The cell centre is the hexagon's centre at mid eye height; neighbours' centres
 //! (MvMesh views) are at the same height. Stage times are measured per proxy and
 //! summed (CPU time, not wall time) and are never written to packs.
@@ -28,7 +33,8 @@
 use crate::backface::all_culled;
 use crate::capture::{matrix_array, pack_texture};
 use crate::cluster::{greedy_clusters, ClusterCandidate, ClusterSettings};
-use crate::grid::HexGrid;
+use crate::far_field::{far_instances, CellGroups, FarField};
+use crate::grid::{HexGrid, Prism};
 use crate::lod_chain::LodChains;
 use crate::mvmesh::derive_mvmesh;
 use crate::raster::ProjectedTexture;
@@ -48,6 +54,8 @@ use thiserror::Error;
 pub enum BakeError {
     #[error("cell {cell} does not exist (the grid has {cells} cells)")]
     NoCell { cell: u32, cells: u32 },
+    #[error("far-field group {group} does not exist (the grid has {groups} groups)")]
+    NoGroup { group: u32, groups: u32 },
     #[error("cell {cell}: {source}")]
     Proxy {
         cell: u32,
@@ -69,6 +77,8 @@ pub enum Assignment {
     Culled,
     /// Index into [`CellBake::proxies`].
     Proxy(u32),
+    /// A far object of the cell's group: drawn from the group's pack.
+    Far,
 }
 
 /// One member of a baked proxy.
@@ -247,13 +257,19 @@ pub struct CellStats {
     pub views: u32,
     /// Proxies taken from an earlier bake by key instead of derived.
     pub reused_proxies: u32,
+    /// Objects drawn from the group's far field (a cell) — or, for a group's bake,
+    /// the number of cells sharing it.
+    pub far_objects: u32,
     pub times: CellTimes,
 }
 
 /// The result of baking one cell.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CellBake {
+    /// The cell's id (the group's id for [`bake_group`]).
     pub cell: u32,
+    /// The cell's far-field group, if the far field is on.
+    pub far_group: Option<u32>,
     /// Per instance of the scene.
     pub assignment: Vec<Assignment>,
     /// Original instances, ascending.
@@ -295,13 +311,16 @@ pub fn bake_cell(
         cell,
         cells,
         params,
+        None,
     )
 }
 
 /// Bakes one cell (module docs); each proxy's collapse starts from the coarsest level
 /// of its model's chain in `chains` that the cell's region allows
-/// ([`crate::lod_chain`]), and a proxy whose key ([`proxy_key`]) is in `reuse` is
-/// taken from there instead of derived.
+/// ([`crate::lod_chain`]), a proxy whose key ([`proxy_key`]) is in `reuse` is
+/// taken from there instead of derived, and the far objects of `far` (the cell's
+/// group, [`FarField::of_cell`]) are left to the group's pack.
+#[allow(clippy::too_many_arguments)]
 pub fn bake_cell_with(
     scene: &Scene,
     chains: &LodChains,
@@ -310,6 +329,7 @@ pub fn bake_cell_with(
     cell: u32,
     cells: &CellParams,
     params: &BakeParams,
+    far: Option<&FarField>,
 ) -> Result<CellBake, BakeError> {
     let start = Instant::now();
     if cell >= grid.cell_count() {
@@ -322,26 +342,29 @@ pub fn bake_cell_with(
     let prism = grid.prism(cell, cells.min_eye_height, cells.max_eye_height);
     let corners = prism.corners();
     let centre = cell_eye(grid, cell, cells);
-    let settings = ProxySettings::for_cell(params, grid.cell_size(), prism);
 
     // Steps 1–3: split, cull, self-occluding error (parallel, collected in order).
     let t = Instant::now();
-    let kinds: Vec<(Option<Representation>, bool)> = (0..scene.instances.len())
+    let is_far = |i: usize| far.is_some_and(|f| f.instances.get(i) == Some(&true));
+    let kinds: Vec<(Option<Representation>, Assignment)> = (0..scene.instances.len())
         .into_par_iter()
         .map(|i| {
             let inst = &scene.instances[i];
             let Some(model) = scene.models.get(inst.model as usize) else {
-                return (None, false);
+                return (None, Assignment::Culled);
             };
             if model.mesh.triangles.is_empty() {
-                return (None, false);
+                return (None, Assignment::Culled);
+            }
+            if is_far(i) {
+                return (None, Assignment::Far);
             }
             let (lo, hi) = scene.instance_bounds(i);
             if prism.intersects_aabb(lo, hi) {
-                return (None, true);
+                return (None, Assignment::Original);
             }
             if all_culled(&model.mesh, inst.transform, &corners) {
-                return (None, false);
+                return (None, Assignment::Culled);
             }
             let error =
                 object_self_occluding_error(grid.cell_size(), params.image_res, centre, lo, hi);
@@ -350,30 +373,239 @@ pub fn bake_cell_with(
                     error,
                     params.self_occluding_tolerance_px,
                 )),
-                false,
+                Assignment::Culled,
             )
         })
         .collect();
     times.split_ms = ms_since(t);
-    let mut assignment: Vec<Assignment> = kinds
-        .iter()
-        .map(|&(_, inside)| {
-            if inside {
-                Assignment::Original
-            } else {
-                Assignment::Culled
+    // Regional occlusion culling (000 §3.1.7; `occlusion.rs`, issue 17): with
+    // `bake.occlusion_culling`, an outside object hidden from every point of the
+    // prism is Culled instead of getting a proxy. Its time counts as split time.
+    let kinds = if params.occlusion_culling {
+        let t = Instant::now();
+        let candidates: Vec<u32> = (0..kinds.len() as u32)
+            .filter(|&i| kinds[i as usize].0.is_some())
+            .collect();
+        let settings = crate::occlusion::OcclusionSettings::for_prism(&prism);
+        let hidden =
+            crate::occlusion::occluded_instances(scene, &prism, &candidates, &settings);
+        let mut kinds = kinds;
+        for (&i, hidden) in candidates.iter().zip(hidden) {
+            if hidden {
+                kinds[i as usize] = (None, Assignment::Culled);
             }
-        })
-        .collect();
+        }
+        times.split_ms += ms_since(t);
+        kinds
+    } else {
+        kinds
+    };
+    let mut assignment: Vec<Assignment> = kinds.iter().map(|k| k.1).collect();
     let originals: Vec<u32> = (0..scene.instances.len() as u32)
         .filter(|&i| assignment[i as usize] == Assignment::Original)
         .collect();
+    let of_kind = |r: Representation| -> Vec<u32> {
+        (0..kinds.len() as u32)
+            .filter(|&i| kinds[i as usize].0 == Some(r))
+            .collect()
+    };
+    let mut eyes = vec![centre];
+    eyes.extend(
+        grid.neighbours(cell)
+            .into_iter()
+            .map(|n| cell_eye(grid, n, cells)),
+    );
+    let region = Region {
+        id: cell,
+        prism,
+        eyes,
+        size: grid.cell_size(),
+    };
+    let (proxies, stage) = derive_region(
+        scene,
+        chains,
+        reuse,
+        &region,
+        &of_kind(Representation::Sv),
+        &of_kind(Representation::Mv),
+        cells,
+        params,
+        &mut times,
+    )?;
+    for (k, p) in proxies.iter().enumerate() {
+        for m in &p.members {
+            assignment[m.instance as usize] = Assignment::Proxy(k as u32);
+        }
+    }
+    let mut bake = finish(
+        scene, cell, assignment, originals, proxies, stage, times, start,
+    );
+    bake.far_group = far.map(|f| f.group);
+    bake.stats.far_objects = bake
+        .assignment
+        .iter()
+        .filter(|&&a| a == Assignment::Far)
+        .count() as u32;
+    Ok(bake)
+}
+
+/// Bakes the far field of group `group` ([`crate::far_field`]): the group's far
+/// objects, clustered (step 4, when `params.clustering`) and derived (step 5) as
+/// single-view proxies from the group centre over the group prism. The result's
+/// `cell` is the group id; it has no originals; every instance that is not far is
+/// [`Assignment::Culled`] in its assignment (not drawn from this pack).
+#[allow(clippy::too_many_arguments)]
+pub fn bake_group(
+    scene: &Scene,
+    chains: &LodChains,
+    reuse: &ProxyReuse,
+    grid: &HexGrid,
+    groups: &CellGroups,
+    group: u32,
+    cells: &CellParams,
+    params: &BakeParams,
+) -> Result<CellBake, BakeError> {
+    let start = Instant::now();
+    if group >= groups.len() {
+        return Err(BakeError::NoGroup {
+            group,
+            groups: groups.len(),
+        });
+    }
+    let mut times = CellTimes::default();
+    let t = Instant::now();
+    let prism = groups.prism(grid, group, cells);
+    let far = far_instances(scene, &prism, params);
+    times.split_ms = ms_since(t);
+    let sv: Vec<u32> = (0..far.len() as u32).filter(|&i| far[i as usize]).collect();
+    let region = Region {
+        id: group,
+        prism,
+        eyes: vec![prism.centre3()],
+        size: prism.cell_size,
+    };
+    let (proxies, stage) = derive_region(
+        scene,
+        chains,
+        reuse,
+        &region,
+        &sv,
+        &[],
+        cells,
+        params,
+        &mut times,
+    )?;
+    let mut assignment = vec![Assignment::Culled; scene.instances.len()];
+    for (k, p) in proxies.iter().enumerate() {
+        for m in &p.members {
+            assignment[m.instance as usize] = Assignment::Proxy(k as u32);
+        }
+    }
+    let mut bake = finish(
+        scene,
+        group,
+        assignment,
+        Vec::new(),
+        proxies,
+        stage,
+        times,
+        start,
+    );
+    bake.stats.far_objects = groups.cells(group).len() as u32;
+    Ok(bake)
+}
+
+/// Everything the hybrid draws from `cell` (for `worker check` and CPU renders):
+/// the cell's bake ([`bake_cell_with`]) with, when `params.far_field` is on, its
+/// group's far-field proxies ([`bake_group`]) appended and its [`Assignment::Far`]
+/// objects pointing at them. Stats are the cell's own plus the group proxies'
+/// counts, polygons and texture bytes.
+#[allow(clippy::too_many_arguments)]
+pub fn bake_cell_hybrid(
+    scene: &Scene,
+    chains: &LodChains,
+    grid: &HexGrid,
+    groups: &CellGroups,
+    cell: u32,
+    cells: &CellParams,
+    params: &BakeParams,
+) -> Result<CellBake, BakeError> {
+    let far = FarField::of_cell(scene, grid, groups, cell, cells, params);
+    let none = ProxyReuse::new();
+    let mut bake = bake_cell_with(
+        scene,
+        chains,
+        &none,
+        grid,
+        cell,
+        cells,
+        params,
+        far.as_ref(),
+    )?;
+    let Some(far) = far else {
+        return Ok(bake);
+    };
+    let group = bake_group(scene, chains, &none, grid, groups, far.group, cells, params)?;
+    let offset = bake.proxies.len() as u32;
+    for (i, a) in group.assignment.iter().enumerate() {
+        if let (Assignment::Proxy(k), Assignment::Far) = (*a, bake.assignment[i]) {
+            bake.assignment[i] = Assignment::Proxy(offset + k);
+        }
+    }
+    let (s, g) = (&mut bake.stats, &group.stats);
+    s.sv_count += g.sv_count;
+    s.sv_polygons += g.sv_polygons;
+    s.cluster_count += g.cluster_count;
+    s.cluster_members += g.cluster_members;
+    s.cluster_polygons += g.cluster_polygons;
+    s.proxied_original_polygons += g.proxied_original_polygons;
+    s.texture_bytes += g.texture_bytes;
+    s.views += g.views;
+    for t in [
+        (&mut s.times.capture_ms, g.times.capture_ms),
+        (&mut s.times.weights_ms, g.times.weights_ms),
+        (&mut s.times.simplify_ms, g.times.simplify_ms),
+    ] {
+        *t.0 += t.1;
+    }
+    bake.proxies.extend(group.proxies);
+    Ok(bake)
+}
+
+/// The region a set of proxies serves: a cell's prism, or a group's
+/// ([`crate::far_field`]).
+struct Region {
+    /// Cell or group id (for errors).
+    id: u32,
+    prism: Prism,
+    /// The capture eyes: the centre first, then (for MvMesh) the neighbours' centres.
+    eyes: Vec<Vec3>,
+    /// The region's size c (the self-occluding error's and the clustering's |VV'|,
+    /// the class thresholds' window depth).
+    size: f32,
+}
+
+/// Steps 4–5 over a region: clustering of the SV candidates `sv`, then the
+/// derivation of every SvMesh / Cluster / MvMesh (`mv`), in parallel over proxies,
+/// collected in order of each proxy's first instance.
+#[allow(clippy::too_many_arguments)]
+fn derive_region(
+    scene: &Scene,
+    chains: &LodChains,
+    reuse: &ProxyReuse,
+    region: &Region,
+    sv: &[u32],
+    mv: &[u32],
+    cells: &CellParams,
+    params: &BakeParams,
+    times: &mut CellTimes,
+) -> Result<(Vec<BakedProxy>, StageTimes), BakeError> {
+    let centre = region.eyes[0];
+    let prism = region.prism;
+    let settings = ProxySettings::for_cell(params, region.size, prism);
 
     // Step 4: clustering of the SV candidates.
     let t = Instant::now();
-    let sv: Vec<u32> = (0..kinds.len() as u32)
-        .filter(|&i| kinds[i as usize].0 == Some(Representation::Sv))
-        .collect();
     let sv_groups: Vec<Vec<u32>> = if params.clustering {
         let candidates: Vec<ClusterCandidate> = sv
             .iter()
@@ -390,7 +622,7 @@ pub fn bake_cell_with(
             &candidates,
             &ClusterSettings {
                 centre,
-                cell_size: grid.cell_size(),
+                cell_size: region.size,
                 image_res: params.image_res,
                 self_occluding_tolerance_px: params.self_occluding_tolerance_px,
             },
@@ -404,19 +636,11 @@ pub fn bake_cell_with(
     let mut jobs: Vec<(u32, Job)> = sv_groups
         .into_iter()
         .map(|g| (g[0], Job::Sv(g)))
-        .chain(
-            (0..kinds.len() as u32)
-                .filter(|&i| kinds[i as usize].0 == Some(Representation::Mv))
-                .map(|i| (i, Job::Mv(i))),
-        )
+        .chain(mv.iter().map(|&i| (i, Job::Mv(i))))
         .collect();
     jobs.sort_by_key(|j| j.0);
-    let mut eyes = vec![centre];
-    eyes.extend(
-        grid.neighbours(cell)
-            .into_iter()
-            .map(|n| cell_eye(grid, n, cells)),
-    );
+    let eyes = &region.eyes;
+    let cell = region.id;
     let params_fp = format::fingerprint::params_fingerprint(params, cells);
     let built: Vec<Result<(BakedProxy, StageTimes), BakeError>> = jobs
         .par_iter()
@@ -432,7 +656,7 @@ pub fn bake_cell_with(
                     };
                     proxy_key(scene, &params_fp, kind, group, &prism, &[centre])
                 }
-                Job::Mv(i) => proxy_key(scene, &params_fp, ProxyKind::MvMesh, &[*i], &prism, &eyes),
+                Job::Mv(i) => proxy_key(scene, &params_fp, ProxyKind::MvMesh, &[*i], &prism, eyes),
             };
             if let Some(packed) = reuse.get(&key) {
                 return Ok((BakedProxy::reused(packed, key), StageTimes::default()));
@@ -470,7 +694,7 @@ pub fn bake_cell_with(
                 }
                 Job::Mv(i) => {
                     let mv =
-                        derive_mvmesh(scene, chains, *i, &eyes, &prism, &settings).map_err(wrap)?;
+                        derive_mvmesh(scene, chains, *i, eyes, &prism, &settings).map_err(wrap)?;
                     Ok((
                         BakedProxy {
                             kind: ProxyKind::MvMesh,
@@ -496,16 +720,26 @@ pub fn bake_cell_with(
     for result in built {
         let (proxy, t) = result?;
         stage.add(&t);
-        for m in &proxy.members {
-            assignment[m.instance as usize] = Assignment::Proxy(proxies.len() as u32);
-        }
         proxies.push(proxy);
     }
+    Ok((proxies, stage))
+}
+
+/// Statistics and the result of a cell's (or group's) bake.
+#[allow(clippy::too_many_arguments)]
+fn finish(
+    scene: &Scene,
+    cell: u32,
+    assignment: Vec<Assignment>,
+    originals: Vec<u32>,
+    proxies: Vec<BakedProxy>,
+    stage: StageTimes,
+    mut times: CellTimes,
+    start: Instant,
+) -> CellBake {
     times.capture_ms = stage.capture_ms;
     times.weights_ms = stage.weights_ms;
     times.simplify_ms = stage.simplify_ms;
-
-    // Statistics.
     let tris_of = |i: u32| {
         let inst = &scene.instances[i as usize];
         scene.models[inst.model as usize].mesh.triangles.len() as u64
@@ -551,13 +785,14 @@ pub fn bake_cell_with(
     };
     times.total_ms = ms_since(start);
     stats.times = times;
-    Ok(CellBake {
+    CellBake {
         cell,
+        far_group: None,
         assignment,
         originals,
         proxies,
         stats,
-    })
+    }
 }
 
 impl CellBake {
@@ -603,7 +838,7 @@ impl CellBake {
         Ok(CellPack {
             cell_id: self.cell,
             fingerprint,
-            far_group: None,
+            far_group: self.far_group,
             originals: self.originals.clone(),
             proxies,
         })

@@ -152,8 +152,8 @@ impl HexGrid {
         Some(row as u32 * self.n_cols + col as u32)
     }
 
-    /// Centre (x, z) of a lattice position, also outside the grid.
-    fn lattice_centre(&self, col: i64, row: i64) -> Vec2 {
+    /// Centre (x, z) of a lattice position `(col, row)`, also outside the grid.
+    pub fn lattice_centre(&self, col: i64, row: i64) -> Vec2 {
         let c = self.cell_size;
         let odd = col.rem_euclid(2) == 1;
         Vec2::new(

@@ -6,6 +6,8 @@
 //! ```text
 //! <out>/base.pack            models + instances + grid (written by the pipeline)
 //! <out>/cells/<id>.pack      one per cell, written atomically by its job
+//! <out>/groups/<id>.pack     one per far-field group (crate::far_field), written by
+//!                            the far-field jobs that follow the cell jobs
 //! <out>/jobs/<job>.json      the job's record: fingerprint, cells, per-cell stats;
 //!                            written atomically AFTER all its packs (the journal's "end")
 //! <out>/index.pack           assembled once every job is done
@@ -25,9 +27,12 @@
 //! a done job or one that will be redone, and the bytes of a redone job are the same.
 
 use crate::bake::ProxyReuse;
+use crate::far_field::{CellGroups, FarField};
 use crate::grid::HexGrid;
 use crate::lod_chain::LodChains;
-use format::fingerprint::{job_fingerprint, params_fingerprint, scene_fingerprint, Fingerprint};
+use format::fingerprint::{
+    group_job_fingerprint, job_fingerprint, params_fingerprint, scene_fingerprint, Fingerprint,
+};
 use format::manifest::Plan;
 use format::pack::CellPack;
 use format::Scene;
@@ -40,6 +45,10 @@ pub struct Job {
     pub id: u32,
     /// Ascending cell ids.
     pub cells: Vec<u32>,
+    /// Ascending far-field group ids ([`crate::far_field`]); a job bakes cells or
+    /// groups, never both.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub groups: Vec<u32>,
     #[serde(with = "hex32")]
     pub fingerprint: Fingerprint,
 }
@@ -48,6 +57,8 @@ pub struct Job {
 #[derive(Clone, Debug)]
 pub struct BuildPlan {
     pub grid: HexGrid,
+    /// The grid's 7-cell groups; they have packs only when `bake.far_field` is on.
+    pub groups: CellGroups,
     pub scene_fingerprint: Fingerprint,
     pub params_fingerprint: Fingerprint,
     pub jobs: Vec<Job>,
@@ -56,7 +67,9 @@ pub struct BuildPlan {
 /// Groups the grid's cells into jobs of `plan.cells_per_job` neighbouring cells:
 /// cells are taken in blocks of `cells_per_job` consecutive columns of one row
 /// (each cell's left/right neighbours share its job), so a job's captures and
-/// model loads stay local.
+/// model loads stay local. With `bake.far_field`, jobs of `cells_per_job`
+/// consecutive far-field groups follow (a cell's bake only needs to know which
+/// objects its group takes, not the group's proxies, so any order works).
 pub fn plan_jobs(plan: &Plan, scene: &Scene) -> BuildPlan {
     let grid = HexGrid::new(scene.ground, plan.cells.cell_size);
     let scene_fp = scene_fingerprint(scene);
@@ -72,12 +85,26 @@ pub fn plan_jobs(plan: &Plan, scene: &Scene) -> BuildPlan {
                 id: jobs.len() as u32,
                 fingerprint: job_fingerprint(&scene_fp, &params_fp, &cells),
                 cells,
+                groups: Vec::new(),
             });
             col = end;
         }
     }
+    let groups = CellGroups::new(&grid);
+    if plan.bake.far_field {
+        let ids: Vec<u32> = (0..groups.len()).collect();
+        for chunk in ids.chunks(per_job as usize) {
+            jobs.push(Job {
+                id: jobs.len() as u32,
+                fingerprint: group_job_fingerprint(&scene_fp, &params_fp, chunk),
+                cells: Vec::new(),
+                groups: chunk.to_vec(),
+            });
+        }
+    }
     BuildPlan {
         grid,
+        groups,
         scene_fingerprint: scene_fp,
         params_fingerprint: params_fp,
         jobs,
@@ -111,6 +138,10 @@ pub struct JobRecord {
     #[serde(with = "hex32")]
     pub fingerprint: Fingerprint,
     pub cells: Vec<CellRecord>,
+    /// A far-field job's group packs (`cell` is the group id); records written
+    /// before the far field read as none.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub groups: Vec<CellRecord>,
     /// Wall time of the job in seconds.
     pub wall_s: f64,
     /// CPU time of the whole process while the job ran, in seconds (all threads). It is
@@ -128,14 +159,60 @@ pub struct JobRecord {
 
 #[derive(Debug, thiserror::Error)]
 pub enum JobError {
-    #[error("cell {cell}: {message}")]
-    Cell { cell: u32, message: String },
+    #[error("{unit}: {message}")]
+    Unit { unit: Unit, message: String },
     #[error("{path}: {message}")]
     Io { path: PathBuf, message: String },
 }
 
 pub fn cell_file(cell: u32) -> String {
     format!("cells/{cell}.pack")
+}
+
+pub fn group_file(group: u32) -> String {
+    format!("groups/{group}.pack")
+}
+
+/// What a job bakes: a cell, or a far-field group ([`crate::far_field`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Unit {
+    Cell(u32),
+    Group(u32),
+}
+
+impl Unit {
+    pub fn id(self) -> u32 {
+        match self {
+            Unit::Cell(id) | Unit::Group(id) => id,
+        }
+    }
+
+    /// Its pack's path relative to the output directory.
+    pub fn file(self) -> String {
+        match self {
+            Unit::Cell(c) => cell_file(c),
+            Unit::Group(g) => group_file(g),
+        }
+    }
+}
+
+impl std::fmt::Display for Unit {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Unit::Cell(c) => write!(f, "cell {c}"),
+            Unit::Group(g) => write!(f, "far-field group {g}"),
+        }
+    }
+}
+
+impl Job {
+    /// The cells, then the groups, the job bakes.
+    pub fn units(&self) -> impl Iterator<Item = Unit> + '_ {
+        self.cells
+            .iter()
+            .map(|&c| Unit::Cell(c))
+            .chain(self.groups.iter().map(|&g| Unit::Group(g)))
+    }
 }
 
 pub fn record_path(out: &Path, job: u32) -> PathBuf {
@@ -152,10 +229,15 @@ pub fn done_record(out: &Path, job: &Job) -> Option<JobRecord> {
             .iter()
             .map(|c| c.cell)
             .ne(job.cells.iter().copied())
+        || record
+            .groups
+            .iter()
+            .map(|c| c.cell)
+            .ne(job.groups.iter().copied())
     {
         return None;
     }
-    for c in &record.cells {
+    for c in record.cells.iter().chain(&record.groups) {
         // The record is written after its packs and names their exact bytes: a pack
         // with the recorded size and blake3 is the pack this job wrote for this cell
         // with this fingerprint (checked above), so it is not decoded again here
@@ -173,10 +255,10 @@ fn recorded_pack(out: &Path, c: &CellRecord) -> Option<Vec<u8>> {
         .then_some(bytes)
 }
 
-/// Runs one job: bakes each cell with `bake` (which returns the cell's pack content
-/// and its report), writes the packs atomically, then the record. Stops at the first
-/// failing cell, naming it. `shared_process`: other jobs run in this process at the
-/// same time (recorded, see [`JobRecord::shared_process`]).
+/// Runs one job: bakes each cell or group with `bake` (which returns its pack
+/// content and its report), writes the packs atomically, then the record. Stops at
+/// the first failing unit, naming it. `shared_process`: other jobs run in this
+/// process at the same time (recorded, see [`JobRecord::shared_process`]).
 pub fn run_job<F>(
     out: &Path,
     job: &Job,
@@ -184,7 +266,7 @@ pub fn run_job<F>(
     mut bake: F,
 ) -> Result<JobRecord, JobError>
 where
-    F: FnMut(u32, &Fingerprint) -> Result<(CellPack, CellReport), String>,
+    F: FnMut(Unit, &Fingerprint) -> Result<(CellPack, CellReport), String>,
 {
     let start = std::time::Instant::now();
     let cpu_start = process_cpu_seconds();
@@ -192,37 +274,44 @@ where
         path: path.to_path_buf(),
         message: e.to_string(),
     };
-    let cells_dir = out.join("cells");
-    std::fs::create_dir_all(&cells_dir).map_err(|e| io(&cells_dir, &e))?;
     let mut cells = Vec::with_capacity(job.cells.len());
-    for &cell in &job.cells {
-        let (pack, report) =
-            bake(cell, &job.fingerprint).map_err(|message| JobError::Cell { cell, message })?;
-        if pack.cell_id != cell || pack.fingerprint != job.fingerprint {
-            return Err(JobError::Cell {
-                cell,
-                message: "the bake returned a pack for another cell or job".into(),
-            });
+    let mut groups = Vec::with_capacity(job.groups.len());
+    for unit in job.units() {
+        let failed = |message: String| JobError::Unit { unit, message };
+        let (pack, report) = bake(unit, &job.fingerprint).map_err(failed)?;
+        if pack.cell_id != unit.id() || pack.fingerprint != job.fingerprint {
+            return Err(failed(
+                "the bake returned a pack for another cell, group or job".into(),
+            ));
         }
-        let bytes = pack.encode().map_err(|e| JobError::Cell {
-            cell,
-            message: e.to_string(),
-        })?;
-        let file = cell_file(cell);
+        let bytes = match unit {
+            Unit::Cell(_) => pack.encode(),
+            Unit::Group(_) => pack.encode_group(),
+        }
+        .map_err(|e| failed(e.to_string()))?;
+        let file = unit.file();
         let path = out.join(&file);
+        if let Some(dir) = path.parent() {
+            std::fs::create_dir_all(dir).map_err(|e| io(dir, &e))?;
+        }
         format::pack::write_atomic(&path, &bytes).map_err(|e| io(&path, &e))?;
-        cells.push(CellRecord {
-            cell,
+        let record = CellRecord {
+            cell: unit.id(),
             file,
             bytes: bytes.len() as u64,
             checksum: *blake3::hash(&bytes).as_bytes(),
             report,
-        });
+        };
+        match unit {
+            Unit::Cell(_) => cells.push(record),
+            Unit::Group(_) => groups.push(record),
+        }
     }
     let record = JobRecord {
         job: job.id,
         fingerprint: job.fingerprint,
         cells,
+        groups,
         wall_s: start.elapsed().as_secs_f64(),
         cpu_s: (process_cpu_seconds() - cpu_start).max(0.0),
         shared_process,
@@ -275,7 +364,7 @@ mod hex32 {
 /// fingerprint) and the packs it lists, taking only packs whose size and checksum
 /// still match the record and that decode, with one key per proxy. Anything else
 /// gives no proxies for that cell (they are derived again).
-pub fn previous_proxies(out: &Path, job: &Job) -> std::collections::BTreeMap<u32, ProxyReuse> {
+pub fn previous_proxies(out: &Path, job: &Job) -> std::collections::BTreeMap<Unit, ProxyReuse> {
     let mut reuse = std::collections::BTreeMap::new();
     let Ok(text) = std::fs::read_to_string(record_path(out, job.id)) else {
         return reuse;
@@ -283,11 +372,27 @@ pub fn previous_proxies(out: &Path, job: &Job) -> std::collections::BTreeMap<u32
     let Ok(record) = serde_json::from_str::<JobRecord>(&text) else {
         return reuse;
     };
-    for c in record.cells.iter().filter(|c| job.cells.contains(&c.cell)) {
+    let units = record
+        .cells
+        .iter()
+        .filter(|c| job.cells.contains(&c.cell))
+        .map(|c| (Unit::Cell(c.cell), c))
+        .chain(
+            record
+                .groups
+                .iter()
+                .filter(|c| job.groups.contains(&c.cell))
+                .map(|c| (Unit::Group(c.cell), c)),
+        );
+    for (unit, c) in units {
         let Some(bytes) = recorded_pack(out, c) else {
             continue;
         };
-        let Ok(pack) = CellPack::from_bytes(&bytes) else {
+        let pack = match unit {
+            Unit::Cell(_) => CellPack::from_bytes(&bytes),
+            Unit::Group(_) => CellPack::group_from_bytes(&bytes),
+        };
+        let Ok(pack) = pack else {
             continue;
         };
         let keys: Vec<Fingerprint> = c.report["proxy_keys"]
@@ -301,25 +406,49 @@ pub fn previous_proxies(out: &Path, job: &Job) -> std::collections::BTreeMap<u32
         if pack.cell_id != c.cell || keys.len() != pack.proxies.len() {
             continue;
         }
-        reuse.insert(c.cell, keys.into_iter().zip(pack.proxies).collect());
+        reuse.insert(unit, keys.into_iter().zip(pack.proxies).collect());
     }
     reuse
 }
 
-/// Bakes one cell of `job` into its pack and report (the function every executor
-/// runs for each cell).
+/// Bakes one cell or far-field group of a job into its pack and report (the
+/// function every executor runs for each unit).
 pub fn bake_cell_pack(
     plan: &Plan,
     scene: &Scene,
     chains: &LodChains,
     reuse: &ProxyReuse,
-    grid: &HexGrid,
-    cell: u32,
+    build: &BuildPlan,
+    unit: Unit,
     fingerprint: &Fingerprint,
 ) -> Result<(CellPack, CellReport), String> {
-    let bake =
-        crate::bake::bake_cell_with(scene, chains, reuse, grid, cell, &plan.cells, &plan.bake)
-            .map_err(|e| e.to_string())?;
+    let (grid, groups) = (&build.grid, &build.groups);
+    let bake = match unit {
+        Unit::Cell(cell) => {
+            let far = FarField::of_cell(scene, grid, groups, cell, &plan.cells, &plan.bake);
+            crate::bake::bake_cell_with(
+                scene,
+                chains,
+                reuse,
+                grid,
+                cell,
+                &plan.cells,
+                &plan.bake,
+                far.as_ref(),
+            )
+        }
+        Unit::Group(group) => crate::bake::bake_group(
+            scene,
+            chains,
+            reuse,
+            grid,
+            groups,
+            group,
+            &plan.cells,
+            &plan.bake,
+        ),
+    }
+    .map_err(|e| e.to_string())?;
     let pack = bake.to_pack(*fingerprint).map_err(|e| e.to_string())?;
     let s = &bake.stats;
     let t = &s.times;
@@ -341,6 +470,9 @@ pub fn bake_cell_pack(
         "texture_bytes": s.texture_bytes,
         "views": s.views,
         "reused_proxies": s.reused_proxies,
+        // A cell: objects drawn from its group's far field; a group: its cells.
+        "far_objects": s.far_objects,
+        "far_group": bake.far_group,
         // Per proxy, in pack order: its content key (crate::bake::proxy_key), read
         // back by `previous_proxies` when the job is baked again.
         "proxy_keys": bake

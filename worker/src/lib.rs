@@ -8,6 +8,7 @@ pub mod check;
 pub mod classify;
 pub mod cluster;
 pub mod diagnostics;
+pub mod far_field;
 pub mod grid;
 pub mod job;
 pub mod lod_chain;

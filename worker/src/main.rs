@@ -60,6 +60,10 @@ enum Command {
         /// (the paper as written; for comparing the two).
         #[arg(long)]
         no_lod_chain: bool,
+        /// Give the cell its own proxy of every outside object instead of sharing
+        /// the far field of its 7-cell group (`bake.far_field: false`).
+        #[arg(long)]
+        no_far_field: bool,
         #[arg(long)]
         json: bool,
     },
@@ -182,23 +186,15 @@ fn run(cli: Cli) -> Result<(), Failure> {
                     &scene,
                     Some(&worker::job::lod_dir(&out)),
                 )
-                .map_err(|e| worker::job::JobError::Cell {
-                    cell: job.cells.first().copied().unwrap_or(0),
+                .map_err(|e| worker::job::JobError::Io {
+                    path: worker::job::lod_dir(&out),
                     message: e.to_string(),
                 })?;
                 let reuse = worker::job::previous_proxies(&out, job);
                 let none = worker::bake::ProxyReuse::new();
-                worker::job::run_job(&out, job, false, |cell, fp| {
-                    let reuse = reuse.get(&cell).unwrap_or(&none);
-                    worker::job::bake_cell_pack(
-                        &plan,
-                        &scene,
-                        &chains,
-                        reuse,
-                        &build.grid,
-                        cell,
-                        fp,
-                    )
+                worker::job::run_job(&out, job, false, |unit, fp| {
+                    let reuse = reuse.get(&unit).unwrap_or(&none);
+                    worker::job::bake_cell_pack(&plan, &scene, &chains, reuse, &build, unit, fp)
                 })
             });
             match result {
@@ -227,6 +223,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
             edge_length_tolerance,
             max_deviation_px,
             no_lod_chain,
+            no_far_field,
             json,
         } => {
             let mut plan = format::manifest::parse_manifest(&manifest).map_err(bad_input)?;
@@ -237,8 +234,12 @@ fn run(cli: Cli) -> Result<(), Failure> {
                 // A bad value fails in the bake (SimplifyError::BadDeviation).
                 plan.bake.max_deviation_px = d;
             }
+            if no_far_field {
+                plan.bake.far_field = false;
+            }
             let scene = plan.load_scene().map_err(bad_input)?;
             let grid = worker::grid::HexGrid::new(scene.ground, plan.cells.cell_size);
+            let groups = worker::far_field::CellGroups::new(&grid);
             // The chains of the manifest's output, as the bake uses them.
             let chains = if no_lod_chain {
                 worker::lod_chain::LodChains::none()
@@ -258,11 +259,12 @@ fn run(cli: Cli) -> Result<(), Failure> {
                 chains
             };
             let t = std::time::Instant::now();
-            let bake = worker::bake::bake_cell_with(
+            // The cell's proxies and its group's far field, as the player draws them.
+            let bake = worker::bake::bake_cell_hybrid(
                 &scene,
                 &chains,
-                &worker::bake::ProxyReuse::new(),
                 &grid,
+                &groups,
                 cell,
                 &plan.cells,
                 &plan.bake,

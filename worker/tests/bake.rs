@@ -156,7 +156,8 @@ fn demo_bake_from_lod_chains_is_valid_deterministic_and_close() {
     let pack = |chains: &LodChains, threads| {
         in_pool(threads, || {
             let reuse = worker::bake::ProxyReuse::new();
-            let b = bake_cell_with(&scene, chains, &reuse, &grid, cell, &cells, &params).unwrap();
+            let b =
+                bake_cell_with(&scene, chains, &reuse, &grid, cell, &cells, &params, None).unwrap();
             validate_bake(&scene, &b);
             (b.to_pack(fp).unwrap().encode().unwrap(), b)
         })
