@@ -1,0 +1,344 @@
+//! Regional occlusion culling (issue 17, item 2; `worker/src/occlusion.rs`): proofs.
+//!
+//! - `no_culled_object_covers_a_pixel_from_1000_views_in_a_city`: in a test-sized
+//!   city (format's `City` generator, procedural statues), for several street cells
+//!   the objects culled from the cell's prism are checked against full-geometry
+//!   frames from 1,000 random views inside those prisms (CPU rasterizer, object-ID
+//!   buffer, back faces culled as the player does): the miss count must be 0.
+//! - `bake_cell_culls_what_a_wall_hides_only_when_asked`: `bake.occlusion_culling`
+//!   on a wall between the cell and a statue culls the statue; off, it gets a proxy.
+//!   Fails if occlusion culling stops culling.
+//! - a property test: random box walls and targets; whatever is culled is hidden
+//!   from random points of the prism by ray casting against the walls.
+
+use format::manifest::{parse_manifest_str, BakeParams, CellParams};
+use format::{Ground, Instance, Model, Scene};
+use glam::{Mat4, Vec2, Vec3};
+use proptest::prelude::*;
+use std::path::Path;
+use worker::bake::{bake_cell, Assignment};
+use worker::grid::{HexGrid, Prism};
+use worker::occlusion::{occluded_instances, OcclusionSettings};
+use worker::raster::{render, CullMode, DrawItem, View, BACKGROUND_ID};
+
+const CITY: &str = r#"(
+    name: "test-city",
+    ground: (min: (0.0, 0.0), max: (184.0, 184.0)),
+    scene: City((
+        seed: 5,
+        block_size: 40.0,
+        street_width: 16.0,
+        buildings_per_block: 2,
+        min_height: 8.0,
+        max_height: 30.0,
+        floor_height: 3.5,
+        variants: 6,
+        props: [
+            (model: Procedural("torus_knot"), count: 16, target_height: 1.8),
+            (model: Procedural("sphere"), count: 16, target_height: 1.2),
+        ],
+    )),
+    cells: (cell_size: 16.0, min_eye_height: 1.5, max_eye_height: 2.5),
+)"#;
+
+/// A small deterministic generator (splitmix64).
+struct Rng(u64);
+impl Rng {
+    fn next(&mut self) -> f32 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        ((z ^ (z >> 31)) >> 40) as f32 / (1u64 << 24) as f32
+    }
+}
+
+fn distance_to_box(p: Vec3, lo: Vec3, hi: Vec3) -> f32 {
+    (lo - p).max(p - hi).max(Vec3::ZERO).length()
+}
+
+#[test]
+fn no_culled_object_covers_a_pixel_from_1000_views_in_a_city() {
+    let plan = parse_manifest_str(CITY, Path::new("manifests/test-city.ron")).unwrap();
+    let scene = plan.load_scene().unwrap();
+    let grid = HexGrid::new(scene.ground, plan.cells.cell_size);
+    let bounds: Vec<(Vec3, Vec3)> = (0..scene.instances.len())
+        .map(|i| scene.instance_bounds(i))
+        .collect();
+    // Street cells: cells whose centre is not inside any building's box.
+    let street_cells: Vec<u32> = (0..grid.cell_count())
+        .filter(|&c| {
+            let centre = grid.centre(c);
+            let p = Vec3::new(centre.x, 2.0, centre.y);
+            bounds
+                .iter()
+                .all(|&(lo, hi)| distance_to_box(p, lo, hi) > 1.0)
+        })
+        .collect();
+    assert!(street_cells.len() >= 10, "{}", street_cells.len());
+    let cells: Vec<u32> = (0..10)
+        .map(|k| street_cells[k * street_cells.len() / 10])
+        .collect();
+
+    let near = 0.05;
+    let mut rng = Rng(17);
+    let (mut views, mut misses, mut culled_total, mut outside_total) = (0usize, 0usize, 0, 0);
+    for &cell in &cells {
+        let prism = grid.prism(cell, plan.cells.min_eye_height, plan.cells.max_eye_height);
+        let candidates: Vec<u32> = (0..scene.instances.len() as u32)
+            .filter(|&i| {
+                let (lo, hi) = bounds[i as usize];
+                !prism.intersects_aabb(lo, hi)
+            })
+            .collect();
+        let hidden = occluded_instances(
+            &scene,
+            &prism,
+            &candidates,
+            &OcclusionSettings::for_prism(&prism),
+        );
+        let culled: Vec<u32> = candidates
+            .iter()
+            .zip(&hidden)
+            .filter(|(_, &h)| h)
+            .map(|(&i, _)| i)
+            .collect();
+        culled_total += culled.len();
+        outside_total += candidates.len();
+        let mut is_culled = vec![false; scene.instances.len()];
+        for &i in &culled {
+            is_culled[i as usize] = true;
+        }
+        // 100 views per cell: uniform eyes in the prism away from the walls (a wall
+        // nearer than the near plane is clipped in any renderer), random directions.
+        let mut cell_views = 0;
+        while cell_views < 100 {
+            let eye = prism.sample(rng.next(), rng.next(), rng.next());
+            if bounds
+                .iter()
+                .any(|&(lo, hi)| distance_to_box(eye, lo, hi) < 4.0 * near)
+            {
+                continue;
+            }
+            let yaw = rng.next() * std::f32::consts::TAU;
+            let pitch = (rng.next() - 0.5) * 0.8;
+            let dir = Vec3::new(
+                yaw.cos() * pitch.cos(),
+                pitch.sin(),
+                yaw.sin() * pitch.cos(),
+            );
+            let view =
+                View::look_at_fov(eye, eye + dir, Vec3::Y, 60.0, 96, 96, near, 5000.0).unwrap();
+            let items: Vec<DrawItem> = scene
+                .instances
+                .iter()
+                .enumerate()
+                .filter(|(i, _)| {
+                    // Whole instances behind the eye draw nothing.
+                    let (lo, hi) = bounds[*i];
+                    (0..8).any(|k| {
+                        let c = Vec3::new(
+                            if k & 1 == 0 { lo.x } else { hi.x },
+                            if k & 2 == 0 { lo.y } else { hi.y },
+                            if k & 4 == 0 { lo.z } else { hi.z },
+                        );
+                        (c - eye).dot(dir) > 0.0
+                    })
+                })
+                .map(|(i, inst)| DrawItem {
+                    mesh: &scene.models[inst.model as usize].mesh,
+                    transform: inst.transform,
+                    tint: inst.tint,
+                    object_id: i as u32,
+                    triangles: None,
+                })
+                .collect();
+            let frame = render(&view, &items, CullMode::Back);
+            misses += frame
+                .object_id
+                .iter()
+                .filter(|&&id| id != BACKGROUND_ID && is_culled[id as usize])
+                .count();
+            cell_views += 1;
+            views += 1;
+        }
+    }
+    eprintln!(
+        "occlusion proof: {views} views in {} cells, {culled_total} of {outside_total} \
+         outside objects culled, {misses} pixels of culled objects",
+        cells.len()
+    );
+    assert!(views >= 1000);
+    assert_eq!(misses, 0, "culled objects cover {misses} pixels");
+    // The test means something only if something is culled.
+    assert!(
+        culled_total * 5 >= outside_total,
+        "{culled_total} of {outside_total}"
+    );
+}
+
+fn box_mesh(lo: [f32; 3], hi: [f32; 3]) -> format::Mesh {
+    let positions: Vec<[f32; 3]> = (0..8)
+        .map(|k: usize| {
+            [
+                if k & 1 == 0 { lo[0] } else { hi[0] },
+                if k & 2 == 0 { lo[1] } else { hi[1] },
+                if k & 4 == 0 { lo[2] } else { hi[2] },
+            ]
+        })
+        .collect();
+    let triangles = vec![
+        [0, 2, 3],
+        [0, 3, 1],
+        [4, 5, 7],
+        [4, 7, 6],
+        [0, 1, 5],
+        [0, 5, 4],
+        [2, 6, 7],
+        [2, 7, 3],
+        [0, 4, 6],
+        [0, 6, 2],
+        [1, 3, 7],
+        [1, 7, 5],
+    ];
+    let mut mesh = format::Mesh {
+        positions,
+        normals: vec![[0.0, 1.0, 0.0]; 8],
+        albedo: vec![[180, 170, 160, 255]; 8],
+        triangles,
+    };
+    format::cleanup::recompute_normals(&mut mesh);
+    mesh
+}
+
+fn model(mesh: format::Mesh) -> Model {
+    let content_hash = mesh.content_hash();
+    Model {
+        name: "m".into(),
+        source: "test".into(),
+        mesh,
+        content_hash,
+    }
+}
+
+#[test]
+fn bake_cell_culls_what_a_wall_hides_only_when_asked() {
+    let statue = format::procedural::build("sphere").unwrap();
+    let mut statue = statue;
+    format::scene_build::normalise(&mut statue, [0.0; 3], 2.0).unwrap();
+    let scene = Scene {
+        models: vec![
+            model(box_mesh([-30.0, 0.0, -3.0], [30.0, 20.0, 3.0])),
+            model(statue),
+        ],
+        instances: vec![
+            Instance {
+                model: 0,
+                transform: Mat4::from_translation(Vec3::new(50.0, 0.0, 80.0)),
+                tint: Vec3::ONE,
+            },
+            Instance {
+                model: 1,
+                transform: Mat4::from_translation(Vec3::new(50.0, 0.0, 100.0)),
+                tint: Vec3::ONE,
+            },
+        ],
+        ground: Ground {
+            min: [0.0, 0.0],
+            max: [100.0, 120.0],
+        },
+    };
+    let grid = HexGrid::new(scene.ground, 16.0);
+    let cell = grid.cell_at(Vec2::new(50.0, 50.0)).unwrap();
+    let cells = CellParams {
+        cell_size: 16.0,
+        min_eye_height: 1.5,
+        max_eye_height: 2.5,
+    };
+    let mut params = BakeParams {
+        image_res: 64,
+        ..BakeParams::default()
+    };
+    params.occlusion_culling = true;
+    let on = bake_cell(&scene, &grid, cell, &cells, &params).unwrap();
+    assert_eq!(
+        on.assignment[1],
+        Assignment::Culled,
+        "the wall hides the statue"
+    );
+    assert!(matches!(on.assignment[0], Assignment::Proxy(_)));
+    params.occlusion_culling = false;
+    let off = bake_cell(&scene, &grid, cell, &cells, &params).unwrap();
+    assert!(matches!(off.assignment[1], Assignment::Proxy(_)));
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(24))]
+    /// Random walls and a random target: if the target is culled, no ray from 400
+    /// random points of the prism to random points of its box escapes the walls.
+    #[test]
+    fn culled_means_every_sampled_ray_hits_a_wall(
+        walls in prop::collection::vec(
+            (-40.0f32..40.0, 12.0f32..40.0, 2.0f32..30.0, 4.0f32..20.0, 1.0f32..12.0, 0.0f32..1.0),
+            1..5),
+        target in (-20.0f32..20.0, 30.0f32..60.0, 0.5f32..4.0, 0.5f32..6.0),
+        seed in 0u64..1000,
+    ) {
+        let mut models = Vec::new();
+        let mut instances = Vec::new();
+        let mut boxes = Vec::new();
+        for (x, z, w, h, d, yaw) in walls {
+            let lo = [-w / 2.0, 0.0, -d / 2.0];
+            let hi = [w / 2.0, h, d / 2.0];
+            let transform = Mat4::from_translation(Vec3::new(x, 0.0, z))
+                * Mat4::from_rotation_y(yaw * 3.0);
+            models.push(model(box_mesh(lo, hi)));
+            instances.push(Instance { model: models.len() as u32 - 1, transform, tint: Vec3::ONE });
+            boxes.push((transform.inverse(), Vec3::from(lo), Vec3::from(hi)));
+        }
+        let (tx, tz, ts, th) = target;
+        models.push(model(box_mesh([-ts / 2.0, 0.0, -ts / 2.0], [ts / 2.0, th, ts / 2.0])));
+        let target_id = instances.len() as u32;
+        instances.push(Instance {
+            model: models.len() as u32 - 1,
+            transform: Mat4::from_translation(Vec3::new(tx, 0.0, tz)),
+            tint: Vec3::ONE,
+        });
+        let scene = Scene {
+            models,
+            instances,
+            ground: Ground { min: [-100.0, -100.0], max: [100.0, 100.0] },
+        };
+        let prism = Prism { centre: Vec2::ZERO, cell_size: 10.0, min_y: 1.0, max_y: 3.0 };
+        if prism.intersects_aabb(scene.instance_bounds(target_id as usize).0, scene.instance_bounds(target_id as usize).1) {
+            return Ok(());
+        }
+        let hidden = occluded_instances(&scene, &prism, &[target_id], &OcclusionSettings::for_prism(&prism));
+        if hidden[0] {
+            let (lo, hi) = scene.instance_bounds(target_id as usize);
+            let mut rng = Rng(seed);
+            for _ in 0..400 {
+                let p = prism.sample(rng.next(), rng.next(), rng.next());
+                let q = lo + (hi - lo) * Vec3::new(rng.next(), rng.next(), rng.next());
+                // The segment p→q must cross the interior of some wall before q.
+                let blocked = boxes.iter().any(|(inv, blo, bhi)| {
+                    let o = inv.transform_point3(p);
+                    let d = inv.transform_vector3(q - p);
+                    let (mut t0, mut t1) = (0.0f32, 1.0f32);
+                    for k in 0..3 {
+                        if d[k].abs() < 1e-12 {
+                            if o[k] <= blo[k] || o[k] >= bhi[k] { return false; }
+                            continue;
+                        }
+                        let a = (blo[k] - o[k]) / d[k];
+                        let b = (bhi[k] - o[k]) / d[k];
+                        t0 = t0.max(a.min(b));
+                        t1 = t1.min(a.max(b));
+                    }
+                    t0 < t1
+                });
+                prop_assert!(blocked, "a ray from {p} to {q} misses every wall");
+            }
+        }
+    }
+}
