@@ -340,6 +340,7 @@ pub fn prepare_cell(base: &BasePack, pack: &CellPack) -> Result<PreparedCell, Ba
                         tint: inst.tint,
                         mask,
                         centroid: centroid.to_array(),
+                        kind: proxy.kind as u32,
                     });
                 }
             }

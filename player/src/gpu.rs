@@ -118,6 +118,9 @@ pub struct ProxyVertex {
     pub mask: u32,
     /// The triangle's centroid (chooses the views, §3.2).
     pub centroid: [f32; 3],
+    /// The proxy's kind (`format::pack::ProxyKind` as u32) for the representation
+    /// colouring ([`crate::overlay::Representation`]).
+    pub kind: u32,
 }
 
 /// A proxy's per-view uniform block.
@@ -134,6 +137,10 @@ pub struct ProxyUniform {
 struct Globals {
     clip_from_world: [f32; 16],
     eye: [f32; 4],
+    /// x: 1 = colour by representation ([`Renderer::set_representation_colours`]).
+    debug: [u32; 4],
+    /// Linear RGB per [`crate::overlay::Representation`].
+    palette: [[f32; 4]; 8],
 }
 
 /// The models of a bake on the GPU (uploaded once).
@@ -255,6 +262,8 @@ pub struct Renderer {
     instances: wgpu::Buffer,
     /// Clear the sky with alpha 0 instead of 1 ([`Renderer::set_coverage_alpha`]).
     coverage_alpha: bool,
+    /// Colour by representation ([`Renderer::set_representation_colours`]).
+    representation_colours: bool,
 }
 
 /// Opens an adapter: `WGPU_BACKEND` and the like from the environment,
@@ -481,7 +490,8 @@ impl Renderer {
             };
         let lit_pipeline = make_pipeline("lit", &lit_layout, "vs_lit", "fs_lit", &lit_buffers);
         let proxy_attrs = wgpu::vertex_attr_array![
-            0 => Float32x3, 1 => Float32x3, 2 => Unorm8x4, 3 => Float32x3, 4 => Uint32, 5 => Float32x3
+            0 => Float32x3, 1 => Float32x3, 2 => Unorm8x4, 3 => Float32x3, 4 => Uint32, 5 => Float32x3,
+            6 => Uint32
         ];
         let proxy_buffers = [Some(wgpu::VertexBufferLayout {
             array_stride: std::mem::size_of::<ProxyVertex>() as u64,
@@ -563,6 +573,7 @@ impl Renderer {
             dummy_view,
             instances,
             coverage_alpha: false,
+            representation_colours: false,
         })
     }
 
@@ -573,6 +584,17 @@ impl Renderer {
     /// the window stay opaque.
     pub fn set_coverage_alpha(&mut self, on: bool) {
         self.coverage_alpha = on;
+    }
+
+    /// With `on`, every triangle is drawn in its representation's debug colour
+    /// ([`crate::overlay::Representation`]), lit by DESIGN.md's Lambert term:
+    /// originals, SV / MV / cluster proxies (textured or waiting), LOD levels ≥ 1.
+    pub fn set_representation_colours(&mut self, on: bool) {
+        self.representation_colours = on;
+    }
+
+    pub fn representation_colours(&self) -> bool {
+        self.representation_colours
     }
 
     /// A second renderer on this one's device with a `width × height` target (e.g. a
@@ -808,17 +830,37 @@ impl Renderer {
     /// milliseconds. Proxies of `list.proxies` that are not ready (textures missing)
     /// are skipped; `list.lit_proxies` are drawn without their textures.
     pub fn render(&mut self, camera: &Camera, models: &GpuModels, list: &DrawList<'_>) -> f64 {
+        use crate::overlay::Representation;
+        let debug = self.representation_colours;
         let g = Globals {
             clip_from_world: camera.clip_from_world_wgpu().to_cols_array(),
             eye: camera.eye.extend(1.0).to_array(),
+            debug: [u32::from(debug), 0, 0, 0],
+            palette: Representation::linear_palette(),
         };
         self.queue
             .write_buffer(&self.globals, 0, bytemuck::bytes_of(&g));
+        // With representation colours the shader takes an original's albedo from its
+        // tint: the representation's colour.
+        let palette = Representation::linear_palette();
+        let recolour = |mut i: InstanceRaw, r: Representation| {
+            if debug {
+                i.tint = palette[r as usize];
+            }
+            i
+        };
         let all: Vec<InstanceRaw> = list
             .originals
             .iter()
-            .flat_map(|(_, v)| v.iter().copied())
-            .chain(list.levels.iter().flat_map(|(_, v)| v.iter().copied()))
+            .flat_map(|(_, v)| v.iter().map(|&i| recolour(i, Representation::Original)))
+            .chain(list.levels.iter().flat_map(|((_, level), v)| {
+                let r = if *level == 0 {
+                    Representation::Original
+                } else {
+                    Representation::LodLevel
+                };
+                v.iter().map(move |&i| recolour(i, r))
+            }))
             .collect();
         let need = std::mem::size_of_val(all.as_slice()) as u64;
         if need > self.instances.size() {
@@ -984,4 +1026,5 @@ const ZERO_VERTEX: ProxyVertex = ProxyVertex {
     tint: [0.0; 3],
     mask: 0,
     centroid: [0.0; 3],
+    kind: 0,
 };

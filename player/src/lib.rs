@@ -15,6 +15,7 @@
 //!   chains per model, level chosen by projected pixel error.
 //! - [`metrics`]: PSNR on luminance and SSIM, over whole frames and over object
 //!   pixels; the anti-aliased reference's linear-light downsampling.
+//! - [`overlay`]: `player view`'s on-screen text and the representation colours.
 //! - [`run`]: the `render`/`compare` commands.
 //! - [`testdata`]: synthetic bakes for tests (`write_synthetic_bake`, `write_quad_bake`).
 //!
@@ -43,6 +44,7 @@ pub mod gpu;
 pub mod grid;
 pub mod lod;
 pub mod metrics;
+pub mod overlay;
 pub mod run;
 pub mod stream;
 pub mod testdata;

@@ -136,9 +136,28 @@ enum Command {
         /// Quit after this many frames.
         #[arg(long)]
         exit_after: Option<u64>,
-        /// Save the last frame as PNG on exit.
+        /// Save the last frame (overlay included) as PNG on exit.
         #[arg(long)]
         screenshot: Option<PathBuf>,
+        /// Start heading in degrees (0 = +x, 90 = +z).
+        #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+        yaw: f32,
+        /// Start pitch in degrees (positive = up).
+        #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+        pitch: f32,
+        /// Start mode (M flips hybrid → full → lod): hybrid, full or lod.
+        #[arg(long, default_value = "hybrid")]
+        mode: Mode,
+        /// Start with the colouring by representation on (C flips it).
+        #[arg(long)]
+        colours: bool,
+        /// Start with the overlay hidden (H flips it).
+        #[arg(long)]
+        no_overlay: bool,
+        /// No window: draw --exit-after frames (default 30) offscreen at the start
+        /// pose and write the last one to --screenshot.
+        #[arg(long, requires = "screenshot")]
+        headless: bool,
         #[command(flatten)]
         stream: StreamArgs,
     },
@@ -221,16 +240,34 @@ fn main() -> ExitCode {
             start,
             exit_after,
             screenshot,
+            yaw,
+            pitch,
+            mode,
+            colours,
+            no_overlay,
+            headless,
             stream,
-        } => player::view::run_view(player::view::ViewOptions {
-            out: out.clone(),
-            size: stream.size.unwrap_or((1024, 768)),
-            stream: stream.config(),
-            start,
-            exit_after,
-            screenshot,
-        })
-        .map_err(|what| player::run::RunError::Write { path: out, what }),
+        } => {
+            let opts = player::view::ViewOptions {
+                size: stream.size.unwrap_or((1024, 768)),
+                stream: stream.config(),
+                start,
+                yaw_deg: yaw,
+                pitch_deg: pitch,
+                mode,
+                colours,
+                overlay: !no_overlay,
+                exit_after,
+                screenshot,
+                ..player::view::ViewOptions::new(out.clone())
+            };
+            if headless {
+                player::view::run_view_headless(&opts)
+            } else {
+                player::view::run_view(opts)
+                    .map_err(|what| player::run::RunError::Write { path: out, what })
+            }
+        }
         Command::Synth { out } => player::testdata::write_synthetic_bake(&out)
             .map(|b| {
                 println!(

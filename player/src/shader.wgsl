@@ -19,6 +19,10 @@ const LIGHT: vec3<f32> = vec3<f32>(0.35777088, 0.89442719, 0.26832816);
 struct Globals {
     clip_from_world: mat4x4<f32>,
     eye: vec4<f32>,
+    // x: 1 = debug colouring by representation (player view's C key): albedo =
+    // palette[representation], lit, no textures (overlay.rs, Representation).
+    debug: vec4<u32>,
+    palette: array<vec4<f32>, 8>,
 };
 @group(0) @binding(0) var<uniform> g: Globals;
 
@@ -63,6 +67,10 @@ fn vs_lit(v: LitIn) -> LitOut {
     o.clip = g.clip_from_world * (model * vec4<f32>(v.pos, 1.0));
     o.normal = nm * v.normal;
     o.albedo = srgb_to_linear(v.albedo.rgb) * v.tint.rgb;
+    if g.debug.x != 0u {
+        // The renderer put the representation's colour into the tint.
+        o.albedo = v.tint.rgb;
+    }
     return o;
 }
 
@@ -97,6 +105,7 @@ struct ProxyIn {
     @location(3) tint: vec3<f32>,
     @location(4) mask: u32,
     @location(5) centroid: vec3<f32>,
+    @location(6) kind: u32,
 };
 
 struct ProxyOut {
@@ -117,6 +126,9 @@ fn vs_proxy(v: ProxyIn) -> ProxyOut {
     o.albedo = srgb_to_linear(v.albedo.rgb) * v.tint;
     o.mask = v.mask;
     o.centroid = v.centroid;
+    if g.debug.x != 0u {
+        o.albedo = g.palette[min(v.kind, 7u)].rgb;
+    }
     return o;
 }
 
@@ -157,6 +169,9 @@ fn angle_between(a: vec3<f32>, b: vec3<f32>) -> f32 {
 @fragment
 fn fs_proxy(i: ProxyOut) -> @location(0) vec4<f32> {
     let lit = shade(i.albedo, i.normal);
+    if g.debug.x != 0u {
+        return vec4<f32>(lit, 1.0);
+    }
     let n = min(p.counts.x, 8u);
     let to_poly = i.centroid - g.eye.xyz;
     // The two views of the mask closest in direction to viewer → polygon.
