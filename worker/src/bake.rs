@@ -387,8 +387,7 @@ pub fn bake_cell_with(
             .filter(|&i| kinds[i as usize].0.is_some())
             .collect();
         let settings = crate::occlusion::OcclusionSettings::for_prism(&prism);
-        let hidden =
-            crate::occlusion::occluded_instances(scene, &prism, &candidates, &settings);
+        let hidden = crate::occlusion::occluded_instances(scene, &prism, &candidates, &settings);
         let mut kinds = kinds;
         for (&i, hidden) in candidates.iter().zip(hidden) {
             if hidden {
