@@ -244,10 +244,22 @@ pub fn cell_glb(
             .models
             .get(inst.model as usize)
             .ok_or_else(|| anyhow!("instance {id}: no model {}", inst.model))?;
+        let transform = Mat4::from_cols_array(&inst.transform);
+        let mut node = json!({
+            "name": format!("instance {id} {}", model.name),
+            "extras": { "hexbake": { "representation": "Original", "instance": id,
+                                      "model": model.name, "tint": inst.tint } },
+        });
+        set_transform(&mut node, &transform);
+        if model.mesh.triangles.is_empty() {
+            // Nothing to draw (glTF has no empty mesh): the node alone.
+            original_nodes.push(b.node(node));
+            continue;
+        }
         let prim = match model_data.get(&inst.model) {
             Some(p) => p.clone(),
             None => {
-                let p = b.model_primitive(&model.mesh)?;
+                let p = b.model_primitive(&model.mesh);
                 model_data.insert(inst.model, p.clone());
                 p
             }
@@ -273,14 +285,7 @@ pub fn cell_glb(
             }
         };
         summary.triangles_original += model.mesh.triangles.len() as u64;
-        let transform = Mat4::from_cols_array(&inst.transform);
-        let mut node = json!({
-            "name": format!("instance {id} {}", model.name),
-            "mesh": mesh,
-            "extras": { "hexbake": { "representation": "Original", "instance": id,
-                                      "model": model.name, "tint": inst.tint } },
-        });
-        set_transform(&mut node, &transform);
+        node["mesh"] = json!(mesh);
         original_nodes.push(b.node(node));
     }
     summary.original_models = model_data.len();
@@ -457,11 +462,8 @@ impl Builder {
         self.accessors.len() - 1
     }
 
-    /// A model's vertex data in model space, its triangles as they are.
-    fn model_primitive(&mut self, mesh: &format::mesh::Mesh) -> anyhow::Result<Primitive> {
-        if mesh.triangles.is_empty() || mesh.positions.is_empty() {
-            return Err(anyhow!("a model without triangles"));
-        }
+    /// A model's vertex data in model space, its triangles as they are (at least one).
+    fn model_primitive(&mut self, mesh: &format::mesh::Mesh) -> Primitive {
         let normals: Vec<[f32; 3]> = mesh
             .normals
             .iter()
@@ -472,13 +474,13 @@ impl Builder {
             .iter()
             .map(|c| worker::shade::srgb8_to_linear(*c).to_array())
             .collect();
-        Ok(Primitive {
+        Primitive {
             position: self.floats(mesh.positions.as_flattened(), 3, "VEC3", true),
             normal: self.floats(normals.as_flattened(), 3, "VEC3", false),
             color: Some(self.floats(colors.as_flattened(), 3, "VEC3", false)),
             texcoord: None,
             indices: self.indices(&mesh.triangles),
-        })
+        }
     }
 
     /// A proxy part's world-space vertices, with UVs or (for `colors`) lit colours.
