@@ -50,8 +50,32 @@ pub struct Storage {
     /// Cell-pack bytes holding everything else (proxy indices, view masks, tables).
     pub mesh_bytes: u64,
     pub cell_bytes: u64,
+    /// Far-field group packs (`groups/<id>.pack`), and the part of them holding
+    /// textures (issue 13).
+    pub group_bytes: u64,
+    pub group_texture_bytes: u64,
     pub total_bytes: u64,
+    /// (cell + group pack bytes) / cells.
     pub per_cell_bytes: f64,
+}
+
+/// The far field shared by 7-cell groups (issue 13; worker `far_field.rs`): proxies
+/// per level and the bytes sharing saves.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct FarFieldStats {
+    /// Group packs baked.
+    pub groups: u64,
+    /// Proxies stored in cell packs (level 0) and in group packs (level 1).
+    pub cell_proxies: u64,
+    pub group_proxies: u64,
+    /// Objects a cell draws from its group's far field, averaged over cells.
+    pub far_objects_per_cell: f64,
+    /// Group-pack bytes.
+    pub group_bytes: u64,
+    /// What the group packs would take if each of their cells stored its own copy,
+    /// beyond the one copy stored: Σ over groups of bytes × (cells − 1).
+    pub bytes_shared: u64,
 }
 
 /// Per-cell averages, the rows of the paper's Tables 3–8.
@@ -109,6 +133,8 @@ pub struct Report {
     /// from an earlier bake of the output instead of derived (issue 13).
     pub proxies: u64,
     pub proxies_reused: u64,
+    /// `None` when the bake has no far field (`bake.far_field` off, or older).
+    pub far_field: Option<FarFieldStats>,
     pub storage: Storage,
     /// Averages over the baked cells; `None` when no cell is baked (there is nothing
     /// to average).
@@ -205,6 +231,38 @@ pub fn build_report(out: &Path) -> anyhow::Result<Report> {
         .map(|m| m.len())
         .unwrap_or(0);
     let (mut cpu_s, mut shared_process) = (0.0, false);
+    // Far-field groups first: every cell line adds its group's proxies (what the
+    // cell draws).
+    let mut groups: BTreeMap<u32, serde_json::Value> = BTreeMap::new();
+    let mut far = FarFieldStats::default();
+    for record in plan.jobs.iter().filter_map(|j| done_record(out, j)) {
+        for g in &record.groups {
+            let r = &g.report;
+            far.groups += 1;
+            far.group_bytes += g.bytes;
+            far.bytes_shared += g.bytes * (num(r, "far_objects") as u64).saturating_sub(1);
+            far.group_proxies += r
+                .get("proxy_keys")
+                .and_then(|k| k.as_array())
+                .map_or(0, |k| k.len() as u64);
+            report.proxies_reused += num(r, "reused_proxies") as u64;
+            if let Some(stages) = r.get("stage_ms").and_then(|s| s.as_object()) {
+                for (k, v) in stages {
+                    *report.stage_s.entry(k.clone()).or_default() +=
+                        v.as_f64().unwrap_or(0.0) / 1000.0;
+                }
+            }
+            if let Ok(pack) = PackFile::read(&out.join(&g.file)) {
+                for s in pack.sections() {
+                    if s.kind == SectionKind::TEXTURES {
+                        report.storage.group_texture_bytes += s.stored_len;
+                    }
+                }
+            }
+            report.storage.group_bytes += g.bytes;
+            groups.insert(g.cell, r.clone());
+        }
+    }
     for job in &plan.jobs {
         // Only valid done records count (a stale or torn record is not a baked cell).
         let Some(record) = done_record(out, job) else {
@@ -221,21 +279,32 @@ pub fn build_report(out: &Path) -> anyhow::Result<Report> {
         shared_process |= record.shared_process;
         for c in &record.cells {
             let r = &c.report;
+            // What the cell draws: its own proxies plus its group's far field.
+            let group = r
+                .get("far_group")
+                .and_then(|g| g.as_u64())
+                .and_then(|g| groups.get(&(g as u32)));
+            let both = |key: &str| num(r, key) + group.map_or(0.0, |g| num(g, key));
             let mut line = CellLine {
                 cell: c.cell,
                 polygons_inside: num(r, "polygons_inside"),
-                sv_polygons: num(r, "sv_polygons"),
+                sv_polygons: both("sv_polygons"),
                 mv_polygons: num(r, "mv_polygons"),
-                cluster_polygons: num(r, "cluster_polygons"),
-                sv_objects: num(r, "sv_objects"),
+                cluster_polygons: both("cluster_polygons"),
+                sv_objects: both("sv_objects"),
                 mv_objects: num(r, "mv_objects"),
-                cluster_objects: num(r, "cluster_objects"),
+                cluster_objects: both("cluster_objects"),
                 culled_objects: num(r, "culled_objects"),
-                outside_original_polygons: num(r, "outside_original_polygons"),
-                texture_bytes: num(r, "texture_bytes"),
+                outside_original_polygons: both("outside_original_polygons"),
+                texture_bytes: both("texture_bytes"),
                 pack_bytes: c.bytes,
                 ..CellLine::default()
             };
+            far.far_objects_per_cell += num(r, "far_objects");
+            far.cell_proxies += r
+                .get("proxy_keys")
+                .and_then(|k| k.as_array())
+                .map_or(0, |k| k.len() as u64);
             if let Some(stages) = r.get("stage_ms").and_then(|s| s.as_object()) {
                 for (k, v) in stages {
                     let ms = v.as_f64().unwrap_or(0.0);
@@ -264,12 +333,17 @@ pub fn build_report(out: &Path) -> anyhow::Result<Report> {
     report.job_cpu_s = (!shared_process).then_some(cpu_s);
     report.cell_lines.sort_by_key(|l| l.cell);
     report.cells = report.cell_lines.len();
+    if far.groups > 0 {
+        far.far_objects_per_cell /= report.cells.max(1) as f64;
+        report.proxies += far.group_proxies;
+        report.far_field = Some(far);
+    }
     let s = &mut report.storage;
     s.mesh_bytes = s.cell_bytes - s.texture_bytes.min(s.cell_bytes);
-    s.total_bytes = s.base_bytes + s.index_bytes + s.cell_bytes;
+    s.total_bytes = s.base_bytes + s.index_bytes + s.cell_bytes + s.group_bytes;
     // Averages over the baked cells; over none there are none.
     s.per_cell_bytes = if report.cells > 0 {
-        s.cell_bytes as f64 / report.cells as f64
+        (s.cell_bytes + s.group_bytes) as f64 / report.cells as f64
     } else {
         0.0
     };
@@ -365,6 +439,11 @@ pub fn to_markdown(r: &Report) -> String {
         ("base (models, instances)", s.base_bytes),
         ("cell meshes (indices, masks, tables)", s.mesh_bytes),
         ("cell textures", s.texture_bytes),
+        (
+            "far-field group packs (all)",
+            s.group_bytes,
+        ),
+        ("of which textures", s.group_texture_bytes),
         ("index", s.index_bytes),
         ("total", s.total_bytes),
     ] {
@@ -372,6 +451,24 @@ pub fn to_markdown(r: &Report) -> String {
     }
     if r.cells > 0 {
         let _ = writeln!(m, "| per cell (average) | {:.0} |", s.per_cell_bytes);
+    }
+    if let Some(f) = &r.far_field {
+        let _ = writeln!(
+            m,
+            "\n## Far field (7-cell groups)\n\n| | value |\n|---|---|\n\
+             | groups | {} |\n\
+             | proxies in cell packs (level 0) | {} |\n\
+             | proxies in group packs (level 1) | {} |\n\
+             | objects a cell draws from its group (mean) | {:.1} |\n\
+             | group-pack bytes | {} |\n\
+             | bytes shared (a copy per cell would add) | {} |",
+            f.groups,
+            f.cell_proxies,
+            f.group_proxies,
+            f.far_objects_per_cell,
+            f.group_bytes,
+            f.bytes_shared
+        );
     }
     time_section(&mut m, r);
     m

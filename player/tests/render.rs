@@ -770,3 +770,79 @@ fn proxies_waiting_for_textures_are_drawn_as_originals() {
     assert!(h_wait <= h_ready, "{h_wait} > {h_ready}");
     assert!(psnr_y(&reference, &waiting) >= psnr_y(&reference, &ready));
 }
+
+/// The far field (format version 2, issue 13): a cell whose proxies live in its
+/// group's pack (`groups/<id>.pack`) draws the same frame as when they were its own;
+/// with the group's pack damaged, the cell draws those objects as originals (never a
+/// hole).
+#[test]
+fn a_cells_far_field_group_is_drawn_with_it() {
+    use format::pack::{CellPack, Index, IndexEntry};
+    let dir = tempfile::tempdir().unwrap();
+    write_synthetic_bake(dir.path()).unwrap();
+    let Some(mut p) = open(dir.path(), (64, 64)) else {
+        return;
+    };
+    let cam = camera_at_instance(&p, 0, 64);
+    let cell = p
+        .bake
+        .grid
+        .nearest_cell(Vec2::new(cam.eye.x, cam.eye.z))
+        .unwrap();
+    let no_prefetch = || StreamConfig {
+        prefetch: false,
+        ..Default::default()
+    };
+    let mut s = Streamer::new(&p.bake, no_prefetch());
+    let (_, tris, _, _) = p.draw(&cam, Mode::Hybrid, Some(&mut s));
+    let before = p.renderer.read_pixels().unwrap();
+    drop(s);
+    // Move the cell's proxies into far-field group 0.
+    let path = dir.path().join(format!("cells/{cell}.pack"));
+    let mut pack = CellPack::read(&path).unwrap();
+    assert!(!pack.proxies.is_empty());
+    let group = CellPack {
+        cell_id: 0,
+        fingerprint: pack.fingerprint,
+        far_group: None,
+        originals: Vec::new(),
+        proxies: std::mem::take(&mut pack.proxies),
+    };
+    pack.far_group = Some(0);
+    pack.write(&path).unwrap();
+    std::fs::create_dir_all(dir.path().join("groups")).unwrap();
+    let group_path = dir.path().join("groups/0.pack");
+    format::pack::write_atomic(&group_path, &group.encode_group().unwrap()).unwrap();
+    let index_path = dir.path().join("index.pack");
+    let mut index = Index::read(&index_path).unwrap();
+    let fp = index.cells[0].fingerprint;
+    for e in &mut index.cells {
+        if e.cell_id == cell {
+            let mut fresh =
+                IndexEntry::for_file(dir.path(), &e.file, cell, e.neighbours.clone(), fp).unwrap();
+            fresh.group = Some(0);
+            *e = fresh;
+        }
+    }
+    index.groups = vec![IndexEntry::for_file(dir.path(), "groups/0.pack", 0, Vec::new(), fp).unwrap()];
+    index.write(&index_path).unwrap();
+    let mut p = open(dir.path(), (64, 64)).unwrap();
+    let mut s = Streamer::new(&p.bake, no_prefetch());
+    let (_, tris_far, _, _) = p.draw(&cam, Mode::Hybrid, Some(&mut s));
+    let after = p.renderer.read_pixels().unwrap();
+    assert_eq!(tris_far, tris);
+    assert_eq!(psnr_y(&before, &after), f64::INFINITY);
+    drop(s);
+    // A damaged group pack: the group's objects are drawn as originals.
+    let mut bytes = std::fs::read(&group_path).unwrap();
+    let mid = bytes.len() / 2;
+    bytes[mid] ^= 0xff;
+    std::fs::write(&group_path, &bytes).unwrap();
+    let mut s = Streamer::new(&p.bake, no_prefetch());
+    let (_, _, tex, _) = p.draw(&cam, Mode::Hybrid, Some(&mut s));
+    let hybrid = p.renderer.read_pixels().unwrap();
+    let (_, _, _, _) = p.draw(&cam, Mode::Frustum, None);
+    let frustum = p.renderer.read_pixels().unwrap();
+    assert_eq!(tex, 0);
+    assert_eq!(psnr_y(&hybrid, &frustum), f64::INFINITY);
+}
