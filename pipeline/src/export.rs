@@ -188,11 +188,37 @@ pub fn export_cell(out: &Path, cell_id: u32, dest: &Path) -> Result<ExportSummar
         )));
     }
 
-    // 4. Build and write. The far field's group packs add their proxies to this list.
+    // The cell's far-field group (format version 2): its proxies are drawn with the
+    // cell's own.
+    let group = match entry.group {
+        None => None,
+        Some(g) => {
+            let ge = index.group(g).ok_or_else(|| {
+                failed(anyhow!("index.pack: cell {cell_id}'s group {g} has no entry"))
+            })?;
+            ge.verify(out).map_err(|e| failed(e.into()))?;
+            let path = out.join(&ge.file);
+            let pack = format::pack::PackFile::open(&path)
+                .and_then(|f| CellPack::decode_group(&f))
+                .with_context(|| path.display().to_string())
+                .map_err(failed)?;
+            pack.check_against(&base)
+                .with_context(|| path.display().to_string())
+                .map_err(failed)?;
+            Some((ge.file.clone(), pack))
+        }
+    };
+
+    // 4. Build and write: the cell's proxies, then its group's.
     let proxies: Vec<(&str, &Proxy)> = cell
         .proxies
         .iter()
         .map(|p| (entry.file.as_str(), p))
+        .chain(
+            group
+                .iter()
+                .flat_map(|(file, pack)| pack.proxies.iter().map(move |p| (file.as_str(), p))),
+        )
         .collect();
     let (glb, mut summary) = cell_glb(&base, cell_id, &cell.originals, &proxies).map_err(failed)?;
     format::pack::write_atomic(dest, &glb)
