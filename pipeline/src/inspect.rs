@@ -288,6 +288,7 @@ mod tests {
 #[derive(Clone, Debug, Serialize)]
 pub struct BakeCheck {
     pub dir: String,
+    /// Cell and far-field group packs the index lists, and how many verified.
     pub cells_indexed: usize,
     pub cells_ok: usize,
     /// One line per problem: the pack and what differs.
@@ -320,17 +321,40 @@ pub fn check_bake(dir: &Path) -> anyhow::Result<BakeCheck> {
             ));
         }
     }
-    for entry in &index.cells {
+    // Cells, then far-field groups (format version 2).
+    let units = index
+        .cells
+        .iter()
+        .map(|e| (e, false))
+        .chain(index.groups.iter().map(|e| (e, true)));
+    for (entry, is_group) in units {
         let path = dir.join(&entry.file);
+        let what = if is_group { "far-field group" } else { "cell" };
         let problem = (|| -> Result<(), String> {
             entry.verify(dir).map_err(|e| e.to_string())?;
-            let pack = CellPack::read(&path).map_err(|e| e.to_string())?;
+            let pack = PackFile::open(&path)
+                .and_then(|f| {
+                    if is_group {
+                        CellPack::decode_group(&f)
+                    } else {
+                        CellPack::decode(&f)
+                    }
+                })
+                .map_err(|e| e.to_string())?;
             if pack.cell_id != entry.cell_id {
                 return Err(format!(
-                    "{}: holds cell {}, the index lists it for cell {}",
+                    "{}: holds {what} {}, the index lists it for {what} {}",
                     path.display(),
                     pack.cell_id,
                     entry.cell_id
+                ));
+            }
+            if !is_group && pack.far_group != entry.group {
+                return Err(format!(
+                    "{}: far-field group {:?}, the index says {:?}",
+                    path.display(),
+                    pack.far_group,
+                    entry.group
                 ));
             }
             if pack.fingerprint != entry.fingerprint {
@@ -351,7 +375,7 @@ pub fn check_bake(dir: &Path) -> anyhow::Result<BakeCheck> {
     }
     Ok(BakeCheck {
         dir: dir.display().to_string(),
-        cells_indexed: index.cells.len(),
+        cells_indexed: index.cells.len() + index.groups.len(),
         cells_ok: ok,
         problems,
     })
@@ -360,7 +384,7 @@ pub fn check_bake(dir: &Path) -> anyhow::Result<BakeCheck> {
 /// Text form of [`BakeCheck`].
 pub fn render_bake_check(c: &BakeCheck) -> String {
     let mut out = format!(
-        "{}: {} of {} indexed cell packs verified against index.pack and base.pack\n",
+        "{}: {} of {} indexed cell and far-field group packs verified against index.pack and base.pack\n",
         c.dir, c.cells_ok, c.cells_indexed
     );
     for p in &c.problems {
