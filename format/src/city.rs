@@ -124,10 +124,7 @@ pub struct CityLayout {
 impl CityLayout {
     pub fn new(params: &CityParams, ground: &Ground) -> Result<CityLayout, CityError> {
         let [w, d] = ground.size().map(f64::from);
-        let (b, s) = (
-            f64::from(params.block_size),
-            f64::from(params.street_width),
-        );
+        let (b, s) = (f64::from(params.block_size), f64::from(params.street_width));
         let pitch = b + s;
         let nx = ((w - s) / pitch).floor().max(0.0);
         let nz = ((d - s) / pitch).floor().max(0.0);
@@ -206,7 +203,7 @@ impl BuildingStyle {
     pub fn draw(params: &CityParams, variant: u32) -> BuildingStyle {
         let slot = params.block_size / params.buildings_per_block as f32;
         let footprint = slot * (1.0 + OVERLAP);
-        let mut rng = SplitMix64::new(mix(params.seed ^ 0xB11D_1A6, u64::from(variant)));
+        let mut rng = SplitMix64::new(mix(params.seed ^ 0x0B11_D1A6, u64::from(variant)));
         let fh = params.floor_height;
         let lo = (params.min_height / fh).round().max(1.0) as u32;
         let hi = ((params.max_height / fh).round() as u32).max(lo);
@@ -396,7 +393,12 @@ fn tier_facades(
             .collect();
         for u in 0..us.len() - 1 {
             for v in 0..ys.len() - 1 {
-                let q = [grid[u][v], grid[u + 1][v], grid[u + 1][v + 1], grid[u][v + 1]];
+                let q = [
+                    grid[u][v],
+                    grid[u + 1][v],
+                    grid[u + 1][v + 1],
+                    grid[u][v + 1],
+                ];
                 let window = u % 2 == 1 && v % 2 == 1;
                 if !window {
                     b.quad(q, normal);
@@ -418,10 +420,10 @@ fn tier_facades(
                 b.quad(back, normal);
                 let along = [dir[0], 0.0, dir[1]];
                 let reveals: [(usize, usize, [f32; 3]); 4] = [
-                    (0, 1, [0.0, 1.0, 0.0]),                 // sill faces up
-                    (1, 2, [-along[0], 0.0, -along[2]]),     // right reveal faces back along
-                    (2, 3, [0.0, -1.0, 0.0]),                // lintel faces down
-                    (3, 0, [along[0], 0.0, along[2]]),       // left reveal
+                    (0, 1, [0.0, 1.0, 0.0]),             // sill faces up
+                    (1, 2, [-along[0], 0.0, -along[2]]), // right reveal faces back along
+                    (2, 3, [0.0, -1.0, 0.0]),            // lintel faces down
+                    (3, 0, [along[0], 0.0, along[2]]),   // left reveal
                 ];
                 for (i, j, n) in reveals {
                     b.quad([q[i], q[j], back[j], back[i]], n);
@@ -626,7 +628,7 @@ pub fn place(
     let mut widest = 0.0f32;
     for (p, e) in props.iter().enumerate() {
         let diagonal = (e.footprint[0].powi(2) + e.footprint[1].powi(2)).sqrt();
-        if !(diagonal <= s * 0.25) {
+        if diagonal.is_nan() || diagonal > s * 0.25 {
             return Err(CityError::PropTooWide {
                 prop: p,
                 diagonal,
@@ -741,7 +743,10 @@ mod tests {
             mesh.validate().unwrap();
             let topo = mesh.edge_topology();
             assert!(topo.is_closed_manifold(), "variant {v}: {topo:?}");
-            assert!(mesh.signed_volume() > 0.0, "variant {v} is wound inside out");
+            assert!(
+                mesh.signed_volume() > 0.0,
+                "variant {v} is wound inside out"
+            );
             let (lo, hi) = mesh.bounds().unwrap();
             assert_eq!(lo[1], 0.0);
             assert!((hi[0] - style.footprint * 0.5).abs() < 1e-4);
@@ -782,12 +787,19 @@ mod tests {
             // On some street, within the street but off its middle half.
             let [x, _, z] = c.translation;
             let off = |axis: usize, v: f32| {
-                (0..=if axis == 0 { layout.blocks_x } else { layout.blocks_z })
+                (0..=if axis == 0 {
+                    layout.blocks_x
+                } else {
+                    layout.blocks_z
+                })
                     .map(|k| (v - layout.street_centre(axis, k)).abs())
                     .fold(f32::INFINITY, f32::min)
             };
             let d = off(0, x).min(off(1, z));
-            assert!(d >= 0.25 * p.street_width && d <= 0.5 * p.street_width, "{d}");
+            assert!(
+                d >= 0.25 * p.street_width && d <= 0.5 * p.street_width,
+                "{d}"
+            );
         }
     }
 

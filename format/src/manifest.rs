@@ -877,7 +877,8 @@ impl Validator<'_> {
         // Floors and windows are geometry: bound them so a building stays a mesh.
         let floors = f64::from(max_height) / f64::from(floor_height);
         let columns = f64::from(block_size) / f64::from(floor_height);
-        if floor_height > min_height || floors * columns > crate::city::MAX_WINDOWS_PER_FACADE as f64
+        if floor_height > min_height
+            || floors * columns > crate::city::MAX_WINDOWS_PER_FACADE as f64
         {
             return Err(self.error(
                 "scene.floor_height",
@@ -894,7 +895,9 @@ impl Validator<'_> {
         if (0..3).any(|k| tint_min[k] > tint_max[k]) {
             return Err(self.error(
                 "scene.tint_max",
-                format!("must be >= `tint_min` per channel, found min {tint_min:?} max {tint_max:?}"),
+                format!(
+                    "must be >= `tint_min` per channel, found min {tint_min:?} max {tint_max:?}"
+                ),
             ));
         }
         Ok(SceneSpec::City(CitySpec {

@@ -91,7 +91,7 @@ pub const MAX_BOXES_PER_MODEL: usize = 4;
 /// rarely meets an edge or vertex); all must see an odd number of crossings.
 pub const PARITY_RAYS: [[f64; 3]; 5] = [
     [0.5773, 0.6211, 0.5301],
-    [-0.7071, 0.1913, 0.6803],
+    [-0.7072, 0.1913, 0.6803],
     [0.1303, -0.9217, 0.3652],
     [-0.3817, -0.2236, -0.8968],
     [0.8911, 0.3090, -0.3323],
@@ -347,7 +347,8 @@ pub fn triangle_meets_open_box(t: &[DVec3; 3], a: DVec3, b: DVec3) -> bool {
 
 /// The occluder boxes of a model, computed once per content hash for the process.
 pub fn model_occluders(model: &format::Model) -> Arc<Vec<OccluderBox>> {
-    static CACHE: OnceLock<Mutex<BTreeMap<[u8; 32], Arc<Vec<OccluderBox>>>>> = OnceLock::new();
+    type Cache = Mutex<BTreeMap<[u8; 32], Arc<Vec<OccluderBox>>>>;
+    static CACHE: OnceLock<Cache> = OnceLock::new();
     let cache = CACHE.get_or_init(|| Mutex::new(BTreeMap::new()));
     if let Some(found) = cache.lock().unwrap().get(&model.content_hash) {
         return found.clone();
