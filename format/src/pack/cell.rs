@@ -384,8 +384,8 @@ impl CellPack {
                 ),
             ));
         }
-        let far_group = (pack.version() >= 2 && meta.far_group != NO_FAR_GROUP)
-            .then_some(meta.far_group);
+        let far_group =
+            (pack.version() >= 2 && meta.far_group != NO_FAR_GROUP).then_some(meta.far_group);
         if far_group.is_some_and(|g| u64::from(g) >= crate::manifest::MAX_CELLS) {
             return Err(malformed(
                 file,
@@ -540,14 +540,19 @@ impl CellPack {
                             ),
                         )
                     })?;
-                let encoding = TextureEncoding::from_u32(v.encoding).ok_or_else(|| {
-                    malformed(
-                        file,
-                        SectionKind::VIEWS,
-                        0,
-                        format!("proxy {p}: unknown texture encoding {}", v.encoding),
-                    )
-                })?;
+                let encoding = TextureEncoding::from_u32_in_version(v.encoding, pack.version())
+                    .ok_or_else(|| {
+                        malformed(
+                            file,
+                            SectionKind::VIEWS,
+                            (view_index * std::mem::size_of::<ViewRecord>() + 84) as u64,
+                            format!(
+                                "proxy {p}: unknown texture encoding {} in format version {}",
+                                v.encoding,
+                                pack.version()
+                            ),
+                        )
+                    })?;
                 let texture = Texture {
                     width: v.width,
                     height: v.height,
