@@ -31,7 +31,7 @@
 //! summed (CPU time, not wall time) and are never written to packs.
 
 use crate::backface::all_culled;
-use crate::capture::{matrix_array, pack_texture};
+use crate::capture::pack_texture;
 use crate::cluster::{greedy_clusters, ClusterCandidate, ClusterSettings};
 use crate::far_field::{far_instances, CellGroups, FarField};
 use crate::grid::{HexGrid, Prism};
@@ -808,14 +808,16 @@ impl CellBake {
                     .views
                     .iter()
                     .map(|v| {
-                        Ok(ProxyView {
-                            eye: v.eye.into(),
-                            matrix: matrix_array(&v.matrix),
-                            texture: pack_texture(v).map_err(|what| BakeError::Texture {
+                        let (texture, matrix) =
+                            pack_texture(v).map_err(|what| BakeError::Texture {
                                 cell: self.cell,
                                 instance: p.members.first().map_or(u32::MAX, |m| m.instance),
                                 what,
-                            })?,
+                            })?;
+                        Ok(ProxyView {
+                            eye: v.eye.into(),
+                            matrix,
+                            texture,
                         })
                     })
                     .collect::<Result<Vec<_>, BakeError>>()?;

@@ -275,9 +275,24 @@ fn dilate(rgba: &mut [u8], filled: &mut [bool], w: usize, h: usize) {
     }
 }
 
-/// Encodes a capture texture for a pack (the smaller lossless encoding after zstd).
-pub fn pack_texture(texture: &ProjectedTexture) -> Result<format::pack::Texture, String> {
-    format::pack::Texture::from_rgba8_smallest(texture.width, texture.height, &texture.rgba)
+/// Encodes a capture texture for a pack (issue 15): block-compressed, BC1 when every
+/// texel is covered (alpha 255), BC3 otherwise (alpha carries coverage), and returns it
+/// with the world → texture matrix it is to be sampled with. Block textures are padded
+/// to multiples of 4 by replicating the last column and row; the matrix's `s` and `t`
+/// rows are scaled by `width / padded_width` and `height / padded_height`, so texture
+/// coordinate 0…1 of the capture becomes 0…w/pw of the padded texture and every world
+/// point samples the texel it sampled before. (Beyond the capture's rectangle the
+/// player now reads the replicated edge instead of "no data"; the edge texels of a
+/// capture are its padding, alpha 0, so that reads as "no data" too, except for the
+/// 1 × 1 texture of a sub-pixel object, opaque by design.)
+pub fn pack_texture(
+    texture: &ProjectedTexture,
+) -> Result<(format::pack::Texture, [f32; 16]), String> {
+    let t = format::pack::Texture::from_rgba8_block(texture.width, texture.height, &texture.rgba)?;
+    let sx = texture.width as f32 / t.width as f32;
+    let sy = texture.height as f32 / t.height as f32;
+    let scale = Mat4::from_diagonal(Vec4::new(sx, sy, 1.0, 1.0));
+    Ok((t, matrix_array(&(scale * texture.matrix))))
 }
 
 /// The column-major matrix as stored in a pack.
