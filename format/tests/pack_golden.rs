@@ -3,7 +3,7 @@
 //! sample content must reproduce them byte for byte (deterministic writer).
 //! Regenerate deliberately with `HEXBAKE_BLESS=1 cargo test -p format --test pack_golden`.
 
-use format::pack::{sample, BasePack, CellPack, Index, PackFile, FORMAT_VERSION};
+use format::pack::{sample, BasePack, CellPack, Index, PackFile, TextureEncoding, FORMAT_VERSION};
 use std::path::PathBuf;
 
 fn golden(name: &str) -> PathBuf {
@@ -69,8 +69,22 @@ fn golden_v2_packs_decode_to_the_samples() {
     let cell = CellPack::read(&golden("cell-v2.pack")).unwrap();
     assert_eq!(cell, sample::small_cell_v2());
     cell.check_against(&sample::small_base()).unwrap();
+    assert_eq!(
+        (
+            cell.proxies[0].views[0].texture.encoding,
+            cell.proxies[1].views[0].texture.encoding
+        ),
+        (TextureEncoding::Bc3, TextureEncoding::Bc1)
+    );
+    assert_eq!(
+        cell.proxies[0].views[0].texture.to_rgba8().unwrap().len(),
+        16 * 12 * 4
+    );
     let pack = PackFile::open(&golden("group-v2.pack")).unwrap();
-    assert_eq!(CellPack::decode_group(&pack).unwrap(), sample::small_group());
+    assert_eq!(
+        CellPack::decode_group(&pack).unwrap(),
+        sample::small_group()
+    );
     // A group pack is not a cell pack, and the other way round.
     assert!(CellPack::decode(&pack).is_err());
     assert!(CellPack::decode_group(&PackFile::open(&golden("cell-v2.pack")).unwrap()).is_err());
@@ -89,7 +103,10 @@ fn regenerating_the_golden_packs_gives_the_same_bytes() {
     );
     check_or_bless("base-v2.pack", sample::small_base().encode().unwrap());
     check_or_bless("cell-v2.pack", sample::small_cell_v2().encode().unwrap());
-    check_or_bless("group-v2.pack", sample::small_group().encode_group().unwrap());
+    check_or_bless(
+        "group-v2.pack",
+        sample::small_group().encode_group().unwrap(),
+    );
     check_or_bless("index-v2.pack", sample::small_index_v2().encode().unwrap());
 }
 
@@ -97,7 +114,12 @@ fn regenerating_the_golden_packs_gives_the_same_bytes() {
 fn golden_packs_exercise_every_codec() {
     use format::pack::Codec;
     let mut seen = std::collections::BTreeSet::new();
-    for name in ["base-v2.pack", "cell-v2.pack", "group-v2.pack", "index-v2.pack"] {
+    for name in [
+        "base-v2.pack",
+        "cell-v2.pack",
+        "group-v2.pack",
+        "index-v2.pack",
+    ] {
         for s in PackFile::read(&golden(name)).unwrap().sections() {
             seen.insert(s.codec as u32);
         }

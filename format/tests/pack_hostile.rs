@@ -7,9 +7,9 @@
 use format::pack::layout::{Codec, SectionKind, HEADER_SIZE};
 use format::pack::writer::{assemble, SectionData, TRY_INDICES, TRY_ZSTD};
 use format::pack::{
-    sample, BasePack, CellPack, FileKind, FORMAT_VERSION, GridParams, Index, IndexEntry, PackError, PackFile,
+    sample, BasePack, CellPack, FileKind, GridParams, Index, IndexEntry, PackError, PackFile,
     PackedInstance, PackedModel, Proxy, ProxyKind, ProxyMember, ProxyView, Texture,
-    TextureEncoding,
+    TextureEncoding, FORMAT_VERSION,
 };
 use format::Mesh;
 use proptest::prelude::*;
@@ -30,7 +30,10 @@ fn samples() -> Vec<(FileKind, Vec<u8>)> {
         (FileKind::Cell, sample::small_cell().encode().unwrap()),
         (FileKind::Index, sample::small_index().encode().unwrap()),
         (FileKind::Cell, sample::small_cell_v2().encode().unwrap()),
-        (FileKind::Group, sample::small_group().encode_group().unwrap()),
+        (
+            FileKind::Group,
+            sample::small_group().encode_group().unwrap(),
+        ),
         (FileKind::Index, sample::small_index_v2().encode().unwrap()),
     ]
 }
@@ -514,6 +517,69 @@ fn cell_pack_values_are_validated() {
     );
 }
 
+/// Issue 15: block-compressed textures with a bad size or data length are refused,
+/// naming the `textures` section and the texture's offset; a version-1 pack may not
+/// use the version-2 block encodings.
+#[test]
+fn block_texture_sizes_are_validated() {
+    let cell = sample::small_cell_v2();
+    let bytes = cell.encode().unwrap();
+    // Proxy 0 view 0 is BC3 16 × 12 (192 bytes) at textures offset 0; record at views 0.
+    let tex = &cell.proxies[0].views[0].texture;
+    assert_eq!((tex.width, tex.height, tex.data.len()), (16, 12, 192));
+    let bad = |at: usize, value: Vec<u8>| {
+        let b = with_value(FileKind::Cell, &bytes, SectionKind::VIEWS, at, &value);
+        decode(FileKind::Cell, &b).unwrap_err()
+    };
+    // Width 15 with data_len still 192: not a multiple of 4.
+    let e = bad(76, u32s(15));
+    assert!(
+        matches!(&e, PackError::Malformed { section, offset: 0, what, .. }
+            if *section == SectionKind::TEXTURES && what.contains("multiples of 4")),
+        "{e}"
+    );
+    // Height 16 (needs 256 bytes) with data_len 192.
+    let e = bad(80, u32s(16));
+    assert!(
+        matches!(&e, PackError::Malformed { section, what, .. }
+            if *section == SectionKind::TEXTURES && what.contains("expected 256")),
+        "{e}"
+    );
+    // Unknown encoding 9.
+    let e = bad(84, u32s(9));
+    assert!(
+        matches!(&e, PackError::Malformed { section, offset: 84, what, .. }
+            if *section == SectionKind::VIEWS && what.contains("unknown texture encoding 9")),
+        "{e}"
+    );
+    // A version-1 cell pack claiming BC1 (encoding 2) is refused.
+    let v1 = sample::small_cell().encode().unwrap();
+    let mut sections = sections_of(&v1);
+    let views = sections
+        .iter_mut()
+        .find(|s| s.kind == SectionKind::VIEWS)
+        .unwrap();
+    views.raw[84..88].copy_from_slice(&u32s(2));
+    let meta = sections
+        .iter_mut()
+        .find(|s| s.kind == SectionKind::CELL_META)
+        .unwrap();
+    meta.raw[52..56].copy_from_slice(&u32s(0)); // version 1: far_group reserved, 0
+    let mut b = assemble(FileKind::Cell, &sections).unwrap();
+    b[12..16].copy_from_slice(&1u32.to_le_bytes());
+    assert!(sample::reseal(&mut b));
+    let e = decode(FileKind::Cell, &b).unwrap_err();
+    assert!(
+        e.to_string()
+            .contains("unknown texture encoding 2 in format version 1"),
+        "{e}"
+    );
+    // The writer refuses what the reader refuses.
+    let mut cell = sample::small_cell_v2();
+    cell.proxies[1].views[0].texture.data.pop();
+    assert!(cell.encode().is_err());
+}
+
 /// Issue 19: index entries name real cells: ids within the largest grid, packs at
 /// least a header long, at most six distinct neighbours that are not the cell itself.
 #[test]
@@ -793,13 +859,15 @@ fn arb_cell() -> impl Strategy<Value = CellPack> {
         prop::collection::vec(arb_proxy(), 0..5),
         prop::option::of(0..format::manifest::MAX_CELLS as u32),
     )
-        .prop_map(|(cell_id, fingerprint, originals, proxies, far_group)| CellPack {
-            cell_id,
-            fingerprint,
-            far_group,
-            originals,
-            proxies,
-        })
+        .prop_map(
+            |(cell_id, fingerprint, originals, proxies, far_group)| CellPack {
+                cell_id,
+                fingerprint,
+                far_group,
+                originals,
+                proxies,
+            },
+        )
 }
 
 fn arb_index() -> impl Strategy<Value = Index> {
@@ -819,40 +887,41 @@ fn arb_index() -> impl Strategy<Value = Index> {
         .prop_map(|(build_fingerprint, cells, groups)| {
             let groups: Vec<u32> = groups.into_iter().collect();
             Index {
-            build_fingerprint,
-            groups: groups
-                .iter()
-                .map(|&g| IndexEntry {
-                    cell_id: g,
-                    file: format!("groups/{g}.pack"),
-                    bytes: 64 + u64::from(g),
-                    checksum: [g as u8; 32],
-                    neighbours: Vec::new(),
-                    fingerprint: [!g as u8; 32],
-                    group: None,
-                })
-                .collect(),
-            cells: cells
-                .into_iter()
-                .filter(|(_, (_, _, f))| format::pack::index::check_relative_path(f).is_ok())
-                .map(|(cell_id, (neighbours, bytes, file))| IndexEntry {
-                    cell_id,
-                    file,
-                    bytes,
-                    checksum: *blake3::hash(&bytes.to_le_bytes()).as_bytes(),
-                    // Distinct (a set), never the cell itself, at most six.
-                    neighbours: neighbours
-                        .into_iter()
-                        .filter(|&n| n != cell_id)
-                        .take(format::pack::index::MAX_NEIGHBOURS)
-                        .collect(),
-                    fingerprint: [cell_id as u8; 32],
-                    group: (!groups.is_empty())
-                        .then(|| groups[cell_id as usize % groups.len()])
-                        .filter(|_| cell_id % 3 != 0),
-                })
-                .collect(),
-        }})
+                build_fingerprint,
+                groups: groups
+                    .iter()
+                    .map(|&g| IndexEntry {
+                        cell_id: g,
+                        file: format!("groups/{g}.pack"),
+                        bytes: 64 + u64::from(g),
+                        checksum: [g as u8; 32],
+                        neighbours: Vec::new(),
+                        fingerprint: [!g as u8; 32],
+                        group: None,
+                    })
+                    .collect(),
+                cells: cells
+                    .into_iter()
+                    .filter(|(_, (_, _, f))| format::pack::index::check_relative_path(f).is_ok())
+                    .map(|(cell_id, (neighbours, bytes, file))| IndexEntry {
+                        cell_id,
+                        file,
+                        bytes,
+                        checksum: *blake3::hash(&bytes.to_le_bytes()).as_bytes(),
+                        // Distinct (a set), never the cell itself, at most six.
+                        neighbours: neighbours
+                            .into_iter()
+                            .filter(|&n| n != cell_id)
+                            .take(format::pack::index::MAX_NEIGHBOURS)
+                            .collect(),
+                        fingerprint: [cell_id as u8; 32],
+                        group: (!groups.is_empty())
+                            .then(|| groups[cell_id as usize % groups.len()])
+                            .filter(|_| cell_id % 3 != 0),
+                    })
+                    .collect(),
+            }
+        })
 }
 
 proptest! {

@@ -563,7 +563,7 @@ impl CellPack {
                     malformed(
                         file,
                         SectionKind::TEXTURES,
-                        next_tex as u64,
+                        (next_tex - data.len()) as u64,
                         format!("proxy {p}: {e}"),
                     )
                 })?;

@@ -312,12 +312,30 @@ pub fn small_index() -> Index {
     }
 }
 
-/// The content of `tests/data/cell-v2.pack`: [`small_cell`] in far-field group 3.
+/// The content of `tests/data/cell-v2.pack`: [`small_cell`] in far-field group 3, with
+/// a BC3 and a BC1 texture (proxies 0 and 1, view 0).
 pub fn small_cell_v2() -> CellPack {
-    CellPack {
+    let mut cell = CellPack {
         far_group: Some(3),
         ..small_cell()
+    };
+    // Block-compressed textures (issue 15): a BC3 capture with coverage in alpha
+    // (13 × 10 padded to 16 × 12) and an opaque BC1 one (6 × 9 padded to 8 × 12).
+    let mut covered = capture_like_rgba(13, 10, 11);
+    for t in covered.chunks_exact_mut(4) {
+        if t[..3] == [135, 180, 235] {
+            t[3] = 0; // background: not covered
+        }
     }
+    cell.proxies[0].views[0].texture =
+        Texture::from_rgba8_block(13, 10, &covered).expect("BC3 sample");
+    let mut opaque = capture_like_rgba(6, 9, 12);
+    for t in opaque.chunks_exact_mut(4) {
+        t[3] = 255;
+    }
+    cell.proxies[1].views[0].texture =
+        Texture::from_rgba8_block(6, 9, &opaque).expect("BC1 sample");
+    cell
 }
 
 /// The content of `tests/data/group-v2.pack`: far-field group 3, the SvMesh and the
