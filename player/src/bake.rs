@@ -10,7 +10,7 @@
 use crate::camera::Aabb;
 use crate::gpu::{normal_matrix, InstanceRaw, ProxyVertex, MAX_VIEWS};
 use crate::grid::CellGrid;
-use format::pack::{BasePack, CellPack, Index, PackError, PackFile, ProxyKind};
+use format::pack::{BasePack, CellPack, Index, PackError, PackFile, ProxyKind, TextureEncoding};
 use glam::{Mat4, Vec3};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -223,8 +223,12 @@ pub struct PreparedView {
     pub eye: [f32; 3],
     pub width: u32,
     pub height: u32,
-    /// Decoded RGBA8 sRGB texels.
-    pub rgba: Vec<u8>,
+    /// What `data` holds: decoded RGBA8 sRGB texels ([`TextureEncoding::Rgba8`], for
+    /// the lossless pack encodings) or the pack's BC1/BC3 blocks as they are (uploaded
+    /// natively, or decoded at upload where the adapter lacks BC sampling:
+    /// [`crate::gpu::Renderer::upload_view_texels`]).
+    pub encoding: TextureEncoding,
+    pub data: Vec<u8>,
 }
 
 /// One proxy ready for upload.
@@ -254,7 +258,7 @@ impl PreparedCell {
             .iter()
             .map(|p| {
                 (p.vertices.len() * std::mem::size_of::<ProxyVertex>()) as u64
-                    + p.views.iter().map(|v| v.rgba.len() as u64).sum::<u64>()
+                    + p.views.iter().map(|v| v.data.len() as u64).sum::<u64>()
             })
             .sum()
     }
@@ -283,17 +287,28 @@ pub fn prepare_cell(base: &BasePack, pack: &CellPack) -> Result<PreparedCell, Ba
         }
         let mut views = Vec::with_capacity(proxy.views.len());
         for (vi, v) in proxy.views.iter().enumerate() {
-            let rgba = v.texture.to_rgba8().map_err(|what| BakeError::BadProxy {
-                cell,
-                proxy: pi,
-                what: format!("view {vi}: {what}"),
-            })?;
+            let (encoding, data) = if v.texture.encoding.is_block() {
+                v.texture.validate().map_err(|what| BakeError::BadProxy {
+                    cell,
+                    proxy: pi,
+                    what: format!("view {vi}: {what}"),
+                })?;
+                (v.texture.encoding, v.texture.data.clone())
+            } else {
+                let rgba = v.texture.to_rgba8().map_err(|what| BakeError::BadProxy {
+                    cell,
+                    proxy: pi,
+                    what: format!("view {vi}: {what}"),
+                })?;
+                (TextureEncoding::Rgba8, rgba)
+            };
             views.push(PreparedView {
                 matrix: v.matrix,
                 eye: v.eye,
                 width: v.texture.width,
                 height: v.texture.height,
-                rgba,
+                encoding,
+                data,
             });
         }
         let default_mask: u32 = if views.is_empty() { 0 } else { 1 };

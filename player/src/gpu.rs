@@ -13,7 +13,7 @@
 use crate::camera::Camera;
 use crate::metrics::srgb_to_linear;
 use bytemuck::{Pod, Zeroable};
-use format::pack::BasePack;
+use format::pack::{BasePack, Texture, TextureEncoding};
 use glam::{Mat3, Mat4, Vec3};
 use std::time::Instant;
 use wgpu::util::DeviceExt;
@@ -22,6 +22,11 @@ use wgpu::util::DeviceExt;
 pub const SKY: [u8; 4] = [150, 190, 235, 255];
 /// Most views a proxy may have (format's `MAX_MV_VIEWS`).
 pub const MAX_VIEWS: usize = 8;
+
+/// Environment variable that, when set, turns native BC texture sampling off: BC1/BC3
+/// capture textures are then decoded to RGBA8 on the CPU as on an adapter without
+/// `TEXTURE_COMPRESSION_BC` ([`Renderer::set_native_bc`]).
+pub const NO_BC_ENV: &str = "HEXBAKE_NO_BC";
 
 const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
 const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
@@ -264,6 +269,10 @@ pub struct Renderer {
     coverage_alpha: bool,
     /// Colour by representation ([`Renderer::set_representation_colours`]).
     representation_colours: bool,
+    /// Upload BC1/BC3 capture textures as they are (the device has
+    /// `TEXTURE_COMPRESSION_BC` and [`Renderer::set_native_bc`] did not turn it off);
+    /// otherwise they are decoded to RGBA8 on the CPU first.
+    native_bc: bool,
 }
 
 /// Opens an adapter: `WGPU_BACKEND` and the like from the environment,
@@ -297,7 +306,8 @@ pub fn open_device_for(
     };
     let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
         label: Some("hexbake player"),
-        required_features: wgpu::Features::empty(),
+        // BC sampling where the adapter has it (capture textures, issue 15).
+        required_features: adapter.features() & wgpu::Features::TEXTURE_COMPRESSION_BC,
         required_limits: adapter.limits(),
         ..Default::default()
     }))
@@ -320,6 +330,9 @@ impl Renderer {
         width: u32,
         height: u32,
     ) -> Result<Renderer, GpuError> {
+        let device_bc = device
+            .features()
+            .contains(wgpu::Features::TEXTURE_COMPRESSION_BC);
         let max = device.limits().max_texture_dimension_2d;
         if width == 0 || height == 0 || width > max || height > max {
             return Err(GpuError::BadSize { width, height, max });
@@ -571,6 +584,7 @@ impl Renderer {
             proxy_bgl,
             sampler,
             dummy_view,
+            native_bc: device_bc && std::env::var_os(NO_BC_ENV).is_none(),
             instances,
             coverage_alpha: false,
             representation_colours: false,
@@ -582,6 +596,22 @@ impl Renderer {
     /// coverage mask (255 where a triangle was drawn, 0 on the sky) — what
     /// `player compare` tells object pixels by. Off by default: frames for PNGs and
     /// the window stay opaque.
+    /// Whether BC capture textures are sampled natively (else decoded on the CPU).
+    pub fn native_bc(&self) -> bool {
+        self.native_bc
+    }
+
+    /// Turns native BC sampling off (CPU decoding to RGBA8 instead, as on an adapter
+    /// without `TEXTURE_COMPRESSION_BC`) or back on where the device has it. Affects
+    /// later uploads only.
+    pub fn set_native_bc(&mut self, on: bool) {
+        self.native_bc = on
+            && self
+                .device
+                .features()
+                .contains(wgpu::Features::TEXTURE_COMPRESSION_BC);
+    }
+
     pub fn set_coverage_alpha(&mut self, on: bool) {
         self.coverage_alpha = on;
     }
@@ -734,6 +764,74 @@ impl Renderer {
         };
         self.try_bind(&mut p);
         p
+    }
+
+    /// Uploads view `view`'s texels as a pack stores them: RGBA8, or BC1/BC3 blocks
+    /// (sides multiples of 4) — natively as `Bc1RgbaUnormSrgb` / `Bc3RgbaUnormSrgb`
+    /// where [`Renderer::native_bc`], else decoded to RGBA8 sRGB on the CPU.
+    pub fn upload_view_texels(
+        &self,
+        proxy: &mut GpuProxy,
+        view: usize,
+        width: u32,
+        height: u32,
+        encoding: TextureEncoding,
+        data: &[u8],
+    ) {
+        let format = match encoding {
+            TextureEncoding::Bc1 => wgpu::TextureFormat::Bc1RgbaUnormSrgb,
+            TextureEncoding::Bc3 => wgpu::TextureFormat::Bc3RgbaUnormSrgb,
+            _ => return self.upload_view_texture(proxy, view, width, height, data),
+        };
+        if view >= proxy.textures.len() {
+            return;
+        }
+        let texture = Texture {
+            width,
+            height,
+            encoding,
+            data: data.to_vec(),
+        };
+        let max = self.device.limits().max_texture_dimension_2d;
+        if let Err(what) = texture.validate() {
+            eprintln!("player: warning: capture texture not uploadable ({what}); drawing it lit");
+            proxy.textures[view] = Some(self.dummy_view.clone());
+            self.try_bind(proxy);
+            return;
+        }
+        if !self.native_bc || width > max || height > max {
+            match texture.to_rgba8() {
+                Ok(rgba) => self.upload_view_texture(proxy, view, width, height, &rgba),
+                Err(what) => {
+                    eprintln!("player: warning: capture texture not decodable ({what}); drawing it lit");
+                    proxy.textures[view] = Some(self.dummy_view.clone());
+                    self.try_bind(proxy);
+                }
+            }
+            return;
+        }
+        let tex = self.device.create_texture_with_data(
+            &self.queue,
+            &wgpu::TextureDescriptor {
+                label: Some("capture (BC)"),
+                size: wgpu::Extent3d {
+                    width,
+                    height,
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+                view_formats: &[],
+            },
+            wgpu::util::TextureDataOrder::LayerMajor,
+            data,
+        );
+        proxy.texture_bytes += data.len() as u64;
+        proxy.textures[view] = Some(tex.create_view(&Default::default()));
+        self.try_bind(proxy);
     }
 
     /// Uploads view `view`'s RGBA8 sRGB texels (row-major, row 0 = v 0).

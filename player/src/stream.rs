@@ -208,7 +208,7 @@ pub struct ResidentCell {
     /// Per proxy: its member instances (drawn as originals until it is ready).
     pub members: Vec<Vec<u32>>,
     /// Texels still waiting in the upload queue: (proxy, view) → texels.
-    pending: BTreeMap<(usize, usize), (u32, u32, Vec<u8>)>,
+    pending: BTreeMap<(usize, usize), (u32, u32, format::pack::TextureEncoding, Vec<u8>)>,
     pub bytes: u64,
     last_used: u64,
 }
@@ -512,7 +512,7 @@ impl Streamer {
                     members.push(p.members);
                     for (vi, v) in p.views.into_iter().enumerate() {
                         self.uploads.push_back((id, pi, vi));
-                        pending.insert((pi, vi), (v.width, v.height, v.rgba));
+                        pending.insert((pi, vi), (v.width, v.height, v.encoding, v.data));
                     }
                 }
                 self.cells.insert(
@@ -545,11 +545,11 @@ impl Streamer {
         let Some(cell) = self.cells.get_mut(&id) else {
             return 0;
         };
-        let Some((w, h, rgba)) = cell.pending.remove(&(pi, vi)) else {
+        let Some((w, h, encoding, data)) = cell.pending.remove(&(pi, vi)) else {
             return 0;
         };
-        renderer.upload_view_texture(&mut cell.proxies[pi], vi, w, h, &rgba);
-        rgba.len() as u64
+        renderer.upload_view_texels(&mut cell.proxies[pi], vi, w, h, encoding, &data);
+        data.len() as u64
     }
 
     /// Moves cell `id`'s queued textures to the front of the texture queue, in
@@ -587,7 +587,7 @@ impl Streamer {
                 .cells
                 .get(&id)
                 .and_then(|c| c.pending.get(&(pi, vi)))
-                .map(|(_, _, t)| t.len() as u64);
+                .map(|(_, _, _, t)| t.len() as u64);
             let Some(size) = size else {
                 continue; // evicted or already uploaded
             };
