@@ -803,7 +803,9 @@ impl Renderer {
             match texture.to_rgba8() {
                 Ok(rgba) => self.upload_view_texture(proxy, view, width, height, &rgba),
                 Err(what) => {
-                    eprintln!("player: warning: capture texture not decodable ({what}); drawing it lit");
+                    eprintln!(
+                        "player: warning: capture texture not decodable ({what}); drawing it lit"
+                    );
                     proxy.textures[view] = Some(self.dummy_view.clone());
                     self.try_bind(proxy);
                 }

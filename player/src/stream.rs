@@ -611,7 +611,9 @@ impl Streamer {
             let victim = self
                 .cells
                 .values()
-                .filter(|c| Some(c.cell_id) != self.current && Some(c.cell_id) != self.current_group)
+                .filter(|c| {
+                    Some(c.cell_id) != self.current && Some(c.cell_id) != self.current_group
+                })
                 .min_by_key(|c| (c.last_used, c.cell_id))
                 .map(|c| c.cell_id);
             let Some(v) = victim else {

@@ -30,7 +30,11 @@ fn capture_like(opaque: bool) -> Vec<u8> {
         .flat_map(|i| {
             let (x, y) = ((i % 64) as f32, (i / 64) as f32);
             let d = ((x - 32.0).powi(2) + (y - 30.0).powi(2)).sqrt() / 26.0;
-            let stripe = if (i % 64 / 4 + i / 64 / 6) % 2 == 0 { 40.0 } else { 0.0 };
+            let stripe = if (i % 64 / 4 + i / 64 / 6) % 2 == 0 {
+                40.0
+            } else {
+                0.0
+            };
             let v = 230.0 - 120.0 * d.min(1.0);
             [
                 v as u8,
@@ -100,12 +104,19 @@ fn native_bc_and_cpu_fallback_draw_the_same_frames() {
             let mut differing = 0;
             let mut textured = 0;
             for (pa, pb) in a.chunks_exact(4).zip(b.chunks_exact(4)) {
-                let d = pa.iter().zip(pb).map(|(x, y)| x.abs_diff(*y)).max().unwrap();
+                let d = pa
+                    .iter()
+                    .zip(pb)
+                    .map(|(x, y)| x.abs_diff(*y))
+                    .max()
+                    .unwrap();
                 max = max.max(d);
                 differing += usize::from(d > 0);
                 textured += usize::from(pa[..3] != player::gpu::SKY[..3]);
             }
-            eprintln!("{want:?}: max difference {max}, {differing} pixels differ, {textured} drawn");
+            eprintln!(
+                "{want:?}: max difference {max}, {differing} pixels differ, {textured} drawn"
+            );
             assert!(textured > 1000, "the quad is drawn ({textured} pixels)");
             assert!(max <= 3, "native and fallback differ by up to {max}");
         }
