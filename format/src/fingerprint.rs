@@ -25,8 +25,10 @@ pub type Fingerprint = [u8; 32];
 /// 5 — collapses start from the models' LOD chains (`worker::lod_chain`), a moved
 /// carrier stays when within tolerance;
 /// 6 — the far field shared by 7-cell groups (`bake.far_field`, worker
-/// `far_field.rs`).
-pub const BAKE_REVISION: u32 = 6;
+/// `far_field.rs`);
+/// 7 — capture textures stored as BC1/BC3 (a proxy reused by key from an older
+/// pack would keep its lossless texture).
+pub const BAKE_REVISION: u32 = 7;
 
 /// Hex form for file names, logs and reports.
 pub fn to_hex(f: &Fingerprint) -> String {

@@ -284,13 +284,16 @@ where
                 "the bake returned a pack for another cell, group or job".into(),
             ));
         }
-        let bytes = match unit {
-            Unit::Cell(_) => pack.encode(),
-            Unit::Group(_) => pack.encode_group(),
-        }
-        .map_err(|e| failed(e.to_string()))?;
         let file = unit.file();
         let path = out.join(&file);
+        // The unit's earlier pack, if any: sections whose content is unchanged (often
+        // the textures, after a small manifest change) are copied, not recompressed.
+        let previous = std::fs::read(&path)
+            .ok()
+            .and_then(|b| format::pack::PackFile::from_bytes(&b).ok());
+        let bytes = pack
+            .encode_reusing(matches!(unit, Unit::Group(_)), previous.as_ref())
+            .map_err(|e| failed(e.to_string()))?;
         if let Some(dir) = path.parent() {
             std::fs::create_dir_all(dir).map_err(|e| io(dir, &e))?;
         }

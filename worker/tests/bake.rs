@@ -691,7 +691,12 @@ fn demo_far_field_is_shared_conservative_and_close() {
             let f = FarField::of_cell(&scene, &grid, &groups, c, &cells, &params).unwrap();
             (c, f)
         })
-        .max_by_key(|(c, f)| (f.instances.iter().filter(|&&x| x).count(), std::cmp::Reverse(*c)))
+        .max_by_key(|(c, f)| {
+            (
+                f.instances.iter().filter(|&&x| x).count(),
+                std::cmp::Reverse(*c),
+            )
+        })
         .unwrap();
     let n_far = far.instances.iter().filter(|&&x| x).count();
     assert!(n_far > 0, "some demo object is far from some group");
@@ -699,12 +704,14 @@ fn demo_far_field_is_shared_conservative_and_close() {
         let (lo, hi) = scene.instance_bounds(i);
         for &c in groups.cells(far.group) {
             let prism = grid.prism(c, cells.min_eye_height, cells.max_eye_height);
-            assert!(!prism.intersects_aabb(lo, hi), "far instance {i} touches cell {c}");
+            assert!(
+                !prism.intersects_aabb(lo, hi),
+                "far instance {i} touches cell {c}"
+            );
         }
     }
     let chains = LodChains::none();
-    let hybrid =
-        bake_cell_hybrid(&scene, &chains, &grid, &groups, cell, &cells, &params).unwrap();
+    let hybrid = bake_cell_hybrid(&scene, &chains, &grid, &groups, cell, &cells, &params).unwrap();
     validate_bake(&scene, &hybrid);
     assert_eq!(hybrid.far_group, Some(far.group));
     let own = bake_cell_with(

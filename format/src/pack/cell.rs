@@ -12,7 +12,7 @@ use super::error::PackError;
 use super::layout::{FileKind, SectionKind};
 use super::reader::PackFile;
 use super::texture::{Texture, TextureEncoding};
-use super::writer::{assemble, write_atomic, SectionData, RAW_ONLY, TRY_INDICES, TRY_ZSTD};
+use super::writer::{assemble_reusing, write_atomic, SectionData, RAW_ONLY, TRY_INDICES, TRY_ZSTD};
 use super::{invalid, malformed};
 use bytemuck::{Pod, Zeroable};
 use std::path::Path;
@@ -213,23 +213,48 @@ fn check_masks(kind: ProxyKind, member: &ProxyMember, view_count: usize) -> Resu
 impl CellPack {
     /// The pack's bytes (deterministic).
     pub fn encode(&self) -> Result<Vec<u8>, PackError> {
-        self.encode_as(FileKind::Cell)
+        self.encode_as(FileKind::Cell, None)
+    }
+
+    /// [`CellPack::encode`] (or, for a group, [`CellPack::encode_group`]) copying
+    /// every section whose content is unchanged from `previous`, an earlier pack of
+    /// the same cell or group, instead of compressing it again
+    /// ([`super::writer::assemble_reusing`]): the same bytes, faster.
+    pub fn encode_reusing(
+        &self,
+        group: bool,
+        previous: Option<&PackFile>,
+    ) -> Result<Vec<u8>, PackError> {
+        if group {
+            self.check_group()?;
+            self.encode_as(FileKind::Group, previous)
+        } else {
+            self.encode_as(FileKind::Cell, previous)
+        }
     }
 
     /// The bytes of a far-field group pack (`groups/<id>.pack`): the same sections as
     /// a cell pack with file kind `group`; `cell_id` is the group id. A group has no
     /// originals and no group of its own.
     pub fn encode_group(&self) -> Result<Vec<u8>, PackError> {
+        self.encode_reusing(true, None)
+    }
+
+    fn check_group(&self) -> Result<(), PackError> {
         if !self.originals.is_empty() || self.far_group.is_some() {
             return Err(invalid(format!(
                 "group {}: a group pack has no originals and no far group",
                 self.cell_id
             )));
         }
-        self.encode_as(FileKind::Group)
+        Ok(())
     }
 
-    fn encode_as(&self, file_kind: FileKind) -> Result<Vec<u8>, PackError> {
+    fn encode_as(
+        &self,
+        file_kind: FileKind,
+        previous: Option<&PackFile>,
+    ) -> Result<Vec<u8>, PackError> {
         if self.far_group == Some(NO_FAR_GROUP) {
             return Err(invalid(format!(
                 "cell {}: far group {NO_FAR_GROUP} is the 'none' value",
@@ -291,7 +316,7 @@ impl CellPack {
             far_group: self.far_group.unwrap_or(NO_FAR_GROUP),
             reserved: [0; 2],
         };
-        assemble(
+        assemble_reusing(
             file_kind,
             &[
                 SectionData {
@@ -335,6 +360,7 @@ impl CellPack {
                     codecs: TRY_ZSTD,
                 },
             ],
+            previous,
         )
     }
 

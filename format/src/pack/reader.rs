@@ -461,6 +461,27 @@ impl PackFile {
             .unwrap_or(&[])
     }
 
+    /// The codec and stored bytes of section `kind` if its decoded content is `raw`,
+    /// its codec is one of `codecs` and this pack has the writer's format version:
+    /// what [`super::writer::assemble_reusing`] copies instead of compressing `raw`
+    /// again (the writer's codec choice is deterministic, so a fresh encoding would
+    /// give these very bytes).
+    pub fn stored_if_same(
+        &self,
+        kind: SectionKind,
+        raw: &[u8],
+        codecs: &[Codec],
+    ) -> Option<(Codec, Vec<u8>)> {
+        let s = *self.section_info(kind)?;
+        if self.version() != FORMAT_VERSION
+            || s.raw_len != raw.len() as u64
+            || !(s.codec == Codec::Raw || codecs.contains(&s.codec))
+        {
+            return None;
+        }
+        (self.section(kind).ok()?.as_ref() == raw).then(|| (s.codec, self.stored(&s).to_vec()))
+    }
+
     /// A section's decoded content: borrowed for raw sections, decompressed now for
     /// compressed ones (nothing is decompressed until asked for).
     pub fn section(&self, kind: SectionKind) -> Result<Cow<'_, [u8]>, PackError> {

@@ -36,6 +36,18 @@ pub const RAW_ONLY: &[Codec] = &[];
 
 /// Builds the bytes of a pack of `file_kind` from its sections, in the given order.
 pub fn assemble(file_kind: FileKind, sections: &[SectionData]) -> Result<Vec<u8>, PackError> {
+    assemble_reusing(file_kind, sections, None)
+}
+
+/// [`assemble`], copying the stored bytes of every section whose decoded content is
+/// unchanged from `previous` (an earlier pack of the same file, [`PackFile::stored_if_same`])
+/// instead of compressing it again: the same bytes, without the compression's cost
+/// (issue 13: an incremental rebake rewrites many packs whose textures did not change).
+pub fn assemble_reusing(
+    file_kind: FileKind,
+    sections: &[SectionData],
+    previous: Option<&super::reader::PackFile>,
+) -> Result<Vec<u8>, PackError> {
     // 1. Check the sections can be described by a v1 table.
     if sections.len() as u64 > MAX_SECTIONS as u64 {
         return Err(PackError::Invalid {
@@ -72,7 +84,9 @@ pub fn assemble(file_kind: FileKind, sections: &[SectionData]) -> Result<Vec<u8>
     let mut stored_all = Vec::with_capacity(sections.len());
     for s in sections {
         let prefer_raw = s.codecs.contains(&Codec::Raw);
-        let (codec, stored) = codec::encode_best_with(&s.raw, s.codecs, prefer_raw);
+        let (codec, stored) = previous
+            .and_then(|p| p.stored_if_same(s.kind, &s.raw, s.codecs))
+            .unwrap_or_else(|| codec::encode_best_with(&s.raw, s.codecs, prefer_raw));
         let offset = align_up(cursor).ok_or_else(|| PackError::Invalid {
             what: "pack too large".into(),
         })?;
