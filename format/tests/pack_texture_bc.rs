@@ -237,3 +237,58 @@ fn encoder_candidates() {
         );
     }
 }
+
+/// Encoder cost and texture error on real cell packs of a lossless bake (run by hand:
+/// `HEXBAKE_BC_PACKS="a.pack b.pack" cargo test --release -p format --test
+/// pack_texture_bc real_packs -- --ignored --nocapture`): per pack, the lossless
+/// writer's time (both encodings + zstd trials) against BC's, the `textures` bytes
+/// after zstd, and the PSNR of the covered texels' RGB.
+#[test]
+#[ignore]
+fn real_packs() {
+    use format::pack::CellPack;
+    let Some(list) = std::env::var_os("HEXBAKE_BC_PACKS") else {
+        return;
+    };
+    let (mut t_lossless, mut t_bc, mut z_lossless, mut z_bc) = (0.0, 0.0, 0usize, 0usize);
+    let (mut se, mut n, mut texels) = (0f64, 0u64, 0u64);
+    for path in list.to_str().unwrap().split_whitespace() {
+        let cell = CellPack::read(std::path::Path::new(path)).unwrap();
+        let (mut raw_l, mut raw_b) = (Vec::new(), Vec::new());
+        for v in cell.proxies.iter().flat_map(|p| &p.views) {
+            let (w, h) = (v.texture.width, v.texture.height);
+            let rgba = v.texture.to_rgba8().unwrap();
+            texels += u64::from(w * h);
+            let t = std::time::Instant::now();
+            let l = Texture::from_rgba8_smallest(w, h, &rgba).unwrap();
+            t_lossless += t.elapsed().as_secs_f64();
+            let t = std::time::Instant::now();
+            let b = Texture::from_rgba8_block(w, h, &rgba).unwrap();
+            t_bc += t.elapsed().as_secs_f64();
+            raw_l.extend_from_slice(&l.data);
+            raw_b.extend_from_slice(&b.data);
+            let d = b.to_rgba8().unwrap();
+            for y in 0..h as usize {
+                for x in 0..w as usize {
+                    let (i, j) = ((y * w as usize + x) * 4, (y * b.width as usize + x) * 4);
+                    if rgba[i + 3] == 255 {
+                        for k in 0..3 {
+                            se += (rgba[i + k] as f64 - d[j + k] as f64).powi(2);
+                        }
+                        n += 3;
+                    }
+                }
+            }
+        }
+        let t = std::time::Instant::now();
+        z_lossless += zstd::bulk::compress(&raw_l, 6).unwrap().len();
+        t_lossless += t.elapsed().as_secs_f64();
+        let t = std::time::Instant::now();
+        z_bc += zstd::bulk::compress(&raw_b, 6).unwrap().len();
+        t_bc += t.elapsed().as_secs_f64();
+    }
+    println!(
+        "{texels} texels: lossless {t_lossless:.2} s -> {z_lossless} B; BC {t_bc:.2} s -> {z_bc} B; covered RGB PSNR {:.2} dB",
+        10.0 * (255.0f64.powi(2) / (se / n as f64)).log10()
+    );
+}
