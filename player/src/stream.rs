@@ -199,6 +199,9 @@ struct Shared {
     resident: Mutex<BTreeSet<u32>>,
 }
 
+/// A view texture waiting for upload: width, height, encoding, texel bytes.
+type PendingTexture = (u32, u32, format::pack::TextureEncoding, Vec<u8>);
+
 /// A resident cell.
 pub struct ResidentCell {
     pub cell_id: u32,
@@ -208,7 +211,7 @@ pub struct ResidentCell {
     /// Per proxy: its member instances (drawn as originals until it is ready).
     pub members: Vec<Vec<u32>>,
     /// Texels still waiting in the upload queue: (proxy, view) → texels.
-    pending: BTreeMap<(usize, usize), (u32, u32, format::pack::TextureEncoding, Vec<u8>)>,
+    pending: BTreeMap<(usize, usize), PendingTexture>,
     pub bytes: u64,
     last_used: u64,
 }

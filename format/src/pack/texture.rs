@@ -109,7 +109,7 @@ impl Texture {
         }
         let data = match encoding {
             TextureEncoding::Bc1 | TextureEncoding::Bc3 => {
-                if width % 4 != 0 || height % 4 != 0 {
+                if !width.is_multiple_of(4) || !height.is_multiple_of(4) {
                     return Err(format!(
                         "{} needs sides that are multiples of 4, got {width}x{height} (use Texture::from_rgba8_block)",
                         encoding.name()
@@ -196,7 +196,9 @@ impl Texture {
     /// Whether the dimensions and data length agree.
     pub fn validate(&self) -> Result<(), String> {
         encoded_len(self.width, self.height)?;
-        if self.encoding.is_block() && (self.width % 4 != 0 || self.height % 4 != 0) {
+        if self.encoding.is_block()
+            && (!self.width.is_multiple_of(4) || !self.height.is_multiple_of(4))
+        {
             return Err(format!(
                 "{}x{} {} texture: block-compressed sides must be multiples of 4",
                 self.width,
