@@ -403,24 +403,36 @@ fn assert_object_figures_are_sane(report: &player::run::CompareReport) {
     }
 }
 
-#[test]
-fn a_missing_or_corrupt_cell_pack_is_drawn_as_originals() {
+/// The synthetic bake opened at 64², a camera at instance 0 and the cell it is in
+/// (`None`: no graphics adapter).
+fn synthetic_at_instance_0() -> Option<(tempfile::TempDir, Player, Camera, u32)> {
     let dir = tempfile::tempdir().unwrap();
     write_synthetic_bake(dir.path()).unwrap();
-    let Some(mut p) = open(dir.path(), (64, 64)) else {
-        return;
-    };
+    let p = open(dir.path(), (64, 64))?;
     let cam = camera_at_instance(&p, 0, 64);
     let cell = p
         .bake
         .grid
         .nearest_cell(Vec2::new(cam.eye.x, cam.eye.z))
         .unwrap();
-    let pack = dir.path().join(format!("cells/{cell}.pack"));
-    let mut bytes = std::fs::read(&pack).unwrap();
+    Some((dir, p, cam, cell))
+}
+
+/// Damages a pack in the middle (its checksums then refuse it).
+fn flip_middle_byte(path: &std::path::Path) {
+    let mut bytes = std::fs::read(path).unwrap();
     let mid = bytes.len() / 2;
     bytes[mid] ^= 0xff;
-    std::fs::write(&pack, &bytes).unwrap();
+    std::fs::write(path, &bytes).unwrap();
+}
+
+#[test]
+fn a_missing_or_corrupt_cell_pack_is_drawn_as_originals() {
+    let Some((dir, mut p, cam, cell)) = synthetic_at_instance_0() else {
+        return;
+    };
+    let pack = dir.path().join(format!("cells/{cell}.pack"));
+    flip_middle_byte(&pack);
     let mut s = Streamer::new(
         &p.bake,
         StreamConfig {
@@ -778,17 +790,9 @@ fn proxies_waiting_for_textures_are_drawn_as_originals() {
 #[test]
 fn a_cells_far_field_group_is_drawn_with_it() {
     use format::pack::{CellPack, Index, IndexEntry};
-    let dir = tempfile::tempdir().unwrap();
-    write_synthetic_bake(dir.path()).unwrap();
-    let Some(mut p) = open(dir.path(), (64, 64)) else {
+    let Some((dir, mut p, cam, cell)) = synthetic_at_instance_0() else {
         return;
     };
-    let cam = camera_at_instance(&p, 0, 64);
-    let cell = p
-        .bake
-        .grid
-        .nearest_cell(Vec2::new(cam.eye.x, cam.eye.z))
-        .unwrap();
     let no_prefetch = || StreamConfig {
         prefetch: false,
         ..Default::default()
@@ -834,10 +838,7 @@ fn a_cells_far_field_group_is_drawn_with_it() {
     assert_eq!(psnr_y(&before, &after), f64::INFINITY);
     drop(s);
     // A damaged group pack: the group's objects are drawn as originals.
-    let mut bytes = std::fs::read(&group_path).unwrap();
-    let mid = bytes.len() / 2;
-    bytes[mid] ^= 0xff;
-    std::fs::write(&group_path, &bytes).unwrap();
+    flip_middle_byte(&group_path);
     let mut s = Streamer::new(&p.bake, no_prefetch());
     let (_, _, tex, _) = p.draw(&cam, Mode::Hybrid, Some(&mut s));
     let hybrid = p.renderer.read_pixels().unwrap();
