@@ -509,8 +509,22 @@ pub fn exercise_readers(bytes: &[u8]) -> usize {
     use super::reader::PackFile;
     let mut accepted = 0;
     accepted += BasePack::from_bytes(bytes).is_ok() as usize;
-    accepted += CellPack::from_bytes(bytes).is_ok() as usize;
-    accepted += CellPack::group_from_bytes(bytes).is_ok() as usize;
+    // Decoded cells and groups also decode every texture (BC blocks included).
+    let textures = |cell: &CellPack| {
+        for v in cell.proxies.iter().flat_map(|p| &p.views) {
+            let _ = v.texture.to_rgba8();
+        }
+    };
+    let cell = CellPack::from_bytes(bytes);
+    if let Ok(c) = &cell {
+        textures(c);
+    }
+    accepted += cell.is_ok() as usize;
+    let group = CellPack::group_from_bytes(bytes);
+    if let Ok(g) = &group {
+        textures(g);
+    }
+    accepted += group.is_ok() as usize;
     accepted += Index::from_bytes(bytes).is_ok() as usize;
     if let Ok(pack) = PackFile::from_bytes(bytes) {
         for s in pack.sections() {
