@@ -18,10 +18,20 @@ use glam::{Mat3, Mat4, Vec3};
 use std::time::Instant;
 use wgpu::util::DeviceExt;
 
-/// Background colour (sRGB8) — `worker::shade::SKY`.
-pub const SKY: [u8; 4] = [150, 190, 235, 255];
-/// Most views a proxy may have (format's `MAX_MV_VIEWS`).
-pub const MAX_VIEWS: usize = 8;
+/// Background colour (sRGB8): the CPU rasterizer's, [`format::shading::SKY`].
+pub use format::shading::SKY;
+/// Most views a proxy may have: the pack's limit.
+pub const MAX_VIEWS: usize = format::pack::cell::MAX_MV_VIEWS;
+
+/// The WGSL source: `shader.wgsl` after [`format::shading::wgsl_constants`] (the
+/// shading, sRGB and view-limit constants, from their Rust home).
+pub fn shader_source() -> String {
+    format!(
+        "{}{}",
+        format::shading::wgsl_constants(),
+        include_str!("shader.wgsl")
+    )
+}
 
 /// Environment variable that, when set, turns native BC texture sampling off: BC1/BC3
 /// capture textures are then decoded to RGBA8 on the CPU as on an adapter without
@@ -378,7 +388,7 @@ impl Renderer {
 
         let shader = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("player shaders"),
-            source: wgpu::ShaderSource::Wgsl(include_str!("shader.wgsl").into()),
+            source: wgpu::ShaderSource::Wgsl(shader_source().into()),
         });
         let globals_bgl = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("globals"),

@@ -25,54 +25,14 @@
 //! is the coverage, kept ≥ 1 where any sample was covered so that partly covered
 //! edge pixels count as object pixels.
 
-/// PSNR reported for identical frames (and the cap of every PSNR in reports, so
-/// JSON never holds infinity).
-pub const PSNR_CAP: f64 = 100.0;
-
-/// sRGB transfer function, decoded: one 8-bit channel → linear in [0, 1] (the
-/// encoder is [`format::load::linear_to_srgb8`]).
-pub fn srgb_to_linear(c: u8) -> f64 {
-    let c = c as f64 / 255.0;
-    if c <= 0.04045 {
-        c / 12.92
-    } else {
-        ((c + 0.055) / 1.055).powf(2.4)
-    }
-}
-
-/// Luminance of RGBA8 pixels (alpha ignored).
-pub fn luminance(rgba: &[u8]) -> Vec<f32> {
-    rgba.chunks_exact(4)
-        .map(|p| 0.299 * p[0] as f32 + 0.587 * p[1] as f32 + 0.114 * p[2] as f32)
-        .collect()
-}
-
-/// PSNR in dB of a mean squared error in 8-bit levels²; `f64::INFINITY` for 0.
-pub fn psnr_of_mse(mse: f64) -> f64 {
-    if mse <= 0.0 {
-        f64::INFINITY
-    } else {
-        10.0 * (255.0f64 * 255.0 / mse).log10()
-    }
-}
+// PSNR cap, luminance, PSNR and sRGB decoding are format's, shared with the worker's
+// bake check (format::metrics, format::srgb); re-exported under the player's names.
+pub use format::metrics::{luminance_f32 as luminance, psnr_of_mse, PSNR_CAP};
+pub use format::srgb::srgb_to_linear_f64 as srgb_to_linear;
 
 /// PSNR in dB of two equally sized RGBA8 images on Y; `f64::INFINITY` when equal.
 pub fn psnr_y(a: &[u8], b: &[u8]) -> f64 {
-    let (ya, yb) = (luminance(a), luminance(b));
-    let n = ya.len().min(yb.len());
-    if n == 0 {
-        return f64::INFINITY;
-    }
-    let mse: f64 = ya
-        .iter()
-        .zip(&yb)
-        .map(|(&x, &y)| {
-            let d = x as f64 - y as f64;
-            d * d
-        })
-        .sum::<f64>()
-        / n as f64;
-    psnr_of_mse(mse)
+    format::metrics::mse_y_rgba(a, b).map_or(f64::INFINITY, psnr_of_mse)
 }
 
 /// Whether an RGBA8 pixel rendered with coverage alpha shows geometry.
@@ -313,7 +273,7 @@ pub fn downsample_linear(rgba: &[u8], width: usize, height: usize, factor: usize
                 }
             }
             for c in rgb {
-                out.push(format::load::linear_to_srgb8((c / n) as f32));
+                out.push(format::srgb::linear_to_srgb_powf((c / n) as f32));
             }
             let a = (alpha as f64 / n).round() as u8;
             out.push(if covered { a.max(1) } else { 0 });
@@ -519,7 +479,7 @@ mod tests {
         .concat();
         let d = downsample_linear(&px, 2, 2, 2);
         assert_eq!(d, vec![188, 188, 188, 64]);
-        assert_eq!(format::load::linear_to_srgb8(0.5), 188);
+        assert_eq!(format::srgb::linear_to_srgb_powf(0.5), 188);
         // One covered sample of 8 × 8 still marks the pixel as an object pixel.
         let mut big = [150u8, 190, 235, 0].repeat(64);
         big[4 * 9 + 3] = 255;

@@ -13,8 +13,8 @@
 // proportional to those angles. A texel outside [0,1]², behind the capture or with
 // alpha < 0.5 (nothing captured there) falls back to the other view, then to lit.
 
-const AMBIENT: f32 = 0.3;
-const LIGHT: vec3<f32> = vec3<f32>(0.35777088, 0.89442719, 0.26832816);
+// AMBIENT, LIGHT, SRGB_* and MAX_VIEWS are not declared here: the player prepends
+// format::shading::wgsl_constants() (player::gpu::shader_source), their one home.
 
 struct Globals {
     clip_from_world: mat4x4<f32>,
@@ -27,9 +27,9 @@ struct Globals {
 @group(0) @binding(0) var<uniform> g: Globals;
 
 fn srgb_to_linear(c: vec3<f32>) -> vec3<f32> {
-    let lo = c / 12.92;
-    let hi = pow((c + vec3<f32>(0.055)) / 1.055, vec3<f32>(2.4));
-    return select(hi, lo, c <= vec3<f32>(0.04045));
+    let lo = c / SRGB_LINEAR_SLOPE;
+    let hi = pow((c + vec3<f32>(SRGB_OFFSET)) / SRGB_SCALE, vec3<f32>(SRGB_GAMMA));
+    return select(hi, lo, c <= vec3<f32>(SRGB_DECODE_THRESHOLD));
 }
 
 fn shade(albedo: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
@@ -82,8 +82,8 @@ fn fs_lit(i: LitOut) -> @location(0) vec4<f32> {
 // ---- proxies ----
 
 struct Proxy {
-    tex_from_world: array<mat4x4<f32>, 8>,
-    view_eye: array<vec4<f32>, 8>,
+    tex_from_world: array<mat4x4<f32>, MAX_VIEWS>,
+    view_eye: array<vec4<f32>, MAX_VIEWS>,
     // x: number of views
     counts: vec4<u32>,
 };
@@ -172,11 +172,11 @@ fn fs_proxy(i: ProxyOut) -> @location(0) vec4<f32> {
     if g.debug.x != 0u {
         return vec4<f32>(lit, 1.0);
     }
-    let n = min(p.counts.x, 8u);
+    let n = min(p.counts.x, MAX_VIEWS);
     let to_poly = i.centroid - g.eye.xyz;
     // The two views of the mask closest in direction to viewer → polygon.
-    var best0 = 8u;
-    var best1 = 8u;
+    var best0 = MAX_VIEWS;
+    var best1 = MAX_VIEWS;
     var a0 = 1e9;
     var a1 = 1e9;
     for (var k = 0u; k < n; k = k + 1u) {
@@ -194,12 +194,12 @@ fn fs_proxy(i: ProxyOut) -> @location(0) vec4<f32> {
             a1 = a;
         }
     }
-    if best0 == 8u {
+    if best0 == MAX_VIEWS {
         return vec4<f32>(lit, 1.0);
     }
     let c0 = project_view(best0, i.world);
     var c1 = vec4<f32>(0.0);
-    if best1 != 8u {
+    if best1 != MAX_VIEWS {
         c1 = project_view(best1, i.world);
     }
     var w0 = c0.a;

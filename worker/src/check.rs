@@ -21,8 +21,11 @@ use format::{Mesh, Scene};
 use glam::Vec3;
 use thiserror::Error;
 
-/// PSNR of identical images (dB).
-pub const MAX_PSNR_DB: f64 = 100.0;
+/// The image metrics are [`format::metrics`]' (shared with the player's compare);
+/// the check reports PSNR capped at [`MAX_PSNR_DB`].
+pub use format::metrics::{
+    capped_psnr_of_mse as psnr_of_mse, luminance, mse_y, PSNR_CAP as MAX_PSNR_DB,
+};
 
 /// Why a check cannot run.
 #[derive(Debug, Error, Clone, PartialEq)]
@@ -90,36 +93,6 @@ pub fn check_views(
             (eye, Vec3::new(a.cos(), 0.0, a.sin()))
         })
         .collect()
-}
-
-/// Luminance of an sRGB8 pixel.
-pub fn luminance(c: [u8; 4]) -> f64 {
-    0.299 * c[0] as f64 + 0.587 * c[1] as f64 + 0.114 * c[2] as f64
-}
-
-/// Mean squared luminance difference of two images of equal size (`None` when the
-/// sizes differ or are zero).
-pub fn mse_y(a: &[[u8; 4]], b: &[[u8; 4]]) -> Option<f64> {
-    if a.is_empty() || a.len() != b.len() {
-        return None;
-    }
-    let sum = a
-        .iter()
-        .zip(b)
-        .map(|(&p, &q)| {
-            let d = luminance(p) - luminance(q);
-            d * d
-        })
-        .sum::<f64>();
-    Some(sum / a.len() as f64)
-}
-
-/// PSNR (dB) of a mean squared error on 8-bit values, capped at [`MAX_PSNR_DB`].
-pub fn psnr_of_mse(mse: f64) -> f64 {
-    if mse <= 0.0 {
-        return MAX_PSNR_DB;
-    }
-    (10.0 * (255.0 * 255.0 / mse).log10()).min(MAX_PSNR_DB)
 }
 
 /// PSNR (dB) on luminance between two images of equal size, capped at

@@ -34,7 +34,7 @@ use crate::grid::Prism;
 use crate::lod_chain::LodChains;
 use crate::raster::ProjectedTexture;
 use crate::simplify::{
-    pixels_per_radian, simplify_seeded, ProjectedLength, SimplifyInput, SimplifyParams, MAX_VIEWS,
+    pixels_per_radian, simplify_seeded, ProjectedLength, SimplifyInput, SimplifyParams, CELL_VIEWS,
 };
 use crate::svmesh::{
     draw_item, ms_since, tidy_selection, world_vertices, MemberMesh, ProxyError, ProxySettings,
@@ -61,7 +61,7 @@ pub struct MvMesh {
 
 /// Derives the MVMesh of `instance` for a cell whose view region is `prism`, with
 /// captures from `eyes` (the cell centre first, then the neighbours' centres; at
-/// most [`MAX_VIEWS`] are used).
+/// most [`CELL_VIEWS`] are used).
 pub fn derive_mvmesh(
     scene: &Scene,
     chains: &LodChains,
@@ -77,7 +77,7 @@ pub fn derive_mvmesh(
     // selection, states and weights are those of its vertices and triangles.
     let start = StartMesh::of(scene, chains, &item, settings);
     let mesh = start.mesh;
-    let eyes = &eyes[..eyes.len().min(MAX_VIEWS as usize)];
+    let eyes = &eyes[..eyes.len().min(CELL_VIEWS as usize)];
 
     // Step 1: polygons not back-facing for the whole cell.
     let t = Instant::now();

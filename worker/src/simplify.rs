@@ -92,8 +92,11 @@ use std::f32::consts::PI;
 /// a collapse that turns any triangle by more is a fold-over and is rejected.
 pub const MIN_NORMAL_TURN_COS: f32 = 0.0;
 
-/// Most views a view set can name: the cell centre and its 6 neighbours (§3.1.4).
-pub const MAX_VIEWS: u32 = 7;
+/// Views of a cell's MVMeshes, the most a view set (a `u8` bit mask) names: the
+/// cell centre and its 6 neighbours' centres (§3.1.4). Not the pack's limit
+/// [`format::pack::cell::MAX_MV_VIEWS`] (8, what a reader accepts), which it must not exceed.
+pub const CELL_VIEWS: u32 = 7;
+const _: () = assert!(CELL_VIEWS as usize <= format::pack::cell::MAX_MV_VIEWS);
 
 /// Pixels per radian of a capture whose `image_res` pixels span one 60° side face
 /// (DESIGN.md "Capture resolution").
@@ -290,7 +293,7 @@ pub enum SimplifyError {
     },
     #[error("{what} of vertex {vertex} is not finite")]
     NonFinite { what: &'static str, vertex: u32 },
-    #[error("view set of vertex {vertex} is {set:#04x}, but only {MAX_VIEWS} views exist")]
+    #[error("view set of vertex {vertex} is {set:#04x}, but only {CELL_VIEWS} views exist")]
     ViewSetOutOfRange { vertex: u32, set: u8 },
     #[error("edge-length tolerance {0} is negative or not a number")]
     BadTolerance(f32),
@@ -557,7 +560,7 @@ fn check_input(input: &SimplifyInput, tolerance: f32) -> Result<(), SimplifyErro
                 return Err(SimplifyError::NonFinite { what, vertex: v });
             }
             if let Some(sets) = input.view_sets {
-                if u32::from(sets[i]) >= 1 << MAX_VIEWS {
+                if u32::from(sets[i]) >= 1 << CELL_VIEWS {
                     return Err(SimplifyError::ViewSetOutOfRange {
                         vertex: v,
                         set: sets[i],

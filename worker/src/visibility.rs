@@ -103,6 +103,7 @@
 
 use crate::backface::{front_facing_vertices_of, planes_of, world_positions};
 use crate::raster::{Capture, CullMode, DrawItem, View, BACKGROUND_ID};
+use crate::shade::{linear_to_srgb, srgb_to_linear, AMBIENT, LIGHT_DIR};
 use format::Mesh;
 use glam::{DVec3, Mat3, Mat4, Vec2, Vec3, Vec3A, Vec4};
 use obvhs::{
@@ -597,7 +598,7 @@ pub fn ray_cast_capture(items: &[DrawItem], view: &View, cull: CullMode) -> Capt
         .iter()
         .map(|item| Mat3::from_mat4(item.transform).inverse().transpose())
         .collect();
-    let light = Vec3::new(0.4, 1.0, 0.3).normalize();
+    let light = LIGHT_DIR;
 
     let rows: Vec<Vec<Sample>> = (0..height)
         .into_par_iter()
@@ -689,7 +690,6 @@ fn shade(
     direction: Vec3,
     light: Vec3,
 ) -> [u8; 4] {
-    const AMBIENT: f32 = 0.3;
     let tri = item.mesh.triangles[triangle as usize];
     let [a, b, c] = tri.map(|i| world[i as usize]);
     let bary = barycentric(point, a, b, c);
@@ -732,23 +732,4 @@ fn barycentric(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> [f32; 3] {
     let v = (d11 * d20 - d01 * d21) / denominator;
     let w = (d00 * d21 - d01 * d20) / denominator;
     [1.0 - v - w, v, w]
-}
-
-fn srgb_to_linear(c: u8) -> f32 {
-    let c = c as f32 / 255.0;
-    if c <= 0.04045 {
-        c / 12.92
-    } else {
-        ((c + 0.055) / 1.055).powf(2.4)
-    }
-}
-
-fn linear_to_srgb(c: f32) -> u8 {
-    let c = c.clamp(0.0, 1.0);
-    let s = if c <= 0.003_130_8 {
-        c * 12.92
-    } else {
-        1.055 * c.powf(1.0 / 2.4) - 0.055
-    };
-    (s * 255.0 + 0.5) as u8
 }

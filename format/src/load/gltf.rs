@@ -7,7 +7,8 @@
 //! when any primitive has `COLOR_0` or a non-white factor; else the procedural
 //! albedo. Textures are not read (images are never decoded).
 
-use super::{linear_to_srgb8, parse_error, Location, ModelFormat, Parsed};
+use super::{parse_error, Location, ModelFormat, Parsed};
+use crate::srgb::linear_to_srgb_powf;
 use crate::cleanup::RawMesh;
 use crate::load::LoadError;
 use glam::{Mat3, Mat4, Vec3};
@@ -117,9 +118,9 @@ pub(crate) fn parse(path: &Path, bytes: &[u8]) -> Result<Parsed, LoadError> {
                     .copied()
                     .unwrap_or([1.0; 4]);
                 colors.push([
-                    linear_to_srgb8(c[0] * p.factor[0]),
-                    linear_to_srgb8(c[1] * p.factor[1]),
-                    linear_to_srgb8(c[2] * p.factor[2]),
+                    linear_to_srgb_powf(c[0] * p.factor[0]),
+                    linear_to_srgb_powf(c[1] * p.factor[1]),
+                    linear_to_srgb_powf(c[2] * p.factor[2]),
                     255,
                 ]);
             }

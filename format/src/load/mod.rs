@@ -226,22 +226,6 @@ pub(crate) fn parse_error(
     }
 }
 
-/// Linear [0, 1] → sRGB8 (the sRGB transfer function, rounded to nearest; also the
-/// player's encoder for its anti-aliased reference).
-pub fn linear_to_srgb8(x: f32) -> u8 {
-    let x = if x.is_finite() {
-        x.clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    let s = if x <= 0.003_130_8 {
-        12.92 * x
-    } else {
-        1.055 * x.powf(1.0 / 2.4) - 0.055
-    };
-    (s * 255.0).round().clamp(0.0, 255.0) as u8
-}
-
 /// An already-sRGB [0, 1] value → sRGB8.
 pub(crate) fn unit_to_u8(x: f32) -> u8 {
     if x.is_finite() {
