@@ -319,3 +319,12 @@ fn border_notch_points_belong_to_the_nearest_border_cell() {
     // But a point off the ground inside a border hexagon has one.
     assert_eq!(g.cell_at(Vec2::new(-5.0, 0.0)), Some(0));
 }
+
+/// The worker's grid is format's (issue 14 item 3): one type, shared with the player.
+#[test]
+fn worker_grid_is_formats() {
+    fn same(g: format::grid::HexGrid) -> HexGrid {
+        g
+    }
+    assert_eq!(same(park()), park());
+}
