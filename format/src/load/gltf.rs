@@ -8,9 +8,9 @@
 //! albedo. Textures are not read (images are never decoded).
 
 use super::{parse_error, Location, ModelFormat, Parsed};
-use crate::srgb::linear_to_srgb_powf;
 use crate::cleanup::RawMesh;
 use crate::load::LoadError;
+use crate::srgb::linear_to_srgb_powf;
 use glam::{Mat3, Mat4, Vec3};
 use std::path::Path;
 
