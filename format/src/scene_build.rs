@@ -338,79 +338,80 @@ fn build_with_placements(plan: &Plan) -> Result<(Scene, Option<Vec<park::Placeme
 
     // Step 4: instances.
     let mut placed = None;
-    let instances = match &plan.scene {
-        SceneSpec::Instances(list) => list
-            .iter()
-            .zip(&entry_model)
-            .map(|(spec, &model)| Instance {
-                model,
-                transform: Mat4::from_translation(Vec3::from(spec.translation))
-                    * Mat4::from_rotation_y(spec.rotation_y_deg.to_radians())
-                    * Mat4::from_scale(Vec3::splat(spec.scale)),
-                tint: Vec3::from(spec.tint),
-            })
-            .collect(),
-        SceneSpec::Park(spec) => {
-            let entries: Vec<ParkEntry> = spec
-                .models
+    let instances =
+        match &plan.scene {
+            SceneSpec::Instances(list) => list
                 .iter()
                 .zip(&entry_model)
-                .map(|(m, &model)| ParkEntry {
-                    count: m.count,
-                    footprint: footprint(&models[model as usize].mesh),
+                .map(|(spec, &model)| Instance {
+                    model,
+                    transform: Mat4::from_translation(Vec3::from(spec.translation))
+                        * Mat4::from_rotation_y(spec.rotation_y_deg.to_radians())
+                        * Mat4::from_scale(Vec3::splat(spec.scale)),
+                    tint: Vec3::from(spec.tint),
                 })
-                .collect();
-            let (_grid, placements) = park::place(
-                spec.seed,
-                &entries,
-                spec.tint_min,
-                spec.tint_max,
-                &plan.ground,
-            )
-            .map_err(|source| SceneError::Park {
-                manifest: plan.manifest_path.clone(),
-                source,
-            })?;
-            placed = Some(placements.clone());
-            placements
-                .iter()
-                .map(|p| Instance {
-                    model: entry_model[p.model_entry],
-                    transform: park_transform(p),
-                    tint: Vec3::from(p.tint),
-                })
-                .collect()
-        }
-        SceneSpec::City(spec) => {
-            let props: Vec<crate::city::PropEntry> = spec
-                .props
-                .iter()
-                .zip(&entry_model)
-                .map(|(m, &model)| crate::city::PropEntry {
-                    count: m.count,
-                    footprint: footprint(&models[model as usize].mesh),
-                })
-                .collect();
-            let params = city_params.as_ref().expect("a city has its parameters");
-            let (_layout, placements) = crate::city::place(params, &props, &plan.ground)
-                .map_err(|source| SceneError::City {
+                .collect(),
+            SceneSpec::Park(spec) => {
+                let entries: Vec<ParkEntry> = spec
+                    .models
+                    .iter()
+                    .zip(&entry_model)
+                    .map(|(m, &model)| ParkEntry {
+                        count: m.count,
+                        footprint: footprint(&models[model as usize].mesh),
+                    })
+                    .collect();
+                let (_grid, placements) = park::place(
+                    spec.seed,
+                    &entries,
+                    spec.tint_min,
+                    spec.tint_max,
+                    &plan.ground,
+                )
+                .map_err(|source| SceneError::Park {
                     manifest: plan.manifest_path.clone(),
                     source,
                 })?;
-            placements
-                .iter()
-                .map(|p| Instance {
-                    model: match p.kind {
-                        crate::city::PlacedKind::Building(v) => first_building + v,
-                        crate::city::PlacedKind::Prop(k) => entry_model[k],
-                    },
-                    transform: Mat4::from_translation(Vec3::from(p.translation))
-                        * Mat4::from_rotation_y(p.yaw_deg.to_radians()),
-                    tint: Vec3::from(p.tint),
-                })
-                .collect()
-        }
-    };
+                placed = Some(placements.clone());
+                placements
+                    .iter()
+                    .map(|p| Instance {
+                        model: entry_model[p.model_entry],
+                        transform: park_transform(p),
+                        tint: Vec3::from(p.tint),
+                    })
+                    .collect()
+            }
+            SceneSpec::City(spec) => {
+                let props: Vec<crate::city::PropEntry> = spec
+                    .props
+                    .iter()
+                    .zip(&entry_model)
+                    .map(|(m, &model)| crate::city::PropEntry {
+                        count: m.count,
+                        footprint: footprint(&models[model as usize].mesh),
+                    })
+                    .collect();
+                let params = city_params.as_ref().expect("a city has its parameters");
+                let (_layout, placements) = crate::city::place(params, &props, &plan.ground)
+                    .map_err(|source| SceneError::City {
+                        manifest: plan.manifest_path.clone(),
+                        source,
+                    })?;
+                placements
+                    .iter()
+                    .map(|p| Instance {
+                        model: match p.kind {
+                            crate::city::PlacedKind::Building(v) => first_building + v,
+                            crate::city::PlacedKind::Prop(k) => entry_model[k],
+                        },
+                        transform: Mat4::from_translation(Vec3::from(p.translation))
+                            * Mat4::from_rotation_y(p.yaw_deg.to_radians()),
+                        tint: Vec3::from(p.tint),
+                    })
+                    .collect()
+            }
+        };
     Ok((
         Scene {
             models,

@@ -194,7 +194,9 @@ pub fn export_cell(out: &Path, cell_id: u32, dest: &Path) -> Result<ExportSummar
         None => None,
         Some(g) => {
             let ge = index.group(g).ok_or_else(|| {
-                failed(anyhow!("index.pack: cell {cell_id}'s group {g} has no entry"))
+                failed(anyhow!(
+                    "index.pack: cell {cell_id}'s group {g} has no entry"
+                ))
             })?;
             ge.verify(out).map_err(|e| failed(e.into()))?;
             let path = out.join(&ge.file);

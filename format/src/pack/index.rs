@@ -490,7 +490,10 @@ impl Index {
                 return Err(bad(format!("group ids not increasing at entry {i}")));
             }
             if r.neighbour_count != 0 {
-                return Err(bad(format!("group {}: a group has no neighbours", r.cell_id)));
+                return Err(bad(format!(
+                    "group {}: a group has no neighbours",
+                    r.cell_id
+                )));
             }
             let end = (r.name_offset as usize).checked_add(r.name_len as usize);
             let name = end
@@ -520,11 +523,7 @@ impl Index {
                 file,
                 SectionKind::INDEX_CELL_GROUPS,
                 0,
-                format!(
-                    "{} entries for {} cells",
-                    cell_groups.len(),
-                    cells.len()
-                ),
+                format!("{} entries for {} cells", cell_groups.len(), cells.len()),
             ));
         }
         for (k, (cell, &g)) in cells.iter_mut().zip(&cell_groups).enumerate() {
