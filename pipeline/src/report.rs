@@ -439,10 +439,7 @@ pub fn to_markdown(r: &Report) -> String {
         ("base (models, instances)", s.base_bytes),
         ("cell meshes (indices, masks, tables)", s.mesh_bytes),
         ("cell textures", s.texture_bytes),
-        (
-            "far-field group packs (all)",
-            s.group_bytes,
-        ),
+        ("far-field group packs (all)", s.group_bytes),
         ("of which textures", s.group_texture_bytes),
         ("index", s.index_bytes),
         ("total", s.total_bytes),

@@ -356,7 +356,10 @@ mod tests {
             });
         }
         let picked = jobs_for_cells(&jobs, &BTreeSet::from([1, 6]), |c| c / 2);
-        assert_eq!(picked.iter().map(|j| j.id).collect::<Vec<_>>(), vec![0, 3, 4, 5]);
+        assert_eq!(
+            picked.iter().map(|j| j.id).collect::<Vec<_>>(),
+            vec![0, 3, 4, 5]
+        );
         let picked = jobs_for_cells(&jobs, &BTreeSet::from([1]), |c| c / 2);
         assert_eq!(picked.iter().map(|j| j.id).collect::<Vec<_>>(), vec![0, 4]);
     }

@@ -828,7 +828,8 @@ fn a_cells_far_field_group_is_drawn_with_it() {
             *e = fresh;
         }
     }
-    index.groups = vec![IndexEntry::for_file(dir.path(), "groups/0.pack", 0, Vec::new(), fp).unwrap()];
+    index.groups =
+        vec![IndexEntry::for_file(dir.path(), "groups/0.pack", 0, Vec::new(), fp).unwrap()];
     index.write(&index_path).unwrap();
     let mut p = open(dir.path(), (64, 64)).unwrap();
     let mut s = Streamer::new(&p.bake, no_prefetch());
