@@ -288,9 +288,12 @@ mod tests {
 #[derive(Clone, Debug, Serialize)]
 pub struct BakeCheck {
     pub dir: String,
-    /// Cell and far-field group packs the index lists, and how many verified.
+    /// Cell packs the index lists, and how many verified.
     pub cells_indexed: usize,
     pub cells_ok: usize,
+    /// Far-field group packs the index lists, and how many verified.
+    pub groups_indexed: usize,
+    pub groups_ok: usize,
     /// One line per problem: the pack and what differs.
     pub problems: Vec<String>,
 }
@@ -305,7 +308,7 @@ pub fn check_bake(dir: &Path) -> anyhow::Result<BakeCheck> {
     let index = Index::read(&dir.join("index.pack"))
         .with_context(|| format!("{}: cannot read the index", dir.display()))?;
     let mut problems = Vec::new();
-    let mut ok = 0;
+    let (mut ok, mut groups_ok) = (0, 0);
     // The index against the base pack: every listed cell and neighbour is a cell of
     // the base pack's grid.
     let grid_cells = base.grid.n_cols as u64 * base.grid.n_rows as u64;
@@ -369,14 +372,17 @@ pub fn check_bake(dir: &Path) -> anyhow::Result<BakeCheck> {
                 .map_err(|e| format!("{}: {e}", path.display()))
         })();
         match problem {
+            Ok(()) if is_group => groups_ok += 1,
             Ok(()) => ok += 1,
             Err(p) => problems.push(p),
         }
     }
     Ok(BakeCheck {
         dir: dir.display().to_string(),
-        cells_indexed: index.cells.len() + index.groups.len(),
+        cells_indexed: index.cells.len(),
         cells_ok: ok,
+        groups_indexed: index.groups.len(),
+        groups_ok,
         problems,
     })
 }
@@ -384,8 +390,8 @@ pub fn check_bake(dir: &Path) -> anyhow::Result<BakeCheck> {
 /// Text form of [`BakeCheck`].
 pub fn render_bake_check(c: &BakeCheck) -> String {
     let mut out = format!(
-        "{}: {} of {} indexed cell and far-field group packs verified against index.pack and base.pack\n",
-        c.dir, c.cells_ok, c.cells_indexed
+        "{}: {} of {} indexed cell packs and {} of {} far-field group packs verified against index.pack and base.pack\n",
+        c.dir, c.cells_ok, c.cells_indexed, c.groups_ok, c.groups_indexed
     );
     for p in &c.problems {
         let _ = writeln!(out, "  {p}");

@@ -192,18 +192,22 @@ pub fn resolve_cells(
     Ok(cells)
 }
 
-/// The jobs holding at least one of `cells` or one of their far-field groups
-/// (`group_of`), in job order.
+/// The jobs holding at least one of `cells`, and the far-field jobs of every group
+/// (`group_of`) a cell of those jobs belongs to (so that each baked cell has its
+/// group and is listed in the index), in job order.
 pub fn jobs_for_cells(
     jobs: &[Job],
     cells: &BTreeSet<u32>,
     group_of: impl Fn(u32) -> u32,
 ) -> Vec<Job> {
-    let groups: BTreeSet<u32> = cells.iter().map(|&c| group_of(c)).collect();
+    let holds = |j: &Job| j.cells.iter().any(|c| cells.contains(c));
+    let groups: BTreeSet<u32> = jobs
+        .iter()
+        .filter(|j| holds(j))
+        .flat_map(|j| j.cells.iter().map(|&c| group_of(c)))
+        .collect();
     jobs.iter()
-        .filter(|j| {
-            j.cells.iter().any(|c| cells.contains(c)) || j.groups.iter().any(|g| groups.contains(g))
-        })
+        .filter(|j| holds(j) || j.groups.iter().any(|g| groups.contains(g)))
         .cloned()
         .collect()
 }

@@ -64,9 +64,10 @@ fn cells_bakes_only_their_jobs_then_a_full_run_completes_identically() {
     // 2. More cells: done jobs are skipped (resumable).
     let (o, v) = run_json(&part, &["--cells", "3,at:1:1"]);
     assert!(o.status.success(), "{}", text(&o));
-    // The cell at (1, 1) is cell 0: job (0, 1) is new, job (3, 4) is done.
-    assert_eq!(v["jobs"], 2, "{v}");
-    assert_eq!(v["jobs_skipped"], 1, "{v}");
+    // The cell at (1, 1) is cell 0: job (0, 1) is new, job (3, 4) is done, and so
+    // are the far-field jobs of their cells' groups (both, baked in step 1).
+    assert_eq!(v["jobs"], 4, "{v}");
+    assert_eq!(v["jobs_skipped"], 3, "{v}");
     assert_eq!(v["jobs_baked"], 1, "{v}");
     assert_eq!(v["partial"]["baked_cells"], 4, "{v}");
     assert_eq!(indexed_cells(&part), vec![0, 1, 3, 4]);
@@ -75,7 +76,8 @@ fn cells_bakes_only_their_jobs_then_a_full_run_completes_identically() {
     //    bake that never was partial.
     let (o, v) = run_json(&part, &[]);
     assert!(o.status.success(), "{}", text(&o));
-    assert_eq!(v["jobs_skipped"], 2, "{v}");
+    // The two cell jobs and two far-field jobs of steps 1–2 are done.
+    assert_eq!(v["jobs_skipped"], 4, "{v}");
     assert!(!part.join("partial.json").exists());
     let report: serde_json::Value =
         serde_json::from_slice(&std::fs::read(part.join("report.json")).unwrap()).unwrap();
@@ -87,6 +89,15 @@ fn cells_bakes_only_their_jobs_then_a_full_run_completes_identically() {
         assert!(
             std::fs::read(part.join(f)).unwrap() == std::fs::read(full.join(f)).unwrap(),
             "{f} differs"
+        );
+    }
+    let groups = Index::read(&full.join("index.pack")).unwrap().groups;
+    assert!(!groups.is_empty());
+    for g in &groups {
+        assert!(
+            std::fs::read(part.join(&g.file)).unwrap() == std::fs::read(full.join(&g.file)).unwrap(),
+            "{} differs",
+            g.file
         );
     }
     for c in 0..9 {
@@ -104,9 +115,10 @@ fn set_overrides_make_a_different_bake() {
     let out = tmp.path().join("o");
     let (o, v) = run_json(&out, &["--cells", "0", "--set", "cells_per_job=1"]);
     assert!(o.status.success(), "{}", text(&o));
+    // The cell's job and the far-field job of its group.
     assert_eq!(
         (v["jobs"].as_u64(), v["cells"].as_u64()),
-        (Some(1), Some(1)),
+        (Some(2), Some(1)),
         "{v}"
     );
     let plan: serde_json::Value =
@@ -127,7 +139,7 @@ fn set_overrides_make_a_different_bake() {
         ],
     );
     assert!(o.status.success(), "{}", text(&o));
-    assert_eq!(v["jobs_baked"], 1, "{v}");
+    assert_eq!(v["jobs_baked"], 2, "{v}");
     let report: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
     assert_eq!(report["bake"]["edge_length_tolerance"], 6.0);

@@ -109,9 +109,17 @@ fn exported_demo_cell_passes_the_khronos_gltf_validator() {
     for kind in ["SvMesh", "MvMesh", "Cluster"] {
         assert!(summary["proxies"][kind].as_u64().unwrap_or(0) > 0, "{kind}");
     }
+    // The cell's own proxies and its far-field group's.
+    let group = pack.far_group.map(|g| {
+        let f = format::pack::PackFile::open(&out.join(format!("groups/{g}.pack"))).unwrap();
+        CellPack::decode_group(&f).unwrap()
+    });
+    let (group_triangles, group_proxies) = group
+        .as_ref()
+        .map_or((0, 0), |g| (g.triangle_count(), g.proxies.len()));
     assert_eq!(
         summary["triangles_proxy"].as_u64().unwrap(),
-        pack.triangle_count(),
+        pack.triangle_count() + group_triangles,
         "every proxy triangle is exported once"
     );
     // Per-vertex UVs stand in for per-pixel projective texturing: on average far
@@ -127,7 +135,7 @@ fn exported_demo_cell_passes_the_khronos_gltf_validator() {
         .collect();
     let count = |prefix: &str| names.iter().filter(|n| n.starts_with(prefix)).count();
     assert_eq!(count("instance "), pack.originals.len());
-    assert_eq!(count("proxy "), pack.proxies.len());
+    assert_eq!(count("proxy "), pack.proxies.len() + group_proxies);
     assert_eq!(
         doc.images().count() as u64,
         summary["textures"].as_u64().unwrap()
