@@ -202,14 +202,16 @@ fn bake_files(out: &Path) -> Vec<(String, Vec<u8>)> {
             std::fs::read(out.join("index.pack")).unwrap(),
         ),
     ];
-    let mut cells: Vec<_> = std::fs::read_dir(out.join("cells"))
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .collect();
-    cells.sort();
-    for c in cells {
-        let name = format!("cells/{}", c.file_name().unwrap().to_string_lossy());
-        files.push((name, std::fs::read(&c).unwrap()));
+    // Cell packs and far-field group packs (a bake without groups has no folder).
+    for dir in ["cells", "groups"] {
+        let mut packs: Vec<_> = std::fs::read_dir(out.join(dir))
+            .map(|d| d.map(|e| e.unwrap().path()).collect())
+            .unwrap_or_default();
+        packs.sort();
+        for c in packs {
+            let name = format!("{dir}/{}", c.file_name().unwrap().to_string_lossy());
+            files.push((name, std::fs::read(&c).unwrap()));
+        }
     }
     files
 }
@@ -308,7 +310,8 @@ fn reused_proxies(out: &Path) -> (u64, u64) {
         if path.extension().is_some_and(|x| x == "json") {
             let r: serde_json::Value =
                 serde_json::from_slice(&std::fs::read(&path).unwrap()).unwrap();
-            for c in r["cells"].as_array().unwrap() {
+            let groups = r["groups"].as_array().cloned().unwrap_or_default();
+            for c in r["cells"].as_array().unwrap().iter().chain(&groups) {
                 reused += c["report"]["reused_proxies"].as_u64().unwrap();
                 all += c["report"]["proxy_keys"].as_array().unwrap().len() as u64;
             }
