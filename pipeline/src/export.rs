@@ -447,7 +447,7 @@ struct Builder {
 
 impl Builder {
     fn view(&mut self, bytes: &[u8], target: Option<u32>) -> usize {
-        while self.bin.len() % 4 != 0 {
+        while !self.bin.len().is_multiple_of(4) {
             self.bin.push(0);
         }
         let mut v = json!({ "buffer": 0, "byteOffset": self.bin.len(), "byteLength": bytes.len() });
@@ -571,7 +571,7 @@ impl Builder {
 
     /// The GLB: header, JSON chunk (space-padded), BIN chunk (zero-padded).
     fn finish(mut self, root: usize) -> anyhow::Result<Vec<u8>> {
-        while self.bin.len() % 4 != 0 {
+        while !self.bin.len().is_multiple_of(4) {
             self.bin.push(0);
         }
         let mut doc = json!({

@@ -95,7 +95,8 @@ fn cells_bakes_only_their_jobs_then_a_full_run_completes_identically() {
     assert!(!groups.is_empty());
     for g in &groups {
         assert!(
-            std::fs::read(part.join(&g.file)).unwrap() == std::fs::read(full.join(&g.file)).unwrap(),
+            std::fs::read(part.join(&g.file)).unwrap()
+                == std::fs::read(full.join(&g.file)).unwrap(),
             "{} differs",
             g.file
         );
