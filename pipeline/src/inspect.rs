@@ -187,8 +187,25 @@ fn summarize(file: &PackFile) -> Result<String, format::pack::PackError> {
                 Some(g) => format!(" (far field: group {g})"),
                 None => String::new(),
             };
+            // Textures by encoding: count and encoded bytes (issue 15).
+            let mut by_encoding: std::collections::BTreeMap<&str, (usize, usize)> =
+                std::collections::BTreeMap::new();
+            for v in c.proxies.iter().flat_map(|p| &p.views) {
+                let e = by_encoding.entry(v.texture.encoding.name()).or_default();
+                e.0 += 1;
+                e.1 += v.texture.data.len();
+            }
+            let encodings: Vec<String> = by_encoding
+                .iter()
+                .map(|(name, (n, bytes))| format!("{n} {name} ({bytes} bytes)"))
+                .collect();
+            let encodings = if encodings.is_empty() {
+                String::new()
+            } else {
+                format!("; textures: {}", encodings.join(", "))
+            };
             format!(
-                "{} {}{far}, {} originals, {} proxies (SvMesh {}, Cluster {}, MvMesh {}, LayeredImpostor {}), {} proxy triangles, {views} views ({texels} texels), fingerprint {}",
+                "{} {}{far}, {} originals, {} proxies (SvMesh {}, Cluster {}, MvMesh {}, LayeredImpostor {}), {} proxy triangles, {views} views ({texels} texels{encodings}), fingerprint {}",
                 if group { "far-field group" } else { "cell" },
                 c.cell_id,
                 c.originals.len(),
