@@ -19,6 +19,43 @@ pub struct Mesh {
 }
 
 impl Mesh {
+    /// The closed axis-aligned box `[lo, hi]`: 8 vertices of colour `albedo`, 12
+    /// outward, counter-clockwise triangles, smooth normals (tests and scenes of
+    /// blocks).
+    pub fn cuboid(lo: [f32; 3], hi: [f32; 3], albedo: [u8; 4]) -> Mesh {
+        let positions: Vec<[f32; 3]> = (0..8)
+            .map(|k: usize| {
+                [
+                    if k & 1 == 0 { lo[0] } else { hi[0] },
+                    if k & 2 == 0 { lo[1] } else { hi[1] },
+                    if k & 4 == 0 { lo[2] } else { hi[2] },
+                ]
+            })
+            .collect();
+        let triangles = vec![
+            [0, 2, 3],
+            [0, 3, 1],
+            [4, 5, 7],
+            [4, 7, 6],
+            [0, 1, 5],
+            [0, 5, 4],
+            [2, 6, 7],
+            [2, 7, 3],
+            [0, 4, 6],
+            [0, 6, 2],
+            [1, 3, 7],
+            [1, 7, 5],
+        ];
+        let mut mesh = Mesh {
+            positions,
+            normals: vec![[0.0, 1.0, 0.0]; 8],
+            albedo: vec![albedo; 8],
+            triangles,
+        };
+        crate::cleanup::recompute_normals(&mut mesh);
+        mesh
+    }
+
     pub fn vertex_count(&self) -> usize {
         self.positions.len()
     }

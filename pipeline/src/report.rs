@@ -199,6 +199,37 @@ fn num(v: &serde_json::Value, key: &str) -> f64 {
     v.get(key).and_then(|x| x.as_f64()).unwrap_or(0.0)
 }
 
+/// Proxies of a cell's or group's report (one content key each).
+fn key_count(r: &serde_json::Value) -> u64 {
+    r.get("proxy_keys")
+        .and_then(|k| k.as_array())
+        .map_or(0, |k| k.len() as u64)
+}
+
+/// A report's per-stage milliseconds.
+fn stage_ms(r: &serde_json::Value) -> Vec<(String, f64)> {
+    r.get("stage_ms")
+        .and_then(|s| s.as_object())
+        .map(|m| {
+            m.iter()
+                .map(|(k, v)| (k.clone(), v.as_f64().unwrap_or(0.0)))
+                .collect()
+        })
+        .unwrap_or_default()
+}
+
+/// Stored bytes of a pack's `textures` section, from its own section table (0 for a
+/// pack that does not open).
+fn stored_texture_bytes(path: &Path) -> u64 {
+    PackFile::read(path).map_or(0, |pack| {
+        pack.sections()
+            .iter()
+            .filter(|s| s.kind == SectionKind::TEXTURES)
+            .map(|s| s.stored_len)
+            .sum()
+    })
+}
+
 /// Builds the report of a finished (or partly finished) bake from its files.
 pub fn build_report(out: &Path) -> anyhow::Result<Report> {
     use anyhow::Context;
@@ -235,37 +266,28 @@ pub fn build_report(out: &Path) -> anyhow::Result<Report> {
     // cell draws).
     let mut groups: BTreeMap<u32, serde_json::Value> = BTreeMap::new();
     let mut far = FarFieldStats::default();
-    for record in plan.jobs.iter().filter_map(|j| done_record(out, j)) {
+    // Only valid done records count (a stale or torn record is not a baked cell);
+    // each is checked once (it reads and hashes every pack it lists).
+    let records: Vec<Option<worker::job::JobRecord>> =
+        plan.jobs.iter().map(|j| done_record(out, j)).collect();
+    for record in records.iter().flatten() {
         for g in &record.groups {
             let r = &g.report;
             far.groups += 1;
             far.group_bytes += g.bytes;
             far.bytes_shared += g.bytes * (num(r, "far_objects") as u64).saturating_sub(1);
-            far.group_proxies += r
-                .get("proxy_keys")
-                .and_then(|k| k.as_array())
-                .map_or(0, |k| k.len() as u64);
+            far.group_proxies += key_count(r);
             report.proxies_reused += num(r, "reused_proxies") as u64;
-            if let Some(stages) = r.get("stage_ms").and_then(|s| s.as_object()) {
-                for (k, v) in stages {
-                    *report.stage_s.entry(k.clone()).or_default() +=
-                        v.as_f64().unwrap_or(0.0) / 1000.0;
-                }
+            for (k, ms) in stage_ms(r) {
+                *report.stage_s.entry(k).or_default() += ms / 1000.0;
             }
-            if let Ok(pack) = PackFile::read(&out.join(&g.file)) {
-                for s in pack.sections() {
-                    if s.kind == SectionKind::TEXTURES {
-                        report.storage.group_texture_bytes += s.stored_len;
-                    }
-                }
-            }
+            report.storage.group_texture_bytes += stored_texture_bytes(&out.join(&g.file));
             report.storage.group_bytes += g.bytes;
             groups.insert(g.cell, r.clone());
         }
     }
-    for job in &plan.jobs {
-        // Only valid done records count (a stale or torn record is not a baked cell).
-        let Some(record) = done_record(out, job) else {
+    for (job, record) in plan.jobs.iter().zip(&records) {
+        let Some(record) = record else {
             if crate::run::error_path(out, job.id).exists() {
                 report.jobs_failed.push(job.id);
             } else {
@@ -301,30 +323,14 @@ pub fn build_report(out: &Path) -> anyhow::Result<Report> {
                 ..CellLine::default()
             };
             far.far_objects_per_cell += num(r, "far_objects");
-            far.cell_proxies += r
-                .get("proxy_keys")
-                .and_then(|k| k.as_array())
-                .map_or(0, |k| k.len() as u64);
-            if let Some(stages) = r.get("stage_ms").and_then(|s| s.as_object()) {
-                for (k, v) in stages {
-                    let ms = v.as_f64().unwrap_or(0.0);
-                    line.stage_ms.insert(k.clone(), ms);
-                    line.bake_ms += ms;
-                    *report.stage_s.entry(k.clone()).or_default() += ms / 1000.0;
-                }
+            far.cell_proxies += key_count(r);
+            for (k, ms) in stage_ms(r) {
+                line.stage_ms.insert(k.clone(), ms);
+                line.bake_ms += ms;
+                *report.stage_s.entry(k).or_default() += ms / 1000.0;
             }
-            // Storage by kind, from the pack's own section table.
-            if let Ok(pack) = PackFile::read(&out.join(&c.file)) {
-                for s in pack.sections() {
-                    if s.kind == SectionKind::TEXTURES {
-                        report.storage.texture_bytes += s.stored_len;
-                    }
-                }
-            }
-            report.proxies += r
-                .get("proxy_keys")
-                .and_then(|k| k.as_array())
-                .map_or(0, |k| k.len() as u64);
+            report.storage.texture_bytes += stored_texture_bytes(&out.join(&c.file));
+            report.proxies += key_count(r);
             report.proxies_reused += num(r, "reused_proxies") as u64;
             report.storage.cell_bytes += c.bytes;
             report.cell_lines.push(line);

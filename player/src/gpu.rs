@@ -822,28 +822,7 @@ impl Renderer {
             }
             return;
         }
-        let tex = self.device.create_texture_with_data(
-            &self.queue,
-            &wgpu::TextureDescriptor {
-                label: Some("capture (BC)"),
-                size: wgpu::Extent3d {
-                    width,
-                    height,
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format,
-                usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-                view_formats: &[],
-            },
-            wgpu::util::TextureDataOrder::LayerMajor,
-            data,
-        );
-        proxy.texture_bytes += data.len() as u64;
-        proxy.textures[view] = Some(tex.create_view(&Default::default()));
-        self.try_bind(proxy);
+        self.set_view_texture(proxy, view, "capture (BC)", format, (width, height), data);
     }
 
     /// Uploads view `view`'s RGBA8 sRGB texels (row-major, row 0 = v 0).
@@ -871,10 +850,31 @@ impl Renderer {
             self.try_bind(proxy);
             return;
         }
+        self.set_view_texture(
+            proxy,
+            view,
+            "capture",
+            wgpu::TextureFormat::Rgba8UnormSrgb,
+            (width, height),
+            rgba,
+        );
+    }
+
+    /// Creates view `view`'s texture from `data` in `format` (RGBA8 or BC blocks),
+    /// counts its bytes and binds the proxy once all its views are there.
+    fn set_view_texture(
+        &self,
+        proxy: &mut GpuProxy,
+        view: usize,
+        label: &str,
+        format: wgpu::TextureFormat,
+        (width, height): (u32, u32),
+        data: &[u8],
+    ) {
         let tex = self.device.create_texture_with_data(
             &self.queue,
             &wgpu::TextureDescriptor {
-                label: Some("capture"),
+                label: Some(label),
                 size: wgpu::Extent3d {
                     width,
                     height,
@@ -883,14 +883,14 @@ impl Renderer {
                 mip_level_count: 1,
                 sample_count: 1,
                 dimension: wgpu::TextureDimension::D2,
-                format: wgpu::TextureFormat::Rgba8UnormSrgb,
+                format,
                 usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
                 view_formats: &[],
             },
             wgpu::util::TextureDataOrder::LayerMajor,
-            rgba,
+            data,
         );
-        proxy.texture_bytes += rgba.len() as u64;
+        proxy.texture_bytes += data.len() as u64;
         proxy.textures[view] = Some(tex.create_view(&Default::default()));
         self.try_bind(proxy);
     }

@@ -851,37 +851,7 @@ mod tests {
     use glam::{Mat4, Vec2};
 
     fn cube(lo: [f32; 3], hi: [f32; 3]) -> Mesh {
-        let p = |k: usize| {
-            [
-                if k & 1 == 0 { lo[0] } else { hi[0] },
-                if k & 2 == 0 { lo[1] } else { hi[1] },
-                if k & 4 == 0 { lo[2] } else { hi[2] },
-            ]
-        };
-        let positions: Vec<[f32; 3]> = (0..8).map(p).collect();
-        // Outward, counter-clockwise.
-        let triangles = vec![
-            [0, 2, 3],
-            [0, 3, 1],
-            [4, 5, 7],
-            [4, 7, 6],
-            [0, 1, 5],
-            [0, 5, 4],
-            [2, 6, 7],
-            [2, 7, 3],
-            [0, 4, 6],
-            [0, 6, 2],
-            [1, 3, 7],
-            [1, 7, 5],
-        ];
-        let mut mesh = Mesh {
-            positions,
-            normals: vec![[0.0, 1.0, 0.0]; 8],
-            albedo: vec![[200, 200, 200, 255]; 8],
-            triangles,
-        };
-        format::cleanup::recompute_normals(&mut mesh);
-        mesh
+        Mesh::cuboid(lo, hi, [200, 200, 200, 255])
     }
 
     fn model(mesh: Mesh) -> Model {

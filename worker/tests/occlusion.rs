@@ -178,37 +178,7 @@ fn no_culled_object_covers_a_pixel_from_1000_views_in_a_city() {
 }
 
 fn box_mesh(lo: [f32; 3], hi: [f32; 3]) -> format::Mesh {
-    let positions: Vec<[f32; 3]> = (0..8)
-        .map(|k: usize| {
-            [
-                if k & 1 == 0 { lo[0] } else { hi[0] },
-                if k & 2 == 0 { lo[1] } else { hi[1] },
-                if k & 4 == 0 { lo[2] } else { hi[2] },
-            ]
-        })
-        .collect();
-    let triangles = vec![
-        [0, 2, 3],
-        [0, 3, 1],
-        [4, 5, 7],
-        [4, 7, 6],
-        [0, 1, 5],
-        [0, 5, 4],
-        [2, 6, 7],
-        [2, 7, 3],
-        [0, 4, 6],
-        [0, 6, 2],
-        [1, 3, 7],
-        [1, 7, 5],
-    ];
-    let mut mesh = format::Mesh {
-        positions,
-        normals: vec![[0.0, 1.0, 0.0]; 8],
-        albedo: vec![[180, 170, 160, 255]; 8],
-        triangles,
-    };
-    format::cleanup::recompute_normals(&mut mesh);
-    mesh
+    format::Mesh::cuboid(lo, hi, [180, 170, 160, 255])
 }
 
 fn model(mesh: format::Mesh) -> Model {
