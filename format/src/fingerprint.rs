@@ -27,8 +27,10 @@ pub type Fingerprint = [u8; 32];
 /// 6 — the far field shared by 7-cell groups (`bake.far_field`, worker
 /// `far_field.rs`);
 /// 7 — capture textures stored as BC1/BC3 (a proxy reused by key from an older
-/// pack would keep its lossless texture).
-pub const BAKE_REVISION: u32 = 7;
+/// pack would keep its lossless texture);
+/// 8 — MVMesh textures from neighbouring centres fitted to the cell's need
+/// (`worker::capture::fitted_scale`).
+pub const BAKE_REVISION: u32 = 8;
 
 /// Hex form for file names, logs and reports.
 pub fn to_hex(f: &Fingerprint) -> String {
