@@ -52,6 +52,8 @@ pub enum CleanupError {
     },
     #[error("colour count {colors} differs from vertex count {vertices}")]
     ColorCount { colors: usize, vertices: usize },
+    #[error("texture coordinate count {uvs} differs from vertex count {vertices}")]
+    UvCount { uvs: usize, vertices: usize },
     #[error("no triangle left after removing degenerate ones (read {triangles} triangles)")]
     NoTriangles { triangles: usize },
     #[error("{vertices} vertices do not fit 32-bit indices")]
@@ -75,6 +77,18 @@ pub struct CleanupStats {
 
 /// Cleans `raw` into a [`Mesh`] (steps in the module docs).
 pub fn finish_mesh(raw: RawMesh) -> Result<(Mesh, CleanupStats), CleanupError> {
+    finish_mesh_with_uvs(raw, None).map(|(mesh, _, stats)| (mesh, stats))
+}
+
+/// [`finish_mesh`] for a mesh with texture coordinates (one per vertex of `raw`):
+/// the weld also keeps UV seams (vertices weld only when position, colour and UV
+/// bits are equal), and the UVs of the kept vertices come back in the mesh's vertex
+/// order.
+#[allow(clippy::type_complexity)]
+pub fn finish_mesh_with_uvs(
+    raw: RawMesh,
+    uvs: Option<Vec<[f32; 2]>>,
+) -> Result<(Mesh, Option<Vec<[f32; 2]>>, CleanupStats), CleanupError> {
     let RawMesh {
         positions,
         colors,
@@ -130,20 +144,35 @@ pub fn finish_mesh(raw: RawMesh) -> Result<(Mesh, CleanupStats), CleanupError> {
         }
     }
 
-    // Step 2: weld identical vertices (position bits + colour), first use wins.
+    if let Some(u) = &uvs {
+        if u.len() != positions.len() {
+            return Err(CleanupError::UvCount {
+                uvs: u.len(),
+                vertices: positions.len(),
+            });
+        }
+    }
+
+    // Step 2: weld identical vertices (position bits + colour + UV bits), first use wins.
     let key_of = |p: [f32; 3]| p.map(|x| (x + 0.0).to_bits());
     let white = [255u8; 4];
-    let mut weld: HashMap<([u32; 3], [u8; 4]), u32> = HashMap::with_capacity(positions.len());
+    let mut weld: HashMap<([u32; 3], [u8; 4], [u32; 2]), u32> =
+        HashMap::with_capacity(positions.len());
     let mut remap = Vec::with_capacity(positions.len());
     let mut welded_positions: Vec<[f32; 3]> = Vec::new();
     let mut welded_colors: Vec<[u8; 4]> = Vec::new();
+    let mut welded_uvs: Vec<[f32; 2]> = Vec::new();
     for (i, p) in positions.iter().enumerate() {
         let color = colors.as_ref().map_or(white, |c| c[i]);
+        let uv = uvs.as_ref().map_or([0.0; 2], |u| u[i]);
         let next = welded_positions.len() as u32;
-        let id = *weld.entry((key_of(*p), color)).or_insert(next);
+        let id = *weld
+            .entry((key_of(*p), color, uv.map(|x| (x + 0.0).to_bits())))
+            .or_insert(next);
         if id == next {
             welded_positions.push(p.map(|x| x + 0.0));
             welded_colors.push(color);
+            welded_uvs.push(uv);
         }
         remap.push(id);
     }
@@ -189,11 +218,13 @@ pub fn finish_mesh(raw: RawMesh) -> Result<(Mesh, CleanupStats), CleanupError> {
     let mut compact = vec![u32::MAX; welded_positions.len()];
     let mut out_positions = Vec::with_capacity(welded_positions.len());
     let mut out_colors = Vec::with_capacity(welded_positions.len());
+    let mut out_uvs = Vec::with_capacity(welded_positions.len());
     for (i, &u) in used.iter().enumerate() {
         if u {
             compact[i] = out_positions.len() as u32;
             out_positions.push(welded_positions[i]);
             out_colors.push(welded_colors[i]);
+            out_uvs.push(welded_uvs[i]);
         }
     }
     stats.unreferenced_vertices = welded_positions.len() - out_positions.len();
@@ -219,7 +250,7 @@ pub fn finish_mesh(raw: RawMesh) -> Result<(Mesh, CleanupStats), CleanupError> {
         );
         crate::procedural::apply_albedo(&mut mesh, seed);
     }
-    Ok((mesh, stats))
+    Ok((mesh, uvs.map(|_| out_uvs), stats))
 }
 
 /// Unnormalised normal (twice the area) of triangle `t`, in f64.

@@ -16,6 +16,7 @@
 //!   instances; parks via [`park`]);
 //! - [`mesh_ext`]: `Mesh::validate`, `Mesh::content_hash`, topology checks.
 
+pub mod albedo;
 pub mod city;
 pub mod cleanup;
 mod field_positions;

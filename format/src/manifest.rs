@@ -31,6 +31,9 @@
 //!     //        buildings_per_block: 2 /* optional */, floor_height: 3.5 /* optional */,
 //!     //        variants: 16 /* optional */, props: [ /* as park models */ ] /* optional */,
 //!     //        tint_min: (..), tint_max: (..) /* optional */)),
+//!     // or: scene: Gltf("scene.glb")  (a .gltf or .glb read as a whole scene: every
+//!     //        node with a mesh placed with its composed transform, in the file's
+//!     //        units; base-colour textures read; `load::load_gltf_scene`)
 //!     // or: scene: Instances([(model: File("a.obj"), target_height: 10.0,
 //!     //        translation: (5.0, 0.0, 7.0), rotation_y_deg: 30.0,
 //!     //        scale: 1.0 /* optional */, tint: (1.0, 0.9, 0.8) /* optional */,
@@ -157,6 +160,16 @@ pub enum SceneSpec {
     Instances(Vec<InstanceSpec>),
     Park(ParkSpec),
     City(CitySpec),
+    /// A glTF file read as a whole scene (issue 18; `load::load_gltf_scene`): every
+    /// node with a mesh is placed with its composed transform, in the file's units.
+    Gltf(GltfSpec),
+}
+
+/// A glTF scene file (`scene: Gltf("file.glb")`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct GltfSpec {
+    /// The `.gltf` or `.glb` file, resolved against the manifest's folder.
+    pub file: PathBuf,
 }
 
 /// A generated city (`city.rs`): blocks of buildings, streets, props on the pavements.
@@ -478,6 +491,7 @@ enum RawScene {
     Park(RawPark),
     Instances(Vec<RawInstance>),
     City(RawCity),
+    Gltf(String),
 }
 
 #[derive(Deserialize)]
@@ -833,6 +847,30 @@ impl Validator<'_> {
         }
     }
 
+    /// A glTF scene file: a `.gltf` or `.glb` that exists.
+    fn gltf(&self, file: String) -> Result<SceneSpec, ManifestError> {
+        if file.is_empty() {
+            return Err(self.error("scene", "names an empty file path".into()));
+        }
+        let resolved = self.base_dir().join(&file);
+        if crate::load::ModelFormat::from_path(&resolved) != Some(crate::load::ModelFormat::Gltf) {
+            return Err(self.error(
+                "scene",
+                format!("names `{file}`; a glTF scene must be a .gltf or .glb file"),
+            ));
+        }
+        if !resolved.is_file() {
+            return Err(self.error(
+                "scene",
+                format!(
+                    "names `{file}`, which does not exist (resolved: {})",
+                    resolved.display()
+                ),
+            ));
+        }
+        Ok(SceneSpec::Gltf(GltfSpec { file: resolved }))
+    }
+
     /// A prop list (park models on the pavements), fields under `scene.props[i]`.
     fn props(&self, raw: Vec<RawParkModel>) -> Result<Vec<ParkModel>, ManifestError> {
         let mut models = Vec::with_capacity(raw.len());
@@ -976,6 +1014,7 @@ impl Validator<'_> {
                 })
             }
             RawScene::City(city) => self.city(city)?,
+            RawScene::Gltf(file) => self.gltf(file)?,
             RawScene::Instances(list) => {
                 if list.is_empty() {
                     return Err(self.error("scene", "lists no instance".into()));

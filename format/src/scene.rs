@@ -3,6 +3,7 @@
 //! A `Scene` is what the validated manifest resolves to once every model is loaded
 //! and normalised; the worker and the player both see the world through it.
 
+use crate::albedo::AlbedoMap;
 use crate::mesh::Mesh;
 use glam::{Mat4, Vec3};
 use serde::{Deserialize, Serialize};
@@ -15,8 +16,13 @@ pub struct Model {
     /// Where it came from (a path, or `procedural:<name>`), for messages and reports.
     pub source: String,
     pub mesh: Mesh,
-    /// blake3 of the loaded mesh's bytes (positions, normals, albedo, triangles).
+    /// blake3 of the loaded mesh's bytes (positions, normals, albedo, triangles);
+    /// for a textured model, [`AlbedoMap::model_hash`] of that and the texture.
     pub content_hash: [u8; 32],
+    /// Base-colour texture and UVs (models of glTF scenes, issue 18); `None`: the
+    /// vertex albedo alone.
+    #[serde(default)]
+    pub albedo_map: Option<AlbedoMap>,
 }
 
 /// One placed copy of a model.

@@ -40,13 +40,17 @@ pub enum SceneError {
         manifest: PathBuf,
         source: crate::city::CityError,
     },
-    /// `--as-instances` of a city: its buildings are generated meshes that no model
-    /// source names.
+    /// `--as-instances` of a city or a glTF scene: its models are generated meshes or
+    /// parts of one file that no model source names.
     #[error(
-        "{}: a city's buildings are generated meshes; it cannot be written as an instance list",
+        "{}: a city's buildings and a glTF scene's meshes are not model files; the scene \
+         cannot be written as an instance list",
         manifest.display()
     )]
     CityAsInstances { manifest: PathBuf },
+    /// A glTF scene whose coordinates exceed the manifest's limits.
+    #[error("{}: {what}", file.display())]
+    GltfScene { file: PathBuf, what: String },
 }
 
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
@@ -196,7 +200,7 @@ pub fn instances_manifest(plan: &Plan) -> Result<String, SceneError> {
             }
         }
         (SceneSpec::Park(_), None) => unreachable!("a park scene has placements"),
-        (SceneSpec::City(_), _) => {
+        (SceneSpec::City(_), _) | (SceneSpec::Gltf(_), _) => {
             return Err(SceneError::CityAsInstances {
                 manifest: plan.manifest_path.clone(),
             })
@@ -234,8 +238,12 @@ pub fn instances_manifest(plan: &Plan) -> Result<String, SceneError> {
 }
 
 fn build_with_placements(plan: &Plan) -> Result<(Scene, Option<Vec<park::Placement>>), SceneError> {
+    if let SceneSpec::Gltf(spec) = &plan.scene {
+        return Ok((build_gltf_scene(plan, &spec.file)?, None));
+    }
     // Step 1: distinct models in manifest order.
     let wanted: Vec<(ModelSource, [f32; 3], f32)> = match &plan.scene {
+        SceneSpec::Gltf(_) => unreachable!("built above"),
         SceneSpec::Park(p) => p
             .models
             .iter()
@@ -303,6 +311,7 @@ fn build_with_placements(plan: &Plan) -> Result<(Scene, Option<Vec<park::Placeme
             source: source.describe(),
             mesh,
             content_hash,
+            albedo_map: None,
         });
     }
 
@@ -332,6 +341,7 @@ fn build_with_placements(plan: &Plan) -> Result<(Scene, Option<Vec<park::Placeme
                 source: format!("city:{}:building-{v}", params.seed),
                 mesh,
                 content_hash,
+                albedo_map: None,
             });
         }
     }
@@ -382,6 +392,7 @@ fn build_with_placements(plan: &Plan) -> Result<(Scene, Option<Vec<park::Placeme
                     })
                     .collect()
             }
+            SceneSpec::Gltf(_) => unreachable!("built above"),
             SceneSpec::City(spec) => {
                 let props: Vec<crate::city::PropEntry> = spec
                     .props
@@ -420,6 +431,83 @@ fn build_with_placements(plan: &Plan) -> Result<(Scene, Option<Vec<park::Placeme
         },
         placed,
     ))
+}
+
+/// Messages about what a glTF scene ignores, printed once per file and process
+/// (every job of a bake builds the scene).
+static GLTF_NOTES_SHOWN: std::sync::Mutex<std::collections::BTreeSet<PathBuf>> =
+    std::sync::Mutex::new(std::collections::BTreeSet::new());
+
+/// The scene of a `Gltf` manifest (`load::load_gltf_scene`): its models as they are
+/// (file units, not normalised), one instance per node and model, tint 1. Model
+/// names are made unique with `#k` as for other scenes; textured models hash their
+/// texture and UVs into the content hash.
+fn build_gltf_scene(plan: &Plan, file: &std::path::Path) -> Result<Scene, SceneError> {
+    let gltf = crate::load::load_gltf_scene(file)?;
+    if !gltf.notes.is_empty() {
+        let mut shown = GLTF_NOTES_SHOWN.lock().unwrap_or_else(|e| e.into_inner());
+        if shown.insert(file.to_path_buf()) {
+            for note in &gltf.notes {
+                eprintln!("{}: note: {note}", file.display());
+            }
+        }
+    }
+    let limit = crate::manifest::MAX_COORDINATE;
+    let too_far = |what: String| SceneError::GltfScene {
+        file: file.to_path_buf(),
+        what,
+    };
+    let mut names_used: BTreeMap<String, u32> = BTreeMap::new();
+    let mut models = Vec::with_capacity(gltf.models.len());
+    for m in gltf.models {
+        if let Some((lo, hi)) = m.mesh.bounds() {
+            if lo.iter().chain(&hi).any(|x| x.abs() > limit) {
+                return Err(too_far(format!(
+                    "mesh `{}` reaches beyond ±{limit} units ({lo:?} to {hi:?})",
+                    m.name
+                )));
+            }
+        }
+        let uses = names_used.entry(m.name.clone()).or_insert(0);
+        *uses += 1;
+        let name = if *uses == 1 {
+            m.name.clone()
+        } else {
+            format!("{}#{uses}", m.name)
+        };
+        let mesh_hash = m.mesh.content_hash();
+        let content_hash = match &m.albedo_map {
+            Some(map) => map.model_hash(&mesh_hash),
+            None => mesh_hash,
+        };
+        models.push(Model {
+            source: format!("{}:{}", file.display(), m.name),
+            name,
+            mesh: m.mesh,
+            content_hash,
+            albedo_map: m.albedo_map,
+        });
+    }
+    let mut instances = Vec::with_capacity(gltf.instances.len());
+    for i in &gltf.instances {
+        let t = i.transform.w_axis.truncate();
+        if t.abs().max_element() > limit {
+            return Err(too_far(format!(
+                "node {} is placed at {t}, beyond ±{limit} units",
+                i.node
+            )));
+        }
+        instances.push(Instance {
+            model: i.model,
+            transform: i.transform,
+            tint: Vec3::ONE,
+        });
+    }
+    Ok(Scene {
+        models,
+        instances,
+        ground: plan.ground,
+    })
 }
 
 /// Object → world transform of a park placement: translate · rotate_y.

@@ -861,6 +861,7 @@ mod tests {
             source: "test".into(),
             mesh,
             content_hash,
+            albedo_map: None,
         }
     }
 

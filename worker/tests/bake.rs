@@ -245,6 +245,7 @@ fn bunny_scene() -> Option<(Scene, HexGrid, CellParams)> {
             source: path.display().to_string(),
             mesh,
             content_hash: [0; 32],
+            albedo_map: None,
         }],
         instances: vec![Instance {
             model: 0,

@@ -188,6 +188,7 @@ fn model(mesh: format::Mesh) -> Model {
         source: "test".into(),
         mesh,
         content_hash,
+        albedo_map: None,
     }
 }
 

@@ -26,7 +26,12 @@ struct Prim {
     triangles: Vec<[u32; 3]>,
 }
 
-pub(crate) fn parse(path: &Path, bytes: &[u8]) -> Result<Parsed, LoadError> {
+/// Parses and validates a glTF document and loads its buffers (shared with the
+/// scene reader, `gltf_scene.rs`).
+pub(crate) fn open_document(
+    path: &Path,
+    bytes: &[u8],
+) -> Result<(gltf::Document, Vec<gltf::buffer::Data>), LoadError> {
     let err = |what: String, at: Location| parse_error(path, FORMAT, what, at);
     let gltf::Gltf { document, blob } = gltf::Gltf::from_slice_without_validation(bytes)
         .map_err(|e| err(e.to_string(), Location::Unknown))?;
@@ -53,6 +58,12 @@ pub(crate) fn parse(path: &Path, bytes: &[u8]) -> Result<Parsed, LoadError> {
     let base = path.parent();
     let buffers = gltf::import_buffers(&document, base, blob)
         .map_err(|e| err(format!("buffers: {e}"), Location::Unknown))?;
+    Ok((document, buffers))
+}
+
+pub(crate) fn parse(path: &Path, bytes: &[u8]) -> Result<Parsed, LoadError> {
+    let err = |what: String, at: Location| parse_error(path, FORMAT, what, at);
+    let (document, buffers) = open_document(path, bytes)?;
     let scene = document
         .default_scene()
         .or_else(|| document.scenes().next())

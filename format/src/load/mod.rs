@@ -15,6 +15,8 @@
 //! (`scene_build::normalise`).
 
 mod gltf;
+pub mod gltf_sample;
+mod gltf_scene;
 mod obj;
 mod off;
 mod ply;
@@ -22,6 +24,7 @@ mod stl;
 
 use crate::cleanup::{finish_mesh, CleanupError, CleanupStats, RawMesh};
 use crate::mesh::Mesh;
+pub use gltf_scene::{load_gltf_scene, GltfInstance, GltfModel, GltfScene};
 use std::fmt;
 use std::path::{Path, PathBuf};
 
@@ -189,11 +192,11 @@ pub fn load_model_with_stats(path: &Path) -> Result<(Mesh, LoadStats), LoadError
 }
 
 /// Runs a parser, turning a panic inside a crate parser into [`LoadError::ParserPanic`].
-fn guarded(
+fn guarded<T>(
     path: &Path,
     format: ModelFormat,
-    parse: impl FnOnce() -> Result<Parsed, LoadError>,
-) -> Result<Parsed, LoadError> {
+    parse: impl FnOnce() -> Result<T, LoadError>,
+) -> Result<T, LoadError> {
     match std::panic::catch_unwind(std::panic::AssertUnwindSafe(parse)) {
         Ok(result) => result,
         Err(payload) => {

@@ -1,0 +1,543 @@
+//! A glTF 2.0 file read as a whole scene (`scene: Gltf("file.glb")`, issue 18), not
+//! as one model: every node with a mesh becomes instances with the node's composed
+//! transform, and a mesh used by several nodes stays one model.
+//!
+//! [`load_gltf_scene`] reads as its steps:
+//! 1. parse and validate the document, load its buffers (`gltf.rs`); refuse
+//!    extensions the file *requires* that hexbake does not read, and note the ones it
+//!    merely *uses* (they are ignored: the base colour is read from
+//!    `pbrMetallicRoughness` whatever `KHR_materials_pbrSpecularGlossiness` says);
+//! 2. walk the default scene's node tree depth-first (children in file order),
+//!    composing transforms (a cycle or a hierarchy deeper than
+//!    [`MAX_DEPTH`](super::gltf::MAX_DEPTH) is an error); skins and morph targets are
+//!    ignored with a note (the mesh is drawn in its bind pose / base shape);
+//! 3. per node with a mesh, split the mesh's triangle primitives by base-colour
+//!    texture: each (mesh, texture or none, mirrored) is one model, created at first
+//!    use, and the node places one instance of each of its mesh's models. A node
+//!    whose transform mirrors (negative determinant) uses a copy of the model with
+//!    flipped winding, so triangles stay counter-clockwise in the world;
+//! 4. a model's albedo: vertex colour (`COLOR_0`, linear) × the material's base-colour
+//!    factor, to sRGB8 per vertex (white when neither is there but a texture is; the
+//!    procedural pattern when nothing is); the base-colour texture (its UV set, the
+//!    sampler's wrap modes) multiplies it when sampled ([`crate::albedo`]).
+//!
+//! Models are in the file's units and frame (glTF is y-up, right-handed, as hexbake);
+//! nothing is normalised. Cameras, lights and animations are not read.
+
+use super::gltf::{open_document, MAX_DEPTH};
+use super::{parse_error, LoadError, Location, ModelFormat};
+use crate::albedo::{AlbedoMap, AlbedoTexture, Wrap, MAX_TEXTURE_SIDE};
+use crate::cleanup::{finish_mesh_with_uvs, RawMesh};
+use crate::mesh::Mesh;
+use crate::srgb::linear_to_srgb_powf;
+use glam::{Mat3, Mat4};
+use std::collections::BTreeMap;
+use std::path::Path;
+
+const FORMAT: ModelFormat = ModelFormat::Gltf;
+
+/// Extensions a file may *require* (none changes what hexbake reads: all are
+/// declared only when used).
+const REQUIRED_OK: &[&str] = &[];
+
+/// One model of a glTF scene.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GltfModel {
+    /// The mesh's name (else `mesh<N>`), with `-textured` / `-mirrored` where one
+    /// glTF mesh gives several models; not yet unique.
+    pub name: String,
+    pub mesh: Mesh,
+    pub albedo_map: Option<AlbedoMap>,
+}
+
+/// One placed model: a node's mesh (or the textured / untextured part of it).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GltfInstance {
+    /// Index into [`GltfScene::models`].
+    pub model: u32,
+    /// Node → world, composed from the scene root.
+    pub transform: Mat4,
+    /// The glTF node it comes from.
+    pub node: u32,
+}
+
+/// A glTF file as a scene.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GltfScene {
+    pub models: Vec<GltfModel>,
+    pub instances: Vec<GltfInstance>,
+    /// What was ignored, one line each (`KHR_texture_transform is not read`, ...).
+    pub notes: Vec<String>,
+}
+
+/// A triangle primitive of a mesh, in mesh space.
+struct ScenePrim {
+    positions: Vec<[f32; 3]>,
+    uvs: Option<Vec<[f32; 2]>>,
+    colors: Vec<[u8; 4]>,
+    triangles: Vec<[u32; 3]>,
+}
+
+/// Reads the glTF scene at `path` (steps in the module docs).
+pub fn load_gltf_scene(path: &Path) -> Result<GltfScene, LoadError> {
+    let bytes = std::fs::read(path).map_err(|source| LoadError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    super::guarded(path, FORMAT, || parse_scene(path, &bytes))
+}
+
+fn parse_scene(path: &Path, bytes: &[u8]) -> Result<GltfScene, LoadError> {
+    let err = |what: String, at: Location| parse_error(path, FORMAT, what, at);
+    // Step 1: document, buffers, extensions (required ones are checked first: the
+    // validator would only say "unsupported extension").
+    if let Ok(g) = gltf::Gltf::from_slice_without_validation(bytes) {
+        let refused: Vec<&str> = g
+            .extensions_required()
+            .filter(|e| !REQUIRED_OK.contains(e))
+            .collect();
+        if !refused.is_empty() {
+            return Err(err(
+                format!(
+                    "the file requires glTF extensions hexbake does not read: {}",
+                    refused.join(", ")
+                ),
+                Location::Unknown,
+            ));
+        }
+    }
+    let (document, buffers) = open_document(path, bytes)?;
+    let mut notes = Vec::new();
+    let required: Vec<&str> = document.extensions_required().collect();
+    let refused: Vec<&str> = required
+        .iter()
+        .copied()
+        .filter(|e| !REQUIRED_OK.contains(e))
+        .collect();
+    if !refused.is_empty() {
+        return Err(err(
+            format!(
+                "the file requires glTF extensions hexbake does not read: {}",
+                refused.join(", ")
+            ),
+            Location::Unknown,
+        ));
+    }
+    let used: Vec<&str> = document.extensions_used().collect();
+    if !used.is_empty() {
+        notes.push(format!(
+            "glTF extensions ignored (not read): {}",
+            used.join(", ")
+        ));
+    }
+    if document.animations().next().is_some() {
+        notes.push("animations ignored: the scene is drawn at rest".into());
+    }
+    let scene = document
+        .default_scene()
+        .or_else(|| document.scenes().next())
+        .ok_or_else(|| err("no scene".into(), Location::Unknown))?;
+
+    // Step 2: walk the nodes.
+    let mut models: Vec<GltfModel> = Vec::new();
+    let mut instances: Vec<GltfInstance> = Vec::new();
+    // (mesh, texture, mirrored) → model index.
+    let mut model_of: BTreeMap<(usize, Option<usize>, bool), u32> = BTreeMap::new();
+    // Decoded textures by (texture index).
+    let mut textures: BTreeMap<usize, AlbedoTexture> = BTreeMap::new();
+    let mut skinned = Vec::new();
+    let mut morphed = Vec::new();
+    let mut stack: Vec<(gltf::Node, Mat4, Vec<usize>)> = scene
+        .nodes()
+        .map(|n| (n, Mat4::IDENTITY, Vec::new()))
+        .collect();
+    stack.reverse();
+    while let Some((node, parent, mut ancestors)) = stack.pop() {
+        let at = || Location::Element(format!("node {}", node.index()));
+        if ancestors.contains(&node.index()) {
+            return Err(err("node hierarchy has a cycle".into(), at()));
+        }
+        if ancestors.len() >= MAX_DEPTH {
+            return Err(err(format!("node hierarchy deeper than {MAX_DEPTH}"), at()));
+        }
+        let local = Mat4::from_cols_array_2d(&node.transform().matrix());
+        let world = parent * local;
+        if !world.is_finite() {
+            return Err(err("node transform is not finite".into(), at()));
+        }
+        if node.skin().is_some() {
+            skinned.push(node.index());
+        }
+        if let Some(mesh) = node.mesh() {
+            let mirrored = Mat3::from_mat4(world).determinant() < 0.0;
+            if mesh
+                .primitives()
+                .any(|p| p.morph_targets().next().is_some())
+            {
+                morphed.push(mesh.index());
+            }
+            // Step 3: the mesh's models, by texture.
+            // Groups in order of first appearance among the primitives.
+            let mut groups: Vec<(Option<usize>, Vec<gltf::Primitive>)> = Vec::new();
+            for p in mesh.primitives() {
+                let texture = p
+                    .material()
+                    .pbr_metallic_roughness()
+                    .base_color_texture()
+                    .map(|t| t.texture().index());
+                match groups.iter_mut().find(|(t, _)| *t == texture) {
+                    Some((_, prims)) => prims.push(p),
+                    None => groups.push((texture, vec![p])),
+                }
+            }
+            let split = groups.len() > 1;
+            for (texture, prims) in groups {
+                let key = (mesh.index(), texture, mirrored);
+                let id = match model_of.get(&key) {
+                    Some(&id) => Some(id),
+                    None => {
+                        let model = build_model(
+                            path,
+                            &document,
+                            &buffers,
+                            &mesh,
+                            &prims,
+                            texture,
+                            mirrored,
+                            split,
+                            &mut textures,
+                        )?;
+                        match model {
+                            Some(m) => {
+                                let id = u32::try_from(models.len())
+                                    .map_err(|_| err("too many models".into(), at()))?;
+                                models.push(m);
+                                model_of.insert(key, id);
+                                Some(id)
+                            }
+                            None => None,
+                        }
+                    }
+                };
+                if let Some(model) = id {
+                    instances.push(GltfInstance {
+                        model,
+                        transform: world,
+                        node: node.index() as u32,
+                    });
+                }
+            }
+        }
+        ancestors.push(node.index());
+        let children: Vec<_> = node.children().collect();
+        for child in children.into_iter().rev() {
+            stack.push((child, world, ancestors.clone()));
+        }
+    }
+    if !skinned.is_empty() {
+        notes.push(format!(
+            "skins ignored (meshes drawn in their bind pose) on nodes {skinned:?}"
+        ));
+    }
+    if !morphed.is_empty() {
+        morphed.dedup();
+        notes.push(format!(
+            "morph targets ignored (base shapes drawn) on meshes {morphed:?}"
+        ));
+    }
+    if instances.is_empty() {
+        return Err(err(
+            "the scene has no node with a triangle mesh".into(),
+            Location::Unknown,
+        ));
+    }
+    Ok(GltfScene {
+        models,
+        instances,
+        notes,
+    })
+}
+
+/// One model: the primitives of `mesh` that use `texture`; `None` when none of them
+/// has triangles.
+#[allow(clippy::too_many_arguments)]
+fn build_model(
+    path: &Path,
+    document: &gltf::Document,
+    buffers: &[gltf::buffer::Data],
+    mesh: &gltf::Mesh,
+    prims: &[gltf::Primitive],
+    texture: Option<usize>,
+    mirrored: bool,
+    split: bool,
+    textures: &mut BTreeMap<usize, AlbedoTexture>,
+) -> Result<Option<GltfModel>, LoadError> {
+    let at = || Location::Element(format!("mesh {}", mesh.index()));
+    let err = |what: String| parse_error(path, FORMAT, what, at());
+    let mut parts = Vec::new();
+    for p in prims {
+        if let Some(part) = read_scene_primitive(path, buffers, mesh, p, texture.is_some())? {
+            parts.push(part);
+        }
+    }
+    if parts.is_empty() {
+        return Ok(None);
+    }
+    // Concatenate the parts.
+    let any_colors = texture.is_some()
+        || prims.iter().any(|p| {
+            p.get(&gltf::Semantic::Colors(0)).is_some()
+                || p.material().pbr_metallic_roughness().base_color_factor() != [1.0; 4]
+        });
+    let mut raw = RawMesh {
+        colors: any_colors.then(Vec::new),
+        ..RawMesh::default()
+    };
+    let mut uvs: Vec<[f32; 2]> = Vec::new();
+    for part in &parts {
+        let base =
+            u32::try_from(raw.positions.len()).map_err(|_| err("too many vertices".into()))?;
+        raw.positions.extend_from_slice(&part.positions);
+        if let Some(c) = &mut raw.colors {
+            c.extend_from_slice(&part.colors);
+        }
+        if let Some(u) = &part.uvs {
+            uvs.extend_from_slice(u);
+        }
+        raw.triangles.extend(part.triangles.iter().map(|t| {
+            let t = t.map(|i| base.saturating_add(i));
+            if mirrored {
+                [t[0], t[2], t[1]]
+            } else {
+                t
+            }
+        }));
+    }
+    let (mesh_out, uvs_out, _) =
+        finish_mesh_with_uvs(raw, texture.map(|_| uvs)).map_err(|source| LoadError::Invalid {
+            path: path.to_path_buf(),
+            source,
+        })?;
+    let albedo_map = match (texture, uvs_out) {
+        (Some(t), Some(uvs)) => {
+            if !textures.contains_key(&t) {
+                let decoded = decode_texture(path, document, buffers, t)?;
+                textures.insert(t, decoded);
+            }
+            Some(AlbedoMap {
+                uvs,
+                texture: textures[&t].clone(),
+            })
+        }
+        _ => None,
+    };
+    let mut name = mesh
+        .name()
+        .filter(|n| !n.is_empty())
+        .map(str::to_string)
+        .unwrap_or_else(|| format!("mesh{}", mesh.index()));
+    if split {
+        name.push_str(if texture.is_some() {
+            "-textured"
+        } else {
+            "-plain"
+        });
+    }
+    if mirrored {
+        name.push_str("-mirrored");
+    }
+    Ok(Some(GltfModel {
+        name,
+        mesh: mesh_out,
+        albedo_map,
+    }))
+}
+
+/// A triangle primitive in mesh space with its sRGB8 colours (vertex colour × base
+/// colour factor) and, when `textured`, the UVs of its base-colour texture's set;
+/// `None` for points and lines.
+fn read_scene_primitive(
+    path: &Path,
+    buffers: &[gltf::buffer::Data],
+    mesh: &gltf::Mesh,
+    primitive: &gltf::Primitive,
+    textured: bool,
+) -> Result<Option<ScenePrim>, LoadError> {
+    use gltf::mesh::Mode;
+    let at = || {
+        Location::Element(format!(
+            "mesh {} primitive {}",
+            mesh.index(),
+            primitive.index()
+        ))
+    };
+    let err = |what: String| parse_error(path, FORMAT, what, at());
+    let mode = primitive.mode();
+    if !matches!(
+        mode,
+        Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+    ) {
+        return Ok(None);
+    }
+    let reader = primitive.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+    let positions: Vec<[f32; 3]> = reader
+        .read_positions()
+        .ok_or_else(|| err("no POSITION attribute".into()))?
+        .collect();
+    let n = positions.len();
+    let pbr = primitive.material().pbr_metallic_roughness();
+    let factor = pbr.base_color_factor();
+    let colors_f: Option<Vec<[f32; 4]>> =
+        reader.read_colors(0).map(|c| c.into_rgba_f32().collect());
+    let colors: Vec<[u8; 4]> = (0..n)
+        .map(|i| {
+            let c = colors_f
+                .as_ref()
+                .and_then(|c| c.get(i))
+                .copied()
+                .unwrap_or([1.0; 4]);
+            [
+                linear_to_srgb_powf(c[0] * factor[0]),
+                linear_to_srgb_powf(c[1] * factor[1]),
+                linear_to_srgb_powf(c[2] * factor[2]),
+                255,
+            ]
+        })
+        .collect();
+    let uvs = if textured {
+        let set = pbr.base_color_texture().map_or(0, |t| t.tex_coord());
+        let uvs: Vec<[f32; 2]> = reader
+            .read_tex_coords(set)
+            .ok_or_else(|| {
+                err(format!(
+                    "the base-colour texture uses TEXCOORD_{set}, which the primitive lacks"
+                ))
+            })?
+            .into_f32()
+            .collect();
+        if uvs.len() != n {
+            return Err(err(format!(
+                "TEXCOORD_{set} has {} entries for {n} vertices",
+                uvs.len()
+            )));
+        }
+        if let Some(bad) = uvs.iter().position(|uv| !uv.iter().all(|x| x.is_finite())) {
+            return Err(err(format!("TEXCOORD_{set} of vertex {bad} is not finite")));
+        }
+        Some(uvs)
+    } else {
+        None
+    };
+    let indices: Vec<u32> = match reader.read_indices() {
+        Some(i) => i.into_u32().collect(),
+        None => {
+            let n = u32::try_from(n).map_err(|_| err("too many vertices".into()))?;
+            (0..n).collect()
+        }
+    };
+    let triangles: Vec<[u32; 3]> = match mode {
+        Mode::Triangles => indices
+            .chunks_exact(3)
+            .map(|t| [t[0], t[1], t[2]])
+            .collect(),
+        Mode::TriangleStrip => indices
+            .windows(3)
+            .enumerate()
+            .map(|(k, t)| {
+                if k % 2 == 0 {
+                    [t[0], t[1], t[2]]
+                } else {
+                    [t[1], t[0], t[2]]
+                }
+            })
+            .collect(),
+        _ => (1..indices.len().saturating_sub(1))
+            .map(|k| [indices[0], indices[k], indices[k + 1]])
+            .collect(),
+    };
+    if let Some((face, t)) = triangles
+        .iter()
+        .enumerate()
+        .find(|(_, t)| t.iter().any(|&i| i as usize >= n))
+    {
+        return Err(err(format!(
+            "triangle {face} uses vertex {}, but the primitive has only {n} vertices",
+            t.iter().copied().max().unwrap_or(0)
+        )));
+    }
+    Ok(Some(ScenePrim {
+        positions,
+        uvs,
+        colors,
+        triangles,
+    }))
+}
+
+/// Decodes texture `index` (its image to RGBA8 sRGB, its sampler's wrap modes).
+fn decode_texture(
+    path: &Path,
+    document: &gltf::Document,
+    buffers: &[gltf::buffer::Data],
+    index: usize,
+) -> Result<AlbedoTexture, LoadError> {
+    let at = || Location::Element(format!("texture {index}"));
+    let err = |what: String| parse_error(path, FORMAT, what, at());
+    let texture = document
+        .textures()
+        .nth(index)
+        .ok_or_else(|| err("no such texture".into()))?;
+    let image = texture.source();
+    // `from_source` resolves relative URIs against the file's folder.
+    let base = Some(path.parent().unwrap_or(Path::new(".")));
+    let data = gltf::image::Data::from_source(image.source(), base, buffers)
+        .map_err(|e| err(format!("image {}: {e}", image.index())))?;
+    let (w, h) = (data.width, data.height);
+    if !(1..=MAX_TEXTURE_SIDE).contains(&w) || !(1..=MAX_TEXTURE_SIDE).contains(&h) {
+        return Err(err(format!(
+            "image {} is {w} × {h} texels; sides must be in 1..={MAX_TEXTURE_SIDE}",
+            image.index()
+        )));
+    }
+    use gltf::image::Format as F;
+    let channels = match data.format {
+        F::R8 => 1,
+        F::R8G8 => 2,
+        F::R8G8B8 => 3,
+        F::R8G8B8A8 => 4,
+        other => {
+            return Err(err(format!(
+                "image {} has pixel format {other:?}; only 8-bit images are read",
+                image.index()
+            )))
+        }
+    };
+    let texels = w as usize * h as usize;
+    if data.pixels.len() != texels * channels {
+        return Err(err(format!(
+            "image {} decoded to {} bytes, expected {}",
+            image.index(),
+            data.pixels.len(),
+            texels * channels
+        )));
+    }
+    let mut rgba = Vec::with_capacity(texels * 4);
+    for px in data.pixels.chunks_exact(channels) {
+        match channels {
+            1 | 2 => rgba.extend_from_slice(&[px[0], px[0], px[0], 255]),
+            3 => rgba.extend_from_slice(&[px[0], px[1], px[2], 255]),
+            _ => rgba.extend_from_slice(&[px[0], px[1], px[2], 255]),
+        }
+    }
+    let wrap = |m: gltf::texture::WrappingMode| match m {
+        gltf::texture::WrappingMode::ClampToEdge => Wrap::ClampToEdge,
+        gltf::texture::WrappingMode::MirroredRepeat => Wrap::MirroredRepeat,
+        gltf::texture::WrappingMode::Repeat => Wrap::Repeat,
+    };
+    let sampler = texture.sampler();
+    Ok(AlbedoTexture {
+        width: w,
+        height: h,
+        rgba,
+        wrap: [wrap(sampler.wrap_s()), wrap(sampler.wrap_t())],
+    })
+}

@@ -1,0 +1,138 @@
+//! glTF files read as scenes (issue 18 item 1): node transforms, mesh reuse,
+//! base-colour textures with their UVs and wrap modes, refusals and notes.
+
+use format::albedo::Wrap;
+use format::load::gltf_sample::{sample_texture, write_textured_sample};
+use format::load::load_gltf_scene;
+use format::manifest::{parse_manifest_str, SceneSpec};
+use glam::{Mat3, Vec3};
+
+#[test]
+fn sample_scene_reuses_meshes_and_reads_textures() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = write_textured_sample(dir.path()).unwrap();
+    let scene = load_gltf_scene(&path).unwrap();
+    // Three nodes use one two-primitive mesh: textured + plain, direct + mirrored.
+    let names: Vec<&str> = scene.models.iter().map(|m| m.name.as_str()).collect();
+    assert_eq!(
+        names,
+        [
+            "crate-textured",
+            "crate-plain",
+            "crate-textured-mirrored",
+            "crate-plain-mirrored"
+        ]
+    );
+    assert_eq!(scene.instances.len(), 6);
+    let models: Vec<u32> = scene.instances.iter().map(|i| i.model).collect();
+    assert_eq!(models, [0, 1, 0, 1, 2, 3]);
+    // Composed transforms: node b is translated, rotated and scaled.
+    let b = scene.instances[2].transform;
+    assert!((b.w_axis.truncate() - Vec3::new(4.0, 0.0, 0.5)).length() < 1e-6);
+    assert!((Mat3::from_mat4(b).determinant() - 3.375).abs() < 1e-4);
+    assert!(Mat3::from_mat4(scene.instances[4].transform).determinant() < 0.0);
+    // The textured model: UVs per vertex (seams kept), the texture
+    // with the sampler's wrap modes, the factor in the vertex albedo. The cube's 24
+    // face corners weld only where position and UV agree (4 corners do): 20.
+    let textured = &scene.models[0];
+    let map = textured.albedo_map.as_ref().expect("textured");
+    assert_eq!(textured.mesh.vertex_count(), 20);
+    assert_eq!(map.uvs.len(), 20);
+    assert_eq!(map.texture.width, 16);
+    assert_eq!(map.texture.rgba, sample_texture());
+    assert_eq!(map.texture.wrap, [Wrap::Repeat, Wrap::MirroredRepeat]);
+    let srgb = |l: f32| format::srgb::linear_to_srgb_powf(l);
+    assert_eq!(textured.mesh.albedo[0], [255, srgb(0.9), srgb(0.8), 255]);
+    assert!(scene.models[1].albedo_map.is_none());
+    assert_eq!(
+        scene.models[1].mesh.albedo[0],
+        [srgb(0.8), srgb(0.1), srgb(0.1), 255]
+    );
+    // Mirrored copies flip the winding: same vertices, triangles reversed.
+    let mirrored = &scene.models[2];
+    assert_eq!(mirrored.mesh.positions, textured.mesh.positions);
+    let t = textured.mesh.triangles[0];
+    assert_eq!(mirrored.mesh.triangles[0], [t[0], t[2], t[1]]);
+    assert!(scene.notes.is_empty(), "{:?}", scene.notes);
+}
+
+#[test]
+fn manifest_gltf_scene_builds_with_hashes_that_cover_the_texture() {
+    let dir = tempfile::tempdir().unwrap();
+    write_textured_sample(dir.path()).unwrap();
+    let manifest = dir.path().join("m.ron");
+    let text = r#"(
+        ground: (min: (-10.0, -10.0), max: (10.0, 10.0)),
+        scene: Gltf("textured-sample.gltf"),
+        cells: (cell_size: 5.0, min_eye_height: 1.0, max_eye_height: 2.0),
+    )"#;
+    let plan = parse_manifest_str(text, &manifest).unwrap();
+    assert!(matches!(&plan.scene, SceneSpec::Gltf(g) if g.file.ends_with("textured-sample.gltf")));
+    let scene = plan.load_scene().unwrap();
+    assert_eq!(scene.models.len(), 4);
+    assert_eq!(scene.instances.len(), 6);
+    let m = &scene.models[0];
+    let map = m.albedo_map.as_ref().unwrap();
+    assert_eq!(m.content_hash, map.model_hash(&m.mesh.content_hash()));
+    assert_ne!(m.content_hash, m.mesh.content_hash());
+    assert_eq!(
+        scene.models[1].content_hash,
+        scene.models[1].mesh.content_hash()
+    );
+    // Changing one texel changes the hash.
+    let mut other = map.clone();
+    other.texture.rgba[0] ^= 1;
+    assert_ne!(other.model_hash(&m.mesh.content_hash()), m.content_hash);
+}
+
+#[test]
+fn bad_gltf_scenes_are_refused_with_the_reason() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = write_textured_sample(dir.path()).unwrap();
+    let text = std::fs::read_to_string(&path).unwrap();
+    // An extension the file requires and hexbake does not read.
+    let required = text.replacen(
+        "\"scene\": 0,",
+        "\"scene\": 0, \"extensionsUsed\": [\"KHR_draco_mesh_compression\"], \"extensionsRequired\": [\"KHR_draco_mesh_compression\"],",
+        1,
+    );
+    std::fs::write(&path, &required).unwrap();
+    let e = load_gltf_scene(&path).unwrap_err().to_string();
+    assert!(
+        e.contains("KHR_draco_mesh_compression") && e.contains("requires"),
+        "{e}"
+    );
+    // Used but not required: read, with a note naming it.
+    let used = text.replacen(
+        "\"scene\": 0,",
+        "\"scene\": 0, \"extensionsUsed\": [\"KHR_texture_transform\"],",
+        1,
+    );
+    std::fs::write(&path, &used).unwrap();
+    let scene = load_gltf_scene(&path).unwrap();
+    assert!(
+        scene
+            .notes
+            .iter()
+            .any(|n| n.contains("KHR_texture_transform")),
+        "{:?}",
+        scene.notes
+    );
+    // A missing texture image names the image.
+    std::fs::write(&path, &text).unwrap();
+    std::fs::remove_file(dir.path().join("checker.png")).unwrap();
+    let e = load_gltf_scene(&path).unwrap_err().to_string();
+    assert!(
+        e.contains("image 0") && e.contains("textured-sample.gltf"),
+        "{e}"
+    );
+    // The manifest refuses other formats as scenes.
+    let e = parse_manifest_str(
+        r#"(ground: (min: (0.0, 0.0), max: (1.0, 1.0)), scene: Gltf("x.obj"),
+            cells: (cell_size: 1.0, min_eye_height: 1.0, max_eye_height: 2.0))"#,
+        &dir.path().join("m.ron"),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains(".gltf or .glb"), "{e}");
+}
