@@ -640,6 +640,7 @@ fn player_renders_like_the_cpu_rasterizer() {
                 tint: inst.tint,
                 object_id: i as u32,
                 triangles: None,
+                albedo_map: scene.models[inst.model as usize].albedo_map.as_ref(),
             })
             .collect();
         let cap = worker::raster::render(&view, &items, worker::raster::CullMode::Back);

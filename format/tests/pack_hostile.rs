@@ -779,6 +779,7 @@ fn arb_base() -> impl Strategy<Value = BasePack> {
                             content_hash: *blake3::hash(name.as_bytes()).as_bytes(),
                             name,
                             mesh,
+                            albedo_map: None,
                         })
                         .collect(),
                     instances,

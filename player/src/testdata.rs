@@ -383,6 +383,7 @@ pub fn write_quad_bake_views(
             name: "quad".into(),
             content_hash: [1; 32],
             mesh: mesh.clone(),
+            albedo_map: None,
         }],
         instances: vec![PackedInstance {
             model: 0,

@@ -55,6 +55,7 @@ fn analysis(c: &mut Criterion) {
         tint: Vec3::ONE,
         object_id: 1,
         triangles: None,
+        albedo_map: None,
     };
     let capture = ray_cast_capture(&[item], &view, CullMode::None);
     let classes = classify(&capture, 1, DEFAULT_T_C0, DEFAULT_T_C1);

@@ -91,6 +91,7 @@ fn bench_raster(c: &mut Criterion) {
             tint: Vec3::ONE,
             object_id: 0,
             triangles: None,
+            albedo_map: None,
         }];
         let tan = (30f32).to_radians().tan();
         let mut views = Vec::new();

@@ -169,6 +169,7 @@ pub fn check_cell(
             tint: inst.tint,
             object_id: i,
             triangles: None,
+            albedo_map: scene.models[inst.model as usize].albedo_map.as_ref(),
         }
     };
     // Reference: every instance as its model.
@@ -194,6 +195,7 @@ pub fn check_cell(
             tint: inst.tint,
             object_id: base + k as u32,
             triangles: None,
+            albedo_map: None,
         });
     }
     let mut by_object: Vec<Option<ProjectiveSurface>> = vec![None; base as usize];

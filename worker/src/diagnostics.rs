@@ -112,6 +112,7 @@ pub fn capture_pictures(
         tint: inst.tint,
         object_id: instance,
         triangles: None,
+        albedo_map: model.albedo_map.as_ref(),
     };
     let capture = render(&view, &[item], CullMode::Back);
     // The thresholds are on window depth with the near plane at the cell's side face

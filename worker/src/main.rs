@@ -406,6 +406,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
                     tint: inst.tint,
                     object_id: i as u32,
                     triangles: None,
+                    albedo_map: scene.models[inst.model as usize].albedo_map.as_ref(),
                 })
                 .collect();
             let capture = render(&view, &items, CullMode::Back);

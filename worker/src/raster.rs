@@ -26,7 +26,8 @@
 //! 4. **Resolve** (deferred shading): per visible pixel, perspective-correct
 //!    barycentrics of the visible triangle at the pixel centre by 2D homogeneous
 //!    rasterization (Olano & Greer 1997), then [`Shading`] — DESIGN.md's Lambert
-//!    formula on the interpolated albedo × tint and normal.
+//!    formula on the interpolated albedo × tint and normal (× the model's albedo
+//!    texture at the interpolated UV where it has one).
 //!
 //! Contract for views: the projection must be an OpenGL-style perspective matrix
 //! whose clip `w` is the eye-space depth −z_eye (every builder in [`crate::view`]
@@ -75,6 +76,10 @@ pub struct DrawItem<'a> {
     pub object_id: u32,
     /// `None` = every triangle of the mesh.
     pub triangles: Option<&'a [u32]>,
+    /// The model's base-colour texture and UVs (glTF scenes, issue 18): the lit
+    /// albedo is multiplied by the texture sampled at the interpolated UV
+    /// (`format::albedo`: bilinear after sRGB decoding). `None`: vertex albedo only.
+    pub albedo_map: Option<&'a format::albedo::AlbedoMap>,
 }
 
 /// The buffers of one capture, row-major, row 0 at the top.
@@ -295,6 +300,9 @@ impl Shading<'_> {
                     n = (p[1] - p[0]).cross(p[2] - p[0]);
                 }
                 let n = n.normalize_or_zero();
+                if let Some(map) = s.item.albedo_map {
+                    albedo *= map.sample_triangle(t, b);
+                }
                 linear_to_srgb8(shade(albedo * s.item.tint, n))
             }
         }

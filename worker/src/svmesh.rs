@@ -252,6 +252,7 @@ pub(crate) fn draw_item(scene: &Scene, instance: u32) -> Result<DrawItem<'_>, Pr
         tint: inst.tint,
         object_id: instance,
         triangles: None,
+        albedo_map: model.albedo_map.as_ref(),
     })
 }
 

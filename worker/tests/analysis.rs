@@ -316,6 +316,7 @@ fn bunny_capture(mesh: &format::Mesh, transform: Mat4, view: &View) -> Capture {
         tint: Vec3::ONE,
         object_id: 7,
         triangles: None,
+        albedo_map: None,
     };
     ray_cast_capture(&[item], view, CullMode::None)
 }
@@ -702,6 +703,7 @@ fn cube_vertex_weights() {
         tint: Vec3::ONE,
         object_id: 4,
         triangles: None,
+        albedo_map: None,
     };
     let capture = ray_cast_capture(&[item], &view, CullMode::None);
     let classes = classify(&capture, 4, DEFAULT_T_C0, DEFAULT_T_C1);
@@ -773,6 +775,7 @@ fn hidden_and_outside_front_facing_vertices_weigh_0_05() {
         tint: Vec3::ONE,
         object_id: 9,
         triangles: None,
+        albedo_map: None,
     };
     let capture = ray_cast_capture(&[item], &view, CullMode::None);
     let classes = classify(&capture, 9, DEFAULT_T_C0, DEFAULT_T_C1);
@@ -853,6 +856,7 @@ fn vertex_just_behind_an_occluding_edge_is_hidden() {
         tint: Vec3::ONE,
         object_id: 3,
         triangles: None,
+        albedo_map: None,
     };
     let capture = ray_cast_capture(&[item], &view, CullMode::None);
 
@@ -900,6 +904,7 @@ fn convex_mesh_front_facing_vertices_are_visible_both_ways() {
             tint: Vec3::ONE,
             object_id: 2,
             triangles: None,
+            albedo_map: None,
         };
         let capture = ray_cast_capture(&[item], &view, CullMode::None);
         let tolerance = DepthTolerance::default();

@@ -403,6 +403,7 @@ fn write_bunny_picture(
         tint: Vec3::ONE,
         object_id: 0,
         triangles: None,
+        albedo_map: None,
     };
     let eye = prism.corners()[8];
     let (lo, hi) = scene.instance_bounds(0);
@@ -473,6 +474,7 @@ fn demo_item(scene: &Scene, i: u32) -> DrawItem<'_> {
         tint: inst.tint,
         object_id: i,
         triangles: None,
+        albedo_map: None,
     }
 }
 

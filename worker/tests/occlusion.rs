@@ -151,6 +151,7 @@ fn no_culled_object_covers_a_pixel_from_1000_views_in_a_city() {
                     tint: inst.tint,
                     object_id: i as u32,
                     triangles: None,
+                    albedo_map: None,
                 })
                 .collect();
             let frame = render(&view, &items, CullMode::Back);

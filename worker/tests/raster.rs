@@ -179,6 +179,7 @@ fn item(mesh: &Mesh, object_id: u32) -> DrawItem<'_> {
         tint: Vec3::ONE,
         object_id,
         triangles: None,
+        albedo_map: None,
     }
 }
 

@@ -130,6 +130,7 @@ fn diagnose_bunny_disagreements() {
             tint: Vec3::ONE,
             object_id: 7,
             triangles: None,
+            albedo_map: None,
         };
         let capture = ray_cast_capture(&[item], &view, CullMode::None);
         let classes = classify(&capture, 7, DEFAULT_T_C0, DEFAULT_T_C1);

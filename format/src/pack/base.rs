@@ -146,6 +146,9 @@ pub struct PackedModel {
     /// blake3 of the loaded mesh (`format::Model::content_hash`).
     pub content_hash: [u8; 32],
     pub mesh: Mesh,
+    /// Base-colour texture and UVs (issue 18; sections `albedo-textures` and
+    /// `texcoords`), `None` for an untextured model.
+    pub albedo_map: Option<crate::albedo::AlbedoMap>,
 }
 
 /// One placed copy of a model.
@@ -224,6 +227,7 @@ impl BasePack {
                     name: m.name.clone(),
                     content_hash: m.content_hash,
                     mesh: m.mesh.clone(),
+                    albedo_map: m.albedo_map.clone(),
                 })
                 .collect(),
             instances: scene
@@ -332,9 +336,7 @@ impl BasePack {
             .collect();
 
         // 2. Sections; positions and normals stay raw unless zstd pays (zero-copy).
-        assemble(
-            FileKind::Base,
-            &[
+        let mut sections = vec![
                 SectionData {
                     kind: SectionKind::BASE_META,
                     raw: bytemuck::bytes_of(&meta).to_vec(),
@@ -375,8 +377,12 @@ impl BasePack {
                     raw: bytemuck::cast_slice(&instances).to_vec(),
                     codecs: TRY_ZSTD,
                 },
-            ],
-        )
+        ];
+        // Optional albedo textures and UVs (issue 18), absent for untextured scenes.
+        let maps: Vec<_> = self.models.iter().map(|m| m.albedo_map.as_ref()).collect();
+        let vertex_counts: Vec<u32> = records.iter().map(|r| r.vertex_count).collect();
+        sections.extend(super::albedo_maps::sections(&maps, &vertex_counts)?);
+        assemble(FileKind::Base, &sections)
     }
 
     /// Decodes a validated pack (every reference and value is checked — the grid
@@ -479,7 +485,10 @@ impl BasePack {
 
         check_vertices(&positions, &normals, 0).map_err(reject)?;
 
-        // 3. Models: split the shared arrays, check names and vertex references.
+        // 3. Models: split the shared arrays, check names and vertex references;
+        // optional albedo textures and UVs (issue 18).
+        let vertex_counts: Vec<u32> = records.iter().map(|r| r.vertex_count).collect();
+        let mut albedo_maps = super::albedo_maps::decode(pack, &vertex_counts)?.into_iter();
         let mut models = Vec::with_capacity(records.len());
         let (mut v0, mut t0) = (0usize, 0usize);
         for (i, r) in records.iter().enumerate() {
@@ -530,6 +539,7 @@ impl BasePack {
                     albedo: colours[v0..v1].to_vec(),
                     triangles: tris.to_vec(),
                 },
+                albedo_map: albedo_maps.next().flatten(),
             });
             (v0, t0) = (v1, t1);
         }

@@ -8,6 +8,7 @@
 //! - [`base`], [`cell`], [`index`]: the three files' contents.
 //! - [`texture`]: capture texture encodings.
 
+pub mod albedo_maps;
 pub mod base;
 pub mod cell;
 pub mod codec;

@@ -192,11 +192,13 @@ pub fn small_base() -> BasePack {
                 name: "tetra".into(),
                 content_hash: *blake3::hash(b"tetra").as_bytes(),
                 mesh: tetra,
+                albedo_map: None,
             },
             PackedModel {
                 name: "grid-16".into(),
                 content_hash: *blake3::hash(b"grid").as_bytes(),
                 mesh: grid_mesh(16, 16, 7),
+                albedo_map: None,
             },
         ],
         instances: vec![
@@ -383,6 +385,7 @@ pub fn synthetic_base(model_count: u32, tris_per_model: u32) -> BasePack {
             name: format!("model-{i}"),
             content_hash: *blake3::hash(&i.to_le_bytes()).as_bytes(),
             mesh: grid_mesh(side, side, i as u64),
+            albedo_map: None,
         })
         .collect();
     base.instances = (0..model_count)
