@@ -1,6 +1,7 @@
-//! Golden packs (format/README.md, "Compatibility policy"): the v1 files committed
-//! under `tests/data/` must keep decoding to the sample content, and encoding the
-//! sample content must reproduce them byte for byte (deterministic writer).
+//! Golden packs (format/README.md, "Compatibility policy"): the files of every shipped
+//! version committed under `tests/data/` must keep decoding to the sample content, and
+//! encoding the sample content must reproduce the current version's byte for byte
+//! (deterministic writer).
 //! Regenerate deliberately with `HEXBAKE_BLESS=1 cargo test -p format --test pack_golden`.
 
 use format::pack::{sample, BasePack, CellPack, Index, PackFile, TextureEncoding, FORMAT_VERSION};
@@ -95,19 +96,41 @@ fn golden_v2_packs_decode_to_the_samples() {
     assert!(index.group(2).is_none());
 }
 
+/// Version 3 (issue 15 item 4) differs from version 2 only by the triangle codec
+/// `zstd+index-mtf`: the v3 files hold the v2 samples.
+#[test]
+fn golden_v3_packs_decode_to_the_samples() {
+    assert_eq!(
+        BasePack::decode(&PackFile::open(&golden("base-v3.pack")).unwrap()).unwrap(),
+        sample::small_base()
+    );
+    assert_eq!(
+        CellPack::read(&golden("cell-v3.pack")).unwrap(),
+        sample::small_cell_v2()
+    );
+    assert_eq!(
+        CellPack::decode_group(&PackFile::open(&golden("group-v3.pack")).unwrap()).unwrap(),
+        sample::small_group()
+    );
+    assert_eq!(
+        Index::read(&golden("index-v3.pack")).unwrap(),
+        sample::small_index_v2()
+    );
+}
+
 #[test]
 fn regenerating_the_golden_packs_gives_the_same_bytes() {
     assert_eq!(
-        FORMAT_VERSION, 2,
+        FORMAT_VERSION, 3,
         "a new version needs new golden files; keep the old ones"
     );
-    check_or_bless("base-v2.pack", sample::small_base().encode().unwrap());
-    check_or_bless("cell-v2.pack", sample::small_cell_v2().encode().unwrap());
+    check_or_bless("base-v3.pack", sample::small_base().encode().unwrap());
+    check_or_bless("cell-v3.pack", sample::small_cell_v2().encode().unwrap());
     check_or_bless(
-        "group-v2.pack",
+        "group-v3.pack",
         sample::small_group().encode_group().unwrap(),
     );
-    check_or_bless("index-v2.pack", sample::small_index_v2().encode().unwrap());
+    check_or_bless("index-v3.pack", sample::small_index_v2().encode().unwrap());
 }
 
 #[test]
@@ -115,16 +138,21 @@ fn golden_packs_exercise_every_codec() {
     use format::pack::Codec;
     let mut seen = std::collections::BTreeSet::new();
     for name in [
-        "base-v2.pack",
-        "cell-v2.pack",
-        "group-v2.pack",
-        "index-v2.pack",
+        "base-v3.pack",
+        "cell-v3.pack",
+        "group-v3.pack",
+        "index-v3.pack",
     ] {
         for s in PackFile::read(&golden(name)).unwrap().sections() {
             seen.insert(s.codec as u32);
         }
     }
-    for c in [Codec::Raw, Codec::Zstd, Codec::ZstdDeltaU32] {
+    for c in [
+        Codec::Raw,
+        Codec::Zstd,
+        Codec::ZstdDeltaU32,
+        Codec::ZstdIndexMtf,
+    ] {
         assert!(seen.contains(&(c as u32)), "no golden section uses {c:?}");
     }
 }

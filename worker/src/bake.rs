@@ -32,6 +32,7 @@
 
 use crate::backface::all_culled;
 use crate::capture::pack_texture;
+use crate::mesh_order::cache_order;
 use crate::cluster::{greedy_clusters, ClusterCandidate, ClusterSettings};
 use crate::far_field::{far_instances, CellGroups, FarField};
 use crate::grid::{HexGrid, Prism};
@@ -675,7 +676,7 @@ fn derive_region(
                         .map(|m| BakedMember {
                             instance: m.instance,
                             input_triangles: m.input_triangles,
-                            triangles: m.simplified.triangles,
+                            triangles: cache_order(m.simplified.triangles, Vec::new()).0,
                             view_masks: Vec::new(),
                             vertex_view_sets: Vec::new(),
                         })
@@ -694,14 +695,18 @@ fn derive_region(
                 Job::Mv(i) => {
                     let mv =
                         derive_mvmesh(scene, chains, *i, eyes, &prism, &settings).map_err(wrap)?;
+                    let (triangles, view_masks) = cache_order(
+                        mv.member.simplified.triangles,
+                        mv.member.simplified.view_masks,
+                    );
                     Ok((
                         BakedProxy {
                             kind: ProxyKind::MvMesh,
                             members: vec![BakedMember {
                                 instance: *i,
                                 input_triangles: mv.member.input_triangles,
-                                triangles: mv.member.simplified.triangles,
-                                view_masks: mv.member.simplified.view_masks,
+                                triangles,
+                                view_masks,
                                 vertex_view_sets: mv.vertex_view_sets,
                             }],
                             views: mv.views,

@@ -226,6 +226,123 @@ pub fn texture_of(
     (texture, covered)
 }
 
+/// Textures are shrunk only when the fitted size saves at least this share of texels
+/// along each shrunk axis (a resampling for a 2 % saving costs more in blur than it
+/// saves in bytes).
+pub const FIT_MIN_SHRINK: f32 = 0.9;
+
+/// The largest linear texel scale a viewer anywhere in a region can use, for a
+/// capture taken from `eye` of an object inside `[lo, hi]` (issue 15 item 3, "texture
+/// resolution fitted to need").
+///
+/// **Rule.** A capture has `image_res` pixels per 60° at its eye (DESIGN.md "Capture
+/// resolution"), the angular resolution of the player's 1024², 60° frame; so a texel
+/// seen at object point `p` spans `|eye − p| · θ` in the world and, from a viewer at
+/// `q`, `|eye − p| / |q − p|` screen pixels. Where every viewer of the region is
+/// farther from every point of the object than the eye is, the texels are smaller
+/// than any screen pixel they will ever cover and the texture can shrink by
+///
+/// `s = max_p |eye − p| / min_{q, p} |q − p|` (clamped to 1),
+///
+/// after which a texel still covers at most one screen pixel from the *nearest* point
+/// of the region. Both terms are bounded conservatively: the numerator is the largest
+/// distance from the eye to the object's box (a corner), the denominator the distance
+/// between the region's and the object's boxes (never more than the true distance),
+/// so `s` is never smaller than the exact ratio. A capture from inside the region (the
+/// cell centre, a group centre) always gets `s ≥ 1`: only the MVMesh's captures from
+/// the neighbouring cells' centres (§3.1.4), which can stand closer to the object than
+/// any point of the cell, shrink.
+pub fn fitted_scale(eye: Vec3, lo: Vec3, hi: Vec3, region_lo: Vec3, region_hi: Vec3) -> f32 {
+    let far = (0..8)
+        .map(|i| {
+            let c = Vec3::new(
+                if i & 1 == 0 { lo.x } else { hi.x },
+                if i & 2 == 0 { lo.y } else { hi.y },
+                if i & 4 == 0 { lo.z } else { hi.z },
+            );
+            c.distance(eye)
+        })
+        .fold(0.0f32, f32::max);
+    let gap = (region_lo - hi).max(lo - region_hi).max(Vec3::ZERO).length();
+    if gap <= 0.0 || !far.is_finite() {
+        return 1.0;
+    }
+    (far / gap).min(1.0)
+}
+
+/// Shrinks `texture` to `scale` (from [`fitted_scale`]) of its width and height when
+/// that saves enough ([`FIT_MIN_SHRINK`]); otherwise returns it unchanged.
+///
+/// The new texels cover the same rectangle, so the world → texture matrix (which maps
+/// to normalised coordinates over the crop) is unchanged. Each new texel is the
+/// area-weighted mean of the source texels under it: over the covered ones (alpha
+/// 255) when they cover at least half its area, which then gets alpha 255, else over
+/// all of them with alpha 0 — coverage stays binary and the rim keeps the object's own
+/// colours, as [`texture_of`]'s dilation intends.
+pub fn fit_texture(texture: ProjectedTexture, scale: f32) -> ProjectedTexture {
+    let (w, h) = (texture.width, texture.height);
+    let nw = ((w as f32 * scale).ceil() as u32).clamp(1, w);
+    let nh = ((h as f32 * scale).ceil() as u32).clamp(1, h);
+    let shrinks = |n: u32, o: u32| (n as f32) <= FIT_MIN_SHRINK * o as f32;
+    if !(shrinks(nw, w) || shrinks(nh, h)) || texture.rgba.len() != (w * h * 4) as usize {
+        return texture;
+    }
+    // Source texel spans of each target column / row with their overlap weights.
+    let spans = |n: u32, o: u32| -> Vec<Vec<(usize, f32)>> {
+        let step = o as f64 / n as f64;
+        (0..n)
+            .map(|i| {
+                let (a, b) = (i as f64 * step, (i + 1) as f64 * step);
+                (a.floor() as usize..(b.ceil() as usize).min(o as usize))
+                    .map(|k| {
+                        let overlap = (b.min(k as f64 + 1.0) - a.max(k as f64)).max(0.0);
+                        (k, overlap as f32)
+                    })
+                    .filter(|&(_, f)| f > 0.0)
+                    .collect()
+            })
+            .collect()
+    };
+    let (xs, ys) = (spans(nw, w), spans(nh, h));
+    let mut rgba = vec![0u8; (nw * nh * 4) as usize];
+    for (ty, yspan) in ys.iter().enumerate() {
+        for (tx, xspan) in xs.iter().enumerate() {
+            // [covered rgb sum, covered area, all rgb sum, all area]
+            let mut cov = [0.0f32; 4];
+            let mut all = [0.0f32; 4];
+            for &(sy, fy) in yspan {
+                for &(sx, fx) in xspan {
+                    let o = (sy * w as usize + sx) * 4;
+                    let a = fx * fy;
+                    let t = &texture.rgba[o..o + 4];
+                    let acc = if t[3] >= 128 { &mut cov } else { &mut all };
+                    for k in 0..3 {
+                        acc[k] += t[k] as f32 * a;
+                    }
+                    acc[3] += a;
+                }
+            }
+            let total = cov[3] + all[3];
+            let (sum, alpha) = if cov[3] >= 0.5 * total {
+                (cov, 255)
+            } else {
+                ([cov[0] + all[0], cov[1] + all[1], cov[2] + all[2], total], 0)
+            };
+            let o = (ty * nw as usize + tx) * 4;
+            for k in 0..3 {
+                rgba[o + k] = (sum[k] / sum[3]).round().clamp(0.0, 255.0) as u8;
+            }
+            rgba[o + 3] = alpha;
+        }
+    }
+    ProjectedTexture {
+        width: nw,
+        height: nh,
+        rgba,
+        ..texture
+    }
+}
+
 /// Clip space → texture coordinates of the crop `[x0, x0 + cw) × [y0, y0 + ch)` of a
 /// `width × height` image (module docs).
 fn crop_matrix(width: f32, height: f32, x0: f32, y0: f32, cw: f32, ch: f32) -> Mat4 {

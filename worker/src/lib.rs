@@ -12,6 +12,7 @@ pub mod far_field;
 pub mod grid;
 pub mod job;
 pub mod lod_chain;
+pub mod mesh_order;
 pub mod mvmesh;
 pub mod occlusion;
 pub mod picture;

@@ -28,7 +28,7 @@
 //!    view order (the centre stays first when it is used).
 
 use crate::backface::regional_backface_cull;
-use crate::capture::{capture_objects, CaptureError};
+use crate::capture::{capture_objects, fit_texture, fitted_scale, items_aabb, CaptureError};
 use crate::classify::{classify_objects, WindowDepth};
 use crate::grid::Prism;
 use crate::lod_chain::LodChains;
@@ -78,6 +78,12 @@ pub fn derive_mvmesh(
     let start = StartMesh::of(scene, chains, &item, settings);
     let mesh = start.mesh;
     let eyes = &eyes[..eyes.len().min(CELL_VIEWS as usize)];
+    let (object_lo, object_hi) = items_aabb(std::slice::from_ref(&item)).unwrap_or_default();
+    let (region_lo, region_hi) = prism_corners
+        .iter()
+        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &c| {
+            (lo.min(c), hi.max(c))
+        });
 
     // Step 1: polygons not back-facing for the whole cell.
     let t = Instant::now();
@@ -143,7 +149,11 @@ pub fn derive_mvmesh(
                 }
             }
         }
-        textures.push(Some(capture.texture));
+        // Texture resolution fitted to need (issue 15 item 3, `capture::fitted_scale`):
+        // a neighbour's centre may stand closer to the object than any point of the
+        // cell; texels finer than the cell's nearest viewer can see are dropped.
+        let scale = fitted_scale(eye, object_lo, object_hi, region_lo, region_hi);
+        textures.push(Some(fit_texture(capture.texture, scale)));
         times.weights_ms += ms_since(t);
     }
     for (w, &back) in weight.iter_mut().zip(&back_everywhere) {

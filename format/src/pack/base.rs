@@ -9,7 +9,7 @@ use super::error::PackError;
 use super::layout::{FileKind, SectionKind};
 use super::reader::{pod_vec, PackFile};
 use super::writer::{
-    assemble, write_atomic, SectionData, RAW_ONLY, TRY_INDICES, TRY_ZSTD, TRY_ZSTD_PREFER_RAW,
+    assemble, write_atomic, SectionData, RAW_ONLY, TRY_TRIANGLES, TRY_ZSTD, TRY_ZSTD_PREFER_RAW,
 };
 use super::{invalid, malformed};
 use crate::manifest::{check_cells, check_ground, CellParams, MAX_COORDINATE, MAX_TINT};
@@ -370,7 +370,7 @@ impl BasePack {
                 SectionData {
                     kind: SectionKind::TRIANGLES,
                     raw: triangles,
-                    codecs: TRY_INDICES,
+                    codecs: TRY_TRIANGLES,
                 },
                 SectionData {
                     kind: SectionKind::INSTANCES,

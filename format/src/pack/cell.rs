@@ -12,7 +12,7 @@ use super::error::PackError;
 use super::layout::{FileKind, SectionKind};
 use super::reader::PackFile;
 use super::texture::{Texture, TextureEncoding};
-use super::writer::{assemble_reusing, write_atomic, SectionData, RAW_ONLY, TRY_INDICES, TRY_ZSTD};
+use super::writer::{assemble_reusing, write_atomic, SectionData, RAW_ONLY, TRY_INDICES, TRY_TRIANGLES, TRY_ZSTD};
 use super::{invalid, malformed};
 use bytemuck::{Pod, Zeroable};
 use std::path::Path;
@@ -342,7 +342,7 @@ impl CellPack {
                 SectionData {
                     kind: SectionKind::MEMBER_TRIANGLES,
                     raw: triangles,
-                    codecs: TRY_INDICES,
+                    codecs: TRY_TRIANGLES,
                 },
                 SectionData {
                     kind: SectionKind::VIEW_MASKS,

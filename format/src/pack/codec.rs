@@ -69,6 +69,101 @@ pub fn postdecode_delta_u32(planes: &[u8]) -> Option<Vec<u8>> {
     Some(out)
 }
 
+/// Length of the move-to-front list of [`precode_index_mtf`].
+pub const MTF_LEN: usize = 16;
+
+/// Move-to-front pre-coding of a little-endian u32 index stream (`bytes.len() % 4 ==
+/// 0`): `n` code bytes, then the deltas. An index found at position `k` of the list of
+/// the [`MTF_LEN`] most recently used indices (initially all 0) codes as `k`; any
+/// other codes as [`MTF_LEN`] followed (in the second part) by the zig-zag LEB128
+/// difference from the previous such index (initially 0). Either way the index moves
+/// to the front. In a triangle list most indices repeat one of the last few
+/// triangles' vertices, so the code bytes are small and zstd's entropy stage takes
+/// them to 3–4 bits.
+pub fn precode_index_mtf(bytes: &[u8]) -> Vec<u8> {
+    let n = bytes.len() / 4;
+    let mut codes = Vec::with_capacity(n);
+    let mut deltas = Vec::new();
+    let mut list = [0u32; MTF_LEN];
+    let mut last_new = 0u32;
+    for c in bytes.chunks_exact(4) {
+        let v = u32::from_le_bytes([c[0], c[1], c[2], c[3]]);
+        let k = match list.iter().position(|&x| x == v) {
+            Some(k) => k,
+            None => {
+                let d = v.wrapping_sub(last_new) as i32;
+                last_new = v;
+                let mut z = ((d << 1) ^ (d >> 31)) as u32;
+                loop {
+                    let b = (z & 0x7f) as u8;
+                    z >>= 7;
+                    if z == 0 {
+                        deltas.push(b);
+                        break;
+                    }
+                    deltas.push(b | 0x80);
+                }
+                MTF_LEN - 1
+            }
+        };
+        codes.push(if list[k] == v { k as u8 } else { MTF_LEN as u8 });
+        list.copy_within(0..k, 1);
+        list[0] = v;
+    }
+    codes.extend_from_slice(&deltas);
+    codes
+}
+
+/// Inverse of [`precode_index_mtf`] for `n` indices; says why on malformed input (a
+/// code above [`MTF_LEN`], a delta cut short or longer than 5 bytes, bytes left over).
+pub fn postdecode_index_mtf(pre: &[u8], n: usize) -> Result<Vec<u8>, String> {
+    if pre.len() < n {
+        return Err(format!("index-mtf: {} bytes for {n} codes", pre.len()));
+    }
+    let (codes, deltas) = pre.split_at(n);
+    let mut at = 0usize;
+    let mut out = Vec::with_capacity(n * 4);
+    let mut list = [0u32; MTF_LEN];
+    let mut last_new = 0u32;
+    for (i, &code) in codes.iter().enumerate() {
+        let (k, v) = match code as usize {
+            k if k < MTF_LEN => (k, list[k]),
+            MTF_LEN => {
+                let mut z = 0u32;
+                let mut shift = 0;
+                loop {
+                    let b = *deltas.get(at).ok_or_else(|| {
+                        format!("index-mtf: index {i}: delta cut short at byte {}", n + at)
+                    })?;
+                    at += 1;
+                    if shift == 28 && b > 0x0f {
+                        return Err(format!("index-mtf: index {i}: delta longer than 32 bits"));
+                    }
+                    z |= ((b & 0x7f) as u32) << shift;
+                    if b & 0x80 == 0 {
+                        break;
+                    }
+                    shift += 7;
+                }
+                let d = (z >> 1) as i32 ^ -((z & 1) as i32);
+                last_new = last_new.wrapping_add(d as u32);
+                (MTF_LEN - 1, last_new)
+            }
+            c => return Err(format!("index-mtf: index {i}: code {c} above {MTF_LEN}")),
+        };
+        list.copy_within(0..k, 1);
+        list[0] = v;
+        out.extend_from_slice(&v.to_le_bytes());
+    }
+    if at != deltas.len() {
+        return Err(format!(
+            "index-mtf: {} bytes left after {n} indices",
+            deltas.len() - at
+        ));
+    }
+    Ok(out)
+}
+
 /// Encodes a section with the codec the writer would choose from `candidates`,
 /// falling back to [`Codec::Raw`] when no compression pays. Returns the codec and the
 /// stored bytes.
@@ -88,6 +183,12 @@ pub fn encode_best_with(raw: &[u8], candidates: &[Codec], prefer_raw: bool) -> (
                     continue;
                 }
                 zstd_compress(&precode_delta_u32(raw))
+            }
+            Codec::ZstdIndexMtf => {
+                if !raw.len().is_multiple_of(4) {
+                    continue;
+                }
+                zstd_compress(&precode_index_mtf(raw))
             }
         };
         if pays(raw.len(), stored.len(), prefer_raw) && stored.len() < best.1.len() {
@@ -119,10 +220,34 @@ pub fn decode(codec: Codec, stored: &[u8], raw_len: u64) -> Result<Vec<u8>, Stri
             let planes = zstd_decompress(stored, raw_len)?;
             postdecode_delta_u32(&planes).ok_or_else(|| "bad delta-u32 length".to_string())
         }
+        Codec::ZstdIndexMtf => {
+            if !raw_len.is_multiple_of(4) {
+                return Err(format!(
+                    "index-mtf section raw length {raw_len} is not a multiple of 4"
+                ));
+            }
+            // n code bytes plus at most 5 delta bytes per index.
+            let n = raw_len / 4;
+            let pre = zstd_decompress_at_most(stored, n.saturating_mul(6))?;
+            postdecode_index_mtf(&pre, n as usize)
+        }
     }
 }
 
 fn zstd_decompress(stored: &[u8], raw_len: u64) -> Result<Vec<u8>, String> {
+    let out = zstd_decompress_at_most(stored, raw_len)?;
+    if out.len() as u64 != raw_len {
+        return Err(format!(
+            "decompressed to {} bytes, table says {raw_len}",
+            out.len()
+        ));
+    }
+    Ok(out)
+}
+
+/// Decompresses one frame of at most `max` bytes (one more is an error).
+fn zstd_decompress_at_most(stored: &[u8], max: u64) -> Result<Vec<u8>, String> {
+    let raw_len = max;
     // Stream into a buffer that grows with the real output, never past raw_len + 1:
     // a frame lying about its size cannot make us allocate more than that.
     let mut decoder = zstd::stream::read::Decoder::with_buffer(stored)
@@ -140,11 +265,9 @@ fn zstd_decompress(stored: &[u8], raw_len: u64) -> Result<Vec<u8>, String> {
         .take(raw_len.saturating_add(1))
         .read_to_end(&mut out)
         .map_err(|e| e.to_string())?;
-    if out.len() as u64 != raw_len {
+    if out.len() as u64 > raw_len {
         return Err(format!(
-            "decompressed to {}{} bytes, table says {raw_len}",
-            out.len(),
-            if out.len() as u64 > raw_len { "+" } else { "" }
+            "decompressed to more than the {raw_len} bytes the table allows"
         ));
     }
     Ok(out)

@@ -11,7 +11,7 @@ use std::fmt;
 /// First 8 bytes of every pack.
 pub const MAGIC: [u8; 8] = *b"HEXBAKE\0";
 /// The format version this crate writes (and the newest it reads).
-pub const FORMAT_VERSION: u32 = 2;
+pub const FORMAT_VERSION: u32 = 3;
 /// Every section starts at a multiple of this many bytes from the file start, so a
 /// memory-mapped (page-aligned) raw section can be viewed as `&[f32]`, `&[[u32; 3]]`...
 pub const SECTION_ALIGN: u64 = 64;
@@ -120,6 +120,12 @@ pub enum Codec {
     /// frame of the *pre-coded* stream: successive differences, zig-zag mapped, with
     /// the four bytes of each value split into four planes (see README "Codecs").
     ZstdDeltaU32 = 2,
+    /// Content is a stream of little-endian u32 indices (triangle lists). Stored as one
+    /// zstd frame of a move-to-front pre-coding: per index one code byte (its position
+    /// in a 16-entry list of recent indices, or 16 for a new one) and, for new ones,
+    /// a zig-zag LEB128 delta from the previous new index (README "Codecs"; format
+    /// version 3, issue 15 item 4).
+    ZstdIndexMtf = 3,
 }
 
 impl Codec {
@@ -128,6 +134,7 @@ impl Codec {
             0 => Some(Codec::Raw),
             1 => Some(Codec::Zstd),
             2 => Some(Codec::ZstdDeltaU32),
+            3 => Some(Codec::ZstdIndexMtf),
             _ => None,
         }
     }
@@ -137,6 +144,7 @@ impl Codec {
             Codec::Raw => "raw",
             Codec::Zstd => "zstd",
             Codec::ZstdDeltaU32 => "zstd+delta-u32",
+            Codec::ZstdIndexMtf => "zstd+index-mtf",
         }
     }
 }

@@ -192,6 +192,12 @@ pub fn scan(bytes: &[u8], file: &Path) -> Result<PackScan, PackError> {
         }
         let codec = Codec::from_u32(e.codec)
             .ok_or_else(|| table_err(format!("unknown codec {}", e.codec)))?;
+        if codec == Codec::ZstdIndexMtf && header.version < 3 {
+            return Err(table_err(format!(
+                "codec 3 (zstd+index-mtf) needs format version 3, the file has {}",
+                header.version
+            )));
+        }
         let expected_offset =
             align_up(cursor).ok_or_else(|| table_err("offset overflow".into()))?;
         if e.offset != expected_offset {
@@ -222,7 +228,7 @@ pub fn scan(bytes: &[u8], file: &Path) -> Result<PackScan, PackError> {
                     e.raw_len, e.stored_len
                 )));
             }
-            Codec::Zstd | Codec::ZstdDeltaU32
+            Codec::Zstd | Codec::ZstdDeltaU32 | Codec::ZstdIndexMtf
                 if e.raw_len > e.stored_len.saturating_mul(MAX_EXPANSION) =>
             {
                 return Err(table_err(format!(

@@ -31,6 +31,8 @@ pub const TRY_ZSTD: &[Codec] = &[Codec::Zstd];
 pub const TRY_ZSTD_PREFER_RAW: &[Codec] = &[Codec::Zstd, Codec::Raw];
 /// Codec candidates for u32 index streams.
 pub const TRY_INDICES: &[Codec] = &[Codec::Zstd, Codec::ZstdDeltaU32];
+/// Codec candidates for triangle lists (u32 triples whose neighbours share vertices).
+pub const TRY_TRIANGLES: &[Codec] = &[Codec::Zstd, Codec::ZstdDeltaU32, Codec::ZstdIndexMtf];
 /// Store raw (tiny fixed-size metadata).
 pub const RAW_ONLY: &[Codec] = &[];
 
