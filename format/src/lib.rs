@@ -30,6 +30,7 @@ pub mod mesh_ext;
 pub mod metrics;
 pub mod pack;
 pub mod park;
+pub mod patch_visibility;
 pub mod path;
 pub mod procedural;
 pub mod scene;

@@ -783,6 +783,7 @@ fn arb_base() -> impl Strategy<Value = BasePack> {
                         })
                         .collect(),
                     instances,
+                    patches: None,
                 }
             })
         })

@@ -390,6 +390,7 @@ pub fn write_quad_bake_views(
             transform: Mat4::IDENTITY.to_cols_array(),
             tint: [1.0; 3],
         }],
+        patches: None,
     };
     mkdir(&dir.join("cells"))?;
     base.write(&dir.join("base.pack"))?;

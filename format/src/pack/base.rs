@@ -77,7 +77,7 @@ impl GridParams {
 /// A value of a base pack that breaks a content rule: the section, the byte offset
 /// in it, and what is wrong. The writer refuses it ([`PackError::Invalid`]), the
 /// reader reports it as [`PackError::Malformed`].
-struct BadValue(SectionKind, u64, String);
+pub(super) struct BadValue(pub(super) SectionKind, pub(super) u64, pub(super) String);
 
 /// Positions are finite and within ±`MAX_COORDINATE` (normalised models are at most
 /// that tall and wide); normals are finite. `first` is the index of `positions[0]` in
@@ -169,6 +169,9 @@ pub struct BasePack {
     pub grid: GridParams,
     pub models: Vec<PackedModel>,
     pub instances: Vec<PackedInstance>,
+    /// Optional per-model patch data (issue 17, sections 0x010B–0x010D): `None` when
+    /// the pack has none.
+    pub patches: Option<super::patches::PatchSet>,
 }
 
 /// Section `base-meta` (80 bytes).
@@ -239,6 +242,7 @@ impl BasePack {
                     tint: i.tint.to_array(),
                 })
                 .collect(),
+            patches: None,
         }
     }
 
@@ -335,6 +339,11 @@ impl BasePack {
             })
             .collect();
 
+        if let Some(set) = &self.patches {
+            let counts: Vec<u32> = records.iter().map(|r| r.triangle_count).collect();
+            super::patches::check(set, &counts).map_err(refuse)?;
+        }
+
         // 2. Sections; positions and normals stay raw unless zstd pays (zero-copy).
         let mut sections = vec![
                 SectionData {
@@ -382,6 +391,9 @@ impl BasePack {
         let maps: Vec<_> = self.models.iter().map(|m| m.albedo_map.as_ref()).collect();
         let vertex_counts: Vec<u32> = records.iter().map(|r| r.vertex_count).collect();
         sections.extend(super::albedo_maps::sections(&maps, &vertex_counts)?);
+        if let Some(set) = &self.patches {
+            sections.extend(super::patches::sections(set));
+        }
         assemble(FileKind::Base, &sections)
     }
 
@@ -565,11 +577,18 @@ impl BasePack {
                 tint: r.tint,
             });
         }
+        // 5. Optional patch data (issue 17).
+        let patches = super::patches::decode(pack, records.len()).map_err(reject)?;
+        if let Some(set) = &patches {
+            let counts: Vec<u32> = records.iter().map(|r| r.triangle_count).collect();
+            super::patches::check(set, &counts).map_err(reject)?;
+        }
         Ok(BasePack {
             scene_fingerprint: meta.scene_fingerprint,
             grid,
             models,
             instances: out_instances,
+            patches,
         })
     }
 

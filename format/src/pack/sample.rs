@@ -218,6 +218,7 @@ pub fn small_base() -> BasePack {
                 tint: [1.0, 0.7, 0.7],
             },
         ],
+        patches: None,
     }
 }
 
@@ -581,4 +582,58 @@ pub fn mutate_decoded(bytes: &[u8], pick: u64) -> Option<Vec<u8>> {
     let v = values[rng.below(values.len() as u64) as usize];
     s.raw[at..at + 4].copy_from_slice(&v.to_le_bytes());
     assemble(pack.file_kind(), &sections).ok()
+}
+
+/// [`small_base`] with patch data (issue 17, sections 0x010B–0x010D): each model's
+/// triangles in patches of consecutive ids taken in reverse, flat normal cones
+/// around +y, seeded sample bits over 18 directions × 2 shells.
+pub fn small_base_patches() -> BasePack {
+    use super::patches::{ModelPatch, ModelPatches, PatchSet};
+    use crate::patch_visibility::{direction_count, PatchBounds};
+    let mut base = small_base();
+    let (level, shells) = (1u32, vec![1.5f32, 8.0]);
+    let samples = direction_count(level) * shells.len();
+    let words = samples.div_ceil(32);
+    let mut rng = SplitMix(17);
+    let models = base
+        .models
+        .iter()
+        .map(|m| {
+            let n = m.mesh.triangles.len() as u32;
+            let per = n.div_ceil(3).max(1);
+            let mut patches = Vec::new();
+            let mut start = 0;
+            while start < n {
+                let count = per.min(n - start);
+                let mut bits: Vec<u32> = (0..words).map(|_| rng.next_u64() as u32).collect();
+                let spare = words * 32 - samples;
+                if spare > 0 {
+                    bits[words - 1] &= u32::MAX >> spare;
+                }
+                patches.push(ModelPatch {
+                    triangle_count: count,
+                    bounds: PatchBounds {
+                        cone_axis: [0.0, 1.0, 0.0],
+                        cone_cos: if start == 0 { -1.0 } else { 0.5 },
+                        centre: [0.5, 0.25 * start as f32, 0.5],
+                        offset: 0.125,
+                    },
+                    samples: bits,
+                });
+                start += count;
+            }
+            ModelPatches {
+                centre: [0.5, 0.5, 0.5],
+                radius: 2.0,
+                patches,
+                triangle_order: (0..n).rev().collect(),
+            }
+        })
+        .collect();
+    base.patches = Some(PatchSet {
+        sample_level: level,
+        shell_radius: shells,
+        models,
+    });
+    base
 }
