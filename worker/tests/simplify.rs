@@ -1136,6 +1136,7 @@ fn model_of(mesh: &TestMesh) -> format::Model {
         source: "test".into(),
         content_hash: [1; 32],
         mesh: m,
+        albedo_map: None,
     }
 }
 
