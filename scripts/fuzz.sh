@@ -5,17 +5,21 @@
 #   scripts/fuzz.sh --build-only     only build the targets
 #
 # With `cargo fuzz` and a nightly toolchain: runs the libFuzzer targets of fuzz/
-# (pack_base, pack_cell, pack_index), seeded with the golden packs of tests/data/.
+# (pack_base, pack_cell, pack_index, seeded with the golden packs of tests/data/;
+# gltf_scene, the glTF scene reader of issue 18, seeded with the textured sample
+# scene of format::load::gltf_sample).
 # Otherwise (no nightly or no cargo-fuzz; fuzz/ is then not built), the stable fallback driver
 # (format/examples/fuzz_packs.rs: seeded random mutations of the sample packs,
-# checksums resealed half the time) runs for SECONDS per target-equivalent instead.
+# checksums resealed half the time) runs for SECONDS per target-equivalent instead,
+# and format/examples/fuzz_gltf.rs (mutations of the sample glTF scene, JSON and GLB)
+# for SECONDS.
 # Exit status: non-zero on any crash/panic or build failure.
 set -euo pipefail
 
 repo=$(cd "$(dirname "$0")/.." && pwd)
 cd "$repo"
 arg=${1:-60}
-targets=(pack_base pack_cell pack_index)
+targets=(pack_base pack_cell pack_index gltf_scene)
 
 have_cargo_fuzz() {
     command -v cargo-fuzz >/dev/null 2>&1 || cargo fuzz --version >/dev/null 2>&1
@@ -33,7 +37,11 @@ if have_cargo_fuzz && have_nightly; then
     for t in "${targets[@]}"; do
         corpus=fuzz/corpus/$t
         mkdir -p "$corpus"
-        cp tests/data/*.pack "$corpus"/
+        if [ "$t" = gltf_scene ]; then
+            cargo run -q -p format --example write_gltf_sample -- "$corpus" >/dev/null
+        else
+            cp tests/data/*.pack "$corpus"/
+        fi
         echo "fuzz.sh: $t for $arg s"
         (cd fuzz && cargo +nightly fuzz run "$t" "corpus/$t" -- -max_total_time="$arg" -max_len=65536 2>&1) |
             tee "/tmp/hexbake-fuzz-$t.log" | grep -E '^(#[0-9]+[[:space:]]+(DONE|INITED)|Done|==[0-9]+==|SUMMARY|artifact)' || true
@@ -42,11 +50,12 @@ if have_cargo_fuzz && have_nightly; then
     done
 else
     echo "fuzz.sh: cargo fuzz or nightly missing: stable fallback driver (format/examples/fuzz_packs.rs)"
-    cargo build -q -p format --example fuzz_packs
+    cargo build -q -p format --example fuzz_packs --example fuzz_gltf
     if [ "$arg" = "--build-only" ]; then
         exit 0
     fi
-    for i in "${!targets[@]}"; do
+    for i in 0 1 2; do
         cargo run -q -p format --example fuzz_packs -- "$arg" "$((i + 1))"
     done
+    cargo run -q -p format --example fuzz_gltf -- "$arg" 1
 fi

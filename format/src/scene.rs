@@ -44,6 +44,21 @@ pub struct Ground {
 }
 
 impl Ground {
+    /// The ground rectangle as a mesh on y = 0 (world space): two counter-clockwise
+    /// triangles seen from above, normals +y, albedo [`crate::shading::GROUND`]. Both
+    /// renderers draw it in views of the scene (not in captures of single objects),
+    /// so views are not objects floating in the sky (issue 18).
+    pub fn mesh(&self) -> Mesh {
+        let [x0, z0] = self.min;
+        let [x1, z1] = self.max;
+        Mesh {
+            positions: vec![[x0, 0.0, z0], [x0, 0.0, z1], [x1, 0.0, z1], [x1, 0.0, z0]],
+            normals: vec![[0.0, 1.0, 0.0]; 4],
+            albedo: vec![crate::shading::GROUND; 4],
+            triangles: vec![[0, 1, 2], [0, 2, 3]],
+        }
+    }
+
     pub fn size(&self) -> [f32; 2] {
         [self.max[0] - self.min[0], self.max[1] - self.min[1]]
     }

@@ -11,6 +11,10 @@ use glam::Vec3;
 /// Background colour (sRGB8, opaque).
 pub const SKY: [u8; 4] = [150, 190, 235, 255];
 
+/// Albedo of the ground rectangle (sRGB8, opaque; [`crate::scene::Ground::mesh`]):
+/// a muted grass-grey, drawn lit like any surface by both renderers (issue 18).
+pub const GROUND: [u8; 4] = [124, 132, 104, 255];
+
 /// Ambient term of the Lambert formula.
 pub const AMBIENT: f32 = 0.3;
 

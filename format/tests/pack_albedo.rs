@@ -2,32 +2,12 @@
 //! textured models (issue 18; layouts in format/README.md): golden section bytes,
 //! round trips, untextured packs without the sections, and hostile content.
 
-use format::albedo::{AlbedoMap, AlbedoTexture, Wrap};
 use format::pack::layout::{FileKind, SectionKind};
 use format::pack::writer::{assemble, SectionData};
 use format::pack::{sample, BasePack, PackFile};
 
-/// The sample base pack with its first model (4 vertices) textured by a 2 × 1
-/// texture and its second model sharing the texture.
 fn textured_base() -> BasePack {
-    let mut base = sample::small_base();
-    let texture = AlbedoTexture {
-        width: 2,
-        height: 1,
-        rgba: vec![255, 0, 0, 255, 0, 0, 255, 255],
-        wrap: [Wrap::Repeat, Wrap::ClampToEdge],
-    };
-    let n0 = base.models[0].mesh.vertex_count();
-    base.models[0].albedo_map = Some(AlbedoMap {
-        uvs: (0..n0).map(|i| [i as f32 * 0.5, 1.0]).collect(),
-        texture: texture.clone(),
-    });
-    let n1 = base.models[1].mesh.vertex_count();
-    base.models[1].albedo_map = Some(AlbedoMap {
-        uvs: vec![[0.25, 0.0]; n1],
-        texture,
-    });
-    base
+    sample::small_base_textured()
 }
 
 fn section(bytes: &[u8], kind: SectionKind) -> Vec<u8> {

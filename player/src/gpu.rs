@@ -81,6 +81,8 @@ pub struct ModelVertex {
     pub normal: [f32; 3],
     /// sRGB8.
     pub albedo: [u8; 4],
+    /// Texture coordinate of the model's albedo texture (0 without one).
+    pub uv: [f32; 2],
 }
 
 /// Per-instance data of an original.
@@ -161,6 +163,9 @@ struct Globals {
 /// The models of a bake on the GPU (uploaded once).
 pub struct GpuModels {
     pub models: Vec<GpuModel>,
+    /// The ground rectangle of the base pack's grid (world space, 6 vertices), drawn
+    /// with every frame (issue 18; `format::scene::Ground::mesh`).
+    ground: wgpu::Buffer,
 }
 
 pub struct GpuModel {
@@ -171,6 +176,9 @@ pub struct GpuModel {
     /// Simplified levels 1.. of the LOD baseline ([`Renderer::upload_lods`]); they
     /// index `vertices`.
     pub lods: Vec<GpuLod>,
+    /// Bind group 2 of the lit pipeline: the model's albedo texture and sampler (its
+    /// glTF wrap modes), or a white texel for an untextured model (issue 18).
+    albedo: wgpu::BindGroup,
 }
 
 /// One simplified level of a model on the GPU (an index buffer only).
@@ -268,7 +276,14 @@ pub struct Renderer {
     readback: wgpu::Buffer,
     padded_row: u32,
     lit_pipeline: wgpu::RenderPipeline,
+    /// The ground: the lit pipeline's layout and vertices, alpha 0 under
+    /// [`Renderer::set_coverage_alpha`] (ground pixels are background to the metrics).
+    ground_pipeline: wgpu::RenderPipeline,
     proxy_pipeline: wgpu::RenderPipeline,
+    /// Layout of the lit pipeline's group 2 (albedo texture + sampler).
+    albedo_bgl: wgpu::BindGroupLayout,
+    /// Group 2 of untextured models and the ground: a white texel.
+    white_albedo: wgpu::BindGroup,
     globals: wgpu::Buffer,
     globals_bg: wgpu::BindGroup,
     proxy_bgl: wgpu::BindGroupLayout,
@@ -437,9 +452,31 @@ impl Renderer {
             label: Some("proxy"),
             entries: &proxy_entries,
         });
+        let albedo_bgl = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("albedo"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 1,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                    count: None,
+                },
+            ],
+        });
+        // Group 1 is the proxies' (same shader module); the lit pipeline uses 0 and 2.
         let lit_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("lit"),
-            bind_group_layouts: &[Some(&globals_bgl)],
+            bind_group_layouts: &[Some(&globals_bgl), None, Some(&albedo_bgl)],
             immediate_size: 0,
         });
         let proxy_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -465,7 +502,9 @@ impl Renderer {
             blend: None,
             write_mask: wgpu::ColorWrites::ALL,
         })];
-        let model_attrs = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Unorm8x4];
+        let model_attrs = wgpu::vertex_attr_array![
+            0 => Float32x3, 1 => Float32x3, 2 => Unorm8x4, 11 => Float32x2
+        ];
         let inst_attrs = wgpu::vertex_attr_array![
             3 => Float32x4, 4 => Float32x4, 5 => Float32x4, 6 => Float32x4,
             7 => Float32x4, 8 => Float32x4, 9 => Float32x4, 10 => Float32x4
@@ -512,6 +551,8 @@ impl Renderer {
                 })
             };
         let lit_pipeline = make_pipeline("lit", &lit_layout, "vs_lit", "fs_lit", &lit_buffers);
+        let ground_pipeline =
+            make_pipeline("ground", &lit_layout, "vs_lit", "fs_ground", &lit_buffers);
         let proxy_attrs = wgpu::vertex_attr_array![
             0 => Float32x3, 1 => Float32x3, 2 => Unorm8x4, 3 => Float32x3, 4 => Uint32, 5 => Float32x3,
             6 => Uint32
@@ -576,7 +617,19 @@ impl Renderer {
             usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
+        let white_albedo = albedo_bind_group(
+            &device,
+            &queue,
+            &albedo_bgl,
+            "white albedo",
+            (1, 1),
+            &[255; 4],
+            [format::albedo::Wrap::Repeat; 2],
+        );
         Ok(Renderer {
+            ground_pipeline,
+            albedo_bgl,
+            white_albedo,
             device,
             queue,
             adapter,
@@ -664,13 +717,43 @@ impl Renderer {
             .iter()
             .map(|m| {
                 let mesh = &m.mesh;
+                let uvs = m.albedo_map.as_ref().map(|a| &a.uvs);
                 let verts: Vec<ModelVertex> = (0..mesh.positions.len())
                     .map(|i| ModelVertex {
                         pos: mesh.positions[i],
                         normal: mesh.normals[i],
                         albedo: mesh.albedo[i],
+                        uv: uvs.and_then(|u| u.get(i)).copied().unwrap_or([0.0; 2]),
                     })
                     .collect();
+                // The albedo texture (issue 18); too large for the adapter: untextured.
+                let max = self.device.limits().max_texture_dimension_2d;
+                let albedo = match &m.albedo_map {
+                    Some(a)
+                        if a.texture.validate().is_ok()
+                            && a.texture.width <= max
+                            && a.texture.height <= max =>
+                    {
+                        albedo_bind_group(
+                            &self.device,
+                            &self.queue,
+                            &self.albedo_bgl,
+                            &m.name,
+                            (a.texture.width, a.texture.height),
+                            &a.texture.rgba,
+                            a.texture.wrap,
+                        )
+                    }
+                    Some(a) => {
+                        eprintln!(
+                            "player: warning: model {}: albedo texture {}x{} not uploadable \
+                             (max side {max}); drawn with its vertex colours",
+                            m.name, a.texture.width, a.texture.height
+                        );
+                        self.white_albedo.clone()
+                    }
+                    None => self.white_albedo.clone(),
+                };
                 // wgpu refuses zero-sized vertex buffers with a binding; keep one vertex.
                 let verts = if verts.is_empty() {
                     vec![ModelVertex::zeroed()]
@@ -700,10 +783,36 @@ impl Renderer {
                     index_count,
                     triangle_count: mesh.triangles.len() as u64,
                     lods: Vec::new(),
+                    albedo,
                 }
             })
             .collect();
-        GpuModels { models }
+        // The ground rectangle, world space, drawn with an identity instance.
+        let g = &base.grid;
+        let ground_mesh = format::scene::Ground {
+            min: g.ground_min,
+            max: g.ground_max,
+        }
+        .mesh();
+        let ground_verts: Vec<ModelVertex> = ground_mesh
+            .triangles
+            .iter()
+            .flatten()
+            .map(|&i| ModelVertex {
+                pos: ground_mesh.positions[i as usize],
+                normal: ground_mesh.normals[i as usize],
+                albedo: ground_mesh.albedo[i as usize],
+                uv: [0.0; 2],
+            })
+            .collect();
+        let ground = self
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("ground"),
+                contents: bytemuck::cast_slice(&ground_verts),
+                usage: wgpu::BufferUsages::VERTEX,
+            });
+        GpuModels { models, ground }
     }
 
     /// Uploads the simplified levels (1..) of each model's LOD chain as index buffers
@@ -945,7 +1054,7 @@ impl Renderer {
         let g = Globals {
             clip_from_world: camera.clip_from_world_wgpu().to_cols_array(),
             eye: camera.eye.extend(1.0).to_array(),
-            debug: [u32::from(debug), 0, 0, 0],
+            debug: [u32::from(debug), u32::from(self.coverage_alpha), 0, 0],
             palette: Representation::linear_palette(),
         };
         self.queue
@@ -959,7 +1068,7 @@ impl Renderer {
             }
             i
         };
-        let all: Vec<InstanceRaw> = list
+        let mut all: Vec<InstanceRaw> = list
             .originals
             .iter()
             .flat_map(|(_, v)| v.iter().map(|&i| recolour(i, Representation::Original)))
@@ -972,6 +1081,9 @@ impl Renderer {
                 v.iter().map(move |&i| recolour(i, r))
             }))
             .collect();
+        // The ground's instance (identity, white tint) comes last.
+        let ground_instance = all.len() as u32;
+        all.push(InstanceRaw::new(Mat4::IDENTITY, Vec3::ONE));
         let need = std::mem::size_of_val(all.as_slice()) as u64;
         if need > self.instances.size() {
             self.instances = self.device.create_buffer(&wgpu::BufferDescriptor {
@@ -1019,12 +1131,19 @@ impl Renderer {
                 multiview_mask: None,
             });
             pass.set_bind_group(0, Some(&self.globals_bg), &[]);
+            // The ground first (issue 18): lit, white albedo texture.
+            pass.set_pipeline(&self.ground_pipeline);
+            pass.set_bind_group(2, Some(&self.white_albedo), &[]);
+            pass.set_vertex_buffer(0, models.ground.slice(..));
+            pass.set_vertex_buffer(1, self.instances.slice(..));
+            pass.draw(0..6, ground_instance..ground_instance + 1);
             pass.set_pipeline(&self.lit_pipeline);
             let mut first = 0u32;
             for (m, inst) in &list.originals {
                 let model = &models.models[*m as usize];
                 let n = inst.len() as u32;
                 if model.index_count > 0 && n > 0 {
+                    pass.set_bind_group(2, Some(&model.albedo), &[]);
                     pass.set_vertex_buffer(0, model.vertices.slice(..));
                     pass.set_vertex_buffer(1, self.instances.slice(..));
                     pass.set_index_buffer(model.indices.slice(..), wgpu::IndexFormat::Uint32);
@@ -1043,6 +1162,7 @@ impl Renderer {
                     },
                 };
                 if count > 0 && n > 0 {
+                    pass.set_bind_group(2, Some(&model.albedo), &[]);
                     pass.set_vertex_buffer(0, model.vertices.slice(..));
                     pass.set_vertex_buffer(1, self.instances.slice(..));
                     pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
@@ -1127,6 +1247,69 @@ impl Renderer {
         self.readback.unmap();
         Ok(out)
     }
+}
+
+/// Bind group 2 of the lit pipeline: an `Rgba8UnormSrgb` texture (sampled in
+/// linear space, as `format::albedo` does on the CPU) and a linear, non-mipmapped
+/// sampler with the texture's wrap modes.
+fn albedo_bind_group(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    layout: &wgpu::BindGroupLayout,
+    label: &str,
+    (width, height): (u32, u32),
+    rgba: &[u8],
+    wrap: [format::albedo::Wrap; 2],
+) -> wgpu::BindGroup {
+    use format::albedo::Wrap;
+    let texture = device.create_texture_with_data(
+        queue,
+        &wgpu::TextureDescriptor {
+            label: Some(label),
+            size: wgpu::Extent3d {
+                width,
+                height,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::Rgba8UnormSrgb,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        },
+        wgpu::util::TextureDataOrder::LayerMajor,
+        rgba,
+    );
+    let mode = |w: Wrap| match w {
+        Wrap::Repeat => wgpu::AddressMode::Repeat,
+        Wrap::MirroredRepeat => wgpu::AddressMode::MirrorRepeat,
+        Wrap::ClampToEdge => wgpu::AddressMode::ClampToEdge,
+    };
+    let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+        label: Some(label),
+        address_mode_u: mode(wrap[0]),
+        address_mode_v: mode(wrap[1]),
+        mag_filter: wgpu::FilterMode::Linear,
+        min_filter: wgpu::FilterMode::Linear,
+        ..Default::default()
+    });
+    device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some(label),
+        layout,
+        entries: &[
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: wgpu::BindingResource::TextureView(
+                    &texture.create_view(&Default::default()),
+                ),
+            },
+            wgpu::BindGroupEntry {
+                binding: 1,
+                resource: wgpu::BindingResource::Sampler(&sampler),
+            },
+        ],
+    })
 }
 
 const ZERO_VERTEX: ProxyVertex = ProxyVertex {

@@ -2,8 +2,12 @@
 //
 // Originals: per-pixel Lambert in linear space,
 //   albedo · (0.3 + 0.7 · max(0, n·L)), L = normalize(0.4, 1.0, 0.3),
-// albedo = vertex sRGB8 colour → linear × instance tint; the Rgba8UnormSrgb target
-// encodes the linear result to sRGB8 (as worker::shade does on the CPU).
+// albedo = vertex sRGB8 colour → linear × instance tint × the model's albedo texture
+// (group 2: Rgba8UnormSrgb, so texels are decoded to linear before the bilinear
+// filter, no mipmaps — format::albedo on the CPU; a white texel for untextured
+// models); the Rgba8UnormSrgb target encodes the linear result to sRGB8 (as
+// worker::shade does on the CPU). The ground (issue 18) is drawn by the same vertex
+// stage with fs_ground.
 //
 // Proxies: projective texturing from the proxy's captures (texcoord = M · world, / w,
 // u right, v down, row 0 of the texture at v = 0). Each triangle carries the mask of
@@ -51,13 +55,18 @@ struct LitIn {
     @location(8) n1: vec4<f32>,
     @location(9) n2: vec4<f32>,
     @location(10) tint: vec4<f32>,
+    @location(11) uv: vec2<f32>,
 };
 
 struct LitOut {
     @builtin(position) clip: vec4<f32>,
     @location(0) normal: vec3<f32>,
     @location(1) albedo: vec3<f32>,
+    @location(2) uv: vec2<f32>,
 };
+
+@group(2) @binding(0) var albedo_tex: texture_2d<f32>;
+@group(2) @binding(1) var albedo_samp: sampler;
 
 @vertex
 fn vs_lit(v: LitIn) -> LitOut {
@@ -67,6 +76,7 @@ fn vs_lit(v: LitIn) -> LitOut {
     o.clip = g.clip_from_world * (model * vec4<f32>(v.pos, 1.0));
     o.normal = nm * v.normal;
     o.albedo = srgb_to_linear(v.albedo.rgb) * v.tint.rgb;
+    o.uv = v.uv;
     if g.debug.x != 0u {
         // The renderer put the representation's colour into the tint.
         o.albedo = v.tint.rgb;
@@ -76,7 +86,22 @@ fn vs_lit(v: LitIn) -> LitOut {
 
 @fragment
 fn fs_lit(i: LitOut) -> @location(0) vec4<f32> {
-    return vec4<f32>(shade(i.albedo, i.normal), 1.0);
+    var albedo = i.albedo;
+    if g.debug.x == 0u {
+        albedo = albedo * textureSampleLevel(albedo_tex, albedo_samp, i.uv, 0.0).rgb;
+    }
+    return vec4<f32>(shade(albedo, i.normal), 1.0);
+}
+
+// The ground: lit vertex colour; background (alpha 0) to the coverage mask when
+// g.debug.y is set (player compare's object pixels exclude it, as they do the sky).
+@fragment
+fn fs_ground(i: LitOut) -> @location(0) vec4<f32> {
+    var a = 1.0;
+    if g.debug.y != 0u {
+        a = 0.0;
+    }
+    return vec4<f32>(shade(i.albedo, i.normal), a);
 }
 
 // ---- proxies ----

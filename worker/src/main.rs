@@ -396,7 +396,8 @@ fn run(cli: Cli) -> Result<(), Failure> {
             let view =
                 worker::raster::View::look_at_fov(eye, target, Vec3::Y, fov, size, size, 0.5, far)
                     .map_err(bad_input)?;
-            let items: Vec<DrawItem> = scene
+            let ground = scene.ground.mesh();
+            let mut items: Vec<DrawItem> = scene
                 .instances
                 .iter()
                 .enumerate()
@@ -409,11 +410,13 @@ fn run(cli: Cli) -> Result<(), Failure> {
                     albedo_map: scene.models[inst.model as usize].albedo_map.as_ref(),
                 })
                 .collect();
+            let instances = items.len();
+            items.push(DrawItem::ground(&ground));
             let capture = render(&view, &items, CullMode::Back);
             worker::picture::write_rgba(&out, size, size, &capture.color)
                 .with_context(|| format!("writing {}", out.display()))
                 .map_err(failed)?;
-            println!("{}: {} instances drawn", out.display(), items.len());
+            println!("{}: {instances} instances drawn", out.display());
             Ok(())
         }
     }

@@ -41,6 +41,10 @@ use rayon::prelude::*;
 /// Object/triangle id of a pixel nothing covers.
 pub const BACKGROUND_ID: u32 = u32::MAX;
 
+/// Object id of the ground rectangle ([`DrawItem::ground`]); like the sky, not an
+/// object to [`Capture::covered_pixels`].
+pub const GROUND_ID: u32 = u32::MAX - 2;
+
 /// A perspective view through an arbitrary (possibly off-axis) window.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct View {
@@ -82,6 +86,22 @@ pub struct DrawItem<'a> {
     pub albedo_map: Option<&'a format::albedo::AlbedoMap>,
 }
 
+impl<'a> DrawItem<'a> {
+    /// The ground rectangle (`format::scene::Ground::mesh`, world space) as drawn in
+    /// views of the scene — `worker render` and the player draw it, so views are not
+    /// objects floating in the sky (issue 18); captures of single objects do not.
+    pub fn ground(mesh: &'a Mesh) -> DrawItem<'a> {
+        DrawItem {
+            mesh,
+            transform: Mat4::IDENTITY,
+            tint: Vec3::ONE,
+            object_id: GROUND_ID,
+            triangles: None,
+            albedo_map: None,
+        }
+    }
+}
+
 /// The buffers of one capture, row-major, row 0 at the top.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Capture {
@@ -97,11 +117,11 @@ pub struct Capture {
 }
 
 impl Capture {
-    /// Number of pixels covered by some surface.
+    /// Number of pixels covered by some object (the ground, [`GROUND_ID`], is not one).
     pub fn covered_pixels(&self) -> usize {
         self.object_id
             .iter()
-            .filter(|&&id| id != BACKGROUND_ID)
+            .filter(|&&id| id != BACKGROUND_ID && id != GROUND_ID)
             .count()
     }
 

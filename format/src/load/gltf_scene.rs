@@ -84,7 +84,13 @@ pub fn load_gltf_scene(path: &Path) -> Result<GltfScene, LoadError> {
         path: path.to_path_buf(),
         source,
     })?;
-    super::guarded(path, FORMAT, || parse_scene(path, &bytes))
+    parse_gltf_scene(path, &bytes)
+}
+
+/// [`load_gltf_scene`] of `bytes` already read from `path` (external buffers and
+/// images resolve against `path`'s folder); what the fuzz targets call.
+pub fn parse_gltf_scene(path: &Path, bytes: &[u8]) -> Result<GltfScene, LoadError> {
+    super::guarded(path, FORMAT, || parse_scene(path, bytes))
 }
 
 fn parse_scene(path: &Path, bytes: &[u8]) -> Result<GltfScene, LoadError> {

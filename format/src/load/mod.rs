@@ -24,7 +24,7 @@ mod stl;
 
 use crate::cleanup::{finish_mesh, CleanupError, CleanupStats, RawMesh};
 use crate::mesh::Mesh;
-pub use gltf_scene::{load_gltf_scene, GltfInstance, GltfModel, GltfScene};
+pub use gltf_scene::{load_gltf_scene, parse_gltf_scene, GltfInstance, GltfModel, GltfScene};
 use std::fmt;
 use std::path::{Path, PathBuf};
 

@@ -143,6 +143,31 @@ pub fn capture_like_rgba(width: u32, height: u32, seed: u64) -> Vec<u8> {
     out
 }
 
+/// [`small_base`] with both models textured (issue 18): one 2 × 1 texture (red,
+/// blue; REPEAT × CLAMP_TO_EDGE) shared by both, so the writer stores it once; the
+/// first model's UVs step by ½ along u, the second's are constant.
+pub fn small_base_textured() -> BasePack {
+    use crate::albedo::{AlbedoMap, AlbedoTexture, Wrap};
+    let mut base = small_base();
+    let texture = AlbedoTexture {
+        width: 2,
+        height: 1,
+        rgba: vec![255, 0, 0, 255, 0, 0, 255, 255],
+        wrap: [Wrap::Repeat, Wrap::ClampToEdge],
+    };
+    let n0 = base.models[0].mesh.vertex_count();
+    base.models[0].albedo_map = Some(AlbedoMap {
+        uvs: (0..n0).map(|i| [i as f32 * 0.5, 1.0]).collect(),
+        texture: texture.clone(),
+    });
+    let n1 = base.models[1].mesh.vertex_count();
+    base.models[1].albedo_map = Some(AlbedoMap {
+        uvs: vec![[0.25, 0.0]; n1],
+        texture,
+    });
+    base
+}
+
 /// The content of `tests/data/base-v1.pack`.
 pub fn small_base() -> BasePack {
     let tetra = Mesh {
