@@ -5,7 +5,9 @@
 #   scripts/fetch-models.sh [DEST]     (default: <repo>/models)
 #
 # Idempotent: a model already present with the right checksum is left alone.
-# Every output file is verified against scripts/models.sha256.
+# Every output file is verified against scripts/models.sha256. Then builds the
+# textured example scene (scripts/build-textured-scene.sh, issue 18) into
+# DEST/textured-plaza/ unless it is there.
 set -euo pipefail
 
 repo=$(cd "$(dirname "$0")/.." && pwd)
@@ -18,8 +20,11 @@ die() { echo "fetch-models: $*" >&2; exit 1; }
 verify() { (cd "$dest" && sha256sum --quiet -c "$sums" >/dev/null 2>&1); }
 
 mkdir -p "$dest"
+textured_scene() { "$repo/scripts/build-textured-scene.sh" "$dest/textured-plaza"; }
+
 if [ -f "$sums" ] && verify; then
     echo "fetch-models: $dest is complete ($(wc -l <"$sums") files verified)"
+    textured_scene
     exit 0
 fi
 
@@ -80,6 +85,8 @@ cp "$testm/glTF2/IndexOutOfRange/"* "$dest/IndexOutOfRange/"
 # CesiumMilkTruck ships as glTF 1.0; convert it to glTF 2.0 binary (several nodes).
 "$assimp_bin" export "$testm/glTF/CesiumMilkTruck/CesiumMilkTruck.gltf" "$work/CesiumMilkTruck.glb" -f glb2 >/dev/null
 cp "$work/CesiumMilkTruck.glb" "$dest/CesiumMilkTruck.glb"
+# Its texture, which the GLB names by URI (read by `scene: Gltf(..)`, issue 18).
+cp "$testm/glTF/CesiumMilkTruck/CesiumMilkTruck.png" "$dest/CesiumMilkTruck.png"
 
 # 4. Verify.
 if [ -f "$sums" ]; then
@@ -89,3 +96,4 @@ else
     (cd "$dest" && find . -type f | sed 's|^\./||' | sort | xargs sha256sum) >"$sums"
     echo "fetch-models: wrote $sums (first run)"
 fi
+textured_scene
