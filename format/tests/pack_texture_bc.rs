@@ -292,3 +292,40 @@ fn real_packs() {
         10.0 * (255.0f64.powi(2) / (se / n as f64)).log10()
     );
 }
+
+/// Trimmed BC3 (format version 3, README "Textures"): blocks farther than one texel
+/// from coverage are zero, and every bilinear sample a reader accepts (alpha ≥ ½) is
+/// the same as with the untrimmed encoding, because all four of its taps decode the
+/// same. Opaque (BC1) textures are not touched.
+#[test]
+fn trimmed_blocks_never_change_an_accepted_sample() {
+    let (w, h) = (64, 48);
+    let rgba = capture_like(w, h, false);
+    let full = Texture::from_rgba8_block(w, h, &rgba).unwrap();
+    let trimmed = Texture::from_rgba8_block_trimmed(w, h, &rgba).unwrap();
+    assert_eq!(trimmed.encoding, TextureEncoding::Bc3);
+    let zero_blocks = trimmed.data.chunks_exact(16).filter(|b| b.iter().all(|&x| x == 0));
+    let n_zero = zero_blocks.count();
+    assert!(n_zero > 0, "the blob's corners are far from coverage");
+    let (a, b) = (full.to_rgba8().unwrap(), trimmed.to_rgba8().unwrap());
+    let pw = full.width as usize;
+    let alpha = |d: &[u8], x: usize, y: usize| d[(y * pw + x) * 4 + 3] as f32 / 255.0;
+    // Every 2×2 tap quad of a bilinear sample: if some weights give alpha ≥ ½, it has
+    // a covered tap; then all four taps must decode identically.
+    for y in 0..full.height as usize - 1 {
+        for x in 0..pw - 1 {
+            let taps = [(x, y), (x + 1, y), (x, y + 1), (x + 1, y + 1)];
+            if taps.iter().any(|&(tx, ty)| alpha(&a, tx, ty) >= 0.5) {
+                for (tx, ty) in taps {
+                    let o = (ty * pw + tx) * 4;
+                    assert_eq!(a[o..o + 4], b[o..o + 4], "tap ({tx}, {ty})");
+                }
+            }
+        }
+    }
+    let opaque = capture_like(w, h, true);
+    assert_eq!(
+        Texture::from_rgba8_block_trimmed(w, h, &opaque).unwrap(),
+        Texture::from_rgba8_block(w, h, &opaque).unwrap()
+    );
+}

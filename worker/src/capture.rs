@@ -405,7 +405,11 @@ fn dilate(rgba: &mut [u8], filled: &mut [bool], w: usize, h: usize) {
 pub fn pack_texture(
     texture: &ProjectedTexture,
 ) -> Result<(format::pack::Texture, [f32; 16]), String> {
-    let t = format::pack::Texture::from_rgba8_block(texture.width, texture.height, &texture.rgba)?;
+    let t = format::pack::Texture::from_rgba8_block_trimmed(
+        texture.width,
+        texture.height,
+        &texture.rgba,
+    )?;
     let sx = texture.width as f32 / t.width as f32;
     let sy = texture.height as f32 / t.height as f32;
     let scale = Mat4::from_diagonal(Vec4::new(sx, sy, 1.0, 1.0));

@@ -18,6 +18,31 @@
 
 use block_compression::CompressionVariant;
 
+/// Sets to zero (alpha 0, colour black) every BC3 block none of whose texels lies
+/// within one texel (8-neighbourhood) of a texel with alpha ≥ 128 (issue 15; README
+/// "Textures"). Readers treat a bilinear sample whose alpha is below one half as "no
+/// data" (the player's `project_view`); such a sample has no covered texel among its
+/// four taps, and every tap of a sample that has one lies within one texel of it. So
+/// the colours of these blocks never reach an image; zeroed, they cost next to
+/// nothing after zstd (they were half of a park-2m cell's blocks: the background of
+/// a statue's bounding rectangle).
+fn clear_unsampled_blocks(width: u32, height: u32, rgba: &[u8], blocks: &mut [u8]) {
+    let (w, h) = (width as usize, height as usize);
+    let covered = |x: usize, y: usize| rgba[(y * w + x) * 4 + 3] >= 128;
+    let bw = w / 4;
+    for by in 0..h / 4 {
+        for bx in 0..bw {
+            let (x0, x1) = ((bx * 4).saturating_sub(1), (bx * 4 + 4).min(w - 1));
+            let (y0, y1) = ((by * 4).saturating_sub(1), (by * 4 + 4).min(h - 1));
+            let near = (y0..=y1).any(|y| (x0..=x1).any(|x| covered(x, y)));
+            if !near {
+                let o = (by * bw + bx) * 16;
+                blocks[o..o + 16].fill(0);
+            }
+        }
+    }
+}
+
 /// Largest texture side accepted by readers and writers.
 pub const MAX_TEXTURE_SIDE: u32 = 16384;
 
@@ -191,6 +216,24 @@ impl Texture {
             TextureEncoding::Bc3
         };
         Texture::from_rgba8(pw, ph, &padded, encoding)
+    }
+
+    /// As [`Texture::from_rgba8_block`], with the BC3 blocks that no accepted sample
+    /// can read set to zero (format version 3 writers; README "Textures": colours
+    /// farther than one texel from a texel of alpha ≥ 128 are undefined). What bakes
+    /// store.
+    pub fn from_rgba8_block_trimmed(
+        width: u32,
+        height: u32,
+        rgba: &[u8],
+    ) -> Result<Texture, String> {
+        let mut texture = Texture::from_rgba8_block(width, height, rgba)?;
+        if texture.encoding == TextureEncoding::Bc3 {
+            let (pw, ph) = (texture.width, texture.height);
+            let padded = pad_edge(width, height, rgba, pw, ph);
+            clear_unsampled_blocks(pw, ph, &padded, &mut texture.data);
+        }
+        Ok(texture)
     }
 
     /// Whether the dimensions and data length agree.
