@@ -167,6 +167,18 @@ impl AlbedoMap {
         self.texture.sample(uv)
     }
 
+    /// Vertex `v`'s sRGB8 `albedo` times the texture at its UV: a per-vertex
+    /// stand-in for the texture where a renderer has no texture lookup — the
+    /// player's proxies drawn lit (their capture has no texel there, or is not
+    /// resident yet) interpolate it, instead of the untextured vertex colour.
+    pub fn vertex_albedo(&self, albedo: [u8; 4], v: usize) -> [u8; 4] {
+        let Some(uv) = self.uvs.get(v) else {
+            return albedo;
+        };
+        let lit = crate::srgb::srgb8_to_linear(albedo) * self.texture.sample(Vec2::from_array(*uv));
+        crate::srgb::linear_to_srgb8(lit)
+    }
+
     /// The content hash of a textured model: the mesh's hash, the UVs and the
     /// texture's hash.
     pub fn model_hash(&self, mesh_hash: &[u8; 32]) -> [u8; 32] {

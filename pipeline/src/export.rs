@@ -12,7 +12,10 @@
 //!   material (metallic 0, roughness 1) whose base-colour factor is the instance's
 //!   tint. The vertex data of a model is stored once; instances with another tint get
 //!   their own glTF mesh (a material is a property of the mesh in glTF) over the same
-//!   accessors. Tints above 1 are clamped (glTF factors are ≤ 1; counted).
+//!   accessors. Tints above 1 are clamped (glTF factors are ≤ 1; counted). A textured
+//!   model (glTF scenes, issue 18) also has TEXCOORD_0 and its albedo texture,
+//!   embedded once per model as PNG, as the material's `baseColorTexture`, sampled
+//!   with the model's wrap modes (samplers after the captures' sampler 0).
 //! - **Proxies**: one node per proxy (`proxy <p> <kind>`), world-space vertices — each
 //!   member's model vertices the proxy's triangles use, transformed by the member's
 //!   instance, emitted once per primitive — with per-vertex TEXCOORD_0 computed from
@@ -261,6 +264,7 @@ pub fn cell_glb(
 
     // Originals: vertex data per model once, a mesh per (model, tint), a node each.
     let mut model_data: BTreeMap<u32, Primitive> = BTreeMap::new();
+    let mut model_textures: BTreeMap<u32, usize> = BTreeMap::new();
     let mut meshes: BTreeMap<(u32, [u32; 3]), usize> = BTreeMap::new();
     let mut original_nodes = Vec::new();
     for &id in originals {
@@ -287,9 +291,22 @@ pub fn cell_glb(
         let prim = match model_data.get(&inst.model) {
             Some(p) => p.clone(),
             None => {
-                let p = b.model_primitive(&model.mesh);
+                let uvs = model.albedo_map.as_ref().map(|a| a.uvs.as_slice());
+                let p = b.model_primitive(&model.mesh, uvs);
                 model_data.insert(inst.model, p.clone());
                 p
+            }
+        };
+        // A textured model's albedo texture (issue 18), embedded once per model.
+        let texture = match (&model.albedo_map, model_textures.get(&inst.model)) {
+            (None, _) => None,
+            (Some(_), Some(&t)) => Some(t),
+            (Some(map), None) => {
+                let (t, png_bytes) = b.model_texture(&model.name, &map.texture)?;
+                summary.textures += 1;
+                summary.texture_png_bytes += png_bytes;
+                model_textures.insert(inst.model, t);
+                Some(t)
             }
         };
         let factor = inst.tint.map(|c| c.clamp(0.0, 1.0));
@@ -306,6 +323,7 @@ pub fn cell_glb(
                         model.name, factor[0], factor[1], factor[2]
                     ),
                     factor,
+                    texture,
                 );
                 let m = b.mesh(&model.name, vec![prim.to_json(material)]);
                 meshes.insert(key, m);
@@ -354,7 +372,7 @@ pub fn cell_glb(
                     prim.to_json(material)
                 }
                 None => {
-                    let material = b.lit_material(&format!("{name} lit"), [1.0; 3]);
+                    let material = b.lit_material(&format!("{name} lit"), [1.0; 3], None);
                     let prim = b.world_primitive(&part, None, true)?;
                     prim.to_json(material)
                 }
@@ -407,6 +425,8 @@ const ARRAY_BUFFER: u32 = 34962;
 const ELEMENT_ARRAY_BUFFER: u32 = 34963;
 const LINEAR: u32 = 9729;
 const CLAMP_TO_EDGE: u32 = 33071;
+const REPEAT: u32 = 10497;
+const MIRRORED_REPEAT: u32 = 33648;
 
 /// Accessors of one primitive.
 #[derive(Clone, Debug)]
@@ -441,6 +461,8 @@ struct Builder {
     materials: Vec<Value>,
     textures: Vec<Value>,
     images: Vec<Value>,
+    /// Samplers of model textures (issue 18), after the captures' sampler 0.
+    samplers: Vec<Value>,
     nodes: Vec<Value>,
     unlit: bool,
 }
@@ -491,7 +513,11 @@ impl Builder {
     }
 
     /// A model's vertex data in model space, its triangles as they are (at least one).
-    fn model_primitive(&mut self, mesh: &format::mesh::Mesh) -> Primitive {
+    fn model_primitive(
+        &mut self,
+        mesh: &format::mesh::Mesh,
+        uvs: Option<&[[f32; 2]]>,
+    ) -> Primitive {
         let normals: Vec<[f32; 3]> = mesh
             .normals
             .iter()
@@ -506,7 +532,7 @@ impl Builder {
             position: self.floats(mesh.positions.as_flattened(), 3, "VEC3", true),
             normal: self.floats(normals.as_flattened(), 3, "VEC3", false),
             color: Some(self.floats(colors.as_flattened(), 3, "VEC3", false)),
-            texcoord: None,
+            texcoord: uvs.map(|uv| self.floats(uv.as_flattened(), 2, "VEC2", false)),
             indices: self.indices(&mesh.triangles),
         }
     }
@@ -527,16 +553,48 @@ impl Builder {
         })
     }
 
-    fn lit_material(&mut self, name: &str, factor: [f32; 3]) -> usize {
-        self.materials.push(json!({
+    /// A lit material: base colour `factor`, times the texture `texture` (an index
+    /// into `textures`, sampled with TEXCOORD_0) when given.
+    fn lit_material(&mut self, name: &str, factor: [f32; 3], texture: Option<usize>) -> usize {
+        let mut m = json!({
             "name": name,
             "pbrMetallicRoughness": {
                 "baseColorFactor": [factor[0], factor[1], factor[2], 1.0],
                 "metallicFactor": 0.0,
                 "roughnessFactor": 1.0,
             },
-        }));
+        });
+        if let Some(t) = texture {
+            m["pbrMetallicRoughness"]["baseColorTexture"] = json!({ "index": t });
+        }
+        self.materials.push(m);
         self.materials.len() - 1
+    }
+
+    /// A model's albedo texture (issue 18) as an embedded PNG with a sampler of its
+    /// wrap modes: `(texture index, PNG bytes)`.
+    fn model_texture(
+        &mut self,
+        name: &str,
+        texture: &format::albedo::AlbedoTexture,
+    ) -> anyhow::Result<(usize, u64)> {
+        use format::albedo::Wrap;
+        let png = encode_png(texture.width, texture.height, &texture.rgba)?;
+        let view = self.view(&png, None);
+        self.images.push(
+            json!({ "name": format!("{name} albedo"), "bufferView": view, "mimeType": "image/png" }),
+        );
+        let wrap = |w: Wrap| match w {
+            Wrap::Repeat => REPEAT,
+            Wrap::MirroredRepeat => MIRRORED_REPEAT,
+            Wrap::ClampToEdge => CLAMP_TO_EDGE,
+        };
+        self.samplers.push(json!({ "magFilter": LINEAR, "minFilter": LINEAR,
+                                   "wrapS": wrap(texture.wrap[0]), "wrapT": wrap(texture.wrap[1]) }));
+        // Sampler 0 is the captures' (clamped); the models' follow it.
+        self.textures
+            .push(json!({ "sampler": self.samplers.len(), "source": self.images.len() - 1 }));
+        Ok((self.textures.len() - 1, png.len() as u64))
     }
 
     fn unlit_textured_material(&mut self, name: &str, png: &[u8]) -> usize {
@@ -588,8 +646,10 @@ impl Builder {
         if !self.images.is_empty() {
             doc["images"] = json!(self.images);
             doc["textures"] = json!(self.textures);
-            doc["samplers"] = json!([{ "magFilter": LINEAR, "minFilter": LINEAR,
-                                       "wrapS": CLAMP_TO_EDGE, "wrapT": CLAMP_TO_EDGE }]);
+            let mut samplers = vec![json!({ "magFilter": LINEAR, "minFilter": LINEAR,
+                                            "wrapS": CLAMP_TO_EDGE, "wrapT": CLAMP_TO_EDGE })];
+            samplers.append(&mut self.samplers);
+            doc["samplers"] = json!(samplers);
         }
         if self.unlit {
             doc["extensionsUsed"] = json!(["KHR_materials_unlit"]);

@@ -351,7 +351,12 @@ pub fn prepare_cell(base: &BasePack, pack: &CellPack) -> Result<PreparedCell, Ba
                     vertices.push(ProxyVertex {
                         pos: world[j].to_array(),
                         normal: n.normalize_or_zero().to_array(),
-                        albedo: mesh.albedo[v as usize],
+                        // A textured model's vertex: its colour × the texture there
+                        // (issue 18), for the lit fallback.
+                        albedo: match &base.models[inst.model as usize].albedo_map {
+                            Some(map) => map.vertex_albedo(mesh.albedo[v as usize], v as usize),
+                            None => mesh.albedo[v as usize],
+                        },
                         tint: inst.tint,
                         mask,
                         centroid: centroid.to_array(),
