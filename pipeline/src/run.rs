@@ -120,8 +120,27 @@ pub fn write_plan_and_base(l: &Loaded) -> Result<(), RunError> {
     };
     let text = serde_json::to_vec_pretty(&plan_file).expect("plan serializes");
     format::pack::write_atomic(&l.out.join("plan.json"), &text).map_err(failed)?;
-    let base = BasePack::from_scene(&l.scene, grid_params(l), l.build.scene_fingerprint);
+    let mut base = BasePack::from_scene(&l.scene, grid_params(l), l.build.scene_fingerprint);
     let path = l.out.join("base.pack");
+    // Issue 17: per-model patch tiling, bitfields and normal cones (worker
+    // `patches.rs`), taken from the existing base pack when its models are the same
+    // and it was made with the same preset (the bake is deterministic).
+    let preset = worker::patches::PatchPreset::standard();
+    let reused = BasePack::read(&path).ok().and_then(|old| {
+        let same = old.models == base.models
+            && old.patches.as_ref().is_some_and(|p| {
+                p.sample_level == preset.sample_level && p.shell_radius == preset.shell_radius
+            });
+        if same {
+            old.patches
+        } else {
+            None
+        }
+    });
+    base.patches = Some(reused.unwrap_or_else(|| {
+        let meshes: Vec<&format::Mesh> = base.models.iter().map(|m| &m.mesh).collect();
+        worker::patches::bake_patch_set(&meshes, &preset)
+    }));
     let bytes = base.encode().map_err(failed)?;
     if std::fs::read(&path).ok().as_deref() != Some(&bytes[..]) {
         format::pack::write_atomic(&path, &bytes).map_err(failed)?;

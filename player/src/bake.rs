@@ -65,6 +65,9 @@ pub struct Bake {
     pub instance_bounds: Vec<Aabb>,
     /// Distance that covers the whole ground (far plane).
     pub extent: f32,
+    /// Patch data for drawing originals patch by patch (issue 17); `None` without
+    /// it or with both tests switched off ([`crate::patches::tests_from_env`]).
+    pub patches: Option<crate::patches::PatchRuntime>,
 }
 
 impl Bake {
@@ -122,7 +125,9 @@ impl Bake {
         } else {
             (scene.max - scene.min).length()
         };
+        let patches = crate::patches::PatchRuntime::new(&base, crate::patches::tests_from_env());
         Bake {
+            patches,
             dir: dir.to_path_buf(),
             grid: CellGrid::new(base.grid),
             base: Arc::new(base),

@@ -145,7 +145,8 @@ fn cell_list<'a>(
             cell.members.iter().flatten().copied().collect();
         ids.extend((0..bake.base.instances.len() as u32).filter(|i| !proxied.contains(i)));
     }
-    let originals = group(bake, visible(bake, &f, ids.into_iter()));
+    let shown: Vec<u32> = visible(bake, &f, ids.into_iter()).collect();
+    let originals = group(bake, shown.iter().copied());
     let in_view = || {
         packs
             .iter()
@@ -158,12 +159,25 @@ fn cell_list<'a>(
         PendingDraw::Originals => Vec::new(),
         PendingDraw::Lit => in_view().filter(|p| !p.is_ready()).collect(),
     };
-    DrawList {
+    let mut list = DrawList {
         originals,
         levels: Vec::new(),
         proxies,
         lit_proxies,
+        patched: Vec::new(),
+    };
+    // Issue 17: the originals' visible patches only (bitfields and normal cones).
+    if let Some(runtime) = &bake.patches {
+        crate::patches::apply(
+            runtime,
+            &bake.base,
+            &shown,
+            camera.eye,
+            &bake.instances,
+            &mut list,
+        );
     }
+    list
 }
 
 /// Triangles and texture bytes a draw list submits.

@@ -179,6 +179,9 @@ pub struct GpuModel {
     /// Bind group 2 of the lit pipeline: the model's albedo texture and sampler (its
     /// glTF wrap modes), or a white texel for an untextured model (issue 18).
     albedo: wgpu::BindGroup,
+    /// `indices` holds the triangles grouped by patch (issue 17, `base.pack`'s
+    /// patch sections), as [`DrawList::patched`] needs.
+    pub patch_ordered: bool,
 }
 
 /// One simplified level of a model on the GPU (an index buffer only).
@@ -228,6 +231,18 @@ pub struct DrawList<'a> {
     /// Proxies drawn lit (vertex colours, no texture) because their textures are not
     /// resident yet (`--pending lit`).
     pub lit_proxies: Vec<&'a GpuProxy>,
+    /// Originals drawn patch by patch (issue 17, [`crate::patches`]).
+    pub patched: Vec<PatchedDraw>,
+}
+
+/// One original drawn as the index ranges of its visible patches.
+#[derive(Clone, Debug)]
+pub struct PatchedDraw {
+    pub model: u32,
+    pub instance: InstanceRaw,
+    /// Ranges of the model's patch-ordered index buffer.
+    pub ranges: Vec<(u32, u32)>,
+    pub triangles: u64,
 }
 
 impl DrawList<'_> {
@@ -254,6 +269,7 @@ impl DrawList<'_> {
             })
             .sum();
         o + l
+            + self.patched.iter().map(|p| p.triangles).sum::<u64>()
             + self
                 .proxies
                 .iter()
@@ -715,7 +731,8 @@ impl Renderer {
         let models = base
             .models
             .iter()
-            .map(|m| {
+            .enumerate()
+            .map(|(model_index, m)| {
                 let mesh = &m.mesh;
                 let uvs = m.albedo_map.as_ref().map(|a| &a.uvs);
                 let verts: Vec<ModelVertex> = (0..mesh.positions.len())
@@ -760,7 +777,21 @@ impl Renderer {
                 } else {
                     verts
                 };
-                let mut idx: Vec<u32> = mesh.triangles.iter().flatten().copied().collect();
+                // With patch data (issue 17) the triangles are uploaded grouped by
+                // patch, for every mode alike: the full-geometry reference and the
+                // hybrid then rasterize surviving triangles in the same order, so
+                // equal-depth ties resolve the same way in both.
+                let order = base
+                    .patches
+                    .as_ref()
+                    .map(|set| &set.models[model_index].triangle_order);
+                let mut idx: Vec<u32> = match order {
+                    Some(order) => order
+                        .iter()
+                        .flat_map(|&t| mesh.triangles[t as usize])
+                        .collect(),
+                    None => mesh.triangles.iter().flatten().copied().collect(),
+                };
                 let index_count = idx.len() as u32;
                 if idx.is_empty() {
                     idx = vec![0; 3];
@@ -784,6 +815,7 @@ impl Renderer {
                     triangle_count: mesh.triangles.len() as u64,
                     lods: Vec::new(),
                     albedo,
+                    patch_ordered: order.is_some(),
                 }
             })
             .collect();
@@ -1080,6 +1112,11 @@ impl Renderer {
                 };
                 v.iter().map(move |&i| recolour(i, r))
             }))
+            .chain(
+                list.patched
+                    .iter()
+                    .map(|p| recolour(p.instance, Representation::Original)),
+            )
             .collect();
         // The ground's instance (identity, white tint) comes last.
         let ground_instance = all.len() as u32;
@@ -1169,6 +1206,19 @@ impl Renderer {
                     pass.draw_indexed(0..count, 0, first..first + n);
                 }
                 first += n;
+            }
+            for p in &list.patched {
+                let model = &models.models[p.model as usize];
+                if model.patch_ordered {
+                    pass.set_bind_group(2, Some(&model.albedo), &[]);
+                    pass.set_vertex_buffer(0, model.vertices.slice(..));
+                    pass.set_vertex_buffer(1, self.instances.slice(..));
+                    pass.set_index_buffer(model.indices.slice(..), wgpu::IndexFormat::Uint32);
+                    for &(a, b) in &p.ranges {
+                        pass.draw_indexed(a..b, 0, first..first + 1);
+                    }
+                }
+                first += 1;
             }
             pass.set_pipeline(&self.proxy_pipeline);
             for p in &list.proxies {

@@ -45,6 +45,7 @@ pub mod grid;
 pub mod lod;
 pub mod metrics;
 pub mod overlay;
+pub mod patches;
 pub mod run;
 pub mod stream;
 pub mod testdata;

@@ -15,6 +15,7 @@ pub mod lod_chain;
 pub mod mesh_order;
 pub mod mvmesh;
 pub mod occlusion;
+pub mod patches;
 pub mod picture;
 pub mod raster;
 pub mod selfocc;
