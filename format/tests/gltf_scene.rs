@@ -19,18 +19,24 @@ fn sample_scene_reuses_meshes_and_reads_textures() {
         [
             "crate-textured",
             "crate-plain",
+            "crate-textured",
+            "crate-plain",
             "crate-textured-mirrored",
             "crate-plain-mirrored"
         ]
     );
     assert_eq!(scene.instances.len(), 6);
     let models: Vec<u32> = scene.instances.iter().map(|i| i.model).collect();
-    assert_eq!(models, [0, 1, 0, 1, 2, 3]);
-    // Composed transforms: node b is translated, rotated and scaled.
+    assert_eq!(models, [0, 1, 2, 3, 4, 5]);
+    // Composed transforms, split into a scale baked into the model and a rigid
+    // instance transform: node b (scaled 1.5) uses models 4 and 5, the crate scaled.
     let b = scene.instances[2].transform;
     assert!((b.w_axis.truncate() - Vec3::new(4.0, 0.0, 0.5)).length() < 1e-6);
-    assert!((Mat3::from_mat4(b).determinant() - 3.375).abs() < 1e-4);
-    assert!(Mat3::from_mat4(scene.instances[4].transform).determinant() < 0.0);
+    assert!((Mat3::from_mat4(b).determinant() - 1.0).abs() < 1e-4);
+    // The mirror is in the model, not the instance transform.
+    assert!((Mat3::from_mat4(scene.instances[4].transform).determinant() - 1.0).abs() < 1e-4);
+    let (lo, hi) = scene.models[2].mesh.bounds().unwrap();
+    assert!((hi[1] - lo[1] - 3.0).abs() < 1e-5, "scaled crate is 3 tall");
     // The textured model: UVs per vertex (seams kept), the texture
     // with the sampler's wrap modes, the factor in the vertex albedo. The cube's 24
     // face corners weld only where position and UV agree (4 corners do): 20.
@@ -48,9 +54,15 @@ fn sample_scene_reuses_meshes_and_reads_textures() {
         scene.models[1].mesh.albedo[0],
         [srgb(0.8), srgb(0.1), srgb(0.1), 255]
     );
-    // Mirrored copies flip the winding: same vertices, triangles reversed.
-    let mirrored = &scene.models[2];
-    assert_eq!(mirrored.mesh.positions, textured.mesh.positions);
+    // Mirrored copies: x negated, winding flipped.
+    let mirrored = &scene.models[4];
+    let negated: Vec<[f32; 3]> = textured
+        .mesh
+        .positions
+        .iter()
+        .map(|p| [-p[0], p[1], p[2]])
+        .collect();
+    assert_eq!(mirrored.mesh.positions, negated);
     let t = textured.mesh.triangles[0];
     assert_eq!(mirrored.mesh.triangles[0], [t[0], t[2], t[1]]);
     assert!(scene.notes.is_empty(), "{:?}", scene.notes);
@@ -69,7 +81,7 @@ fn manifest_gltf_scene_builds_with_hashes_that_cover_the_texture() {
     let plan = parse_manifest_str(text, &manifest).unwrap();
     assert!(matches!(&plan.scene, SceneSpec::Gltf(g) if g.file.ends_with("textured-sample.gltf")));
     let scene = plan.load_scene().unwrap();
-    assert_eq!(scene.models.len(), 4);
+    assert_eq!(scene.models.len(), 6);
     assert_eq!(scene.instances.len(), 6);
     let m = &scene.models[0];
     let map = m.albedo_map.as_ref().unwrap();

@@ -12,10 +12,16 @@
 //!    [`MAX_DEPTH`](super::gltf::MAX_DEPTH) is an error); skins and morph targets are
 //!    ignored with a note (the mesh is drawn in its bind pose / base shape);
 //! 3. per node with a mesh, split the mesh's triangle primitives by base-colour
-//!    texture: each (mesh, texture or none, mirrored) is one model, created at first
-//!    use, and the node places one instance of each of its mesh's models. A node
-//!    whose transform mirrors (negative determinant) uses a copy of the model with
-//!    flipped winding, so triangles stay counter-clockwise in the world;
+//!    texture: each (mesh, texture or none, scale) is one model, created at first
+//!    use, and the node places one instance of each of its mesh's models. The bake's
+//!    kernels see instances as parks have them — rigid transforms over models in
+//!    world units — so the node's composed transform is split ([`split_transform`]):
+//!    a similarity (uniform scale s × rotation, possibly mirroring) becomes a model
+//!    scaled by s (and mirrored in x when the node mirrors) and a rotation + translation
+//!    as the instance transform; anything else (non-uniform scale, shear) is baked
+//!    whole into the model and the instance only translates. Nodes with the same
+//!    mesh and scale share a model. A mirrored model has flipped winding, so
+//!    triangles stay counter-clockwise in the world;
 //! 4. a model's albedo: vertex colour (`COLOR_0`, linear) × the material's base-colour
 //!    factor, to sRGB8 per vertex (white when neither is there but a texture is; the
 //!    procedural pattern when nothing is); the base-colour texture (its UV set, the
@@ -147,8 +153,8 @@ fn parse_scene(path: &Path, bytes: &[u8]) -> Result<GltfScene, LoadError> {
     // Step 2: walk the nodes.
     let mut models: Vec<GltfModel> = Vec::new();
     let mut instances: Vec<GltfInstance> = Vec::new();
-    // (mesh, texture, mirrored) → model index.
-    let mut model_of: BTreeMap<(usize, Option<usize>, bool), u32> = BTreeMap::new();
+    // (mesh, texture, baked linear part's bits, mirrored) → model index.
+    let mut model_of: BTreeMap<(usize, Option<usize>, [u32; 9], bool), u32> = BTreeMap::new();
     // Decoded textures by (texture index).
     let mut textures: BTreeMap<usize, AlbedoTexture> = BTreeMap::new();
     let mut skinned = Vec::new();
@@ -175,7 +181,8 @@ fn parse_scene(path: &Path, bytes: &[u8]) -> Result<GltfScene, LoadError> {
             skinned.push(node.index());
         }
         if let Some(mesh) = node.mesh() {
-            let mirrored = Mat3::from_mat4(world).determinant() < 0.0;
+            let (baked, instance_transform) = split_transform(world);
+            let mirrored = baked.determinant() < 0.0;
             if mesh
                 .primitives()
                 .any(|p| p.morph_targets().next().is_some())
@@ -198,7 +205,12 @@ fn parse_scene(path: &Path, bytes: &[u8]) -> Result<GltfScene, LoadError> {
             }
             let split = groups.len() > 1;
             for (texture, prims) in groups {
-                let key = (mesh.index(), texture, mirrored);
+                let key = (
+                    mesh.index(),
+                    texture,
+                    baked.to_cols_array().map(f32::to_bits),
+                    mirrored,
+                );
                 let id = match model_of.get(&key) {
                     Some(&id) => Some(id),
                     None => {
@@ -209,7 +221,7 @@ fn parse_scene(path: &Path, bytes: &[u8]) -> Result<GltfScene, LoadError> {
                             &mesh,
                             &prims,
                             texture,
-                            mirrored,
+                            (baked, mirrored),
                             split,
                             &mut textures,
                         )?;
@@ -228,7 +240,7 @@ fn parse_scene(path: &Path, bytes: &[u8]) -> Result<GltfScene, LoadError> {
                 if let Some(model) = id {
                     instances.push(GltfInstance {
                         model,
-                        transform: world,
+                        transform: instance_transform,
                         node: node.index() as u32,
                     });
                 }
@@ -264,8 +276,9 @@ fn parse_scene(path: &Path, bytes: &[u8]) -> Result<GltfScene, LoadError> {
     })
 }
 
-/// One model: the primitives of `mesh` that use `texture`; `None` when none of them
-/// has triangles.
+/// One model: the primitives of `mesh` that use `texture`, positions multiplied by
+/// `baked`, winding flipped when the node's transform `mirrored`; `None` when none
+/// of them has triangles.
 #[allow(clippy::too_many_arguments)]
 fn build_model(
     path: &Path,
@@ -274,7 +287,7 @@ fn build_model(
     mesh: &gltf::Mesh,
     prims: &[gltf::Primitive],
     texture: Option<usize>,
-    mirrored: bool,
+    (baked, mirrored): (Mat3, bool),
     split: bool,
     textures: &mut BTreeMap<usize, AlbedoTexture>,
 ) -> Result<Option<GltfModel>, LoadError> {
@@ -303,7 +316,11 @@ fn build_model(
     for part in &parts {
         let base =
             u32::try_from(raw.positions.len()).map_err(|_| err("too many vertices".into()))?;
-        raw.positions.extend_from_slice(&part.positions);
+        raw.positions.extend(
+            part.positions
+                .iter()
+                .map(|p| (baked * glam::Vec3::from_array(*p)).to_array()),
+        );
         if let Some(c) = &mut raw.colors {
             c.extend_from_slice(&part.colors);
         }
@@ -357,6 +374,36 @@ fn build_model(
         mesh: mesh_out,
         albedo_map,
     }))
+}
+
+/// Splits a node's world transform into the linear part baked into its model and
+/// the instance transform (step 3 of the module docs): for a similarity `T·(s·Q)`
+/// (Q orthogonal; checked to 10⁻⁴), `(s·F, T·Q·F)` with F = I, or the mirror
+/// diag(−1, 1, 1) when Q mirrors (so instance transforms are proper rotations, as
+/// in parks); otherwise `(L, T)` with L the whole linear part. `instance · baked` is
+/// the world transform's linear part.
+pub(crate) fn split_transform(world: Mat4) -> (Mat3, Mat4) {
+    let linear = Mat3::from_mat4(world);
+    let translation = Mat4::from_translation(world.w_axis.truncate());
+    let s = linear.determinant().abs().cbrt();
+    if s > 0.0 && s.is_finite() {
+        let q = linear * (1.0 / s);
+        let qtq = q.transpose() * q;
+        let orthogonal = (qtq - Mat3::IDENTITY)
+            .to_cols_array()
+            .iter()
+            .all(|d| d.abs() < 1e-4);
+        if orthogonal {
+            // A mirror goes into the model (x negated), so the instance only rotates.
+            let mirror = if q.determinant() < 0.0 { -1.0 } else { 1.0 };
+            let flip = Mat3::from_diagonal(glam::Vec3::new(mirror, 1.0, 1.0));
+            return (
+                Mat3::from_diagonal(glam::Vec3::splat(s)) * flip,
+                translation * Mat4::from_mat3(q * flip),
+            );
+        }
+    }
+    (linear, translation)
 }
 
 /// A triangle primitive in mesh space with its sRGB8 colours (vertex colour × base
