@@ -29,8 +29,10 @@ pub type Fingerprint = [u8; 32];
 /// 7 — capture textures stored as BC1/BC3 (a proxy reused by key from an older
 /// pack would keep its lossless texture);
 /// 8 — MVMesh textures from neighbouring centres fitted to the cell's need
-/// (`worker::capture::fitted_scale`).
-pub const BAKE_REVISION: u32 = 8;
+/// (`worker::capture::fitted_scale`);
+/// 9 — objective selection of representations with layered impostors (issue 16,
+/// `bake.quality`, worker `select.rs`, `impostor.rs`).
+pub const BAKE_REVISION: u32 = 9;
 
 /// Hex form for file names, logs and reports.
 pub fn to_hex(f: &Fingerprint) -> String {
@@ -92,6 +94,7 @@ pub fn params_fingerprint(bake: &BakeParams, cells: &CellParams) -> Fingerprint 
         occlusion_culling,
         max_deviation_px,
         far_field,
+        quality,
     } = bake;
     h.update(&image_res.to_le_bytes());
     f32s(
@@ -109,6 +112,15 @@ pub fn params_fingerprint(bake: &BakeParams, cells: &CellParams) -> Fingerprint 
         *occlusion_culling as u8,
         *far_field as u8,
     ]);
+    // Objective selection (issue 16): absent, or its floor.
+    match quality {
+        None => h.update(&[0]),
+        Some(q) => {
+            h.update(&[1]);
+            h.update(&q.min_psnr_db.to_le_bytes());
+            h.update(&q.min_ssim.to_le_bytes())
+        }
+    };
     let CellParams {
         cell_size,
         min_eye_height,
@@ -181,6 +193,9 @@ mod tests {
             |b, _| b.occlusion_culling = true,
             |b, _| b.max_deviation_px = 0.0,
             |b, _| b.far_field = false,
+            |b, _| b.quality = None,
+            |b, _| b.quality.as_mut().unwrap().min_psnr_db = 35.0,
+            |b, _| b.quality.as_mut().unwrap().min_ssim = 0.95,
             |_, c| c.cell_size = 100.0,
             |_, c| c.min_eye_height = 2.0,
             |_, c| c.max_eye_height = 20.0,

@@ -40,6 +40,7 @@
 //!     //        pre_rotation_deg: (0.0, 0.0, 0.0) /* optional */), ...]),
 //!     cells: (cell_size: 50.0, min_eye_height: 6.0, max_eye_height: 12.0),
 //!     bake: (image_res: 1024, clustering: true),       // optional, every field optional
+//!     //    quality: (min_psnr_db: 30.0, min_ssim: 0.9) /* objective selection, issue 16 */
 //!     cells_per_job: 4,                                // optional, default 4
 //!     output: "../out/demo",                           // optional, default ../out/<name>
 //! )
@@ -100,6 +101,52 @@ pub struct BakeParams {
     /// Plans written before it existed read as off (they were baked without it).
     #[serde(default)]
     pub far_field: bool,
+    /// Objective selection of representations (paper 004; issue 16; worker
+    /// `select.rs`): the quality floor every proxy must meet on its own pixels from
+    /// every sample viewpoint of its region; the cheapest candidate that does is
+    /// kept. Default [`QualityFloor::default`]; plans written before it existed read
+    /// as `None` (baked without selection: every outside object a mesh proxy).
+    #[serde(default)]
+    pub quality: Option<QualityFloor>,
+}
+
+/// The quality floor of the objective selection (`bake.quality`, paper 004 §3–4):
+/// a candidate representation of an object is acceptable when, in each sample view
+/// of the region, its PSNR on luminance and its SSIM over the object's pixels (where
+/// the object or the candidate is drawn) reach these.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct QualityFloor {
+    /// Default 30 dB: an RMS error of 8 levels of Y (3 %) over the object's pixels,
+    /// the usual threshold of acceptable lossy image coding, and 004's finding that
+    /// PSNR differences above ~30 dB are hardly visible on objects.
+    pub min_psnr_db: f64,
+    /// Default 0.9: Wang et al.'s SSIM for "good" quality; catches structural errors
+    /// (shifted edges, holes) that PSNR averages away on small objects.
+    pub min_ssim: f64,
+}
+
+impl Default for QualityFloor {
+    fn default() -> Self {
+        QualityFloor {
+            min_psnr_db: 30.0,
+            min_ssim: 0.9,
+        }
+    }
+}
+
+/// The rules of `bake.quality` (also for `pipeline run --set`): the field that
+/// breaks them and why.
+pub fn check_quality(min_psnr_db: f64, min_ssim: f64) -> Result<(), (&'static str, String)> {
+    if !(0.0..=crate::metrics::PSNR_CAP).contains(&min_psnr_db) {
+        return Err((
+            "min_psnr_db",
+            format!("must be in 0..=100 dB, found {min_psnr_db}"),
+        ));
+    }
+    if !(0.0..=1.0).contains(&min_ssim) {
+        return Err(("min_ssim", format!("must be in 0..=1, found {min_ssim}")));
+    }
+    Ok(())
 }
 
 /// Default of [`BakeParams::max_deviation_px`].
@@ -117,6 +164,7 @@ impl Default for BakeParams {
             occlusion_culling: false,
             max_deviation_px: DEFAULT_MAX_DEVIATION_PX,
             far_field: true,
+            quality: Some(QualityFloor::default()),
         }
     }
 }
@@ -590,6 +638,24 @@ struct RawBake {
     occlusion_culling: bool,
     max_deviation_px: f32,
     far_field: bool,
+    quality: RawQuality,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields, default)]
+struct RawQuality {
+    min_psnr_db: f64,
+    min_ssim: f64,
+}
+
+impl Default for RawQuality {
+    fn default() -> Self {
+        let d = QualityFloor::default();
+        RawQuality {
+            min_psnr_db: d.min_psnr_db,
+            min_ssim: d.min_ssim,
+        }
+    }
 }
 
 impl Default for RawBake {
@@ -605,6 +671,7 @@ impl Default for RawBake {
             occlusion_culling: d.occlusion_culling,
             max_deviation_px: d.max_deviation_px,
             far_field: d.far_field,
+            quality: RawQuality::default(),
         }
     }
 }
@@ -847,6 +914,16 @@ impl Validator<'_> {
         }
     }
 
+    /// `bake.quality` (issue 16): PSNR in 0..=100 dB, SSIM in 0..=1.
+    fn quality(&self, q: RawQuality) -> Result<QualityFloor, ManifestError> {
+        check_quality(q.min_psnr_db, q.min_ssim)
+            .map_err(|(field, what)| self.error(&format!("bake.quality.{field}"), what))?;
+        Ok(QualityFloor {
+            min_psnr_db: q.min_psnr_db,
+            min_ssim: q.min_ssim,
+        })
+    }
+
     /// A glTF scene file: a `.gltf` or `.glb` that exists.
     fn gltf(&self, file: String) -> Result<SceneSpec, ManifestError> {
         if file.is_empty() {
@@ -1080,6 +1157,7 @@ impl Validator<'_> {
             occlusion_culling: b.occlusion_culling,
             max_deviation_px: self.non_negative("bake.max_deviation_px", b.max_deviation_px)?,
             far_field: b.far_field,
+            quality: Some(self.quality(b.quality)?),
         };
 
         let cells_per_job = raw.cells_per_job.unwrap_or(DEFAULT_CELLS_PER_JOB);

@@ -35,6 +35,10 @@ fn samples() -> Vec<(FileKind, Vec<u8>)> {
             sample::small_group().encode_group().unwrap(),
         ),
         (FileKind::Index, sample::small_index_v2().encode().unwrap()),
+        (
+            FileKind::Cell,
+            sample::small_cell_impostor().encode().unwrap(),
+        ),
     ]
 }
 
@@ -195,7 +199,7 @@ fn unknown_section_kinds_are_skipped() {
         },
     );
     sections.push(SectionData {
-        kind: SectionKind::LAYERED_IMPOSTORS,
+        kind: SectionKind(0x02fe),
         raw: vec![1, 2, 3],
         codecs: &[],
     });
@@ -515,6 +519,89 @@ fn cell_pack_values_are_validated() {
         e.to_string().contains("outside the base pack's grid"),
         "{e}"
     );
+}
+
+/// Issue 16: the `layered-impostors` section's values are checked — layer count,
+/// reserved fields, codes, depth range — naming the section and the offset; a
+/// LayeredImpostor without the section, or with a block-compressed texture, is
+/// refused; the writer refuses what the reader would.
+#[test]
+fn layered_impostor_values_are_validated() {
+    let bytes = sample::small_cell_impostor().encode().unwrap();
+    let end = 64 + 3 * 16;
+    let cases: Vec<Case> = vec![
+        (SectionKind::LAYERED_IMPOSTORS, 56, u32s(0), 56, "0 layers"),
+        (
+            SectionKind::LAYERED_IMPOSTORS,
+            56,
+            u32s(65),
+            56,
+            "65 layers",
+        ),
+        (SectionKind::LAYERED_IMPOSTORS, 60, u32s(1), 60, "reserved"),
+        (
+            SectionKind::LAYERED_IMPOSTORS,
+            64 + 12,
+            u32s(1),
+            68,
+            "reserved 1",
+        ),
+        (
+            SectionKind::LAYERED_IMPOSTORS,
+            64 + 4,
+            u32s(300),
+            68,
+            "codes 300",
+        ),
+        (
+            SectionKind::LAYERED_IMPOSTORS,
+            64 + 4,
+            u32s(0),
+            end as u64,
+            "codes 0..=86",
+        ),
+        (
+            SectionKind::LAYERED_IMPOSTORS,
+            48,
+            f32s(f32::NAN),
+            end as u64,
+            "depth range",
+        ),
+        (
+            SectionKind::LAYERED_IMPOSTORS,
+            0,
+            f32s(f32::INFINITY),
+            end as u64,
+            "corner rays",
+        ),
+        (
+            SectionKind::LAYERED_IMPOSTORS,
+            64,
+            f32s(-1.0),
+            end as u64,
+            "layer 0: depth",
+        ),
+    ];
+    assert_refused(FileKind::Cell, &bytes, cases);
+    // Without its section the impostor's record is past the (empty) section's end.
+    let mut sections = sections_of(&bytes);
+    sections.retain(|s| s.kind != SectionKind::LAYERED_IMPOSTORS);
+    let e = CellPack::from_bytes(&assemble(FileKind::Cell, &sections).unwrap()).unwrap_err();
+    assert!(
+        e.to_string().contains("record past the section's end"),
+        "{e}"
+    );
+    // Writer side.
+    let mut cell = sample::small_cell_impostor();
+    cell.proxies.last_mut().unwrap().layers = None;
+    assert!(matches!(cell.encode(), Err(PackError::Invalid { .. })));
+    let mut cell = sample::small_cell_impostor();
+    cell.proxies[0].layers = cell.proxies.last().unwrap().layers.clone();
+    assert!(matches!(cell.encode(), Err(PackError::Invalid { .. })));
+    let mut cell = sample::small_cell_impostor();
+    let v = &mut cell.proxies.last_mut().unwrap().views[0];
+    v.texture = Texture::from_rgba8_block(12, 10, &v.texture.to_rgba8().unwrap()).unwrap();
+    assert!(matches!(cell.encode(), Err(PackError::Invalid { .. })));
 }
 
 /// Issue 15: block-compressed textures with a bad size or data length are refused,
@@ -849,6 +936,7 @@ fn arb_proxy() -> impl Strategy<Value = Proxy> {
                 kind,
                 members,
                 views,
+                layers: None,
             })
     })
 }

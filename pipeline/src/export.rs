@@ -930,6 +930,7 @@ mod tests {
                 view_at([100.0, 0.0, 0.0]),
                 view_at([10.0, 0.0, 0.0]),
             ],
+            layers: None,
         };
         let c = Some(Vec3::ZERO);
         let far = Vec3::new(0.0, 0.0, 500.0);

@@ -48,6 +48,9 @@ const KEYS: &[(&str, &[&str])] = &[
     ("bake.clustering", &[]),
     ("bake.occlusion_culling", &[]),
     ("bake.far_field", &[]),
+    ("bake.quality", &[]),
+    ("bake.quality.min_psnr_db", &["min_psnr_db"]),
+    ("bake.quality.min_ssim", &["min_ssim"]),
     ("bake.max_deviation_px", &["deviation"]),
     ("cells.cell_size", &["cell_size"]),
     ("cells.min_eye_height", &[]),
@@ -152,6 +155,22 @@ pub fn apply_overrides(plan: &mut Plan, overrides: &[Override]) -> Result<(), Ov
             "bake.clustering" => plan.bake.clustering = o.boolean()?,
             "bake.occlusion_culling" => plan.bake.occlusion_culling = o.boolean()?,
             "bake.far_field" => plan.bake.far_field = o.boolean()?,
+            // `off` bakes without objective selection (every outside object a mesh
+            // proxy, as before issue 16); `on` restores the default floor.
+            "bake.quality" => {
+                plan.bake.quality = o.boolean()?.then(format::manifest::QualityFloor::default)
+            }
+            "bake.quality.min_psnr_db" | "bake.quality.min_ssim" => {
+                let v: f64 = o.value.parse().map_err(|_| o.bad("must be a number"))?;
+                let q = plan.bake.quality.get_or_insert_with(Default::default);
+                if o.key.ends_with("min_psnr_db") {
+                    q.min_psnr_db = v;
+                } else {
+                    q.min_ssim = v;
+                }
+                format::manifest::check_quality(q.min_psnr_db, q.min_ssim)
+                    .map_err(|(_, what)| o.bad(what))?;
+            }
             "bake.max_deviation_px" => plan.bake.max_deviation_px = o.non_negative()?,
             "cells.cell_size" => plan.cells.cell_size = o.positive()?,
             "cells.min_eye_height" => plan.cells.min_eye_height = o.non_negative()?,

@@ -269,6 +269,38 @@ impl PreparedCell {
     }
 }
 
+/// The quads of a layered impostor (paper 001; format `ImpostorLayers`): per layer
+/// two triangles at `eye + depth · corner_ray`, wound counter-clockwise as seen from
+/// the eye; `mask` carries the layer's depth codes (`code_lo | code_hi << 8`) and
+/// the shader draws only the texels whose alpha code lies between them.
+fn impostor_quads(
+    eye: [f32; 3],
+    layers: &format::pack::ImpostorLayers,
+    vertices: &mut Vec<ProxyVertex>,
+    bounds: &mut Aabb,
+) {
+    let eye = Vec3::from_array(eye);
+    let rays = layers.corner_rays.map(Vec3::from_array);
+    let axis = (rays[0] + rays[1] + rays[2] + rays[3]).normalize_or_zero();
+    for layer in &layers.layers {
+        let c = rays.map(|r| eye + layer.depth * r);
+        let centroid = 0.25 * (c[0] + c[1] + c[2] + c[3]);
+        let mask = u32::from(layer.code_lo) | (u32::from(layer.code_hi) << 8);
+        for k in [0, 3, 2, 0, 2, 1] {
+            bounds.add(c[k]);
+            vertices.push(ProxyVertex {
+                pos: c[k].to_array(),
+                normal: (-axis).to_array(),
+                albedo: [255, 255, 255, 255],
+                tint: [1.0; 3],
+                mask,
+                centroid: centroid.to_array(),
+                kind: ProxyKind::LayeredImpostor as u32,
+            });
+        }
+    }
+}
+
 /// Turns a validated cell pack into world-space proxy triangle lists. Members'
 /// triangles index their model's vertices placed by the member instance's transform.
 /// View masks: MvMesh per triangle from the pack; SvMesh and Cluster use view 0 for
@@ -277,12 +309,6 @@ pub fn prepare_cell(base: &BasePack, pack: &CellPack) -> Result<PreparedCell, Ba
     let cell = pack.cell_id;
     let mut proxies = Vec::with_capacity(pack.proxies.len());
     for (pi, proxy) in pack.proxies.iter().enumerate() {
-        if proxy.kind == ProxyKind::LayeredImpostor {
-            // Not drawable by this player; its members fall back to nothing (the
-            // bake never writes this kind yet).
-            eprintln!("player: warning: cell {cell} proxy {pi}: layered impostors are not drawn");
-            continue;
-        }
         if proxy.views.len() > MAX_VIEWS {
             return Err(BakeError::BadProxy {
                 cell,
@@ -319,6 +345,11 @@ pub fn prepare_cell(base: &BasePack, pack: &CellPack) -> Result<PreparedCell, Ba
         let default_mask: u32 = if views.is_empty() { 0 } else { 1 };
         let mut vertices = Vec::new();
         let mut bounds = Aabb::EMPTY;
+        if let (ProxyKind::LayeredImpostor, Some(layers), Some(v)) =
+            (proxy.kind, &proxy.layers, proxy.views.first())
+        {
+            impostor_quads(v.eye, layers, &mut vertices, &mut bounds);
+        }
         for m in &proxy.members {
             let inst =
                 base.instances

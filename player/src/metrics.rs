@@ -62,92 +62,9 @@ pub fn masked_sq_error_y(a: &[u8], b: &[u8], mask: &[bool]) -> (f64, usize) {
         })
 }
 
-fn gaussian(radius: usize, sigma: f64) -> Vec<f64> {
-    let w: Vec<f64> = (0..=2 * radius)
-        .map(|i| {
-            let x = i as f64 - radius as f64;
-            (-x * x / (2.0 * sigma * sigma)).exp()
-        })
-        .collect();
-    let s: f64 = w.iter().sum();
-    w.into_iter().map(|v| v / s).collect()
-}
-
-/// Separable "valid" filtering: output is (w − k + 1) × (h − k + 1).
-fn filter_valid(img: &[f64], w: usize, h: usize, k: &[f64]) -> (Vec<f64>, usize, usize) {
-    let n = k.len();
-    let (ow, oh) = (w + 1 - n, h + 1 - n);
-    let mut tmp = vec![0.0; ow * h];
-    for y in 0..h {
-        let row = &img[y * w..(y + 1) * w];
-        for x in 0..ow {
-            tmp[y * ow + x] = k.iter().zip(&row[x..x + n]).map(|(a, b)| a * b).sum();
-        }
-    }
-    let mut out = vec![0.0; ow * oh];
-    for y in 0..oh {
-        for x in 0..ow {
-            out[y * ow + x] = (0..n).map(|j| k[j] * tmp[(y + j) * ow + x]).sum();
-        }
-    }
-    (out, ow, oh)
-}
-
-/// The SSIM map of two equally sized RGBA8 images on Y: one value per position
-/// where the (possibly clipped) window fits, `(map, map_width, map_height, radius)`;
-/// map position (x, y) is the window centred on pixel (x + radius, y + radius).
-fn ssim_map_y(a: &[u8], b: &[u8], width: usize, height: usize) -> (Vec<f64>, usize, usize, usize) {
-    let ya: Vec<f64> = luminance(a).into_iter().map(f64::from).collect();
-    let yb: Vec<f64> = luminance(b).into_iter().map(f64::from).collect();
-    let radius = 5.min((width.min(height) - 1) / 2);
-    let k = gaussian(radius, 1.5);
-    let (c1, c2) = ((0.01f64 * 255.0).powi(2), (0.03f64 * 255.0).powi(2));
-    let (mu_a, ow, oh) = filter_valid(&ya, width, height, &k);
-    let (mu_b, _, _) = filter_valid(&yb, width, height, &k);
-    let sq = |v: &[f64], u: &[f64]| -> Vec<f64> { v.iter().zip(u).map(|(x, y)| x * y).collect() };
-    let (aa, _, _) = filter_valid(&sq(&ya, &ya), width, height, &k);
-    let (bb, _, _) = filter_valid(&sq(&yb, &yb), width, height, &k);
-    let (ab, _, _) = filter_valid(&sq(&ya, &yb), width, height, &k);
-    let map = (0..ow * oh)
-        .map(|i| {
-            let (ma, mb) = (mu_a[i], mu_b[i]);
-            let va = aa[i] - ma * ma;
-            let vb = bb[i] - mb * mb;
-            let cov = ab[i] - ma * mb;
-            ((2.0 * ma * mb + c1) * (2.0 * cov + c2)) / ((ma * ma + mb * mb + c1) * (va + vb + c2))
-        })
-        .collect();
-    (map, ow, oh, radius)
-}
-
-/// Mean SSIM of two equally sized RGBA8 images (`width × height`) on Y.
-pub fn ssim_y(a: &[u8], b: &[u8], width: usize, height: usize) -> f64 {
-    if width == 0 || height == 0 {
-        return 1.0;
-    }
-    let (map, _, _, _) = ssim_map_y(a, b, width, height);
-    map.iter().sum::<f64>() / map.len() as f64
-}
-
-/// Mean SSIM on Y over the window positions centred on a pixel of `mask`; `None`
-/// when there is none.
-pub fn masked_ssim_y(
-    a: &[u8],
-    b: &[u8],
-    width: usize,
-    height: usize,
-    mask: &[bool],
-) -> Option<f64> {
-    if width == 0 || height == 0 {
-        return None;
-    }
-    let (map, ow, oh, r) = ssim_map_y(a, b, width, height);
-    let (sum, n) = (0..oh)
-        .flat_map(|y| (0..ow).map(move |x| (x, y)))
-        .filter(|&(x, y)| mask[(y + r) * width + x + r])
-        .fold((0.0, 0usize), |(s, n), (x, y)| (s + map[y * ow + x], n + 1));
-    (n > 0).then(|| sum / n as f64)
-}
+// SSIM (Wang et al. 2004 on Y) lives in format::metrics, shared with the worker's
+// objective selection (issue 16).
+pub use format::metrics::{masked_ssim_y, ssim_y};
 
 /// Image quality of one frame against one reference (both rendered with coverage
 /// alpha, `width × height` RGBA8).

@@ -60,7 +60,7 @@ impl Representation {
             Representation::SvMesh => "SV mesh",
             Representation::Cluster => "cluster",
             Representation::MvMesh => "MV mesh",
-            Representation::LayeredImpostor => "impostor (none baked)",
+            Representation::LayeredImpostor => "layered impostor",
             Representation::Culled => "culled (not drawn)",
             Representation::LodLevel => "LOD level >= 1",
         }

@@ -16,6 +16,8 @@
 // eye_i → centroid and viewer → centroid), blended with weights inversely
 // proportional to those angles. A texel outside [0,1]², behind the capture or with
 // alpha < 0.5 (nothing captured there) falls back to the other view, then to lit.
+//
+// Layered impostors (kind 4, paper 001): see impostor_layer below.
 
 // AMBIENT, LIGHT, SRGB_* and MAX_VIEWS are not declared here: the player prepends
 // format::shading::wgsl_constants() (player::gpu::shader_source), their one home.
@@ -140,6 +142,7 @@ struct ProxyOut {
     @location(2) albedo: vec3<f32>,
     @location(3) @interpolate(flat) mask: u32,
     @location(4) @interpolate(flat) centroid: vec3<f32>,
+    @location(5) @interpolate(flat) kind: u32,
 };
 
 @vertex
@@ -151,6 +154,7 @@ fn vs_proxy(v: ProxyIn) -> ProxyOut {
     o.albedo = srgb_to_linear(v.albedo.rgb) * v.tint;
     o.mask = v.mask;
     o.centroid = v.centroid;
+    o.kind = v.kind;
     if g.debug.x != 0u {
         o.albedo = g.palette[min(v.kind, 7u)].rgb;
     }
@@ -191,8 +195,39 @@ fn angle_between(a: vec3<f32>, b: vec3<f32>) -> f32 {
     return acos(clamp(dot(normalize(a), normalize(b)), -1.0, 1.0));
 }
 
+// Layered impostor (paper 001 §4; kind 4): a layer quad shows view 0's texels whose
+// alpha (a depth code, linear in the sRGB texture) lies in the layer's codes
+// (mask = lo | hi << 8); the others are discarded (the alpha test), so the quad writes
+// depth only where the layer has surface. The code is read from the nearest texel,
+// the colour bilinearly (worker impostor.rs does the same on the CPU).
+fn impostor_layer(i: ProxyOut) -> vec4<f32> {
+    let tc = p.tex_from_world[0] * vec4<f32>(i.world, 1.0);
+    if tc.w <= 0.0 {
+        discard;
+    }
+    let uv = tc.xy / tc.w;
+    if any(uv < vec2<f32>(0.0)) || any(uv >= vec2<f32>(1.0)) {
+        discard;
+    }
+    let dims = textureDimensions(t0);
+    let texel = min(vec2<u32>(uv * vec2<f32>(dims)), dims - vec2<u32>(1u));
+    let code = u32(round(textureLoad(t0, texel, 0).a * 255.0));
+    let lo = i.mask & 0xffu;
+    let hi = (i.mask >> 8u) & 0xffu;
+    if code == 0u || code < lo || code > hi {
+        discard;
+    }
+    if g.debug.x != 0u {
+        return vec4<f32>(shade(i.albedo, -i.normal), 1.0);
+    }
+    return vec4<f32>(textureSampleLevel(t0, samp, uv, 0.0).rgb, 1.0);
+}
+
 @fragment
 fn fs_proxy(i: ProxyOut) -> @location(0) vec4<f32> {
+    if i.kind == 4u {
+        return impostor_layer(i);
+    }
     let lit = shade(i.albedo, i.normal);
     if g.debug.x != 0u {
         return vec4<f32>(lit, 1.0);

@@ -284,12 +284,14 @@ pub fn write_synthetic_bake_with(
                         view(eye, lo, hi, colour_of(i)),
                         view(eye2, lo, hi, colour_of(i)),
                     ],
+                    layers: None,
                 });
             } else {
                 proxies.push(Proxy {
                     kind: ProxyKind::SvMesh,
                     members: vec![member(i, false)],
                     views: vec![view(eye, lo, hi, colour_of(i))],
+                    layers: None,
                 });
             }
         }
@@ -303,6 +305,7 @@ pub fn write_synthetic_bake_with(
                 kind: ProxyKind::Cluster,
                 members: cluster.iter().map(|&i| member(i, false)).collect(),
                 views: vec![view(eye, lo, hi, colour_of(cluster[0]))],
+                layers: None,
             });
         }
         CellPack {
@@ -415,6 +418,7 @@ pub fn write_quad_bake_views(
                         texture: tex.clone(),
                     })
                     .collect(),
+                layers: None,
             }],
         }
         .write(&dir.join(format!("cells/{id}.pack")))?;

@@ -32,15 +32,19 @@
 
 use crate::backface::all_culled;
 use crate::capture::pack_texture;
-use crate::mesh_order::cache_order;
 use crate::cluster::{greedy_clusters, ClusterCandidate, ClusterSettings};
 use crate::far_field::{far_instances, CellGroups, FarField};
 use crate::grid::{HexGrid, Prism};
+use crate::impostor::{build_layered_impostor, LayeredImpostor};
 use crate::lod_chain::LodChains;
+use crate::mesh_order::cache_order;
 use crate::mvmesh::derive_mvmesh;
+use crate::raster::DrawItem;
 use crate::raster::ProjectedTexture;
+use crate::select::{self, sample_viewpoints, subpixel_from_region, Candidate, Measured};
 use crate::selfocc::{choose_representation, object_self_occluding_error, Representation};
 use crate::svmesh::{derive_svmesh, ms_since, ProxyError, ProxySettings, StageTimes};
+use format::manifest::QualityFloor;
 use format::manifest::{BakeParams, CellParams};
 use format::pack::{CellPack, Proxy, ProxyKind, ProxyMember, ProxyView};
 use format::Scene;
@@ -109,11 +113,28 @@ pub struct BakedProxy {
     /// Reused from an earlier bake of the cell (its key matched): the pack form,
     /// written as it is. Its members carry triangles and masks, no collapse inputs.
     pub packed: Option<Proxy>,
+    /// LayeredImpostor (issue 16): its image and layers (`views` holds its texture
+    /// too); `None` for every other kind.
+    pub impostor: Option<LayeredImpostor>,
+    /// The objective selection's measurement of the kept candidate
+    /// ([`crate::select`]), where one was measured.
+    pub quality: Option<Measured>,
 }
 
 impl BakedProxy {
+    /// Triangles drawn: the members' (mesh proxies) or two per layer (impostors).
     pub fn triangle_count(&self) -> u64 {
-        self.members.iter().map(|m| m.triangles.len() as u64).sum()
+        let layers = match (&self.impostor, &self.packed) {
+            (Some(i), _) => i.layers.layers.len() as u64,
+            (None, Some(p)) => p.layers.as_ref().map_or(0, |l| l.layers.len() as u64),
+            (None, None) => 0,
+        };
+        2 * layers
+            + self
+                .members
+                .iter()
+                .map(|m| m.triangles.len() as u64)
+                .sum::<u64>()
     }
 
     pub fn view_count(&self) -> usize {
@@ -152,6 +173,8 @@ impl BakedProxy {
             views: Vec::new(),
             key,
             packed: Some(packed.clone()),
+            impostor: None,
+            quality: None,
         }
     }
 }
@@ -229,6 +252,8 @@ pub struct CellTimes {
     /// Classes, weights, view sets, triangle selection.
     pub weights_ms: f64,
     pub simplify_ms: f64,
+    /// Objective selection (issue 16): building and measuring candidates.
+    pub select_ms: f64,
     /// Wall time of the whole `bake_cell`.
     pub total_ms: f64,
 }
@@ -261,7 +286,43 @@ pub struct CellStats {
     /// Objects drawn from the group's far field (a cell) — or, for a group's bake,
     /// the number of cells sharing it.
     pub far_objects: u32,
+    /// Layered impostors (issue 16), the objects they stand for and their quads'
+    /// triangles (two per layer).
+    pub impostor_count: u32,
+    pub impostor_members: u32,
+    pub impostor_polygons: u64,
+    /// Outside objects the objective selection culled (below a pixel from the whole
+    /// region); they are also counted in `culled`.
+    pub selection_culled: u32,
+    /// The objective selection's measurements of the proxies it kept (issue 16).
+    pub quality: CellQuality,
     pub times: CellTimes,
+}
+
+/// Quality figures of a cell's measured proxies (issue 16, [`crate::select`]): each
+/// kept candidate that was measured contributes its worst sample view.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CellQuality {
+    /// Proxies whose kept candidate was measured.
+    pub measured: u32,
+    /// Smallest object-pixel PSNR(Y) of a sample view over the measured proxies
+    /// ([`format::metrics::PSNR_CAP`] when none was measured).
+    pub worst_psnr_db: f64,
+    /// Smallest object-pixel SSIM likewise (1 when none).
+    pub worst_ssim: f64,
+    /// |ΔY| over the object pixels of every measured view, bins of 8 levels.
+    pub error_histogram: [u64; 8],
+}
+
+impl Default for CellQuality {
+    fn default() -> Self {
+        CellQuality {
+            measured: 0,
+            worst_psnr_db: format::metrics::PSNR_CAP,
+            worst_ssim: 1.0,
+            error_histogram: [0; 8],
+        }
+    }
 }
 
 /// The result of baking one cell.
@@ -421,17 +482,11 @@ pub fn bake_cell_with(
         eyes,
         size: grid.cell_size(),
     };
+    let (sv, mv) = (of_kind(Representation::Sv), of_kind(Representation::Mv));
     let (proxies, stage) = derive_region(
-        scene,
-        chains,
-        reuse,
-        &region,
-        &of_kind(Representation::Sv),
-        &of_kind(Representation::Mv),
-        cells,
-        params,
-        &mut times,
+        scene, chains, reuse, &region, &sv, &mv, cells, params, &mut times,
     )?;
+    let selection_culled = selection_culled(sv.len() + mv.len(), &proxies);
     for (k, p) in proxies.iter().enumerate() {
         for m in &p.members {
             assignment[m.instance as usize] = Assignment::Proxy(k as u32);
@@ -441,6 +496,7 @@ pub fn bake_cell_with(
         scene, cell, assignment, originals, proxies, stage, times, start,
     );
     bake.far_group = far.map(|f| f.group);
+    bake.stats.selection_culled = selection_culled;
     bake.stats.far_objects = bake
         .assignment
         .iter()
@@ -495,6 +551,7 @@ pub fn bake_group(
         params,
         &mut times,
     )?;
+    let culled = selection_culled(sv.len(), &proxies);
     let mut assignment = vec![Assignment::Culled; scene.instances.len()];
     for (k, p) in proxies.iter().enumerate() {
         for m in &p.members {
@@ -512,6 +569,7 @@ pub fn bake_group(
         start,
     );
     bake.stats.far_objects = groups.cells(group).len() as u32;
+    bake.stats.selection_culled = culled;
     Ok(bake)
 }
 
@@ -559,6 +617,9 @@ pub fn bake_cell_hybrid(
     s.cluster_members += g.cluster_members;
     s.cluster_polygons += g.cluster_polygons;
     s.proxied_original_polygons += g.proxied_original_polygons;
+    s.impostor_count += g.impostor_count;
+    s.impostor_members += g.impostor_members;
+    s.impostor_polygons += g.impostor_polygons;
     s.texture_bytes += g.texture_bytes;
     s.views += g.views;
     for t in [
@@ -570,6 +631,13 @@ pub fn bake_cell_hybrid(
     }
     bake.proxies.extend(group.proxies);
     Ok(bake)
+}
+
+/// Candidates (SV and MV objects) that ended in no proxy: culled by the objective
+/// selection (issue 16).
+fn selection_culled(candidates: usize, proxies: &[BakedProxy]) -> u32 {
+    let kept: usize = proxies.iter().map(|p| p.members.len()).sum();
+    candidates.saturating_sub(kept) as u32
 }
 
 /// The region a set of proxies serves: a cell's prism, or a group's
@@ -688,6 +756,8 @@ fn derive_region(
                             views: vec![sv.view],
                             key,
                             packed: None,
+                            impostor: None,
+                            quality: None,
                         },
                         sv.times,
                     ))
@@ -695,10 +765,8 @@ fn derive_region(
                 Job::Mv(i) => {
                     let mv =
                         derive_mvmesh(scene, chains, *i, eyes, &prism, &settings).map_err(wrap)?;
-                    let (triangles, view_masks) = cache_order(
-                        mv.member.simplified.triangles,
-                        mv.member.simplified.view_masks,
-                    );
+                    let (triangles, view_masks) =
+                        cache_order(mv.member.simplified.triangles, mv.pack_masks);
                     Ok((
                         BakedProxy {
                             kind: ProxyKind::MvMesh,
@@ -712,6 +780,8 @@ fn derive_region(
                             views: mv.views,
                             key,
                             packed: None,
+                            impostor: None,
+                            quality: None,
                         },
                         mv.times,
                     ))
@@ -726,7 +796,177 @@ fn derive_region(
         stage.add(&t);
         proxies.push(proxy);
     }
+    // Step 6 (issue 16): objective selection (paper 004, `select.rs`).
+    if let Some(floor) = &params.quality {
+        let t = Instant::now();
+        proxies = select_region(scene, region, proxies, params, floor)?;
+        times.select_ms += ms_since(t);
+    }
     Ok((proxies, stage))
+}
+
+/// Step 6 (issue 16, [`crate::select`]): per derived proxy, the cheapest of Culled
+/// (below a pixel from the whole region), a layered impostor at half or full
+/// capture resolution, and the mesh proxy itself that meets `floor` from the
+/// region's sample viewpoints. Culled proxies are dropped (their members stay
+/// [`Assignment::Culled`]); reused proxies are kept as they are. Parallel over
+/// proxies, collected in order.
+fn select_region(
+    scene: &Scene,
+    region: &Region,
+    proxies: Vec<BakedProxy>,
+    params: &BakeParams,
+    floor: &QualityFloor,
+) -> Result<Vec<BakedProxy>, BakeError> {
+    let prism = region.prism;
+    let centre = region.eyes[0];
+    let eyes = sample_viewpoints(&prism);
+    let max_offset = prism
+        .corners()
+        .iter()
+        .map(|c| c.distance(centre))
+        .fold(0.0f32, f32::max);
+    let chosen: Vec<Result<Option<BakedProxy>, BakeError>> = proxies
+        .into_par_iter()
+        .map(|proxy| {
+            if proxy.packed.is_some() {
+                return Ok(Some(proxy));
+            }
+            let members: Vec<u32> = proxy.members.iter().map(|m| m.instance).collect();
+            let originals: Vec<DrawItem> = members
+                .iter()
+                .map(|&i| {
+                    let inst = &scene.instances[i as usize];
+                    DrawItem {
+                        mesh: &scene.models[inst.model as usize].mesh,
+                        transform: inst.transform,
+                        tint: inst.tint,
+                        object_id: i,
+                        triangles: None,
+                        albedo_map: scene.models[inst.model as usize].albedo_map.as_ref(),
+                    }
+                })
+                .collect();
+            // Culled: less than a pixel from the whole region.
+            let Some((lo, hi)) = crate::capture::items_aabb(&originals) else {
+                return Ok(Some(proxy));
+            };
+            if subpixel_from_region(lo, hi, &prism, params.image_res) {
+                return Ok(None);
+            }
+            // The paper's mesh proxy, measured in every view: the report's figure
+            // and the thresholds of the cheaper candidates (select.rs, "Acceptance").
+            let refs = select::references(&originals, &eyes, centre, params.image_res);
+            let meshes: Vec<format::Mesh> = proxy
+                .members
+                .iter()
+                .map(|m| {
+                    let inst = &scene.instances[m.instance as usize];
+                    let model = &scene.models[inst.model as usize].mesh;
+                    format::Mesh {
+                        positions: model.positions.clone(),
+                        normals: model.normals.clone(),
+                        albedo: model.albedo.clone(),
+                        triangles: m.triangles.clone(),
+                    }
+                })
+                .collect();
+            let items: Vec<DrawItem> = meshes
+                .iter()
+                .zip(&originals)
+                .enumerate()
+                .map(|(k, (mesh, o))| DrawItem {
+                    mesh,
+                    object_id: k as u32,
+                    albedo_map: None,
+                    ..*o
+                })
+                .collect();
+            let textures = crate::raster::ProjectiveTextures {
+                viewer: centre,
+                by_object: proxy
+                    .members
+                    .iter()
+                    .map(|m| {
+                        Some(crate::raster::ProjectiveSurface {
+                            views: proxy.views.clone(),
+                            triangle_masks: (!m.view_masks.is_empty())
+                                .then(|| m.view_masks.clone()),
+                        })
+                    })
+                    .collect(),
+            };
+            let floor_only = select::Thresholds {
+                psnr_db: floor.min_psnr_db,
+                ssim: floor.min_ssim,
+            };
+            let mesh_quality = select::measure_against(
+                &refs,
+                &Candidate::Mesh {
+                    items: &items,
+                    textures: &textures,
+                },
+                &floor_only,
+            );
+            let thresholds = select::Thresholds::for_candidates(floor, &mesh_quality);
+            // Candidates cheaper than the mesh proxy, cheapest first.
+            let texels: u64 = proxy.views.iter().map(|v| v.rgba.len() as u64 / 4).sum();
+            let mesh_cost = select::cost(proxy.triangle_count(), texels, 1);
+            let mut candidates = Vec::new();
+            for res in [params.image_res / 2, params.image_res] {
+                let built = build_layered_impostor(
+                    centre,
+                    &originals,
+                    res.max(1),
+                    params.image_res,
+                    max_offset,
+                )
+                .map_err(|e| BakeError::Texture {
+                    cell: region.id,
+                    instance: members[0],
+                    what: format!("layered impostor: {e}"),
+                })?;
+                if let Some(imp) = built {
+                    let c = select::cost(imp.triangle_count(), imp.texels(), 1);
+                    if c < mesh_cost {
+                        candidates.push((c, imp));
+                    }
+                }
+            }
+            candidates.sort_by_key(|c| c.0);
+            for (_, imp) in candidates {
+                let m = select::measure_against(&refs, &Candidate::Impostor(&imp), &thresholds);
+                if m.passed {
+                    return Ok(Some(BakedProxy {
+                        kind: ProxyKind::LayeredImpostor,
+                        members: members
+                            .iter()
+                            .map(|&instance| BakedMember {
+                                instance,
+                                input_triangles: Vec::new(),
+                                triangles: Vec::new(),
+                                view_masks: Vec::new(),
+                                vertex_view_sets: Vec::new(),
+                            })
+                            .collect(),
+                        views: vec![imp.texture.clone()],
+                        key: proxy.key,
+                        packed: None,
+                        impostor: Some(imp),
+                        quality: Some(m),
+                    }));
+                }
+            }
+            let mut proxy = proxy;
+            proxy.quality = Some(mesh_quality);
+            Ok(Some(proxy))
+        })
+        .collect();
+    let mut out = Vec::new();
+    for c in chosen {
+        out.extend(c?);
+    }
+    Ok(out)
 }
 
 /// Statistics and the result of a cell's (or group's) bake.
@@ -769,6 +1009,11 @@ fn finish(
                 stats.mv_count += 1;
                 stats.mv_polygons += tris;
             }
+            ProxyKind::LayeredImpostor => {
+                stats.impostor_count += 1;
+                stats.impostor_members += p.members.len() as u32;
+                stats.impostor_polygons += tris;
+            }
             _ => {
                 stats.cluster_count += 1;
                 stats.cluster_members += p.members.len() as u32;
@@ -780,8 +1025,18 @@ fn finish(
         stats.views += p.view_count() as u32;
         stats.texture_bytes += p.texture_bytes();
         stats.reused_proxies += u32::from(p.packed.is_some());
+        if let Some(m) = &p.quality {
+            let q = &mut stats.quality;
+            q.measured += 1;
+            q.worst_psnr_db = q.worst_psnr_db.min(m.worst_psnr_db);
+            q.worst_ssim = q.worst_ssim.min(m.worst_ssim);
+            for (a, b) in q.error_histogram.iter_mut().zip(m.error_histogram) {
+                *a += b;
+            }
+        }
     }
-    let proxy_polygons = stats.sv_polygons + stats.mv_polygons + stats.cluster_polygons;
+    let proxy_polygons =
+        stats.sv_polygons + stats.mv_polygons + stats.cluster_polygons + stats.impostor_polygons;
     stats.simplified_ratio = if stats.proxied_original_polygons > 0 {
         proxy_polygons as f64 / stats.proxied_original_polygons as f64
     } else {
@@ -808,6 +1063,35 @@ impl CellBake {
             .map(|p| {
                 if let Some(packed) = &p.packed {
                     return Ok(packed.clone());
+                }
+                if let Some(imp) = &p.impostor {
+                    // Lossless: the alpha channel holds depth codes (impostor.rs).
+                    let t = &imp.texture;
+                    let texture =
+                        format::pack::Texture::from_rgba8_smallest(t.width, t.height, &t.rgba)
+                            .map_err(|what| BakeError::Texture {
+                                cell: self.cell,
+                                instance: p.members.first().map_or(u32::MAX, |m| m.instance),
+                                what,
+                            })?;
+                    return Ok(Proxy {
+                        kind: ProxyKind::LayeredImpostor,
+                        members: p
+                            .members
+                            .iter()
+                            .map(|m| ProxyMember {
+                                instance: m.instance,
+                                triangles: Vec::new(),
+                                view_masks: Vec::new(),
+                            })
+                            .collect(),
+                        views: vec![ProxyView {
+                            eye: t.eye.into(),
+                            matrix: crate::capture::matrix_array(&t.matrix),
+                            texture,
+                        }],
+                        layers: Some(imp.layers.clone()),
+                    });
                 }
                 let views = p
                     .views
@@ -838,6 +1122,7 @@ impl CellBake {
                         })
                         .collect(),
                     views,
+                    layers: None,
                 })
             })
             .collect::<Result<Vec<_>, BakeError>>()?;

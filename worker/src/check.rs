@@ -4,6 +4,9 @@
 //! [`Shading::Projective`]) from viewpoints spread over the cell's prism, and compares
 //! them by PSNR on luminance `Y = 0.299 R + 0.587 G + 0.114 B` of the sRGB8 values.
 //!
+//! Layered impostors (issue 16) are drawn by [`crate::impostor::composite_impostors`]
+//! into the hybrid frame after the meshes, depth-tested.
+//!
 //! Viewpoints (deterministic): view k of n sits at `prism.sample(u, v, w)` with
 //! `(u, v, w)` the Halton point k + 1 in bases 2, 3, 5, and looks horizontally in the
 //! direction of azimuth `2π (k + ½) / n`, 60° vertical field of view, square image.
@@ -200,6 +203,16 @@ pub fn check_cell(
     }
     let mut by_object: Vec<Option<ProjectiveSurface>> = vec![None; base as usize];
     by_object.extend(proxies.surfaces.iter().cloned());
+    let impostors: Vec<crate::impostor::ImpostorDraw> = bake
+        .proxies
+        .iter()
+        .filter_map(|p| p.impostor.as_ref())
+        .map(|imp| crate::impostor::ImpostorDraw {
+            texture: &imp.texture,
+            layers: &imp.layers,
+            object_id: u32::MAX - 1,
+        })
+        .collect();
 
     let extent = {
         let g = scene.ground.size();
@@ -222,12 +235,14 @@ pub fn check_cell(
             viewer: eye,
             by_object: by_object.clone(),
         };
-        let hybrid = render_with(
+        let mut hybrid = render_with(
             &view,
             &hybrid_items,
             CullMode::Back,
             Shading::Projective(&textures),
         );
+        // Layered impostors (issue 16) composite into the depth-tested frame.
+        crate::impostor::composite_impostors(&mut hybrid, &impostors);
         let mse = mse_y(&reference.color, &hybrid.color).unwrap_or(0.0);
         mse_sum += mse;
         if reference.covered_pixels() == 0 {

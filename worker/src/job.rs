@@ -476,6 +476,17 @@ pub fn bake_cell_pack(
         // A cell: objects drawn from its group's far field; a group: its cells.
         "far_objects": s.far_objects,
         "far_group": bake.far_group,
+        // Issue 16: layered impostors and the objective selection's figures.
+        "impostors": s.impostor_count,
+        "impostor_objects": s.impostor_members,
+        "impostor_polygons": s.impostor_polygons,
+        "selection_culled": s.selection_culled,
+        "quality": {
+            "measured_proxies": s.quality.measured,
+            "worst_psnr_db": s.quality.worst_psnr_db,
+            "worst_ssim": s.quality.worst_ssim,
+            "error_histogram": s.quality.error_histogram,
+        },
         // Per proxy, in pack order: its content key (crate::bake::proxy_key), read
         // back by `previous_proxies` when the job is baked again.
         "proxy_keys": bake
@@ -490,6 +501,7 @@ pub fn bake_cell_pack(
             "capture": t.capture_ms,
             "weights": t.weights_ms,
             "simplify": t.simplify_ms,
+            "select": t.select_ms,
         },
     });
     Ok((pack, report))

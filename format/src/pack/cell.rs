@@ -4,15 +4,18 @@
 //! SvMesh (one capture, projective texturing, §3.1), Cluster (SV objects merged by
 //! greedy clustering, §3.1.4), MvMesh (captures from the cell centre and its
 //! neighbours with a per-triangle view mask, §3.2) — each as index buffers into the
-//! members' model vertices plus capture matrices and textures. Culled objects are
-//! listed nowhere. Layered impostors (paper 001) have a reserved kind and section.
+//! members' model vertices plus capture matrices and textures — and LayeredImpostor
+//! (paper 001 §3–4: one RGB + depth image sliced into depth layers, section
+//! `layered-impostors`, [`ImpostorLayers`]). Culled objects are listed nowhere.
 
 use super::base::{pack_triangles, BasePack};
 use super::error::PackError;
 use super::layout::{FileKind, SectionKind};
 use super::reader::PackFile;
 use super::texture::{Texture, TextureEncoding};
-use super::writer::{assemble_reusing, write_atomic, SectionData, RAW_ONLY, TRY_INDICES, TRY_TRIANGLES, TRY_ZSTD};
+use super::writer::{
+    assemble_reusing, write_atomic, SectionData, RAW_ONLY, TRY_INDICES, TRY_TRIANGLES, TRY_ZSTD,
+};
 use super::{invalid, malformed};
 use bytemuck::{Pod, Zeroable};
 use std::path::Path;
@@ -31,8 +34,9 @@ pub enum ProxyKind {
     /// Simplified mesh with captures from the centre and up to 6 neighbours; each
     /// triangle carries a mask of the views that see it; the player blends two views.
     MvMesh = 3,
-    /// Reserved for layered impostors (paper 001); its textures and layer data will
-    /// live in the `layered-impostors` section.
+    /// Layered impostor (paper 001): one RGB + depth-code view sliced into quads;
+    /// its layers live in the `layered-impostors` section ([`ImpostorLayers`]). Its
+    /// members list the instances it stands for, with no triangles.
     LayeredImpostor = 4,
 }
 
@@ -85,6 +89,158 @@ pub struct Proxy {
     pub kind: ProxyKind,
     pub members: Vec<ProxyMember>,
     pub views: Vec<ProxyView>,
+    /// LayeredImpostor only (section `layered-impostors`): how its one view, an RGBA8
+    /// image whose alpha holds depth codes, is sliced into layers. `None` for every
+    /// other kind.
+    pub layers: Option<ImpostorLayers>,
+}
+
+/// Most layers of one layered impostor (paper 001 §6 used up to 32; we allow twice
+/// that so that a finer error angle stays representable).
+pub const MAX_IMPOSTOR_LAYERS: usize = 64;
+
+/// The layers of a layered impostor (paper 001 §3): one RGB + depth image captured
+/// from the eye of the proxy's only view, drawn as a stack of quads perpendicular to
+/// the capture axis. The view's texture is RGBA8 (never block-compressed): RGB the
+/// colour, alpha a *depth code* — 0 where nothing was captured, else
+/// `c ∈ 1..=255` standing for the eye-space depth `d` with
+/// `1/d = 1/near − (c − 1)/254 · (1/near − 1/far)` (uniform in inverse depth, the
+/// quantity the parallax error grows with). Layer `l` is the quad
+/// `eye + depth_l · ray_k` (k = the four corners) drawing only the texels whose code
+/// lies in `code_lo..=code_hi` (001 §4's alpha test); neighbouring layers overlap by a
+/// code so that no crack opens between them (001 Fig. 2).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ImpostorLayers {
+    /// World-space vectors from the view's eye to the corners of its texture
+    /// rectangle, texture coordinates (0,0), (1,0), (1,1), (0,1), at eye-space depth 1.
+    pub corner_rays: [[f32; 3]; 4],
+    /// Eye-space depth of code 1.
+    pub near: f32,
+    /// Eye-space depth of code 255 (≥ `near`).
+    pub far: f32,
+    /// Front to back.
+    pub layers: Vec<ImpostorLayer>,
+}
+
+/// One layer of a layered impostor.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ImpostorLayer {
+    /// Eye-space depth of the layer's quad.
+    pub depth: f32,
+    /// The depth codes it draws, `1 ≤ code_lo ≤ code_hi ≤ 255`.
+    pub code_lo: u8,
+    pub code_hi: u8,
+}
+
+impl ImpostorLayers {
+    /// The eye-space depth a code `1..=255` stands for (struct docs).
+    pub fn depth_of_code(&self, code: u8) -> f32 {
+        depth_of_code(self.near, self.far, code)
+    }
+
+    /// Whether the layers are well formed (finite, positive, ordered codes).
+    pub fn validate(&self) -> Result<(), String> {
+        if !self.corner_rays.iter().flatten().all(|v| v.is_finite()) {
+            return Err("corner rays are not finite".into());
+        }
+        if !(self.near.is_finite()
+            && self.far.is_finite()
+            && self.near > 0.0
+            && self.far >= self.near)
+        {
+            return Err(format!(
+                "depth range {}..{} is not 0 < near <= far",
+                self.near, self.far
+            ));
+        }
+        if self.layers.is_empty() || self.layers.len() > MAX_IMPOSTOR_LAYERS {
+            return Err(format!(
+                "{} layers, expected 1..={MAX_IMPOSTOR_LAYERS}",
+                self.layers.len()
+            ));
+        }
+        for (i, l) in self.layers.iter().enumerate() {
+            if !(l.depth.is_finite() && l.depth > 0.0) {
+                return Err(format!("layer {i}: depth {} is not positive", l.depth));
+            }
+            if l.code_lo == 0 || l.code_lo > l.code_hi {
+                return Err(format!(
+                    "layer {i}: codes {}..={} are not 1 <= lo <= hi",
+                    l.code_lo, l.code_hi
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The eye-space depth of depth code `code` (1..=255) over `near..far`
+/// ([`ImpostorLayers`]); code 0 (empty) maps to `far`.
+pub fn depth_of_code(near: f32, far: f32, code: u8) -> f32 {
+    let t = (code.max(1) - 1) as f32 / 254.0;
+    let inv = 1.0 / near - t * (1.0 / near - 1.0 / far);
+    1.0 / inv
+}
+
+/// The depth code (1..=255) of eye-space depth `depth` over `near..far`, clamped.
+pub fn code_of_depth(near: f32, far: f32, depth: f32) -> u8 {
+    let span = 1.0 / near - 1.0 / far;
+    if span <= 0.0 || !span.is_finite() {
+        return 1;
+    }
+    let t = ((1.0 / near - 1.0 / depth) / span).clamp(0.0, 1.0);
+    1 + (t * 254.0).round() as u8
+}
+
+/// One record of section `layered-impostors` (64 bytes), followed by its
+/// `layer_count` [`ImpostorLayerRecord`]s; one per LayeredImpostor proxy, in proxy
+/// order.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct ImpostorRecord {
+    pub corner_rays: [[f32; 3]; 4],
+    pub near: f32,
+    pub far: f32,
+    pub layer_count: u32,
+    pub reserved: u32,
+}
+const _: () = assert!(std::mem::size_of::<ImpostorRecord>() == 64);
+
+/// One layer in section `layered-impostors` (16 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct ImpostorLayerRecord {
+    pub depth: f32,
+    pub code_lo: u32,
+    pub code_hi: u32,
+    pub reserved: u32,
+}
+const _: () = assert!(std::mem::size_of::<ImpostorLayerRecord>() == 16);
+
+/// A proxy's layers agree with its kind and views (a LayeredImpostor has layers and
+/// one lossless view; no other kind has layers).
+fn check_layers(proxy: &Proxy) -> Result<(), String> {
+    match (&proxy.layers, proxy.kind) {
+        (Some(l), ProxyKind::LayeredImpostor) => {
+            l.validate()?;
+            if proxy.views.len() != 1 {
+                return Err(format!(
+                    "LayeredImpostor with {} views, expected 1",
+                    proxy.views.len()
+                ));
+            }
+            if proxy.views[0].texture.encoding.is_block() {
+                return Err(
+                    "LayeredImpostor texture is block-compressed (its alpha holds depth codes)"
+                        .into(),
+                );
+            }
+            Ok(())
+        }
+        (None, ProxyKind::LayeredImpostor) => Err("LayeredImpostor without layers".into()),
+        (Some(_), k) => Err(format!("{} proxy with impostor layers", k.name())),
+        (None, _) => Ok(()),
+    }
 }
 
 /// The content of one cell pack.
@@ -270,7 +426,26 @@ impl CellPack {
         let mut triangles: Vec<u8> = Vec::new();
         let mut masks = Vec::new();
         let mut textures = Vec::new();
+        let mut impostors: Vec<u8> = Vec::new();
         for (p, proxy) in self.proxies.iter().enumerate() {
+            check_layers(proxy).map_err(|e| invalid(format!("proxy {p}: {e}")))?;
+            if let Some(l) = &proxy.layers {
+                impostors.extend_from_slice(bytemuck::bytes_of(&ImpostorRecord {
+                    corner_rays: l.corner_rays,
+                    near: l.near,
+                    far: l.far,
+                    layer_count: l.layers.len() as u32,
+                    reserved: 0,
+                }));
+                for layer in &l.layers {
+                    impostors.extend_from_slice(bytemuck::bytes_of(&ImpostorLayerRecord {
+                        depth: layer.depth,
+                        code_lo: layer.code_lo.into(),
+                        code_hi: layer.code_hi.into(),
+                        reserved: 0,
+                    }));
+                }
+            }
             proxies.push(ProxyRecord {
                 kind: proxy.kind as u32,
                 member_count: u32_of(proxy.members.len(), "members")?,
@@ -316,52 +491,58 @@ impl CellPack {
             far_group: self.far_group.unwrap_or(NO_FAR_GROUP),
             reserved: [0; 2],
         };
-        assemble_reusing(
-            file_kind,
-            &[
-                SectionData {
-                    kind: SectionKind::CELL_META,
-                    raw: bytemuck::bytes_of(&meta).to_vec(),
-                    codecs: RAW_ONLY,
-                },
-                SectionData {
-                    kind: SectionKind::ORIGINALS,
-                    raw: bytemuck::cast_slice(&self.originals).to_vec(),
-                    codecs: TRY_INDICES,
-                },
-                SectionData {
-                    kind: SectionKind::PROXIES,
-                    raw: bytemuck::cast_slice(&proxies).to_vec(),
-                    codecs: TRY_ZSTD,
-                },
-                SectionData {
-                    kind: SectionKind::MEMBERS,
-                    raw: bytemuck::cast_slice(&members).to_vec(),
-                    codecs: TRY_ZSTD,
-                },
-                SectionData {
-                    kind: SectionKind::MEMBER_TRIANGLES,
-                    raw: triangles,
-                    codecs: TRY_TRIANGLES,
-                },
-                SectionData {
-                    kind: SectionKind::VIEW_MASKS,
-                    raw: masks,
-                    codecs: TRY_ZSTD,
-                },
-                SectionData {
-                    kind: SectionKind::VIEWS,
-                    raw: bytemuck::cast_slice(&views).to_vec(),
-                    codecs: TRY_ZSTD,
-                },
-                SectionData {
-                    kind: SectionKind::TEXTURES,
-                    raw: textures,
-                    codecs: TRY_ZSTD,
-                },
-            ],
-            previous,
-        )
+        let mut sections = vec![
+            SectionData {
+                kind: SectionKind::CELL_META,
+                raw: bytemuck::bytes_of(&meta).to_vec(),
+                codecs: RAW_ONLY,
+            },
+            SectionData {
+                kind: SectionKind::ORIGINALS,
+                raw: bytemuck::cast_slice(&self.originals).to_vec(),
+                codecs: TRY_INDICES,
+            },
+            SectionData {
+                kind: SectionKind::PROXIES,
+                raw: bytemuck::cast_slice(&proxies).to_vec(),
+                codecs: TRY_ZSTD,
+            },
+            SectionData {
+                kind: SectionKind::MEMBERS,
+                raw: bytemuck::cast_slice(&members).to_vec(),
+                codecs: TRY_ZSTD,
+            },
+            SectionData {
+                kind: SectionKind::MEMBER_TRIANGLES,
+                raw: triangles,
+                codecs: TRY_TRIANGLES,
+            },
+            SectionData {
+                kind: SectionKind::VIEW_MASKS,
+                raw: masks,
+                codecs: TRY_ZSTD,
+            },
+            SectionData {
+                kind: SectionKind::VIEWS,
+                raw: bytemuck::cast_slice(&views).to_vec(),
+                codecs: TRY_ZSTD,
+            },
+            SectionData {
+                kind: SectionKind::TEXTURES,
+                raw: textures,
+                codecs: TRY_ZSTD,
+            },
+        ];
+        // Only packs with layered impostors carry the section, so packs without
+        // them stay byte-identical to those of writers that never knew it.
+        if !impostors.is_empty() {
+            sections.push(SectionData {
+                kind: SectionKind::LAYERED_IMPOSTORS,
+                raw: impostors,
+                codecs: TRY_ZSTD,
+            });
+        }
+        assemble_reusing(file_kind, &sections, previous)
     }
 
     /// Decodes a validated cell pack. Instance ids and vertex indices can only be
@@ -463,6 +644,11 @@ impl CellPack {
         let triangles = pack_triangles(pack, SectionKind::MEMBER_TRIANGLES)?;
         let masks = pack.section(SectionKind::VIEW_MASKS)?;
         let textures = pack.section(SectionKind::TEXTURES)?;
+        let impostors = match pack.section_info(SectionKind::LAYERED_IMPOSTORS) {
+            Some(_) => pack.section(SectionKind::LAYERED_IMPOSTORS)?.into_owned(),
+            None => Vec::new(),
+        };
+        let mut next_impostor = 0usize;
 
         // 2. Walk proxies, consuming members, triangles, masks, views and texture bytes
         //    in order; every count is checked against what is left.
@@ -599,11 +785,26 @@ impl CellPack {
                     texture,
                 });
             }
-            out.push(Proxy {
+            let layers = if kind == ProxyKind::LayeredImpostor {
+                Some(read_layers(file, &impostors, &mut next_impostor, p)?)
+            } else {
+                None
+            };
+            let proxy = Proxy {
                 kind,
                 members: proxy_members,
                 views: proxy_views,
-            });
+                layers,
+            };
+            check_layers(&proxy).map_err(|e| {
+                malformed(
+                    file,
+                    SectionKind::LAYERED_IMPOSTORS,
+                    next_impostor as u64,
+                    format!("proxy {p}: {e}"),
+                )
+            })?;
+            out.push(proxy);
         }
         // 3. Nothing may be left over.
         for (kind, used, len) in [
@@ -612,6 +813,11 @@ impl CellPack {
             (SectionKind::MEMBER_TRIANGLES, next_tri, triangles.len()),
             (SectionKind::VIEW_MASKS, next_mask, masks.len()),
             (SectionKind::TEXTURES, next_tex, textures.len()),
+            (
+                SectionKind::LAYERED_IMPOSTORS,
+                next_impostor,
+                impostors.len(),
+            ),
         ] {
             if used != len {
                 return Err(malformed(
@@ -710,6 +916,82 @@ impl CellPack {
             .map(|m| m.triangles.len() as u64)
             .sum()
     }
+}
+
+/// The next impostor record and its layers from section `layered-impostors`
+/// (`bytes`, from offset `*next`), for proxy `p`.
+fn read_layers(
+    file: &Path,
+    bytes: &[u8],
+    next: &mut usize,
+    p: usize,
+) -> Result<ImpostorLayers, PackError> {
+    const KIND: SectionKind = SectionKind::LAYERED_IMPOSTORS;
+    let at = *next;
+    let record = take(bytes, next, std::mem::size_of::<ImpostorRecord>()).ok_or_else(|| {
+        malformed(
+            file,
+            KIND,
+            at as u64,
+            format!("proxy {p}: LayeredImpostor record past the section's end"),
+        )
+    })?;
+    let r: ImpostorRecord = bytemuck::pod_read_unaligned(record);
+    if r.reserved != 0 {
+        return Err(malformed(
+            file,
+            KIND,
+            at as u64 + 60,
+            format!("proxy {p}: reserved field is not 0"),
+        ));
+    }
+    if r.layer_count == 0 || r.layer_count as usize > MAX_IMPOSTOR_LAYERS {
+        return Err(malformed(
+            file,
+            KIND,
+            at as u64 + 56,
+            format!(
+                "proxy {p}: {} layers, expected 1..={MAX_IMPOSTOR_LAYERS}",
+                r.layer_count
+            ),
+        ));
+    }
+    let size = std::mem::size_of::<ImpostorLayerRecord>();
+    let mut layers = Vec::with_capacity(r.layer_count as usize);
+    for i in 0..r.layer_count as usize {
+        let at = *next;
+        let bytes = take(bytes, next, size).ok_or_else(|| {
+            malformed(
+                file,
+                KIND,
+                at as u64,
+                format!("proxy {p}: layer {i} past the section's end"),
+            )
+        })?;
+        let l: ImpostorLayerRecord = bytemuck::pod_read_unaligned(bytes);
+        if l.reserved != 0 || l.code_lo > 255 || l.code_hi > 255 {
+            return Err(malformed(
+                file,
+                KIND,
+                at as u64 + 4,
+                format!(
+                    "proxy {p}: layer {i}: codes {}..={} or reserved {} out of range",
+                    l.code_lo, l.code_hi, l.reserved
+                ),
+            ));
+        }
+        layers.push(ImpostorLayer {
+            depth: l.depth,
+            code_lo: l.code_lo as u8,
+            code_hi: l.code_hi as u8,
+        });
+    }
+    Ok(ImpostorLayers {
+        corner_rays: r.corner_rays,
+        near: r.near,
+        far: r.far,
+        layers,
+    })
 }
 
 /// The next `n` items of `items` from `*next`, advancing it; `None` if fewer remain.

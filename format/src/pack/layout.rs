@@ -184,7 +184,8 @@ impl SectionKind {
     pub const VIEW_MASKS: SectionKind = SectionKind(0x0206);
     pub const VIEWS: SectionKind = SectionKind(0x0207);
     pub const TEXTURES: SectionKind = SectionKind(0x0208);
-    /// Reserved for layered impostors (paper 001); no v1 writer emits it.
+    /// Layered impostors (paper 001, issue 16): the layers of every LayeredImpostor
+    /// proxy; present only in packs that have one (format/README.md).
     pub const LAYERED_IMPOSTORS: SectionKind = SectionKind(0x0209);
     /// Reserved for patch visibility bitfields (paper 002); no v1 writer emits it.
     pub const PATCH_BITFIELDS: SectionKind = SectionKind(0x020a);

@@ -22,11 +22,14 @@ pub mod texture;
 pub mod writer;
 
 pub use base::{BasePack, GridParams, PackedInstance, PackedModel};
-pub use cell::{CellPack, Proxy, ProxyKind, ProxyMember, ProxyView};
+pub use cell::{
+    code_of_depth, depth_of_code, CellPack, ImpostorLayer, ImpostorLayers, Proxy, ProxyKind,
+    ProxyMember, ProxyView, MAX_IMPOSTOR_LAYERS,
+};
 pub use error::PackError;
 pub use index::{Index, IndexEntry};
-pub use patches::{ModelPatch, ModelPatches, PatchSet};
 pub use layout::{Codec, FileKind, SectionKind, FORMAT_VERSION};
+pub use patches::{ModelPatch, ModelPatches, PatchSet};
 pub use reader::{scan, PackFile, PackScan, SectionInfo};
 pub use texture::{Texture, TextureEncoding};
 pub use writer::{

@@ -4,7 +4,9 @@
 //! packs; nothing here is used by a bake.
 
 use super::base::{BasePack, GridParams, PackedInstance, PackedModel};
-use super::cell::{CellPack, Proxy, ProxyKind, ProxyMember, ProxyView};
+use super::cell::{
+    CellPack, ImpostorLayer, ImpostorLayers, Proxy, ProxyKind, ProxyMember, ProxyView,
+};
 use super::index::{Index, IndexEntry};
 use super::texture::{Texture, TextureEncoding};
 use crate::mesh::Mesh;
@@ -283,6 +285,7 @@ pub fn small_cell() -> CellPack {
                     view_masks: vec![],
                 }],
                 views: vec![view([35.0, 1.7, 25.0], 16, 1, TextureEncoding::Rgba8Left)],
+                layers: None,
             },
             Proxy {
                 kind: ProxyKind::Cluster,
@@ -299,6 +302,7 @@ pub fn small_cell() -> CellPack {
                     },
                 ],
                 views: vec![view([35.0, 1.7, 25.0], 8, 2, TextureEncoding::Rgba8)],
+                layers: None,
             },
             Proxy {
                 kind: ProxyKind::MvMesh,
@@ -312,6 +316,7 @@ pub fn small_cell() -> CellPack {
                     view([45.0, 1.7, 25.0], 8, 4, TextureEncoding::Rgba8Left),
                     view([40.0, 1.7, 33.0], 8, 5, TextureEncoding::Rgba8Left),
                 ],
+                layers: None,
             },
         ],
     }
@@ -363,6 +368,66 @@ pub fn small_cell_v2() -> CellPack {
     }
     cell.proxies[1].views[0].texture =
         Texture::from_rgba8_block(6, 9, &opaque).expect("BC1 sample");
+    cell
+}
+
+/// The content of `tests/data/cell-impostor-v3.pack` (issue 16): [`small_cell_v2`]
+/// plus a LayeredImpostor of instance 2 with three overlapping layers; its RGBA8
+/// texture carries depth codes in alpha (0 outside a disc, 1..=255 inside).
+pub fn small_cell_impostor() -> CellPack {
+    let mut cell = small_cell_v2();
+    let (w, h) = (12u32, 10u32);
+    let mut rgba = capture_like_rgba(w, h, 13);
+    for y in 0..h {
+        for x in 0..w {
+            let o = ((y * w + x) * 4 + 3) as usize;
+            let (dx, dy) = (x as f32 - 5.5, y as f32 - 4.5);
+            let r2 = dx * dx + dy * dy;
+            rgba[o] = if r2 > 20.0 {
+                0
+            } else {
+                1 + (r2 / 20.0 * 254.0) as u8
+            };
+        }
+    }
+    let mut v = view([35.0, 1.7, 25.0], 4, 14, TextureEncoding::Rgba8);
+    v.texture = Texture::from_rgba8(w, h, &rgba, TextureEncoding::Rgba8).expect("sample");
+    cell.proxies.push(Proxy {
+        kind: ProxyKind::LayeredImpostor,
+        members: vec![ProxyMember {
+            instance: 2,
+            triangles: Vec::new(),
+            view_masks: Vec::new(),
+        }],
+        views: vec![v],
+        layers: Some(ImpostorLayers {
+            corner_rays: [
+                [-0.1, 0.1, -1.0],
+                [0.1, 0.1, -1.0],
+                [0.1, -0.1, -1.0],
+                [-0.1, -0.1, -1.0],
+            ],
+            near: 20.0,
+            far: 24.0,
+            layers: vec![
+                ImpostorLayer {
+                    depth: 20.6,
+                    code_lo: 1,
+                    code_hi: 86,
+                },
+                ImpostorLayer {
+                    depth: 21.9,
+                    code_lo: 85,
+                    code_hi: 171,
+                },
+                ImpostorLayer {
+                    depth: 23.3,
+                    code_lo: 170,
+                    code_hi: 255,
+                },
+            ],
+        }),
+    });
     cell
 }
 
@@ -482,6 +547,7 @@ pub fn synthetic_cell(
                 view_masks: masks,
             }],
             views,
+            layers: None,
         });
     }
     CellPack {

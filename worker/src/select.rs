@@ -1,0 +1,338 @@
+//! Objective selection of representations (paper 004, Jehaes et al., §3.2–3.3;
+//! DESIGN.md "Representations"; issue 16): instead of a distance rule, each outside
+//! object (or cluster) gets the cheapest candidate representation whose image
+//! quality, measured against the original, meets the manifest's floor
+//! (`bake.quality`) from every sample viewpoint of the region it serves.
+//!
+//! - **Candidates**: Culled when the object covers less than one pixel from the
+//!   whole region ([`subpixel_from_region`]); layered impostors ([`crate::impostor`],
+//!   paper 001) at half and full capture resolution (004 §3.2–3.3: the image-based
+//!   representation at the lowest resolution that meets the target); the mesh proxy
+//!   the paper's algorithm derives (SvMesh / Cluster / MvMesh, 000 §3.1), which is
+//!   kept when nothing cheaper passes (004 §3.3: "polygonal rendering is used for
+//!   that object").
+//! - **Cost** ([`cost`]): what a proxy adds to a frame and to a pack, in triangle
+//!   equivalents: `triangles + texels / TEXELS_PER_TRIANGLE + DRAW_CALL_COST` per
+//!   draw call. A triangle of a textured proxy costs a vertex fetch and transform
+//!   and 12 index bytes; [`TEXELS_PER_TRIANGLE`] = 64 texels (256 bytes of RGBA8,
+//!   32 of BC1) are counted as one triangle, so a texture cannot grow without
+//!   bound to save a few triangles; every proxy is one draw call
+//!   ([`DRAW_CALL_COST`] = 16), which only matters against culling. The walk's
+//!   figure of merit is triangles per frame, which the triangle term dominates.
+//! - **Sample viewpoints** ([`sample_viewpoints`], K = 20): the 12 corners of the
+//!   region's prism (both eye heights), the centres of its 6 side faces (mid
+//!   height) and the hexagon's centre at both eye heights. 004 §3.2 samples the
+//!   viewing sphere around an object; our viewer is confined to the region, so the
+//!   region's extreme points are where a candidate departs most from its capture.
+//! - **Metric**: from each viewpoint both the original and the candidate are drawn
+//!   alone by the CPU rasterizer through a tight frustum around the object at
+//!   [`SUPERSAMPLE`]² samples per pixel of the output resolution (`image_res` per
+//!   60°), box-filtered in linear light (anti-aliased, DESIGN.md "Measuring quality
+//!   honestly" — without it a quarter-pixel shift of a silhouette reads as sky
+//!   against object and swamps every other error), and compared over the object's
+//!   own pixels (where either image has a covered sample): PSNR on luminance
+//!   ([`format::metrics`]) and SSIM over the windows centred on those pixels. A
+//!   candidate passes when its PSNR of the squared errors pooled over all K views
+//!   and its mean SSIM reach the thresholds; the worst view's figures are
+//!   reported.
+//! - **Acceptance.** The paper's mesh proxy is measured first, in every view. Its
+//!   own figures on this metric are far below any absolute floor for small
+//!   objects (on the demo, worst-view object-pixel PSNR of 12–28 dB: the paper
+//!   allows T_s = 5 px of self-occlusion error, and a silhouette off by one
+//!   aliased pixel turns sky into object), so the thresholds for the cheaper
+//!   candidates are `min(floor, mesh's figure)`, per metric (pooled PSNR, mean
+//!   SSIM): a candidate is kept when it reaches the manifest's floor over the
+//!   region, or is measured no worse than the paper's own representation. The mesh itself is
+//!   always acceptable (004 §3.3: polygonal rendering when nothing image-based
+//!   meets the target); its measurement is what the bake's quality report shows.
+
+use crate::capture::items_aabb;
+use crate::grid::Prism;
+use crate::impostor::{composite_impostors, ImpostorDraw, LayeredImpostor};
+use crate::raster::{
+    render, render_with, Capture, CullMode, DrawItem, ProjectiveTextures, Shading, View,
+    BACKGROUND_ID,
+};
+use format::manifest::QualityFloor;
+use format::metrics::{capped_psnr_of_mse, luminance, masked_ssim_y};
+use glam::Vec3;
+
+/// Texels counted as one triangle in [`cost`] (module docs).
+pub const TEXELS_PER_TRIANGLE: u64 = 64;
+/// Triangle equivalents of one draw call in [`cost`] (module docs).
+pub const DRAW_CALL_COST: u64 = 16;
+
+/// Measurement frames are rendered this many times wider and higher than the
+/// output resolution and box-filtered in linear light before comparing
+/// (DESIGN.md "Measuring quality honestly": against anti-aliased references).
+pub const SUPERSAMPLE: u32 = 2;
+
+/// A candidate's cost in triangle equivalents (module docs).
+pub fn cost(triangles: u64, texels: u64, draw_calls: u64) -> u64 {
+    triangles + texels.div_ceil(TEXELS_PER_TRIANGLE) + DRAW_CALL_COST * draw_calls
+}
+
+/// The K = 20 sample viewpoints of `prism` (module docs), in a fixed order.
+pub fn sample_viewpoints(prism: &Prism) -> Vec<Vec3> {
+    let corners = prism.corners();
+    let mut eyes: Vec<Vec3> = corners.to_vec();
+    for face in prism.side_faces() {
+        eyes.push(0.25 * (face[0] + face[1] + face[2] + face[3]));
+    }
+    let c = prism.centre3();
+    eyes.push(Vec3::new(c.x, prism.min_y, c.z));
+    eyes.push(Vec3::new(c.x, prism.max_y, c.z));
+    eyes
+}
+
+/// Whether the box `[lo, hi]` subtends less than one pixel (of `image_res` per 60°)
+/// from every point of `prism`: its bounding sphere seen from the prism point
+/// nearest its centre, minus the radius (conservative: never smaller than the true
+/// nearest distance).
+pub fn subpixel_from_region(lo: Vec3, hi: Vec3, prism: &Prism, image_res: u32) -> bool {
+    let centre = 0.5 * (lo + hi);
+    let radius = 0.5 * (hi - lo).length();
+    let nearest = prism.closest_point(centre).distance(centre) - radius;
+    if nearest <= 0.0 {
+        return false;
+    }
+    let pixel = std::f32::consts::FRAC_PI_3 / image_res.max(1) as f32;
+    2.0 * (radius / nearest).atan() < pixel
+}
+
+/// Image quality of a candidate over the sample views it was measured in.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Measured {
+    /// Smallest PSNR(Y) over the object's pixels of a measured view (capped).
+    pub worst_psnr_db: f64,
+    /// Smallest object-pixel SSIM of a measured view.
+    pub worst_ssim: f64,
+    /// PSNR(Y) of the squared errors pooled over every measured view's object
+    /// pixels (capped): the region-wide quality the acceptance uses.
+    pub pooled_psnr_db: f64,
+    /// Mean object-pixel SSIM over the measured views.
+    pub mean_ssim: f64,
+    /// Views rendered (fewer than K when it failed early).
+    pub views: u32,
+    /// Met the thresholds ([`Thresholds`]).
+    pub passed: bool,
+    /// Histogram of |ΔY| over the object's pixels of every measured view, bins of
+    /// 8 levels (the last bin: ≥ 56).
+    pub error_histogram: [u64; 8],
+}
+
+/// How a candidate is drawn for measuring.
+pub enum Candidate<'a> {
+    /// A layered impostor.
+    Impostor(&'a LayeredImpostor),
+    /// Simplified meshes with projective textures (`items`' object ids index
+    /// `textures.by_object`).
+    Mesh {
+        items: &'a [DrawItem<'a>],
+        textures: &'a ProjectiveTextures,
+    },
+}
+
+/// The original's renders from the sample viewpoints, farthest from `capture_eye`
+/// first (ties by index: deterministic); viewpoints from which the object's box
+/// cannot be framed (inside it) are left out.
+pub fn references(
+    originals: &[DrawItem],
+    eyes: &[Vec3],
+    capture_eye: Vec3,
+    image_res: u32,
+) -> Vec<(Vec3, Capture)> {
+    let Some((lo, hi)) = items_aabb(originals) else {
+        return Vec::new();
+    };
+    let mut order: Vec<usize> = (0..eyes.len()).collect();
+    order.sort_by(|&a, &b| {
+        let (da, db) = (
+            eyes[a].distance_squared(capture_eye),
+            eyes[b].distance_squared(capture_eye),
+        );
+        db.total_cmp(&da).then(a.cmp(&b))
+    });
+    order
+        .into_iter()
+        .filter_map(|k| {
+            let view = View::tight_around(eyes[k], lo, hi, image_res * SUPERSAMPLE).ok()?;
+            (view.width as u64 * view.height as u64 <= 4096 * 4096)
+                .then(|| (eyes[k], render(&view, originals, CullMode::Back)))
+        })
+        .collect()
+}
+
+/// The thresholds a candidate must reach in every view (PSNR dB, SSIM).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Thresholds {
+    pub psnr_db: f64,
+    pub ssim: f64,
+}
+
+impl Thresholds {
+    /// The floor, lowered to what the paper's mesh proxy measured where that is
+    /// less (module docs, "Acceptance").
+    pub fn for_candidates(floor: &QualityFloor, mesh: &Measured) -> Thresholds {
+        Thresholds {
+            psnr_db: floor.min_psnr_db.min(mesh.pooled_psnr_db),
+            ssim: floor.min_ssim.min(mesh.mean_ssim),
+        }
+    }
+}
+
+/// Measures `candidate` against the original's `references` in every view; it
+/// passes when its pooled PSNR and mean SSIM reach `thresholds` (module docs).
+pub fn measure_against(
+    references: &[(Vec3, Capture)],
+    candidate: &Candidate,
+    thresholds: &Thresholds,
+) -> Measured {
+    let mut m = Measured {
+        worst_psnr_db: format::metrics::PSNR_CAP,
+        worst_ssim: 1.0,
+        pooled_psnr_db: format::metrics::PSNR_CAP,
+        mean_ssim: 1.0,
+        views: 0,
+        passed: true,
+        error_histogram: [0; 8],
+    };
+    let (mut sse, mut pixels, mut ssim_sum) = (0.0f64, 0usize, 0.0f64);
+    for (eye, reference) in references {
+        let frame = draw_candidate(&reference.view, candidate, *eye);
+        let c = compare(reference, &frame, &mut m.error_histogram);
+        m.views += 1;
+        m.worst_psnr_db = m.worst_psnr_db.min(c.psnr_db);
+        m.worst_ssim = m.worst_ssim.min(c.ssim);
+        sse += c.sq_error;
+        pixels += c.pixels;
+        ssim_sum += c.ssim;
+    }
+    if pixels > 0 {
+        m.pooled_psnr_db = capped_psnr_of_mse(sse / pixels as f64);
+    }
+    if m.views > 0 {
+        m.mean_ssim = ssim_sum / m.views as f64;
+    }
+    m.passed = m.pooled_psnr_db >= thresholds.psnr_db && m.mean_ssim >= thresholds.ssim;
+    m
+}
+
+/// [`references`] then [`measure_against`] with the floor as thresholds.
+pub fn measure(
+    originals: &[DrawItem],
+    candidate: &Candidate,
+    eyes: &[Vec3],
+    capture_eye: Vec3,
+    image_res: u32,
+    floor: &QualityFloor,
+) -> Measured {
+    let refs = references(originals, eyes, capture_eye, image_res);
+    let t = Thresholds {
+        psnr_db: floor.min_psnr_db,
+        ssim: floor.min_ssim,
+    };
+    measure_against(&refs, candidate, &t)
+}
+
+/// Draws the candidate alone from `view` (viewer at `eye`).
+pub fn draw_candidate(view: &View, candidate: &Candidate, eye: Vec3) -> Capture {
+    match candidate {
+        Candidate::Impostor(imp) => {
+            let mut frame = render(view, &[], CullMode::Back);
+            composite_impostors(
+                &mut frame,
+                &[ImpostorDraw {
+                    texture: &imp.texture,
+                    layers: &imp.layers,
+                    object_id: 0,
+                }],
+            );
+            frame
+        }
+        Candidate::Mesh { items, textures } => {
+            let t = ProjectiveTextures {
+                viewer: eye,
+                by_object: textures.by_object.clone(),
+            };
+            render_with(view, items, CullMode::Back, Shading::Projective(&t))
+        }
+    }
+}
+
+/// One view's comparison over the object pixels.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Compared {
+    pub psnr_db: f64,
+    pub ssim: f64,
+    /// Σ ΔY² and the object pixels it is over.
+    pub sq_error: f64,
+    pub pixels: usize,
+}
+
+/// PSNR(Y) and SSIM over the object pixels of a reference / candidate pair (where
+/// either is not background); identical or empty → the caps. Adds |ΔY| of those
+/// pixels to `histogram`.
+pub fn compare(reference: &Capture, frame: &Capture, histogram: &mut [u64; 8]) -> Compared {
+    let (w, h, ref_px, ref_cov) = box_filter(reference, SUPERSAMPLE);
+    let (_, _, frame_px, frame_cov) = box_filter(frame, SUPERSAMPLE);
+    let mask: Vec<bool> = ref_cov
+        .iter()
+        .zip(&frame_cov)
+        .map(|(&a, &b)| a || b)
+        .collect();
+    let (mut sum, mut n) = (0.0f64, 0usize);
+    for ((a, b), &m) in ref_px.iter().zip(&frame_px).zip(&mask) {
+        if m {
+            let d = luminance(*a) - luminance(*b);
+            sum += d * d;
+            n += 1;
+            histogram[((d.abs() / 8.0) as usize).min(7)] += 1;
+        }
+    }
+    if n == 0 {
+        return Compared {
+            psnr_db: format::metrics::PSNR_CAP,
+            ssim: 1.0,
+            sq_error: 0.0,
+            pixels: 0,
+        };
+    }
+    let psnr = capped_psnr_of_mse(sum / n as f64);
+    let flat = |c: &[[u8; 4]]| -> Vec<u8> { c.iter().flatten().copied().collect() };
+    let ssim = masked_ssim_y(&flat(&ref_px), &flat(&frame_px), w, h, &mask).unwrap_or(1.0);
+    Compared {
+        psnr_db: psnr,
+        ssim,
+        sq_error: sum,
+        pixels: n,
+    }
+}
+
+/// The capture box-filtered `f × f` in linear light (partial blocks at the right and
+/// bottom edges average what they have): width, height, sRGB8 pixels, and per pixel
+/// whether any of its samples was covered.
+pub fn box_filter(c: &Capture, f: u32) -> (usize, usize, Vec<[u8; 4]>, Vec<bool>) {
+    let (w, h) = (c.view.width as usize, c.view.height as usize);
+    let f = f.max(1) as usize;
+    let (ow, oh) = (w.div_ceil(f), h.div_ceil(f));
+    let mut px = Vec::with_capacity(ow * oh);
+    let mut cov = Vec::with_capacity(ow * oh);
+    for oy in 0..oh {
+        for ox in 0..ow {
+            let mut sum = Vec3::ZERO;
+            let (mut n, mut covered) = (0.0f32, false);
+            for y in oy * f..((oy + 1) * f).min(h) {
+                for x in ox * f..((ox + 1) * f).min(w) {
+                    let q = y * w + x;
+                    sum += format::srgb::srgb8_to_linear(c.color[q]);
+                    n += 1.0;
+                    covered |= c.object_id[q] != BACKGROUND_ID;
+                }
+            }
+            px.push(format::srgb::linear_to_srgb8(sum / n));
+            cov.push(covered);
+        }
+    }
+    (ow, oh, px, cov)
+}
