@@ -165,6 +165,7 @@ fn cell_list<'a>(
         proxies,
         lit_proxies,
         patched: Vec::new(),
+        cull_eye: Some(camera.eye),
     };
     // Issue 17: the originals' visible patches only (bitfields and normal cones).
     if let Some(runtime) = &bake.patches {

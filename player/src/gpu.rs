@@ -204,6 +204,8 @@ pub struct GpuProxy {
     lit_bind_group: wgpu::BindGroup,
     pub texture_bytes: u64,
     pub vertex_bytes: u64,
+    /// Its triangles' normal clusters (issue 17, [`crate::patches::ProxyCluster`]).
+    pub clusters: Vec<crate::patches::ProxyCluster>,
 }
 
 impl GpuProxy {
@@ -213,6 +215,20 @@ impl GpuProxy {
 
     pub fn triangle_count(&self) -> u64 {
         self.vertex_count as u64 / 3
+    }
+
+    /// The vertex ranges to draw from `eye`: clusters wholly back-facing to it are
+    /// left out (issue 17); everything when `eye` is `None`.
+    pub fn ranges(&self, eye: Option<Vec3>) -> Vec<(u32, u32)> {
+        crate::patches::proxy_ranges(&self.clusters, self.vertex_count, eye)
+    }
+
+    /// Triangles [`GpuProxy::ranges`] draws.
+    pub fn triangles_from(&self, eye: Option<Vec3>) -> u64 {
+        self.ranges(eye)
+            .iter()
+            .map(|(a, b)| (b - a) as u64 / 3)
+            .sum()
     }
 
     pub fn missing_textures(&self) -> usize {
@@ -233,6 +249,9 @@ pub struct DrawList<'a> {
     pub lit_proxies: Vec<&'a GpuProxy>,
     /// Originals drawn patch by patch (issue 17, [`crate::patches`]).
     pub patched: Vec<PatchedDraw>,
+    /// The eye the proxies' normal clusters are tested against (issue 17); `None`
+    /// draws every proxy triangle.
+    pub cull_eye: Option<Vec3>,
 }
 
 /// One original drawn as the index ranges of its visible patches.
@@ -274,7 +293,7 @@ impl DrawList<'_> {
                 .proxies
                 .iter()
                 .chain(&self.lit_proxies)
-                .map(|p| p.triangle_count())
+                .map(|p| p.triangles_from(self.cull_eye))
                 .sum::<u64>()
     }
 }
@@ -883,6 +902,9 @@ impl Renderer {
             u.view_eye[i] = [eye[0], eye[1], eye[2], 1.0];
         }
         u.counts[0] = views.len().min(MAX_VIEWS) as u32;
+        // Issue 17: triangles grouped by normal cluster for the per-frame test.
+        let (vertices, clusters) = crate::patches::cluster_proxy_vertices(vertices);
+        let vertices = vertices.as_slice();
         let contents: &[u8] = if vertices.is_empty() {
             bytemuck::bytes_of(&ZERO_VERTEX)
         } else {
@@ -912,6 +934,7 @@ impl Renderer {
             lit_bind_group,
             texture_bytes: 0,
             vertex_bytes: std::mem::size_of_val(vertices) as u64,
+            clusters,
         };
         self.try_bind(&mut p);
         p
@@ -1225,13 +1248,17 @@ impl Renderer {
                 if let (Some(bg), true) = (&p.bind_group, p.vertex_count > 0) {
                     pass.set_bind_group(1, Some(bg), &[]);
                     pass.set_vertex_buffer(0, p.vertices.slice(..));
-                    pass.draw(0..p.vertex_count, 0..1);
+                    for (a, b) in p.ranges(list.cull_eye) {
+                        pass.draw(a..b, 0..1);
+                    }
                 }
             }
             for p in list.lit_proxies.iter().filter(|p| p.vertex_count > 0) {
                 pass.set_bind_group(1, Some(&p.lit_bind_group), &[]);
                 pass.set_vertex_buffer(0, p.vertices.slice(..));
-                pass.draw(0..p.vertex_count, 0..1);
+                for (a, b) in p.ranges(list.cull_eye) {
+                    pass.draw(a..b, 0..1);
+                }
             }
         }
         let t0 = Instant::now();

@@ -191,3 +191,225 @@ pub fn apply(
     }
     list.originals = by_model.into_iter().collect();
 }
+
+/// A run of a proxy's (de-indexed, world-space) triangles in one normal cluster, with
+/// the bounds of [`format::patch_visibility::patch_backfacing`] (issue 17 item 4
+/// applied to proxies too: 003 §4.1's normal clusters, formed at load time).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ProxyCluster {
+    pub bounds: PatchBounds,
+    /// First vertex and vertex count in the proxy's vertex buffer.
+    pub first: u32,
+    pub count: u32,
+}
+
+/// Whether the per-cluster back-face test of proxies is on (`HEXBAKE_PATCH_BACKFACE`,
+/// read once).
+pub fn proxy_backface_on() -> bool {
+    static ON: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+    *ON.get_or_init(|| tests_from_env().backface)
+}
+
+/// The cluster (Zhang & Hoff's cube-face partition, 24 clusters) of a geometric
+/// normal; the same partition as the bake's patches (worker `patches.rs`).
+fn cluster_of(n: Vec3) -> u8 {
+    let a = n.abs();
+    let (axis, u, v) = if a.x >= a.y && a.x >= a.z {
+        (0u8, n.y, n.z)
+    } else if a.y >= a.z {
+        (1, n.z, n.x)
+    } else {
+        (2, n.x, n.y)
+    };
+    let major = u8::from(n.to_array()[axis as usize] < 0.0);
+    ((axis * 2 + major) << 2) | (u8::from(u < 0.0) << 1) | u8::from(v < 0.0)
+}
+
+/// Reorders a proxy's triangles by normal cluster (stable within a cluster) and
+/// returns the clusters with their normal cones. Every mode draws the reordered
+/// buffer, so switching the test off changes nothing but the culling.
+pub fn cluster_proxy_vertices(
+    vertices: &[crate::gpu::ProxyVertex],
+) -> (Vec<crate::gpu::ProxyVertex>, Vec<ProxyCluster>) {
+    let tris = vertices.len() / 3;
+    let normal = |t: usize| {
+        let [a, b, c] = [0, 1, 2].map(|k| Vec3::from(vertices[3 * t + k].pos).as_dvec3());
+        (b - a).cross(c - a)
+    };
+    let mut order: Vec<(u8, usize)> = (0..tris)
+        .map(|t| (cluster_of(normal(t).as_vec3()), t))
+        .collect();
+    order.sort_unstable();
+    let mut out = Vec::with_capacity(vertices.len());
+    let mut clusters = Vec::new();
+    let mut k = 0;
+    while k < order.len() {
+        let mut j = k;
+        while j < order.len() && order[j].0 == order[k].0 {
+            j += 1;
+        }
+        let first = out.len() as u32;
+        for &(_, t) in &order[k..j] {
+            out.extend_from_slice(&vertices[3 * t..3 * t + 3]);
+        }
+        clusters.push(ProxyCluster {
+            bounds: cone_of(&out[first as usize..]),
+            first,
+            count: out.len() as u32 - first,
+        });
+        k = j;
+    }
+    out.extend_from_slice(&vertices[3 * tris..]);
+    (out, clusters)
+}
+
+/// Normal cone, box centre and plane offset of a run of triangles (f64 inside,
+/// rounded outward), as the bake computes them for patches.
+fn cone_of(v: &[crate::gpu::ProxyVertex]) -> PatchBounds {
+    use glam::DVec3;
+    let p = |i: usize| Vec3::from(v[i].pos).as_dvec3();
+    let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+    let mut normals = Vec::with_capacity(v.len() / 3);
+    let mut sum = DVec3::ZERO;
+    for t in 0..v.len() / 3 {
+        let [a, b, c] = [p(3 * t), p(3 * t + 1), p(3 * t + 2)];
+        lo = lo.min(a).min(b).min(c);
+        hi = hi.max(a).max(b).max(c);
+        let cross = (b - a).cross(c - a);
+        let len = cross.length();
+        if len > 1e-12 && len.is_finite() {
+            normals.push((cross / len, a));
+            sum += cross;
+        }
+    }
+    let centre = if lo.x.is_finite() {
+        (lo + hi) * 0.5
+    } else {
+        DVec3::ZERO
+    };
+    let everything = PatchBounds {
+        cone_axis: [0.0, 0.0, 1.0],
+        cone_cos: -1.0,
+        centre: centre.as_vec3().to_array(),
+        offset: 0.0,
+    };
+    if normals.is_empty() || sum.length() < 1e-9 {
+        return everything;
+    }
+    let axis = sum.normalize();
+    let cos = normals
+        .iter()
+        .map(|(n, _)| n.dot(axis))
+        .fold(1.0f64, f64::min)
+        - 1e-6;
+    if cos <= -1.0 {
+        return everything;
+    }
+    let offset = normals
+        .iter()
+        .map(|(n, q)| n.dot(centre - *q))
+        .fold(f64::NEG_INFINITY, f64::max);
+    PatchBounds {
+        cone_axis: axis.as_vec3().normalize().to_array(),
+        cone_cos: cos as f32,
+        centre: centre.as_vec3().to_array(),
+        offset: (offset + 1e-6 * (hi - lo).length()) as f32,
+    }
+}
+
+/// The vertex ranges of a proxy to draw from `eye` (world): its clusters that are
+/// not wholly back-facing, adjacent ones merged; everything without clusters.
+pub fn proxy_ranges(
+    clusters: &[ProxyCluster],
+    vertex_count: u32,
+    eye: Option<Vec3>,
+) -> Vec<(u32, u32)> {
+    let (Some(eye), true) = (eye, proxy_backface_on() && !clusters.is_empty()) else {
+        return vec![(0, vertex_count)];
+    };
+    let mut ranges: Vec<(u32, u32)> = Vec::new();
+    for c in clusters {
+        let eps = 1e-5 * (1.0 + Vec3::from(c.bounds.centre).length());
+        if format::patch_visibility::patch_backfacing(&c.bounds, eye, eps) {
+            continue;
+        }
+        let (a, b) = (c.first, c.first + c.count);
+        match ranges.last_mut() {
+            Some(last) if last.1 == a => last.1 = b,
+            _ => ranges.push((a, b)),
+        }
+    }
+    ranges
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gpu::ProxyVertex;
+    use bytemuck::Zeroable;
+
+    /// A closed box of 12 triangles as proxy vertices.
+    fn box_vertices() -> Vec<ProxyVertex> {
+        let mesh = format::Mesh::cuboid([0.0, 0.0, 0.0], [2.0, 3.0, 4.0], [200; 4]);
+        let mut out = Vec::new();
+        for t in &mesh.triangles {
+            for &v in t {
+                out.push(ProxyVertex {
+                    pos: mesh.positions[v as usize],
+                    ..ProxyVertex::zeroed()
+                });
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn clustering_keeps_every_triangle_and_culls_only_back_faces() {
+        let v = box_vertices();
+        let (ordered, clusters) = cluster_proxy_vertices(&v);
+        assert_eq!(ordered.len(), v.len());
+        let key = |t: &[ProxyVertex]| {
+            t.iter()
+                .map(|x| x.pos.map(f32::to_bits))
+                .collect::<Vec<_>>()
+        };
+        let mut a: Vec<_> = v.chunks(3).map(key).collect();
+        let mut b: Vec<_> = ordered.chunks(3).map(key).collect();
+        a.sort();
+        b.sort();
+        assert_eq!(a, b);
+        assert_eq!(
+            clusters.iter().map(|c| c.count).sum::<u32>() as usize,
+            v.len()
+        );
+        let mut seed = 5u64;
+        let mut rnd = || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((seed >> 33) as f32 / (1u64 << 31) as f32) * 20.0 - 10.0
+        };
+        for _ in 0..500 {
+            let eye = Vec3::new(rnd(), rnd(), rnd());
+            let ranges = proxy_ranges(&clusters, ordered.len() as u32, Some(eye));
+            let kept = |t: usize| {
+                ranges
+                    .iter()
+                    .any(|&(a, b)| (a as usize..b as usize).contains(&(3 * t)))
+            };
+            for t in 0..ordered.len() / 3 {
+                let [p, q, r] = [0, 1, 2].map(|k| Vec3::from(ordered[3 * t + k].pos));
+                let n = (q - p).cross(r - p);
+                if n.dot(eye - p) > 1e-4 * n.length() {
+                    assert!(kept(t), "front-facing triangle {t} culled from {eye:?}");
+                }
+            }
+            // A box seen from outside: at least one face is culled.
+            let inside = eye.cmpge(Vec3::ZERO).all() && eye.cmple(Vec3::new(2.0, 3.0, 4.0)).all();
+            if !inside {
+                let drawn: u32 = ranges.iter().map(|(a, b)| b - a).sum();
+                assert!(drawn < ordered.len() as u32, "{eye:?}");
+            }
+        }
+    }
+}
