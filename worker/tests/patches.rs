@@ -189,3 +189,49 @@ fn error_and_savings_from_random_views() {
         );
     }
 }
+
+/// The same measurement on real meshes from `models/` (skipped when
+/// `scripts/fetch-models.sh` has not fetched them): 100 views each.
+#[test]
+fn error_and_savings_on_real_meshes() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../models");
+    for name in ["bunny.obj", "armadillo.off"] {
+        let Ok(mesh) = format::load::load_model(&dir.join(name)) else {
+            eprintln!("{name}: not fetched, skipped");
+            continue;
+        };
+        let set = bake_patch_set(&[&mesh], &small_preset());
+        let model = &set.models[0];
+        for tests in [
+            PatchTests {
+                bitfields: true,
+                backface: true,
+            },
+            PatchTests {
+                bitfields: false,
+                backface: true,
+            },
+        ] {
+            let e = measure_error(&mesh, model, &set, tests, 100, 128, (1.5, 8.0), 11);
+            eprintln!(
+                "{name}: {tests:?}: {} patches, {:.1} % of triangles drawn, {} of {} pixels \
+                 differ ({} of {} views)",
+                model.patches.len(),
+                100.0 * e.triangles_drawn as f64 / e.triangles_full as f64,
+                e.differing_pixels,
+                e.covered_pixels,
+                e.views_with_error,
+                e.views
+            );
+            assert!(e.triangles_drawn < e.triangles_full);
+            if !tests.bitfields {
+                assert_eq!(e.differing_pixels, 0, "{name}");
+            }
+            // 002 §4: near-identical views; here at most 0.5 % of the model's pixels.
+            assert!(
+                e.differing_pixels * 200 <= e.covered_pixels,
+                "{name}: {e:?}"
+            );
+        }
+    }
+}
