@@ -765,8 +765,10 @@ fn derive_region(
                 Job::Mv(i) => {
                     let mv =
                         derive_mvmesh(scene, chains, *i, eyes, &prism, &settings).map_err(wrap)?;
-                    let (triangles, view_masks) =
-                        cache_order(mv.member.simplified.triangles, mv.pack_masks);
+                    let (triangles, view_masks) = cache_order(
+                        mv.member.simplified.triangles,
+                        mv.member.simplified.view_masks,
+                    );
                     Ok((
                         BakedProxy {
                             kind: ProxyKind::MvMesh,
