@@ -51,7 +51,9 @@ fn smaller_than_delta_on_a_grid_mesh() {
     let mut id: Vec<u32> = (0..side * side).collect();
     let mut s = 12345u64;
     for i in (1..id.len()).rev() {
-        s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        s = s
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
         id.swap(i, (s >> 33) as usize % (i + 1));
     }
     let mut tris = Vec::new();
@@ -66,7 +68,12 @@ fn smaller_than_delta_on_a_grid_mesh() {
     let (_, mtf) = encode_best(&raw, &[Codec::ZstdIndexMtf]);
     let (_, delta) = encode_best(&raw, &[Codec::ZstdDeltaU32]);
     let per_tri = mtf.len() as f64 / (tris.len() / 3) as f64;
-    assert!(mtf.len() < delta.len(), "mtf {} vs delta {}", mtf.len(), delta.len());
+    assert!(
+        mtf.len() < delta.len(),
+        "mtf {} vs delta {}",
+        mtf.len(),
+        delta.len()
+    );
     assert!(per_tri < 3.0, "{per_tri} bytes per triangle");
 }
 

@@ -304,7 +304,10 @@ fn trimmed_blocks_never_change_an_accepted_sample() {
     let full = Texture::from_rgba8_block(w, h, &rgba).unwrap();
     let trimmed = Texture::from_rgba8_block_trimmed(w, h, &rgba).unwrap();
     assert_eq!(trimmed.encoding, TextureEncoding::Bc3);
-    let zero_blocks = trimmed.data.chunks_exact(16).filter(|b| b.iter().all(|&x| x == 0));
+    let zero_blocks = trimmed
+        .data
+        .chunks_exact(16)
+        .filter(|b| b.iter().all(|&x| x == 0));
     let n_zero = zero_blocks.count();
     assert!(n_zero > 0, "the blob's corners are far from coverage");
     let (a, b) = (full.to_rgba8().unwrap(), trimmed.to_rgba8().unwrap());

@@ -263,7 +263,10 @@ pub fn fitted_scale(eye: Vec3, lo: Vec3, hi: Vec3, region_lo: Vec3, region_hi: V
             c.distance(eye)
         })
         .fold(0.0f32, f32::max);
-    let gap = (region_lo - hi).max(lo - region_hi).max(Vec3::ZERO).length();
+    let gap = (region_lo - hi)
+        .max(lo - region_hi)
+        .max(Vec3::ZERO)
+        .length();
     if gap <= 0.0 || !far.is_finite() {
         return 1.0;
     }
@@ -326,7 +329,10 @@ pub fn fit_texture(texture: ProjectedTexture, scale: f32) -> ProjectedTexture {
             let (sum, alpha) = if cov[3] >= 0.5 * total {
                 (cov, 255)
             } else {
-                ([cov[0] + all[0], cov[1] + all[1], cov[2] + all[2], total], 0)
+                (
+                    [cov[0] + all[0], cov[1] + all[1], cov[2] + all[2], total],
+                    0,
+                )
             };
             let o = (ty * nw as usize + tx) * 4;
             for k in 0..3 {
