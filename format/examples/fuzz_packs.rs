@@ -88,7 +88,9 @@ fn main() {
     let seed: u64 = args.next().and_then(|s| s.parse().ok()).unwrap_or(1);
     let seeds = vec![
         sample::small_base().encode().expect("sample base"),
-        sample::small_base_textured().encode().expect("sample textured base"),
+        sample::small_base_textured()
+            .encode()
+            .expect("sample textured base"),
         sample::small_cell().encode().expect("sample cell"),
         sample::small_index().encode().expect("sample index"),
         sample::small_cell_v2().encode().expect("sample cell v2"),
