@@ -1,5 +1,7 @@
-//! `report.png`: the hex grid drawn three times as heat maps — polygons per cell
-//! (inside + proxies), pack bytes, bake time — each with a colour bar whose ends are
+//! `report.png`: the hex grid drawn four times as heat maps — polygons per cell
+//! (inside + proxies), pack bytes, bake time, and (issue 16) the quality check's
+//! worst sample view PSNR(Y) per cell ("worst db", drawn negated so that the
+//! worst cells are the hot end; its labels read −dB) — each with a colour bar whose ends are
 //! labelled with the minimum and maximum (a tiny built-in digit font: tiny-skia draws
 //! no text).
 
@@ -34,16 +36,22 @@ pub fn render(grid_params: &GridParams, lines: &[CellLine]) -> anyhow::Result<Ve
     let [gw, gd] = [cmax.x - cmin.x, cmax.y - cmin.y];
     let scale = PANEL / gw.max(gd).max(1e-6);
     let panel_h = gd * scale;
-    let width = (3.0 * PANEL + 4.0 * MARGIN) as u32;
+    let width = (4.0 * PANEL + 5.0 * MARGIN) as u32;
     let height = (panel_h + 2.0 * MARGIN + BAR_H + LABEL_H + 8.0) as u32;
     let mut pm = Pixmap::new(width, height).ok_or_else(|| anyhow::anyhow!("bad image size"))?;
     pm.fill(Color::WHITE);
-    let metrics: [Metric; 3] = [
+    let metrics: [Metric; 4] = [
         ("polygons", |l| {
-            l.polygons_inside + l.sv_polygons + l.mv_polygons + l.cluster_polygons
+            l.polygons_inside
+                + l.sv_polygons
+                + l.mv_polygons
+                + l.cluster_polygons
+                + l.impostor_polygons
         }),
         ("bytes", |l| l.pack_bytes as f64),
         ("ms", |l| l.bake_ms),
+        // Negated so that the worst (lowest) PSNR is the hot end; labels show -dB.
+        ("worst db", |l| -l.worst_view_psnr_db),
     ];
     for (k, (_name, metric)) in metrics.iter().enumerate() {
         let x0 = MARGIN + k as f32 * (PANEL + MARGIN);

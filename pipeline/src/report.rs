@@ -38,6 +38,19 @@ pub struct CellLine {
     pub bake_ms: f64,
     /// Per-stage bake time in ms.
     pub stage_ms: BTreeMap<String, f64>,
+    /// Issue 16: layered impostors (objects, quad triangles) and the outside
+    /// objects the objective selection culled (below a pixel from the region).
+    pub impostor_objects: f64,
+    pub impostor_polygons: f64,
+    pub selection_culled: f64,
+    /// Issue 16, the bake's quality check: proxies measured by the objective
+    /// selection (cell and its far-field group), the worst sample view's
+    /// object-pixel PSNR(Y) and SSIM among them (100 dB / 1 when none), and the
+    /// |ΔY| histogram over their object pixels (bins of 8 levels, last ≥ 56).
+    pub measured_proxies: f64,
+    pub worst_view_psnr_db: f64,
+    pub worst_view_ssim: f64,
+    pub error_histogram: [u64; 8],
 }
 
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -140,7 +153,15 @@ pub struct Report {
     /// to average).
     pub per_cell: Option<PaperTable>,
     pub cell_lines: Vec<CellLine>,
+    /// Issue 16: the cells whose worst sample view has the lowest object-pixel
+    /// PSNR(Y), worst first (at most [`WORST_CELLS`]), and the share of the outside
+    /// objects of the baked cells per representation.
+    pub worst_cells: Vec<(u32, f64)>,
+    pub representation_share: BTreeMap<String, f64>,
 }
+
+/// Cells listed in [`Report::worst_cells`].
+pub const WORST_CELLS: usize = 10;
 
 impl Report {
     /// The per-cell averages, or NaN for every statistic when no cell is baked (what
@@ -320,8 +341,12 @@ pub fn build_report(out: &Path) -> anyhow::Result<Report> {
                 outside_original_polygons: both("outside_original_polygons"),
                 texture_bytes: both("texture_bytes"),
                 pack_bytes: c.bytes,
+                impostor_objects: both("impostor_objects"),
+                impostor_polygons: both("impostor_polygons"),
+                selection_culled: num(r, "selection_culled"),
                 ..CellLine::default()
             };
+            quality_of(&mut line, r, group);
             far.far_objects_per_cell += num(r, "far_objects");
             far.cell_proxies += key_count(r);
             for (k, ms) in stage_ms(r) {
@@ -354,7 +379,58 @@ pub fn build_report(out: &Path) -> anyhow::Result<Report> {
         0.0
     };
     report.per_cell = paper_table(&report.cell_lines);
+    let mut worst: Vec<(u32, f64)> = report
+        .cell_lines
+        .iter()
+        .filter(|l| l.measured_proxies > 0.0)
+        .map(|l| (l.cell, l.worst_view_psnr_db))
+        .collect();
+    worst.sort_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)));
+    worst.truncate(WORST_CELLS);
+    report.worst_cells = worst;
+    let mut share = BTreeMap::new();
+    let lines = &report.cell_lines;
+    let total: f64 = lines
+        .iter()
+        .map(|l| {
+            l.sv_objects + l.mv_objects + l.cluster_objects + l.impostor_objects + l.culled_objects
+        })
+        .sum();
+    if total > 0.0 {
+        for (k, f) in [
+            ("sv", (|l: &CellLine| l.sv_objects) as fn(&CellLine) -> f64),
+            ("mv", |l| l.mv_objects),
+            ("cluster", |l| l.cluster_objects),
+            ("layered_impostor", |l| l.impostor_objects),
+            ("culled", |l| l.culled_objects),
+        ] {
+            share.insert(k.to_string(), lines.iter().map(f).sum::<f64>() / total);
+        }
+    }
+    report.representation_share = share;
     Ok(report)
+}
+
+/// The quality figures of a cell's record `r` and its far-field group's `group`
+/// (issue 16): measured proxies add up, the worst view is the worse of the two.
+fn quality_of(line: &mut CellLine, r: &serde_json::Value, group: Option<&serde_json::Value>) {
+    line.worst_view_psnr_db = format::metrics::PSNR_CAP;
+    line.worst_view_ssim = 1.0;
+    for q in std::iter::once(r)
+        .chain(group)
+        .filter_map(|v| v.get("quality"))
+    {
+        line.measured_proxies += num(q, "measured_proxies");
+        if num(q, "measured_proxies") > 0.0 {
+            line.worst_view_psnr_db = line.worst_view_psnr_db.min(num(q, "worst_psnr_db"));
+            line.worst_view_ssim = line.worst_view_ssim.min(num(q, "worst_ssim"));
+        }
+        if let Some(h) = q.get("error_histogram").and_then(|h| h.as_array()) {
+            for (a, b) in line.error_histogram.iter_mut().zip(h) {
+                *a += b.as_u64().unwrap_or(0);
+            }
+        }
+    }
 }
 
 /// The per-cell averages of `lines`; `None` for no lines.
@@ -473,8 +549,62 @@ pub fn to_markdown(r: &Report) -> String {
             f.bytes_shared
         );
     }
+    quality_section(&mut m, r);
     time_section(&mut m, r);
     m
+}
+
+/// Issue 16: representation shares, the quality check's worst cells and the pooled
+/// error histogram.
+fn quality_section(m: &mut String, r: &Report) {
+    use std::fmt::Write;
+    if !r.representation_share.is_empty() {
+        let _ = writeln!(
+            m,
+            "\n## Representations of the outside objects (share over the baked cells)\n\n| kind | share |\n|---|---|"
+        );
+        for (k, v) in &r.representation_share {
+            let _ = writeln!(m, "| {k} | {:.1} % |", 100.0 * v);
+        }
+    }
+    let measured: f64 = r.cell_lines.iter().map(|l| l.measured_proxies).sum();
+    if measured == 0.0 {
+        return;
+    }
+    let _ = writeln!(
+        m,
+        "\n## Quality check (objective selection, issue 16)\n\n{measured:.0} proxies \
+         measured from their region's sample viewpoints against the original, on the \
+         objects' own pixels (worker `select.rs`). Worst cells by their worst sample \
+         view's PSNR(Y):\n\n| cell | worst view PSNR(Y) dB | worst view SSIM |\n|---|---|---|"
+    );
+    for (cell, psnr) in &r.worst_cells {
+        let ssim = r
+            .cell_lines
+            .iter()
+            .find(|l| l.cell == *cell)
+            .map_or(f64::NAN, |l| l.worst_view_ssim);
+        let _ = writeln!(m, "| {cell} | {psnr:.2} | {ssim:.3} |");
+    }
+    let mut hist = [0u64; 8];
+    for l in &r.cell_lines {
+        for (a, b) in hist.iter_mut().zip(l.error_histogram) {
+            *a += b;
+        }
+    }
+    let total = hist.iter().sum::<u64>().max(1) as f64;
+    let _ = writeln!(
+        m,
+        "\nError histogram over the measured object pixels (|ΔY|, 8-bit levels):\n\n| |ΔY| | share |\n|---|---|"
+    );
+    for (i, h) in hist.iter().enumerate() {
+        let range = if i == 7 {
+            ">= 56".to_string()
+        } else {
+            format!("{}–{}", 8 * i, 8 * i + 7)
+        };
+        let _ = writeln!(m, "| {range} | {:.2} % |", 100.0 * *h as f64 / total);
+    }
 }
 
 /// The rows of the paper's Tables 3–8 for averages `t`.

@@ -856,9 +856,8 @@ fn select_region(
             if subpixel_from_region(lo, hi, &prism, params.image_res) {
                 return Ok(None);
             }
-            // The paper's mesh proxy, measured in every view: the report's figure
-            // and the thresholds of the cheaper candidates (select.rs, "Acceptance").
-            let refs = select::references(&originals, &eyes, centre, params.image_res);
+            // The paper's mesh proxy as the measuring code draws it: its figures set
+            // the thresholds of the cheaper candidates (select.rs, "Acceptance").
             let meshes: Vec<format::Mesh> = proxy
                 .members
                 .iter()
@@ -898,19 +897,6 @@ fn select_region(
                     })
                     .collect(),
             };
-            let floor_only = select::Thresholds {
-                psnr_db: floor.min_psnr_db,
-                ssim: floor.min_ssim,
-            };
-            let mesh_quality = select::measure_against(
-                &refs,
-                &Candidate::Mesh {
-                    items: &items,
-                    textures: &textures,
-                },
-                &floor_only,
-            );
-            let thresholds = select::Thresholds::for_candidates(floor, &mesh_quality);
             // Candidates cheaper than the mesh proxy, cheapest first.
             let texels: u64 = proxy.views.iter().map(|v| v.rgba.len() as u64 / 4).sum();
             let mesh_cost = select::cost(proxy.triangle_count(), texels, 1);
@@ -936,31 +922,46 @@ fn select_region(
                 }
             }
             candidates.sort_by_key(|c| c.0);
-            for (_, imp) in candidates {
-                let m = select::measure_against(&refs, &Candidate::Impostor(&imp), &thresholds);
-                if m.passed {
-                    return Ok(Some(BakedProxy {
-                        kind: ProxyKind::LayeredImpostor,
-                        members: members
-                            .iter()
-                            .map(|&instance| BakedMember {
-                                instance,
-                                input_triangles: Vec::new(),
-                                triangles: Vec::new(),
-                                view_masks: Vec::new(),
-                                vertex_view_sets: Vec::new(),
-                            })
-                            .collect(),
-                        views: vec![imp.texture.clone()],
-                        key: proxy.key,
-                        packed: None,
-                        impostor: Some(imp),
-                        quality: Some(m),
-                    }));
-                }
+            let drawn: Vec<Candidate> = candidates
+                .iter()
+                .map(|(_, imp)| Candidate::Impostor(imp))
+                .collect();
+            let (mesh_quality, winner) = select::select_among(
+                &originals,
+                &Candidate::Mesh {
+                    items: &items,
+                    textures: &textures,
+                },
+                &drawn,
+                &eyes,
+                centre,
+                params.image_res,
+                floor,
+            );
+            drop(drawn);
+            if let Some((i, m)) = winner {
+                let imp = candidates.swap_remove(i).1;
+                return Ok(Some(BakedProxy {
+                    kind: ProxyKind::LayeredImpostor,
+                    members: members
+                        .iter()
+                        .map(|&instance| BakedMember {
+                            instance,
+                            input_triangles: Vec::new(),
+                            triangles: Vec::new(),
+                            view_masks: Vec::new(),
+                            vertex_view_sets: Vec::new(),
+                        })
+                        .collect(),
+                    views: vec![imp.texture.clone()],
+                    key: proxy.key,
+                    packed: None,
+                    impostor: Some(imp),
+                    quality: Some(m),
+                }));
             }
             let mut proxy = proxy;
-            proxy.quality = Some(mesh_quality);
+            proxy.quality = (mesh_quality.views > 0).then_some(mesh_quality);
             Ok(Some(proxy))
         })
         .collect();

@@ -36,13 +36,15 @@
 //!   and its mean SSIM reach the thresholds; the worst view's figures are
 //!   reported.
 //! - **Acceptance.** The paper's mesh proxy is measured first, in every view. Its
-//!   own figures on this metric are far below any absolute floor for small
-//!   objects (on the demo, worst-view object-pixel PSNR of 12–28 dB: the paper
-//!   allows T_s = 5 px of self-occlusion error, and a silhouette off by one
-//!   aliased pixel turns sky into object), so the thresholds for the cheaper
-//!   candidates are `min(floor, mesh's figure)`, per metric (pooled PSNR, mean
-//!   SSIM): a candidate is kept when it reaches the manifest's floor over the
-//!   region, or is measured no worse than the paper's own representation. The mesh itself is
+//!   own figures on this metric are often below an absolute floor (on the demo,
+//!   object-pixel PSNR of 15–33 dB: the paper allows T_s = 5 px of
+//!   self-occlusion error), so in each view the threshold of a cheaper candidate
+//!   is `min(floor, the mesh's figure in that view)`, per metric (PSNR, SSIM): a
+//!   candidate is kept when, from every sample viewpoint, it reaches the
+//!   manifest's floor or is no worse than the paper's own representation
+//!   ([`select_among`]). Views are measured farthest from the capture eye first
+//!   (where image-based candidates are worst) and a candidate is dropped at its
+//!   first failing view, so a rejection costs about one view. The mesh itself is
 //!   always acceptable (004 §3.3: polygonal rendering when nothing image-based
 //!   meets the target); its measurement is what the bake's quality report shows.
 
@@ -233,6 +235,103 @@ pub fn measure(
         ssim: floor.min_ssim,
     };
     measure_against(&refs, candidate, &t)
+}
+
+/// The objective selection of one object (module docs, "Acceptance"): `mesh` (the
+/// paper's proxy) and the cheaper `candidates` (cheapest first) are measured
+/// together, view by view, farthest from `capture_eye` first; a candidate is
+/// dropped at the first view where its PSNR or SSIM falls below `min(floor, the
+/// mesh's in that view)`, and measuring stops when none is left. Returns the
+/// mesh's measurement over the views rendered, and the cheapest candidate that
+/// met every view with its measurement. With no candidate nothing is rendered.
+pub fn select_among(
+    originals: &[DrawItem],
+    mesh: &Candidate,
+    candidates: &[Candidate],
+    eyes: &[Vec3],
+    capture_eye: Vec3,
+    image_res: u32,
+    floor: &QualityFloor,
+) -> (Measured, Option<(usize, Measured)>) {
+    let fresh = || Measured {
+        worst_psnr_db: format::metrics::PSNR_CAP,
+        worst_ssim: 1.0,
+        pooled_psnr_db: format::metrics::PSNR_CAP,
+        mean_ssim: 1.0,
+        views: 0,
+        passed: true,
+        error_histogram: [0; 8],
+    };
+    let mut mesh_m = fresh();
+    if candidates.is_empty() {
+        mesh_m.views = 0;
+        return (mesh_m, None);
+    }
+    let Some((lo, hi)) = items_aabb(originals) else {
+        return (mesh_m, None);
+    };
+    let mut alive: Vec<Option<(Measured, f64, usize, f64)>> = candidates
+        .iter()
+        .map(|_| Some((fresh(), 0.0, 0, 0.0)))
+        .collect();
+    let (mut m_sse, mut m_px, mut m_ssim) = (0.0f64, 0usize, 0.0f64);
+    let mut order: Vec<usize> = (0..eyes.len()).collect();
+    order.sort_by(|&a, &b| {
+        let (da, db) = (
+            eyes[a].distance_squared(capture_eye),
+            eyes[b].distance_squared(capture_eye),
+        );
+        db.total_cmp(&da).then(a.cmp(&b))
+    });
+    for k in order {
+        if alive.iter().all(Option::is_none) {
+            break;
+        }
+        let Ok(view) = View::tight_around(eyes[k], lo, hi, image_res * SUPERSAMPLE) else {
+            continue;
+        };
+        if view.width as u64 * view.height as u64 > 4096 * 4096 {
+            continue;
+        }
+        let reference = render(&view, originals, CullMode::Back);
+        let frame = draw_candidate(&view, mesh, eyes[k]);
+        let c = compare(&reference, &frame, &mut mesh_m.error_histogram);
+        add_view(&mut mesh_m, &c, (&mut m_sse, &mut m_px, &mut m_ssim));
+        let psnr_needed = floor.min_psnr_db.min(c.psnr_db);
+        let ssim_needed = floor.min_ssim.min(c.ssim);
+        for (cand, slot) in candidates.iter().zip(alive.iter_mut()) {
+            let Some((m, sse, px, ssim_sum)) = slot else {
+                continue;
+            };
+            let f = draw_candidate(&view, cand, eyes[k]);
+            let cc = compare(&reference, &f, &mut m.error_histogram);
+            add_view(m, &cc, (sse, px, ssim_sum));
+            if cc.psnr_db < psnr_needed || cc.ssim < ssim_needed {
+                *slot = None;
+            }
+        }
+    }
+    mesh_m.passed =
+        mesh_m.pooled_psnr_db >= floor.min_psnr_db && mesh_m.mean_ssim >= floor.min_ssim;
+    let winner = alive
+        .into_iter()
+        .enumerate()
+        .find_map(|(i, a)| a.map(|(m, ..)| (i, m)));
+    (mesh_m, winner)
+}
+
+/// Adds one view's comparison to a measurement (pooled PSNR and mean SSIM so far).
+fn add_view(m: &mut Measured, c: &Compared, (sse, px, ssim_sum): (&mut f64, &mut usize, &mut f64)) {
+    m.views += 1;
+    m.worst_psnr_db = m.worst_psnr_db.min(c.psnr_db);
+    m.worst_ssim = m.worst_ssim.min(c.ssim);
+    *sse += c.sq_error;
+    *px += c.pixels;
+    *ssim_sum += c.ssim;
+    if *px > 0 {
+        m.pooled_psnr_db = capped_psnr_of_mse(*sse / *px as f64);
+    }
+    m.mean_ssim = *ssim_sum / m.views as f64;
 }
 
 /// Draws the candidate alone from `view` (viewer at `eye`).
