@@ -96,7 +96,9 @@ fn main() {
         sample::small_cell_v2().encode().expect("sample cell v2"),
         sample::small_group().encode_group().expect("sample group"),
         sample::small_index_v2().encode().expect("sample index v2"),
-        sample::small_base_patches().encode().expect("sample base with patches"),
+        sample::small_base_patches()
+            .encode()
+            .expect("sample base with patches"),
     ];
     for s in &seeds {
         assert_eq!(

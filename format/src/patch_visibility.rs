@@ -212,11 +212,8 @@ pub fn select_patches(
     let v = eye - model.centre;
     let r = v.length() / model.radius.max(f32::MIN_POSITIVE);
     let n_dirs = sphere.directions.len();
-    let use_bits = tests.bitfields
-        && model.words > 0
-        && !shells.is_empty()
-        && r.is_finite()
-        && r >= shells[0];
+    let use_bits =
+        tests.bitfields && model.words > 0 && !shells.is_empty() && r.is_finite() && r >= shells[0];
     if use_bits {
         let face = sphere.face_of(v);
         let k = shells.iter().rposition(|&s| s <= r).unwrap_or(0);
@@ -305,10 +302,7 @@ mod tests {
         assert!(patch_backfacing(&p, Vec3::new(0.0, 0.0, -1.0), 1e-6));
         assert!(patch_backfacing(&p, Vec3::new(5.0, 3.0, -0.1), 1e-6));
         // A half-angle of 60°: from (1, 0, -0.2) a normal tilted towards +x sees the eye.
-        let wide = PatchBounds {
-            cone_cos: 0.5,
-            ..p
-        };
+        let wide = PatchBounds { cone_cos: 0.5, ..p };
         assert!(!patch_backfacing(&wide, Vec3::new(1.0, 0.0, -0.2), 1e-6));
         assert!(patch_backfacing(&wide, Vec3::new(0.1, 0.0, -1.0), 1e-6));
         let all = PatchBounds {

@@ -95,7 +95,8 @@ pub struct PatchRecord {
 const _: () = assert!(std::mem::size_of::<PatchRecord>() == 48);
 
 fn finite(v: &[f32]) -> bool {
-    v.iter().all(|x| x.is_finite() && x.abs() <= crate::manifest::MAX_COORDINATE)
+    v.iter()
+        .all(|x| x.is_finite() && x.abs() <= crate::manifest::MAX_COORDINATE)
 }
 
 /// Checks a patch set against the models' triangle counts; the section and byte
@@ -111,7 +112,10 @@ pub(super) fn check(set: &PatchSet, triangle_counts: &[u32]) -> Result<(), BadVa
     }
     let n = set.shell_radius.len();
     let shells_ok = (1..=MAX_SHELLS).contains(&n)
-        && set.shell_radius.iter().all(|r| r.is_finite() && *r >= 1.0 && *r <= 1e6)
+        && set
+            .shell_radius
+            .iter()
+            .all(|r| r.is_finite() && *r >= 1.0 && *r <= 1e6)
         && set.shell_radius.windows(2).all(|w| w[0] < w[1]);
     if !shells_ok {
         return Err(BadValue(
@@ -185,8 +189,8 @@ pub(super) fn check(set: &PatchSet, triangle_counts: &[u32]) -> Result<(), BadVa
         for (k, p) in m.patches.iter().enumerate() {
             let off = (patch_base + 48 * (patch_index + k)) as u64;
             let b = &p.bounds;
-            let axis_ok = finite(&b.cone_axis)
-                && (glam::Vec3::from(b.cone_axis).length() - 1.0).abs() < 1e-3;
+            let axis_ok =
+                finite(&b.cone_axis) && (glam::Vec3::from(b.cone_axis).length() - 1.0).abs() < 1e-3;
             if !(axis_ok && (-1.0..=1.0).contains(&b.cone_cos)) {
                 return Err(BadValue(
                     table,
@@ -314,7 +318,10 @@ pub(super) fn decode(pack: &PackFile, model_count: usize) -> Result<Option<Patch
         return Err(BadValue(
             table,
             0,
-            format!("sample level {} above {MAX_SAMPLE_LEVEL}", head.sample_level),
+            format!(
+                "sample level {} above {MAX_SAMPLE_LEVEL}",
+                head.sample_level
+            ),
         ));
     }
     if head.model_count as usize != model_count {
