@@ -1,0 +1,132 @@
+//! Issue 17 items 3–4 in the player: originals drawn as the index ranges of their
+//! visible patches change no pixel of the hybrid frame (which, with every instance
+//! an original, equals the full-geometry frame) and draw fewer triangles. The patch
+//! data is written here with format code only (the player never links the worker):
+//! one patch per triangle, its exact normal as a zero-width cone, every sample bit
+//! set — so the test exercises the ranges, the patch-ordered index buffers and the
+//! conservative cone test.
+
+use format::pack::{BasePack, ModelPatch, ModelPatches, PatchSet};
+use format::patch_visibility::{direction_count, PatchBounds};
+use glam::Vec3;
+use player::camera::Camera;
+use player::frame::Mode;
+use player::gpu::GpuError;
+use player::metrics::psnr_y;
+use player::run::Player;
+use player::stream::{StreamConfig, Streamer};
+use player::testdata::write_synthetic_bake_with;
+
+fn per_triangle_patches(base: &BasePack) -> PatchSet {
+    let (level, shells) = (0u32, vec![1.5f32, 64.0]);
+    let samples = direction_count(level) * shells.len();
+    let words = samples.div_ceil(32);
+    let all = |w: usize| {
+        if w + 1 < words || samples % 32 == 0 {
+            u32::MAX
+        } else {
+            u32::MAX >> (32 - samples % 32)
+        }
+    };
+    let models = base
+        .models
+        .iter()
+        .map(|m| {
+            let mesh = &m.mesh;
+            let p = |i: u32| Vec3::from(mesh.positions[i as usize]);
+            let (lo, hi) = mesh.positions.iter().fold(
+                (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
+                |(lo, hi), q| (lo.min(Vec3::from(*q)), hi.max(Vec3::from(*q))),
+            );
+            let centre = (lo + hi) * 0.5;
+            let patches = mesh
+                .triangles
+                .iter()
+                .map(|t| {
+                    let [a, b, c] = t.map(p);
+                    let n = (b - a).cross(c - a);
+                    let centroid = (a + b + c) / 3.0;
+                    let bounds = if n.length() > 1e-12 {
+                        PatchBounds {
+                            cone_axis: n.normalize().to_array(),
+                            cone_cos: 1.0,
+                            centre: centroid.to_array(),
+                            offset: 1e-4,
+                        }
+                    } else {
+                        PatchBounds {
+                            cone_axis: [0.0, 0.0, 1.0],
+                            cone_cos: -1.0,
+                            centre: centroid.to_array(),
+                            offset: 0.0,
+                        }
+                    };
+                    ModelPatch {
+                        triangle_count: 1,
+                        bounds,
+                        samples: (0..words).map(all).collect(),
+                    }
+                })
+                .collect();
+            ModelPatches {
+                centre: centre.to_array(),
+                radius: ((hi - lo).length() * 0.5).max(1e-3),
+                patches,
+                triangle_order: (0..mesh.triangles.len() as u32).collect(),
+            }
+        })
+        .collect();
+    PatchSet {
+        sample_level: level,
+        shell_radius: shells,
+        models,
+    }
+}
+
+fn frame(dir: &std::path::Path) -> Option<(u64, Vec<u8>, Vec<u8>)> {
+    let mut p = match Player::open(dir, (128, 128)) {
+        Ok(p) => p,
+        Err(player::run::RunError::Gpu(GpuError::NoAdapter(e))) => {
+            eprintln!("SKIP: no graphics adapter ({e})");
+            return None;
+        }
+        Err(e) => panic!("{e}"),
+    };
+    let b = p.bake.instance_bounds[0];
+    let r = (b.max - b.min).length() * 0.5;
+    let cam = Camera {
+        eye: b.centre() + Vec3::new(0.3 * r, 0.2 * r, 3.0 * r),
+        dir: Vec3::NEG_Z,
+        fov_y_deg: 60.0,
+        width: 128,
+        height: 128,
+        near: 0.25,
+        far: p.bake.extent,
+    };
+    p.warm_up(&cam);
+    let mut s = Streamer::new(&p.bake, StreamConfig::default());
+    let (_, tris, _, _) = p.draw(&cam, Mode::Hybrid, Some(&mut s));
+    let hybrid = p.renderer.read_pixels().unwrap();
+    p.draw(&cam, Mode::Full, None);
+    let full = p.renderer.read_pixels().unwrap();
+    Some((tris, hybrid, full))
+}
+
+#[test]
+fn patch_culling_changes_no_pixel_and_draws_fewer_triangles() {
+    let dir = tempfile::tempdir().unwrap();
+    write_synthetic_bake_with(dir.path(), true).unwrap();
+    let Some((tris_plain, hybrid_plain, full_plain)) = frame(dir.path()) else {
+        return;
+    };
+    assert_eq!(psnr_y(&hybrid_plain, &full_plain), f64::INFINITY);
+    let path = dir.path().join("base.pack");
+    let mut base = BasePack::read(&path).unwrap();
+    base.patches = Some(per_triangle_patches(&base));
+    base.write(&path).unwrap();
+    let (tris, hybrid, full) = frame(dir.path()).unwrap();
+    eprintln!("triangles: {tris} with patches, {tris_plain} without");
+    assert!(tris < tris_plain, "{tris} >= {tris_plain}");
+    assert_eq!(psnr_y(&hybrid, &full), f64::INFINITY);
+    assert_eq!(psnr_y(&full, &full_plain), f64::INFINITY);
+}
