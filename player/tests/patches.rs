@@ -22,7 +22,7 @@ fn per_triangle_patches(base: &BasePack) -> PatchSet {
     let samples = direction_count(level) * shells.len();
     let words = samples.div_ceil(32);
     let all = |w: usize| {
-        if w + 1 < words || samples % 32 == 0 {
+        if w + 1 < words || samples.is_multiple_of(32) {
             u32::MAX
         } else {
             u32::MAX >> (32 - samples % 32)
