@@ -22,7 +22,7 @@ fn main() {
         .replace("\"uri\": \"textured-sample.bin\", ", "")
         .into_bytes();
     let mut glb_json = glb_json;
-    while glb_json.len() % 4 != 0 {
+    while !glb_json.len().is_multiple_of(4) {
         glb_json.push(b' ');
     }
     let mut glb = Vec::new();

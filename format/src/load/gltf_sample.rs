@@ -75,7 +75,7 @@ pub fn write_textured_sample(dir: &Path) -> std::io::Result<PathBuf> {
     let mut bin: Vec<u8> = Vec::new();
     let mut views = Vec::new();
     let mut push = |bytes: &[u8], target: u32| {
-        while bin.len() % 4 != 0 {
+        while !bin.len().is_multiple_of(4) {
             bin.push(0);
         }
         let offset = bin.len();
@@ -90,7 +90,7 @@ pub fn write_textured_sample(dir: &Path) -> std::io::Result<PathBuf> {
     push(bytemuck::cast_slice(&box_idx), 34963);
     push(bytemuck::cast_slice(&lid_pos), 34962);
     push(bytemuck::cast_slice(&lid_idx), 34963);
-    while bin.len() % 4 != 0 {
+    while !bin.len().is_multiple_of(4) {
         bin.push(0);
     }
     let bounds = |p: &[[f32; 3]]| {

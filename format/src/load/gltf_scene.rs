@@ -343,14 +343,13 @@ fn build_model(
         })?;
     let albedo_map = match (texture, uvs_out) {
         (Some(t), Some(uvs)) => {
-            if !textures.contains_key(&t) {
-                let decoded = decode_texture(path, document, buffers, t)?;
-                textures.insert(t, decoded);
-            }
-            Some(AlbedoMap {
-                uvs,
-                texture: textures[&t].clone(),
-            })
+            let texture = match textures.entry(t) {
+                std::collections::btree_map::Entry::Occupied(e) => e.get().clone(),
+                std::collections::btree_map::Entry::Vacant(e) => e
+                    .insert(decode_texture(path, document, buffers, t)?)
+                    .clone(),
+            };
+            Some(AlbedoMap { uvs, texture })
         }
         _ => None,
     };

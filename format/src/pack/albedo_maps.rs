@@ -262,7 +262,7 @@ pub(crate) fn decode(
             })?;
         let uvs: Vec<[f32; 2]> = bytes[at..end]
             .chunks_exact(8)
-            .map(|c| bytemuck::pod_read_unaligned::<[f32; 2]>(c))
+            .map(bytemuck::pod_read_unaligned::<[f32; 2]>)
             .collect();
         if let Some(v) = uvs.iter().position(|uv| !uv.iter().all(|x| x.is_finite())) {
             return Err(malformed(
