@@ -426,3 +426,49 @@ pub fn write_quad_bake_views(
     write_index(dir, &grid, fingerprint)?;
     Ok(grid)
 }
+
+/// Issue 16: a one-object bake drawn in every cell as a LayeredImpostor: `texture`
+/// (RGBA8, depth codes in alpha) seen from `capture` — its matrix is
+/// [`texture_matrix`], so `q` is the eye-space depth — sliced into `layers` (corner
+/// rays are filled in from the camera). The quad of [`write_quad_bake`] is the
+/// member instance (not drawn: an impostor has no triangles).
+pub fn write_impostor_bake(
+    dir: &Path,
+    capture: &Camera,
+    texture: Texture,
+    mut layers: format::pack::ImpostorLayers,
+) -> Result<GridParams, TestDataError> {
+    let centre = capture.eye + capture.dir.normalize() * layers.near;
+    let grid = write_quad_bake_views(dir, centre, ProxyKind::SvMesh, Vec::new(), Vec::new())?;
+    let t = (capture.fov_y_deg.to_radians() / 2.0).tan();
+    let r = t * capture.width as f32 / capture.height as f32;
+    let to_world = capture.view().inverse();
+    let ray = |s: f32, v: f32| {
+        to_world
+            .transform_vector3(Vec3::new((2.0 * s - 1.0) * r, (1.0 - 2.0 * v) * t, -1.0))
+            .to_array()
+    };
+    layers.corner_rays = [ray(0.0, 0.0), ray(1.0, 0.0), ray(1.0, 1.0), ray(0.0, 1.0)];
+    let fingerprint = [3u8; 32];
+    for id in 0..grid.n_cols * grid.n_rows {
+        let path = dir.join(format!("cells/{id}.pack"));
+        let mut cell = CellPack::read(&path).map_err(TestDataError::Pack)?;
+        cell.proxies = vec![Proxy {
+            kind: ProxyKind::LayeredImpostor,
+            members: vec![ProxyMember {
+                instance: 0,
+                triangles: Vec::new(),
+                view_masks: Vec::new(),
+            }],
+            views: vec![ProxyView {
+                eye: capture.eye.to_array(),
+                matrix: texture_matrix(capture),
+                texture: texture.clone(),
+            }],
+            layers: Some(layers.clone()),
+        }];
+        cell.write(&path).map_err(TestDataError::Pack)?;
+    }
+    write_index(dir, &grid, fingerprint)?;
+    Ok(grid)
+}
