@@ -165,16 +165,16 @@ impl SectionKind {
     pub const VERTEX_COLOURS: SectionKind = SectionKind(0x0106);
     pub const TRIANGLES: SectionKind = SectionKind(0x0107);
     pub const INSTANCES: SectionKind = SectionKind(0x0108);
+    /// Issue 18: albedo textures of textured models (optional; README).
+    pub const ALBEDO_TEXTURES: SectionKind = SectionKind(0x0109);
+    /// Issue 18: per textured model, its texture and one UV per vertex (optional).
+    pub const TEXCOORDS: SectionKind = SectionKind(0x010a);
     /// Issue 17: per-model patch tiling, normal cones and sampling parameters.
     pub const PATCH_TABLE: SectionKind = SectionKind(0x010b);
     /// Issue 17: each model's triangle ids grouped by patch.
     pub const PATCH_TRIANGLES: SectionKind = SectionKind(0x010c);
     /// Issue 17: per patch, its bits over the spherical samples (002).
     pub const PATCH_SAMPLES: SectionKind = SectionKind(0x010d);
-    /// Issue 18: albedo textures of textured models (optional; README).
-    pub const ALBEDO_TEXTURES: SectionKind = SectionKind(0x0109);
-    /// Issue 18: per textured model, its texture and one UV per vertex (optional).
-    pub const TEXCOORDS: SectionKind = SectionKind(0x010a);
     // cells/<id>.pack
     pub const CELL_META: SectionKind = SectionKind(0x0201);
     pub const ORIGINALS: SectionKind = SectionKind(0x0202);
@@ -210,11 +210,11 @@ impl SectionKind {
             SectionKind::VERTEX_COLOURS => "vertex-colours",
             SectionKind::TRIANGLES => "triangles",
             SectionKind::INSTANCES => "instances",
+            SectionKind::ALBEDO_TEXTURES => "albedo-textures",
+            SectionKind::TEXCOORDS => "texcoords",
             SectionKind::PATCH_TABLE => "patch-table",
             SectionKind::PATCH_TRIANGLES => "patch-triangles",
             SectionKind::PATCH_SAMPLES => "patch-samples",
-            SectionKind::ALBEDO_TEXTURES => "albedo-textures",
-            SectionKind::TEXCOORDS => "texcoords",
             SectionKind::CELL_META => "cell-meta",
             SectionKind::ORIGINALS => "originals",
             SectionKind::PROXIES => "proxies",
