@@ -147,6 +147,65 @@ pub struct PatchBounds {
     pub offset: f32,
 }
 
+impl PatchBounds {
+    /// The normal cone, box centre and plane offset of a set of triangles (corner
+    /// positions; computed in f64 and rounded outward so the f32 test
+    /// [`patch_backfacing`] stays conservative). Degenerate triangles cover no pixel
+    /// and constrain nothing; triangles whose normals span every direction give the
+    /// "never back-facing" cone (`cone_cos` −1). The bake's patches (worker
+    /// `patches::normal_cone`) and the player's proxy clusters use this one rule.
+    pub fn of_triangles(triangles: impl Iterator<Item = [glam::DVec3; 3]>) -> PatchBounds {
+        use glam::DVec3;
+        let mut normals = Vec::new();
+        let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+        let mut sum = DVec3::ZERO;
+        for [a, b, c] in triangles {
+            lo = lo.min(a).min(b).min(c);
+            hi = hi.max(a).max(b).max(c);
+            let cross = (b - a).cross(c - a);
+            let len = cross.length();
+            if len > 1e-12 && len.is_finite() {
+                normals.push((cross / len, a));
+                sum += cross;
+            }
+        }
+        let centre = if lo.x.is_finite() {
+            (lo + hi) * 0.5
+        } else {
+            DVec3::ZERO
+        };
+        let everything = PatchBounds {
+            cone_axis: [0.0, 0.0, 1.0],
+            cone_cos: -1.0,
+            centre: centre.as_vec3().to_array(),
+            offset: 0.0,
+        };
+        if normals.is_empty() || sum.length() < 1e-9 {
+            return everything;
+        }
+        let axis = sum.normalize();
+        let cos = normals
+            .iter()
+            .map(|(n, _)| n.dot(axis))
+            .fold(1.0f64, f64::min);
+        let offset = normals
+            .iter()
+            .map(|(n, q)| n.dot(centre - *q))
+            .fold(f64::NEG_INFINITY, f64::max);
+        // Round outward so the f32 test stays conservative.
+        let cos = (cos - 1e-6).max(-1.0);
+        if cos <= -1.0 {
+            return everything;
+        }
+        PatchBounds {
+            cone_axis: axis.as_vec3().normalize().to_array(),
+            cone_cos: cos as f32,
+            centre: centre.as_vec3().to_array(),
+            offset: (offset + 1e-6 * (hi - lo).length()) as f32,
+        }
+    }
+}
+
 /// True when every triangle of the patch faces away from `eye` (model space), so the
 /// GPU's back-face culling would drop all of them (module docs; 003 §4.1 normal
 /// clusters). `eps` absorbs rounding (model units).

@@ -263,58 +263,13 @@ pub fn cluster_proxy_vertices(
     (out, clusters)
 }
 
-/// Normal cone, box centre and plane offset of a run of triangles (f64 inside,
-/// rounded outward), as the bake computes them for patches.
+/// Normal cone, box centre and plane offset of a run of triangles, as the bake
+/// computes them for patches ([`PatchBounds::of_triangles`]).
 fn cone_of(v: &[crate::gpu::ProxyVertex]) -> PatchBounds {
-    use glam::DVec3;
-    let p = |i: usize| Vec3::from(v[i].pos).as_dvec3();
-    let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
-    let mut normals = Vec::with_capacity(v.len() / 3);
-    let mut sum = DVec3::ZERO;
-    for t in 0..v.len() / 3 {
-        let [a, b, c] = [p(3 * t), p(3 * t + 1), p(3 * t + 2)];
-        lo = lo.min(a).min(b).min(c);
-        hi = hi.max(a).max(b).max(c);
-        let cross = (b - a).cross(c - a);
-        let len = cross.length();
-        if len > 1e-12 && len.is_finite() {
-            normals.push((cross / len, a));
-            sum += cross;
-        }
-    }
-    let centre = if lo.x.is_finite() {
-        (lo + hi) * 0.5
-    } else {
-        DVec3::ZERO
-    };
-    let everything = PatchBounds {
-        cone_axis: [0.0, 0.0, 1.0],
-        cone_cos: -1.0,
-        centre: centre.as_vec3().to_array(),
-        offset: 0.0,
-    };
-    if normals.is_empty() || sum.length() < 1e-9 {
-        return everything;
-    }
-    let axis = sum.normalize();
-    let cos = normals
-        .iter()
-        .map(|(n, _)| n.dot(axis))
-        .fold(1.0f64, f64::min)
-        - 1e-6;
-    if cos <= -1.0 {
-        return everything;
-    }
-    let offset = normals
-        .iter()
-        .map(|(n, q)| n.dot(centre - *q))
-        .fold(f64::NEG_INFINITY, f64::max);
-    PatchBounds {
-        cone_axis: axis.as_vec3().normalize().to_array(),
-        cone_cos: cos as f32,
-        centre: centre.as_vec3().to_array(),
-        offset: (offset + 1e-6 * (hi - lo).length()) as f32,
-    }
+    PatchBounds::of_triangles(
+        v.chunks_exact(3)
+            .map(|t| [0, 1, 2].map(|k| Vec3::from(t[k].pos).as_dvec3())),
+    )
 }
 
 /// The vertex ranges of a proxy to draw from `eye` (world): its clusters that are

@@ -336,57 +336,13 @@ pub fn tile_patches(mesh: &Mesh, target: usize) -> Vec<Vec<u32>> {
     out
 }
 
-/// The normal cone, box centre and plane offset of a patch (f64 inside).
+/// The normal cone, box centre and plane offset of a patch
+/// ([`PatchBounds::of_triangles`]).
 pub fn normal_cone(mesh: &Mesh, tris: &[u32]) -> PatchBounds {
-    let mut normals = Vec::with_capacity(tris.len());
-    let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
-    let mut sum = DVec3::ZERO;
-    for &t in tris {
-        let [a, b, c] = corners(mesh, mesh.triangles[t as usize]);
-        lo = lo.min(a).min(b).min(c);
-        hi = hi.max(a).max(b).max(c);
-        let cross = (b - a).cross(c - a);
-        let len = cross.length();
-        // A degenerate triangle covers no pixel: it constrains nothing.
-        if len > 1e-12 && len.is_finite() {
-            normals.push((cross / len, a));
-            sum += cross;
-        }
-    }
-    let centre = if lo.x.is_finite() {
-        (lo + hi) * 0.5
-    } else {
-        DVec3::ZERO
-    };
-    let everything = PatchBounds {
-        cone_axis: [0.0, 0.0, 1.0],
-        cone_cos: -1.0,
-        centre: centre.as_vec3().to_array(),
-        offset: 0.0,
-    };
-    if normals.is_empty() || sum.length() < 1e-9 {
-        return everything;
-    }
-    let axis = sum.normalize();
-    let cos = normals
-        .iter()
-        .map(|(n, _)| n.dot(axis))
-        .fold(1.0f64, f64::min);
-    let offset = normals
-        .iter()
-        .map(|(n, q)| n.dot(centre - *q))
-        .fold(f64::NEG_INFINITY, f64::max);
-    // Round outward so the f32 test stays conservative.
-    let cos = (cos - 1e-6).max(-1.0);
-    if cos <= -1.0 {
-        return everything;
-    }
-    PatchBounds {
-        cone_axis: axis.as_vec3().normalize().to_array(),
-        cone_cos: cos as f32,
-        centre: centre.as_vec3().to_array(),
-        offset: (offset + 1e-6 * (hi - lo).length()) as f32,
-    }
+    PatchBounds::of_triangles(
+        tris.iter()
+            .map(|&t| corners(mesh, mesh.triangles[t as usize])),
+    )
 }
 
 /// The view of sample (direction, shell) around the bounding sphere.
