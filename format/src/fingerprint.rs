@@ -193,9 +193,19 @@ mod tests {
             |b, _| b.occlusion_culling = true,
             |b, _| b.max_deviation_px = 0.0,
             |b, _| b.far_field = false,
-            |b, _| b.quality = None,
-            |b, _| b.quality.as_mut().unwrap().min_psnr_db = 35.0,
-            |b, _| b.quality.as_mut().unwrap().min_ssim = 0.95,
+            |b, _| b.quality = Some(Default::default()),
+            |b, _| {
+                b.quality = Some(crate::manifest::QualityFloor {
+                    min_psnr_db: 35.0,
+                    ..Default::default()
+                })
+            },
+            |b, _| {
+                b.quality = Some(crate::manifest::QualityFloor {
+                    min_ssim: 0.95,
+                    ..Default::default()
+                })
+            },
             |_, c| c.cell_size = 100.0,
             |_, c| c.min_eye_height = 2.0,
             |_, c| c.max_eye_height = 20.0,

@@ -40,7 +40,8 @@
 //!     //        pre_rotation_deg: (0.0, 0.0, 0.0) /* optional */), ...]),
 //!     cells: (cell_size: 50.0, min_eye_height: 6.0, max_eye_height: 12.0),
 //!     bake: (image_res: 1024, clustering: true),       // optional, every field optional
-//!     //    quality: (min_psnr_db: 30.0, min_ssim: 0.9) /* objective selection, issue 16 */
+//!     //    quality: (min_psnr_db: 30.0, min_ssim: 0.9) /* opt-in objective selection, issue 16;
+//!     //                                                    `quality: ()` for the defaults */
 //!     cells_per_job: 4,                                // optional, default 4
 //!     output: "../out/demo",                           // optional, default ../out/<name>
 //! )
@@ -104,8 +105,10 @@ pub struct BakeParams {
     /// Objective selection of representations (paper 004; issue 16; worker
     /// `select.rs`): the quality floor every proxy must meet on its own pixels from
     /// every sample viewpoint of its region; the cheapest candidate that does is
-    /// kept. Default [`QualityFloor::default`]; plans written before it existed read
-    /// as `None` (baked without selection: every outside object a mesh proxy).
+    /// kept. Opt-in: absent = `None` (every outside object a mesh proxy, as in the
+    /// paper); `quality: ()` selects with [`QualityFloor::default`]. Not on by default
+    /// because it does not pay yet: on park-2m cells it costs +50 % bake CPU for 0.6 %
+    /// of objects drawn as layered impostors (BENCHMARKS.md, issue 16).
     #[serde(default)]
     pub quality: Option<QualityFloor>,
 }
@@ -164,7 +167,7 @@ impl Default for BakeParams {
             occlusion_culling: false,
             max_deviation_px: DEFAULT_MAX_DEVIATION_PX,
             far_field: true,
-            quality: Some(QualityFloor::default()),
+            quality: None,
         }
     }
 }
@@ -638,7 +641,7 @@ struct RawBake {
     occlusion_culling: bool,
     max_deviation_px: f32,
     far_field: bool,
-    quality: RawQuality,
+    quality: Option<RawQuality>,
 }
 
 #[derive(Deserialize)]
@@ -671,7 +674,7 @@ impl Default for RawBake {
             occlusion_culling: d.occlusion_culling,
             max_deviation_px: d.max_deviation_px,
             far_field: d.far_field,
-            quality: RawQuality::default(),
+            quality: None,
         }
     }
 }
@@ -1157,7 +1160,7 @@ impl Validator<'_> {
             occlusion_culling: b.occlusion_culling,
             max_deviation_px: self.non_negative("bake.max_deviation_px", b.max_deviation_px)?,
             far_field: b.far_field,
-            quality: Some(self.quality(b.quality)?),
+            quality: b.quality.map(|q| self.quality(q)).transpose()?,
         };
 
         let cells_per_job = raw.cells_per_job.unwrap_or(DEFAULT_CELLS_PER_JOB);
