@@ -428,6 +428,7 @@ fn build_with_placements(plan: &Plan) -> Result<(Scene, Option<Vec<park::Placeme
             models,
             instances,
             ground: plan.ground,
+            model_bounds: Default::default(),
         },
         placed,
     ))
@@ -507,6 +508,7 @@ fn build_gltf_scene(plan: &Plan, file: &std::path::Path) -> Result<Scene, SceneE
         models,
         instances,
         ground: plan.ground,
+        model_bounds: Default::default(),
     })
 }
 

@@ -943,6 +943,7 @@ mod tests {
                 min: [-100.0, -100.0],
                 max: [100.0, 100.0],
             },
+            model_bounds: Default::default(),
         };
         let prism = Prism {
             centre: Vec2::new(0.0, 0.0),

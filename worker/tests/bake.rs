@@ -253,6 +253,7 @@ fn bunny_scene() -> Option<(Scene, HexGrid, CellParams)> {
             tint: Vec3::ONE,
         }],
         ground,
+        model_bounds: Default::default(),
     };
     let cells = CellParams {
         cell_size: CELL_SIZE,
