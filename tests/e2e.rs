@@ -631,21 +631,8 @@ fn player_renders_like_the_cpu_rasterizer() {
             worker::raster::View::look_at_fov(*eye, *target, Vec3::Y, 60.0, 256, 256, 0.25, far)
                 .unwrap();
         let ground = scene.ground.mesh();
-        let mut items: Vec<worker::raster::DrawItem> = scene
-            .instances
-            .iter()
-            .enumerate()
-            .map(|(i, inst)| worker::raster::DrawItem {
-                mesh: &scene.models[inst.model as usize].mesh,
-                transform: inst.transform,
-                tint: inst.tint,
-                object_id: i as u32,
-                triangles: None,
-                albedo_map: scene.models[inst.model as usize].albedo_map.as_ref(),
-            })
-            .collect();
+        let items = worker::raster::DrawItem::scene_with_ground(&scene, &ground);
         // Both renderers draw the ground (issue 18).
-        items.push(worker::raster::DrawItem::ground(&ground));
         let cap = worker::raster::render(&view, &items, worker::raster::CullMode::Back);
         assert!(cap.covered_pixels() > 500, "view {k} shows objects");
         let cpu: Vec<u8> = cap.color.iter().flatten().copied().collect();
@@ -713,20 +700,7 @@ fn textured_gltf_scene_bakes_and_renders_alike_on_cpu_and_gpu() {
             worker::raster::View::look_at_fov(*eye, *target, Vec3::Y, 60.0, 192, 192, 0.25, far)
                 .unwrap();
         let ground = scene.ground.mesh();
-        let mut items: Vec<worker::raster::DrawItem> = scene
-            .instances
-            .iter()
-            .enumerate()
-            .map(|(i, inst)| worker::raster::DrawItem {
-                mesh: &scene.models[inst.model as usize].mesh,
-                transform: inst.transform,
-                tint: inst.tint,
-                object_id: i as u32,
-                triangles: None,
-                albedo_map: scene.models[inst.model as usize].albedo_map.as_ref(),
-            })
-            .collect();
-        items.push(worker::raster::DrawItem::ground(&ground));
+        let items = worker::raster::DrawItem::scene_with_ground(&scene, &ground);
         let cap = worker::raster::render(&view, &items, worker::raster::CullMode::Back);
         assert!(cap.covered_pixels() > 2000, "view {k} shows the crates");
         let cpu: Vec<u8> = cap.color.iter().flatten().copied().collect();

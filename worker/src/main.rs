@@ -397,21 +397,8 @@ fn run(cli: Cli) -> Result<(), Failure> {
                 worker::raster::View::look_at_fov(eye, target, Vec3::Y, fov, size, size, 0.5, far)
                     .map_err(bad_input)?;
             let ground = scene.ground.mesh();
-            let mut items: Vec<DrawItem> = scene
-                .instances
-                .iter()
-                .enumerate()
-                .map(|(i, inst)| DrawItem {
-                    mesh: &scene.models[inst.model as usize].mesh,
-                    transform: inst.transform,
-                    tint: inst.tint,
-                    object_id: i as u32,
-                    triangles: None,
-                    albedo_map: scene.models[inst.model as usize].albedo_map.as_ref(),
-                })
-                .collect();
-            let instances = items.len();
-            items.push(DrawItem::ground(&ground));
+            let items = DrawItem::scene_with_ground(&scene, &ground);
+            let instances = scene.instances.len();
             let capture = render(&view, &items, CullMode::Back);
             worker::picture::write_rgba(&out, size, size, &capture.color)
                 .with_context(|| format!("writing {}", out.display()))

@@ -100,6 +100,27 @@ impl<'a> DrawItem<'a> {
             albedo_map: None,
         }
     }
+
+    /// Every instance of `scene` (object id = instance index), whole, then the ground
+    /// (`ground` = `scene.ground.mesh()`): a view of the scene as `worker render` and
+    /// the tests draw it.
+    pub fn scene_with_ground(scene: &'a format::Scene, ground: &'a Mesh) -> Vec<DrawItem<'a>> {
+        let mut items: Vec<DrawItem> = scene
+            .instances
+            .iter()
+            .enumerate()
+            .map(|(i, inst)| DrawItem {
+                mesh: &scene.models[inst.model as usize].mesh,
+                transform: inst.transform,
+                tint: inst.tint,
+                object_id: i as u32,
+                triangles: None,
+                albedo_map: scene.models[inst.model as usize].albedo_map.as_ref(),
+            })
+            .collect();
+        items.push(DrawItem::ground(ground));
+        items
+    }
 }
 
 /// The buffers of one capture, row-major, row 0 at the top.

@@ -149,6 +149,56 @@ pub(crate) fn parse(path: &Path, bytes: &[u8]) -> Result<Parsed, LoadError> {
     })
 }
 
+/// The triangles of a primitive of `mode` (triangles, strip or fan) from its indices
+/// (`None`: the vertices in order), checked against its `n` vertices. Shared by the
+/// model loader and the scene loader (`gltf_scene.rs`).
+pub(super) fn primitive_triangles(
+    indices: Option<Vec<u32>>,
+    mode: gltf::mesh::Mode,
+    n: usize,
+    err: &dyn Fn(String) -> LoadError,
+) -> Result<Vec<[u32; 3]>, LoadError> {
+    use gltf::mesh::Mode;
+    let indices: Vec<u32> = match indices {
+        Some(i) => i,
+        None => {
+            let n = u32::try_from(n).map_err(|_| err("too many vertices".into()))?;
+            (0..n).collect()
+        }
+    };
+    let triangles: Vec<[u32; 3]> = match mode {
+        Mode::Triangles => indices
+            .chunks_exact(3)
+            .map(|t| [t[0], t[1], t[2]])
+            .collect(),
+        Mode::TriangleStrip => indices
+            .windows(3)
+            .enumerate()
+            .map(|(k, t)| {
+                if k % 2 == 0 {
+                    [t[0], t[1], t[2]]
+                } else {
+                    [t[1], t[0], t[2]]
+                }
+            })
+            .collect(),
+        _ => (1..indices.len().saturating_sub(1))
+            .map(|k| [indices[0], indices[k], indices[k + 1]])
+            .collect(),
+    };
+    if let Some((face, t)) = triangles
+        .iter()
+        .enumerate()
+        .find(|(_, t)| t.iter().any(|&i| i as usize >= n))
+    {
+        return Err(err(format!(
+            "triangle {face} uses vertex {}, but the primitive has only {n} vertices",
+            t.iter().copied().max().unwrap_or(0)
+        )));
+    }
+    Ok(triangles)
+}
+
 /// One primitive in world space; `None` for points and lines.
 fn read_primitive(
     path: &Path,
@@ -182,44 +232,8 @@ fn read_primitive(
     let colors = reader
         .read_colors(0)
         .map(|c| c.into_rgba_f32().collect::<Vec<_>>());
-    let indices: Vec<u32> = match reader.read_indices() {
-        Some(i) => i.into_u32().collect(),
-        None => {
-            let n = u32::try_from(positions.len()).map_err(|_| err("too many vertices".into()))?;
-            (0..n).collect()
-        }
-    };
-    let mut triangles: Vec<[u32; 3]> = match mode {
-        Mode::Triangles => indices
-            .chunks_exact(3)
-            .map(|t| [t[0], t[1], t[2]])
-            .collect(),
-        Mode::TriangleStrip => indices
-            .windows(3)
-            .enumerate()
-            .map(|(k, t)| {
-                if k % 2 == 0 {
-                    [t[0], t[1], t[2]]
-                } else {
-                    [t[1], t[0], t[2]]
-                }
-            })
-            .collect(),
-        _ => (1..indices.len().saturating_sub(1))
-            .map(|k| [indices[0], indices[k], indices[k + 1]])
-            .collect(),
-    };
-    if let Some((face, t)) = triangles
-        .iter()
-        .enumerate()
-        .find(|(_, t)| t.iter().any(|&i| i as usize >= positions.len()))
-    {
-        return Err(err(format!(
-            "triangle {face} uses vertex {}, but the primitive has only {} vertices",
-            t.iter().copied().max().unwrap_or(0),
-            positions.len()
-        )));
-    }
+    let indices = reader.read_indices().map(|i| i.into_u32().collect());
+    let mut triangles = primitive_triangles(indices, mode, positions.len(), &err)?;
     if Mat3::from_mat4(world).determinant() < 0.0 {
         for t in &mut triangles {
             t.swap(1, 2);

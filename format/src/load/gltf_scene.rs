@@ -30,7 +30,7 @@
 //! Models are in the file's units and frame (glTF is y-up, right-handed, as hexbake);
 //! nothing is normalised. Cameras, lights and animations are not read.
 
-use super::gltf::{open_document, MAX_DEPTH};
+use super::gltf::{open_document, primitive_triangles, MAX_DEPTH};
 use super::{parse_error, LoadError, Location, ModelFormat};
 use crate::albedo::{AlbedoMap, AlbedoTexture, Wrap, MAX_TEXTURE_SIDE};
 use crate::cleanup::{finish_mesh_with_uvs, RawMesh};
@@ -480,43 +480,8 @@ fn read_scene_primitive(
     } else {
         None
     };
-    let indices: Vec<u32> = match reader.read_indices() {
-        Some(i) => i.into_u32().collect(),
-        None => {
-            let n = u32::try_from(n).map_err(|_| err("too many vertices".into()))?;
-            (0..n).collect()
-        }
-    };
-    let triangles: Vec<[u32; 3]> = match mode {
-        Mode::Triangles => indices
-            .chunks_exact(3)
-            .map(|t| [t[0], t[1], t[2]])
-            .collect(),
-        Mode::TriangleStrip => indices
-            .windows(3)
-            .enumerate()
-            .map(|(k, t)| {
-                if k % 2 == 0 {
-                    [t[0], t[1], t[2]]
-                } else {
-                    [t[1], t[0], t[2]]
-                }
-            })
-            .collect(),
-        _ => (1..indices.len().saturating_sub(1))
-            .map(|k| [indices[0], indices[k], indices[k + 1]])
-            .collect(),
-    };
-    if let Some((face, t)) = triangles
-        .iter()
-        .enumerate()
-        .find(|(_, t)| t.iter().any(|&i| i as usize >= n))
-    {
-        return Err(err(format!(
-            "triangle {face} uses vertex {}, but the primitive has only {n} vertices",
-            t.iter().copied().max().unwrap_or(0)
-        )));
-    }
+    let indices = reader.read_indices().map(|i| i.into_u32().collect());
+    let triangles = primitive_triangles(indices, mode, n, &err)?;
     Ok(Some(ScenePrim {
         positions,
         uvs,
