@@ -34,6 +34,9 @@
 //!     // or: scene: Gltf("scene.glb")  (a .gltf or .glb read as a whole scene: every
 //!     //        node with a mesh placed with its composed transform, in the file's
 //!     //        units; base-colour textures read; `load::load_gltf_scene`)
+//!     // or: scene: Gltf((file: "scene.glb", group_by_parent: true))  (the same, with
+//!     //        the mesh nodes under one parent node merged into one object: a
+//!     //        building of 40 nodes is one object of the bake; default false)
 //!     // or: scene: Instances([(model: File("a.obj"), target_height: 10.0,
 //!     //        translation: (5.0, 0.0, 7.0), rotation_y_deg: 30.0,
 //!     //        scale: 1.0 /* optional */, tint: (1.0, 0.9, 0.8) /* optional */,
@@ -221,6 +224,10 @@ pub enum SceneSpec {
 pub struct GltfSpec {
     /// The `.gltf` or `.glb` file, resolved against the manifest's folder.
     pub file: PathBuf,
+    /// The mesh nodes under one parent node are one object (one model per texture,
+    /// one instance): `load::GltfOptions::group_by_parent`.
+    #[serde(default)]
+    pub group_by_parent: bool,
 }
 
 /// A generated city (`city.rs`): blocks of buildings, streets, props on the pavements.
@@ -542,7 +549,23 @@ enum RawScene {
     Park(RawPark),
     Instances(Vec<RawInstance>),
     City(RawCity),
-    Gltf(String),
+    Gltf(RawGltf),
+}
+
+/// `Gltf("file.glb")` or `Gltf((file: "file.glb", group_by_parent: true))`.
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum RawGltf {
+    File(String),
+    Spec(RawGltfSpec),
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawGltfSpec {
+    file: String,
+    #[serde(default)]
+    group_by_parent: bool,
 }
 
 #[derive(Deserialize)]
@@ -928,7 +951,7 @@ impl Validator<'_> {
     }
 
     /// A glTF scene file: a `.gltf` or `.glb` that exists.
-    fn gltf(&self, file: String) -> Result<SceneSpec, ManifestError> {
+    fn gltf(&self, file: String, group_by_parent: bool) -> Result<SceneSpec, ManifestError> {
         if file.is_empty() {
             return Err(self.error("scene", "names an empty file path".into()));
         }
@@ -948,7 +971,10 @@ impl Validator<'_> {
                 ),
             ));
         }
-        Ok(SceneSpec::Gltf(GltfSpec { file: resolved }))
+        Ok(SceneSpec::Gltf(GltfSpec {
+            file: resolved,
+            group_by_parent,
+        }))
     }
 
     /// A prop list (park models on the pavements), fields under `scene.props[i]`.
@@ -1094,7 +1120,8 @@ impl Validator<'_> {
                 })
             }
             RawScene::City(city) => self.city(city)?,
-            RawScene::Gltf(file) => self.gltf(file)?,
+            RawScene::Gltf(RawGltf::File(file)) => self.gltf(file, false)?,
+            RawScene::Gltf(RawGltf::Spec(spec)) => self.gltf(spec.file, spec.group_by_parent)?,
             RawScene::Instances(list) => {
                 if list.is_empty() {
                     return Err(self.error("scene", "lists no instance".into()));

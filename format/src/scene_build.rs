@@ -239,7 +239,7 @@ pub fn instances_manifest(plan: &Plan) -> Result<String, SceneError> {
 
 fn build_with_placements(plan: &Plan) -> Result<(Scene, Option<Vec<park::Placement>>), SceneError> {
     if let SceneSpec::Gltf(spec) = &plan.scene {
-        return Ok((build_gltf_scene(plan, &spec.file)?, None));
+        return Ok((build_gltf_scene(plan, spec)?, None));
     }
     // Step 1: distinct models in manifest order.
     let wanted: Vec<(ModelSource, [f32; 3], f32)> = match &plan.scene {
@@ -443,8 +443,12 @@ static GLTF_NOTES_SHOWN: std::sync::Mutex<std::collections::BTreeSet<PathBuf>> =
 /// (file units, not normalised), one instance per node and model, tint 1. Model
 /// names are made unique with `#k` as for other scenes; textured models hash their
 /// texture and UVs into the content hash.
-fn build_gltf_scene(plan: &Plan, file: &std::path::Path) -> Result<Scene, SceneError> {
-    let gltf = crate::load::load_gltf_scene(file)?;
+fn build_gltf_scene(plan: &Plan, spec: &crate::manifest::GltfSpec) -> Result<Scene, SceneError> {
+    let file = spec.file.as_path();
+    let options = crate::load::GltfOptions {
+        group_by_parent: spec.group_by_parent,
+    };
+    let gltf = crate::load::load_gltf_scene_with(file, options)?;
     if !gltf.notes.is_empty() {
         let mut shown = GLTF_NOTES_SHOWN.lock().unwrap_or_else(|e| e.into_inner());
         if shown.insert(file.to_path_buf()) {

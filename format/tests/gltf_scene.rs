@@ -148,3 +148,93 @@ fn bad_gltf_scenes_are_refused_with_the_reason() {
     .to_string();
     assert!(e.contains(".gltf or .glb"), "{e}");
 }
+
+/// A glTF scene of one triangle mesh used by three nodes: a parent "building" at
+/// x = 10 with two mesh children (the second 1 up), and one mesh node at the root.
+fn write_grouped_sample(dir: &std::path::Path) -> std::path::PathBuf {
+    let positions: [[f32; 3]; 3] = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]];
+    let bytes: Vec<u8> = positions
+        .iter()
+        .flatten()
+        .flat_map(|x| x.to_le_bytes())
+        .collect();
+    std::fs::write(dir.join("tri.bin"), &bytes).unwrap();
+    let json = r#"{
+        "asset": {"version": "2.0"},
+        "scene": 0,
+        "scenes": [{"nodes": [0, 3]}],
+        "nodes": [
+            {"name": "building", "translation": [10.0, 0.0, 0.0], "children": [1, 2]},
+            {"mesh": 0},
+            {"mesh": 0, "translation": [0.0, 1.0, 0.0]},
+            {"mesh": 0, "translation": [-5.0, 0.0, 0.0]}
+        ],
+        "meshes": [{"name": "tri", "primitives": [{"attributes": {"POSITION": 0}}]}],
+        "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                       "min": [0.0, 0.0, -1.0], "max": [1.0, 0.0, 0.0]}],
+        "bufferViews": [{"buffer": 0, "byteLength": 36}],
+        "buffers": [{"uri": "tri.bin", "byteLength": 36}]
+    }"#;
+    let path = dir.join("grouped.gltf");
+    std::fs::write(&path, json).unwrap();
+    path
+}
+
+/// Issue 18: `group_by_parent` makes the mesh nodes under one parent one object
+/// (one model in the parent's frame, one instance); without it each mesh node is an
+/// instance of the shared mesh. Both through the loader and the manifest.
+#[test]
+fn mesh_nodes_group_by_parent_when_asked() {
+    use format::load::{load_gltf_scene_with, GltfOptions};
+    let dir = tempfile::tempdir().unwrap();
+    let path = write_grouped_sample(dir.path());
+    let plain = load_gltf_scene(&path).unwrap();
+    assert_eq!(plain.models.len(), 1);
+    assert_eq!(plain.instances.len(), 3);
+    let grouped = load_gltf_scene_with(
+        &path,
+        GltfOptions {
+            group_by_parent: true,
+        },
+    )
+    .unwrap();
+    let names: Vec<&str> = grouped.models.iter().map(|m| m.name.as_str()).collect();
+    assert_eq!(names, ["building", "tri"]);
+    assert_eq!(grouped.instances.len(), 2);
+    let building = &grouped.models[0];
+    assert_eq!(building.mesh.triangles.len(), 2);
+    assert_eq!(
+        building.mesh.bounds().unwrap(),
+        ([0.0, 0.0, -1.0], [1.0, 1.0, 0.0])
+    );
+    let i = grouped.instances[0];
+    assert_eq!((i.model, i.node), (0, 0));
+    assert_eq!(i.transform.w_axis.truncate(), Vec3::new(10.0, 0.0, 0.0));
+    assert_eq!(grouped.instances[1].model, 1);
+    assert_eq!(
+        grouped.instances[1].transform.w_axis.truncate(),
+        Vec3::new(-5.0, 0.0, 0.0)
+    );
+    // The same through the manifest: the old form and the struct form.
+    let manifest = dir.path().join("m.ron");
+    let scene_of = |scene: &str| {
+        let text = format!(
+            "(ground: (min: (-10.0, -10.0), max: (20.0, 10.0)), scene: {scene},
+              cells: (cell_size: 5.0, min_eye_height: 1.0, max_eye_height: 2.0))"
+        );
+        let plan = parse_manifest_str(&text, &manifest).unwrap();
+        plan.load_scene().unwrap()
+    };
+    assert_eq!(scene_of(r#"Gltf("grouped.gltf")"#).instances.len(), 3);
+    assert_eq!(
+        scene_of(r#"Gltf((file: "grouped.gltf"))"#).instances.len(),
+        3
+    );
+    let s = scene_of(r#"Gltf((file: "grouped.gltf", group_by_parent: true))"#);
+    assert_eq!((s.models.len(), s.instances.len()), (2, 2));
+    // A misspelt field is refused, not ignored.
+    let text = r#"(ground: (min: (-10.0, -10.0), max: (20.0, 10.0)),
+        scene: Gltf((file: "grouped.gltf", group_by_parnet: true)),
+        cells: (cell_size: 5.0, min_eye_height: 1.0, max_eye_height: 2.0))"#;
+    assert!(parse_manifest_str(text, &manifest).is_err());
+}

@@ -22,6 +22,14 @@
 //!    whole into the model and the instance only translates. Nodes with the same
 //!    mesh and scale share a model. A mirrored model has flipped winding, so
 //!    triangles stay counter-clockwise in the world;
+//!    With [`GltfOptions::group_by_parent`] (manifest `group_by_parent: true`), the
+//!    mesh nodes that are children of one node, when there are two or more, are one
+//!    object instead: their meshes are merged into one model per base-colour
+//!    texture, in the parent's frame (each child's local transform baked into the
+//!    model, the parent's world transform split as above), and placed once with
+//!    the parent's instance transform, so a building of 40 nodes is one object of
+//!    the bake. Such models are not shared with other nodes; a parent with a single
+//!    mesh child, and mesh nodes at the scene's root, stay as without grouping;
 //! 4. a model's albedo: vertex colour (`COLOR_0`, linear) × the material's base-colour
 //!    factor, to sRGB8 per vertex (white when neither is there but a texture is; the
 //!    procedural pattern when nothing is); the base-colour texture (its UV set, the
@@ -67,6 +75,13 @@ pub struct GltfInstance {
     pub node: u32,
 }
 
+/// How a glTF file is read as a scene.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct GltfOptions {
+    /// One object per parent node of two or more mesh nodes (module docs, step 3).
+    pub group_by_parent: bool,
+}
+
 /// A glTF file as a scene.
 #[derive(Clone, Debug, PartialEq)]
 pub struct GltfScene {
@@ -74,6 +89,17 @@ pub struct GltfScene {
     pub instances: Vec<GltfInstance>,
     /// What was ignored, one line each (`KHR_texture_transform is not read`, ...).
     pub notes: Vec<String>,
+}
+
+/// One mesh's primitives placed in a model: `offset + linear · p`, winding flipped
+/// when `mirrored` (the linear part's determinant is negative).
+struct Part<'a> {
+    mesh: gltf::Mesh<'a>,
+    prims: Vec<gltf::Primitive<'a>>,
+    linear: Mat3,
+    /// `None` for a node's own mesh (the model is the mesh, linearly transformed).
+    offset: Option<glam::Vec3>,
+    mirrored: bool,
 }
 
 /// A triangle primitive of a mesh, in mesh space.
@@ -86,20 +112,27 @@ struct ScenePrim {
 
 /// Reads the glTF scene at `path` (steps in the module docs).
 pub fn load_gltf_scene(path: &Path) -> Result<GltfScene, LoadError> {
+    load_gltf_scene_with(path, GltfOptions::default())
+}
+
+/// [`load_gltf_scene`] with options (the manifest's `group_by_parent`).
+pub fn load_gltf_scene_with(path: &Path, options: GltfOptions) -> Result<GltfScene, LoadError> {
     let bytes = std::fs::read(path).map_err(|source| LoadError::Io {
         path: path.to_path_buf(),
         source,
     })?;
-    parse_gltf_scene(path, &bytes)
+    super::guarded(path, FORMAT, || parse_scene(path, &bytes, options))
 }
 
 /// [`load_gltf_scene`] of `bytes` already read from `path` (external buffers and
 /// images resolve against `path`'s folder); what the fuzz targets call.
 pub fn parse_gltf_scene(path: &Path, bytes: &[u8]) -> Result<GltfScene, LoadError> {
-    super::guarded(path, FORMAT, || parse_scene(path, bytes))
+    super::guarded(path, FORMAT, || {
+        parse_scene(path, bytes, GltfOptions::default())
+    })
 }
 
-fn parse_scene(path: &Path, bytes: &[u8]) -> Result<GltfScene, LoadError> {
+fn parse_scene(path: &Path, bytes: &[u8], options: GltfOptions) -> Result<GltfScene, LoadError> {
     let err = |what: String, at: Location| parse_error(path, FORMAT, what, at);
     // Step 1: document, buffers, extensions (required ones are checked first: the
     // validator would only say "unsupported extension").
@@ -159,6 +192,10 @@ fn parse_scene(path: &Path, bytes: &[u8]) -> Result<GltfScene, LoadError> {
     let mut textures: BTreeMap<usize, AlbedoTexture> = BTreeMap::new();
     let mut skinned = Vec::new();
     let mut morphed = Vec::new();
+    // Step 2a: every node in depth-first order with its world transform and its
+    // parent (index and world transform); then, when grouping, the parents of two
+    // or more mesh nodes.
+    let mut visits: Vec<(gltf::Node, Mat4, Option<(usize, Mat4)>)> = Vec::new();
     let mut stack: Vec<(gltf::Node, Mat4, Vec<usize>)> = scene
         .nodes()
         .map(|n| (n, Mat4::IDENTITY, Vec::new()))
@@ -180,15 +217,61 @@ fn parse_scene(path: &Path, bytes: &[u8]) -> Result<GltfScene, LoadError> {
         if node.skin().is_some() {
             skinned.push(node.index());
         }
+        let parent_of = ancestors.last().map(|&p| (p, parent));
+        visits.push((node.clone(), world, parent_of));
+        ancestors.push(node.index());
+        let children: Vec<_> = node.children().collect();
+        for child in children.into_iter().rev() {
+            stack.push((child, world, ancestors.clone()));
+        }
+    }
+    // Parent index → its mesh children (in visit order), for parents of two or more.
+    let mut by_parent: BTreeMap<usize, Vec<usize>> = BTreeMap::new();
+    if options.group_by_parent {
+        for (k, (node, _, parent)) in visits.iter().enumerate() {
+            if let (Some(_), Some((p, _))) = (node.mesh(), parent) {
+                by_parent.entry(*p).or_default().push(k);
+            }
+        }
+        by_parent.retain(|_, members| members.len() >= 2);
+    }
+    let grouped: BTreeMap<usize, usize> = by_parent
+        .iter()
+        .flat_map(|(&p, members)| members.iter().map(move |&k| (k, p)))
+        .collect();
+    // Step 2b: place the mesh nodes (a group where its first member is visited).
+    for (k, (node, world, parent)) in visits.iter().enumerate() {
+        let (node, world) = (node, *world);
+        let at = || Location::Element(format!("node {}", node.index()));
         if let Some(mesh) = node.mesh() {
-            let (baked, instance_transform) = split_transform(world);
-            let mirrored = baked.determinant() < 0.0;
             if mesh
                 .primitives()
                 .any(|p| p.morph_targets().next().is_some())
             {
                 morphed.push(mesh.index());
             }
+        }
+        if let (Some(&p), Some((_, parent_world))) = (grouped.get(&k), parent) {
+            if by_parent[&p][0] == k {
+                let members: Vec<&gltf::Node> =
+                    by_parent[&p].iter().map(|&m| &visits[m].0).collect();
+                let parent_node = document.nodes().nth(p).expect("visited parent");
+                place_group(
+                    path,
+                    &document,
+                    &buffers,
+                    (&parent_node, *parent_world),
+                    &members,
+                    &mut textures,
+                    &mut models,
+                    &mut instances,
+                )?;
+            }
+            continue;
+        }
+        if let Some(mesh) = node.mesh() {
+            let (baked, instance_transform) = split_transform(world);
+            let mirrored = baked.determinant() < 0.0;
             // Step 3: the mesh's models, by texture.
             // Groups in order of first appearance among the primitives.
             let mut groups: Vec<(Option<usize>, Vec<gltf::Primitive>)> = Vec::new();
@@ -214,15 +297,21 @@ fn parse_scene(path: &Path, bytes: &[u8]) -> Result<GltfScene, LoadError> {
                 let id = match model_of.get(&key) {
                     Some(&id) => Some(id),
                     None => {
+                        let part = Part {
+                            mesh: mesh.clone(),
+                            prims,
+                            linear: baked,
+                            offset: None,
+                            mirrored,
+                        };
+                        let name = model_name(&mesh, texture, split, mirrored);
                         let model = build_model(
                             path,
                             &document,
                             &buffers,
-                            &mesh,
-                            &prims,
+                            &[part],
                             texture,
-                            (baked, mirrored),
-                            split,
+                            name,
                             &mut textures,
                         )?;
                         match model {
@@ -245,11 +334,6 @@ fn parse_scene(path: &Path, bytes: &[u8]) -> Result<GltfScene, LoadError> {
                     });
                 }
             }
-        }
-        ancestors.push(node.index());
-        let children: Vec<_> = node.children().collect();
-        for child in children.into_iter().rev() {
-            stack.push((child, world, ancestors.clone()));
         }
     }
     if !skinned.is_empty() {
@@ -276,35 +360,149 @@ fn parse_scene(path: &Path, bytes: &[u8]) -> Result<GltfScene, LoadError> {
     })
 }
 
-/// One model: the primitives of `mesh` that use `texture`, positions multiplied by
-/// `baked`, winding flipped when the node's transform `mirrored`; `None` when none
-/// of them has triangles.
+/// Places a group of mesh nodes, children of `parent` (step 3, `group_by_parent`):
+/// one model per base-colour texture of all their primitives, in the parent's frame
+/// (the parent's world transform split by [`split_transform`]), each placed once
+/// with the parent's instance transform.
 #[allow(clippy::too_many_arguments)]
+fn place_group(
+    path: &Path,
+    document: &gltf::Document,
+    buffers: &[gltf::buffer::Data],
+    (parent, parent_world): (&gltf::Node, Mat4),
+    members: &[&gltf::Node],
+    textures: &mut BTreeMap<usize, AlbedoTexture>,
+    models: &mut Vec<GltfModel>,
+    instances: &mut Vec<GltfInstance>,
+) -> Result<(), LoadError> {
+    let at = || Location::Element(format!("node {}", parent.index()));
+    let (baked, instance_transform) = split_transform(parent_world);
+    // Textures in order of first appearance over the members' primitives.
+    let mut by_texture: Vec<(Option<usize>, Vec<Part>)> = Vec::new();
+    for node in members {
+        let Some(mesh) = node.mesh() else { continue };
+        let local = Mat4::from_cols_array_2d(&node.transform().matrix());
+        let affine = Mat4::from_mat3(baked) * local;
+        let linear = Mat3::from_mat4(affine);
+        for p in mesh.primitives() {
+            let texture = p
+                .material()
+                .pbr_metallic_roughness()
+                .base_color_texture()
+                .map(|t| t.texture().index());
+            let slot = match by_texture.iter().position(|(t, _)| *t == texture) {
+                Some(i) => i,
+                None => {
+                    by_texture.push((texture, Vec::new()));
+                    by_texture.len() - 1
+                }
+            };
+            // Consecutive primitives of one node share a part.
+            let offset = Some(affine.w_axis.truncate());
+            let parts = &mut by_texture[slot].1;
+            match parts.last_mut() {
+                Some(part)
+                    if part.mesh.index() == mesh.index()
+                        && part.linear == linear
+                        && part.offset == offset =>
+                {
+                    part.prims.push(p)
+                }
+                _ => parts.push(Part {
+                    mesh: mesh.clone(),
+                    prims: vec![p],
+                    linear,
+                    offset,
+                    mirrored: linear.determinant() < 0.0,
+                }),
+            }
+        }
+    }
+    let split = by_texture.len() > 1;
+    for (texture, parts) in by_texture {
+        let mut name = parent
+            .name()
+            .filter(|n| !n.is_empty())
+            .map(str::to_string)
+            .unwrap_or_else(|| format!("node{}", parent.index()));
+        if split {
+            name.push_str(if texture.is_some() {
+                "-textured"
+            } else {
+                "-plain"
+            });
+        }
+        let model = build_model(path, document, buffers, &parts, texture, name, textures)?;
+        if let Some(m) = model {
+            let id = u32::try_from(models.len())
+                .map_err(|_| parse_error(path, FORMAT, "too many models".to_string(), at()))?;
+            models.push(m);
+            instances.push(GltfInstance {
+                model: id,
+                transform: instance_transform,
+                node: parent.index() as u32,
+            });
+        }
+    }
+    Ok(())
+}
+
+/// The name of a node's model: the mesh's name (else `mesh<N>`), with `-textured`
+/// / `-plain` when the mesh is `split` by texture and `-mirrored`.
+fn model_name(mesh: &gltf::Mesh, texture: Option<usize>, split: bool, mirrored: bool) -> String {
+    let mut name = mesh
+        .name()
+        .filter(|n| !n.is_empty())
+        .map(str::to_string)
+        .unwrap_or_else(|| format!("mesh{}", mesh.index()));
+    if split {
+        name.push_str(if texture.is_some() {
+            "-textured"
+        } else {
+            "-plain"
+        });
+    }
+    if mirrored {
+        name.push_str("-mirrored");
+    }
+    name
+}
+
+/// One model named `name`: the primitives of `parts` (all using `texture`), each
+/// part's positions transformed and its winding flipped when it mirrors; `None`
+/// when none of them has triangles.
 fn build_model(
     path: &Path,
     document: &gltf::Document,
     buffers: &[gltf::buffer::Data],
-    mesh: &gltf::Mesh,
-    prims: &[gltf::Primitive],
+    parts: &[Part],
     texture: Option<usize>,
-    (baked, mirrored): (Mat3, bool),
-    split: bool,
+    name: String,
     textures: &mut BTreeMap<usize, AlbedoTexture>,
 ) -> Result<Option<GltfModel>, LoadError> {
-    let at = || Location::Element(format!("mesh {}", mesh.index()));
+    let at = || {
+        Location::Element(format!(
+            "mesh {}",
+            parts.first().map_or(0, |p| p.mesh.index())
+        ))
+    };
     let err = |what: String| parse_error(path, FORMAT, what, at());
-    let mut parts = Vec::new();
-    for p in prims {
-        if let Some(part) = read_scene_primitive(path, buffers, mesh, p, texture.is_some())? {
-            parts.push(part);
+    let mut read = Vec::new();
+    for part in parts {
+        for p in &part.prims {
+            if let Some(prim) =
+                read_scene_primitive(path, buffers, &part.mesh, p, texture.is_some())?
+            {
+                read.push((prim, part));
+            }
         }
     }
-    if parts.is_empty() {
+    if read.is_empty() {
         return Ok(None);
     }
-    // Concatenate the parts.
+    // Concatenate the primitives.
     let any_colors = texture.is_some()
-        || prims.iter().any(|p| {
+        || parts.iter().flat_map(|part| &part.prims).any(|p| {
             p.get(&gltf::Semantic::Colors(0)).is_some()
                 || p.material().pbr_metallic_roughness().base_color_factor() != [1.0; 4]
         });
@@ -313,14 +511,17 @@ fn build_model(
         ..RawMesh::default()
     };
     let mut uvs: Vec<[f32; 2]> = Vec::new();
-    for part in &parts {
+    for (part, placed) in &read {
+        let (linear, offset, mirrored) = (placed.linear, placed.offset, placed.mirrored);
         let base =
             u32::try_from(raw.positions.len()).map_err(|_| err("too many vertices".into()))?;
-        raw.positions.extend(
-            part.positions
-                .iter()
-                .map(|p| (baked * glam::Vec3::from_array(*p)).to_array()),
-        );
+        raw.positions.extend(part.positions.iter().map(|p| {
+            let q = linear * glam::Vec3::from_array(*p);
+            match offset {
+                Some(o) => (q + o).to_array(),
+                None => q.to_array(),
+            }
+        }));
         if let Some(c) = &mut raw.colors {
             c.extend_from_slice(&part.colors);
         }
@@ -353,21 +554,6 @@ fn build_model(
         }
         _ => None,
     };
-    let mut name = mesh
-        .name()
-        .filter(|n| !n.is_empty())
-        .map(str::to_string)
-        .unwrap_or_else(|| format!("mesh{}", mesh.index()));
-    if split {
-        name.push_str(if texture.is_some() {
-            "-textured"
-        } else {
-            "-plain"
-        });
-    }
-    if mirrored {
-        name.push_str("-mirrored");
-    }
     Ok(Some(GltfModel {
         name,
         mesh: mesh_out,
