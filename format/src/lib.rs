@@ -35,6 +35,7 @@ pub mod path;
 pub mod procedural;
 pub mod scene;
 pub mod scene_build;
+pub mod schema;
 pub mod shading;
 pub mod srgb;
 

@@ -66,103 +66,66 @@ pub fn masked_sq_error_y(a: &[u8], b: &[u8], mask: &[bool]) -> (f64, usize) {
 // objective selection (issue 16).
 pub use format::metrics::{masked_ssim_y, ssim_y};
 
+// The per-frame and per-path quality figures are part of `player compare --json`:
+// their schema is `format::schema::compare`, measured here.
+pub use format::schema::compare::{FrameQuality, ObjectQuality};
+
 /// Image quality of one frame against one reference (both rendered with coverage
 /// alpha, `width × height` RGBA8).
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
-pub struct FrameQuality {
-    /// Full-frame PSNR(Y), capped at [`PSNR_CAP`].
-    pub psnr_y_db: f64,
-    /// Full-frame mean SSIM on Y.
-    pub ssim: f64,
-    /// Pixels that are not background in the frame or in the reference.
-    pub object_pixels: usize,
-    /// PSNR(Y) over the object pixels, capped; `None` without object pixels.
-    pub object_psnr_y_db: Option<f64>,
-    /// Mean SSIM over the windows centred on object pixels; `None` without any.
-    pub object_ssim: Option<f64>,
-    /// Σ ΔY² over the object pixels (8-bit levels²), for pooling over a path.
-    #[serde(skip)]
-    pub object_sq_error: f64,
-    /// All pixels of the frame.
-    #[serde(skip)]
-    pub pixels: usize,
-}
-
-impl FrameQuality {
-    pub fn measure(reference: &[u8], frame: &[u8], width: usize, height: usize) -> FrameQuality {
-        let mask = object_mask(reference, frame);
-        let (sq, n) = masked_sq_error_y(reference, frame, &mask);
-        FrameQuality {
-            psnr_y_db: psnr_y(reference, frame).min(PSNR_CAP),
-            ssim: ssim_y(reference, frame, width, height),
-            object_pixels: n,
-            object_psnr_y_db: (n > 0).then(|| psnr_of_mse(sq / n as f64).min(PSNR_CAP)),
-            object_ssim: masked_ssim_y(reference, frame, width, height, &mask),
-            object_sq_error: sq,
-            pixels: width * height,
-        }
+pub fn measure_frame(reference: &[u8], frame: &[u8], width: usize, height: usize) -> FrameQuality {
+    let mask = object_mask(reference, frame);
+    let (sq, n) = masked_sq_error_y(reference, frame, &mask);
+    FrameQuality {
+        psnr_y_db: psnr_y(reference, frame).min(PSNR_CAP),
+        ssim: ssim_y(reference, frame, width, height),
+        object_pixels: n,
+        object_psnr_y_db: (n > 0).then(|| psnr_of_mse(sq / n as f64).min(PSNR_CAP)),
+        object_ssim: masked_ssim_y(reference, frame, width, height, &mask),
+        object_sq_error: sq,
+        pixels: width * height,
     }
 }
 
-/// Object-pixel quality over a path.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
-pub struct ObjectQuality {
-    /// PSNR(Y) of the MSE pooled over every object pixel of every frame, capped
-    /// ([`PSNR_CAP`] without any object pixel).
-    pub object_psnr_y_db: f64,
-    /// The lowest per-frame object PSNR(Y) ([`PSNR_CAP`] without object pixels).
-    pub min_object_psnr_y_db: f64,
-    /// The frame of that minimum.
-    pub worst_object_frame: Option<usize>,
-    /// Mean of the per-frame object SSIM over the frames that have object pixels
-    /// (1 without any).
-    pub mean_object_ssim: f64,
-    /// Object pixels / all pixels over the path (what the full-frame figures are
-    /// diluted by: 1 − this is sky).
-    pub object_pixel_fraction: f64,
-}
-
-impl ObjectQuality {
-    /// Summary of per-frame figures; `frames` yields (frame number, quality).
-    pub fn summarize<'a>(
-        frames: impl IntoIterator<Item = (usize, &'a FrameQuality)>,
-    ) -> ObjectQuality {
-        let (mut sq, mut n, mut pixels) = (0.0, 0usize, 0usize);
-        let (mut ssim_sum, mut ssim_n) = (0.0, 0usize);
-        let mut worst: Option<(f64, usize)> = None;
-        for (i, q) in frames {
-            sq += q.object_sq_error;
-            n += q.object_pixels;
-            pixels += q.pixels;
-            if let Some(s) = q.object_ssim {
-                ssim_sum += s;
-                ssim_n += 1;
-            }
-            if let Some(p) = q.object_psnr_y_db {
-                if worst.is_none_or(|(w, _)| p < w) {
-                    worst = Some((p, i));
-                }
+/// Object-pixel quality over a path: summary of per-frame figures; `frames` yields
+/// (frame number, quality).
+pub fn summarize_objects<'a>(
+    frames: impl IntoIterator<Item = (usize, &'a FrameQuality)>,
+) -> ObjectQuality {
+    let (mut sq, mut n, mut pixels) = (0.0, 0usize, 0usize);
+    let (mut ssim_sum, mut ssim_n) = (0.0, 0usize);
+    let mut worst: Option<(f64, usize)> = None;
+    for (i, q) in frames {
+        sq += q.object_sq_error;
+        n += q.object_pixels;
+        pixels += q.pixels;
+        if let Some(s) = q.object_ssim {
+            ssim_sum += s;
+            ssim_n += 1;
+        }
+        if let Some(p) = q.object_psnr_y_db {
+            if worst.is_none_or(|(w, _)| p < w) {
+                worst = Some((p, i));
             }
         }
-        ObjectQuality {
-            object_psnr_y_db: if n == 0 {
-                PSNR_CAP
-            } else {
-                psnr_of_mse(sq / n as f64).min(PSNR_CAP)
-            },
-            min_object_psnr_y_db: worst.map_or(PSNR_CAP, |w| w.0),
-            worst_object_frame: worst.map(|w| w.1),
-            mean_object_ssim: if ssim_n == 0 {
-                1.0
-            } else {
-                ssim_sum / ssim_n as f64
-            },
-            object_pixel_fraction: if pixels == 0 {
-                0.0
-            } else {
-                n as f64 / pixels as f64
-            },
-        }
+    }
+    ObjectQuality {
+        object_psnr_y_db: if n == 0 {
+            PSNR_CAP
+        } else {
+            psnr_of_mse(sq / n as f64).min(PSNR_CAP)
+        },
+        min_object_psnr_y_db: worst.map_or(PSNR_CAP, |w| w.0),
+        worst_object_frame: worst.map(|w| w.1),
+        mean_object_ssim: if ssim_n == 0 {
+            1.0
+        } else {
+            ssim_sum / ssim_n as f64
+        },
+        object_pixel_fraction: if pixels == 0 {
+            0.0
+        } else {
+            n as f64 / pixels as f64
+        },
     }
 }
 
@@ -315,7 +278,7 @@ mod tests {
             "{}",
             sq / n as f64
         );
-        let q = FrameQuality::measure(&a, &b, 16, 16);
+        let q = measure_frame(&a, &b, 16, 16);
         let expected = 10.0 * (255.0f64 * 255.0 / expected_mse).log10();
         assert_eq!(q.object_pixels, 20);
         assert!((q.object_psnr_y_db.unwrap() - expected).abs() < 1e-3);
@@ -323,12 +286,12 @@ mod tests {
         assert!(q.psnr_y_db < q.object_psnr_y_db.unwrap());
         // Object pixels of the same colour in both frames: no error wherever the sky is.
         let c = frame(16, 16, [100, 50, 150], &common, [100, 50, 50]);
-        let q = FrameQuality::measure(&a, &c, 16, 16);
+        let q = measure_frame(&a, &c, 16, 16);
         assert_eq!(q.object_psnr_y_db, Some(PSNR_CAP));
         assert!(q.psnr_y_db < 30.0, "{}", q.psnr_y_db);
         // Only sky: no object figures.
         let sky = frame(16, 16, [100, 50, 50], &[], [0, 0, 0]);
-        let q = FrameQuality::measure(&sky, &sky, 16, 16);
+        let q = measure_frame(&sky, &sky, 16, 16);
         assert_eq!(
             (q.object_pixels, q.object_psnr_y_db, q.object_ssim),
             (0, None, None)
@@ -347,7 +310,7 @@ mod tests {
                 b[(y * 32 + x) * 4 + 1] = (x * 7 + y * 13) as u8;
             }
         }
-        let q = FrameQuality::measure(&a, &b, 32, 32);
+        let q = measure_frame(&a, &b, 32, 32);
         assert!(
             (q.object_ssim.unwrap() - 1.0).abs() < 1e-12,
             "{:?}",
@@ -365,11 +328,11 @@ mod tests {
         let b2 = frame(8, 8, [0, 0, 0], &block(2, 2, 2), [130, 50, 50]); // 4 px ΔY 8.97, 12 px object → sky
         let sky = frame(8, 8, [0, 0, 0], &[], [0, 0, 0]);
         let q = [
-            FrameQuality::measure(&a, &b1, 8, 8),
-            FrameQuality::measure(&a, &b2, 8, 8),
-            FrameQuality::measure(&sky, &sky, 8, 8),
+            measure_frame(&a, &b1, 8, 8),
+            measure_frame(&a, &b2, 8, 8),
+            measure_frame(&sky, &sky, 8, 8),
         ];
-        let s = ObjectQuality::summarize(q.iter().enumerate());
+        let s = summarize_objects(q.iter().enumerate());
         let y_obj = 0.299 * 100.0 + 0.587 * 50.0 + 0.114 * 50.0;
         let sq2 = 4.0 * 8.97f64.powi(2) + 12.0 * y_obj * y_obj;
         let pooled = (16.0 * 2.99f64.powi(2) + sq2) / 32.0;

@@ -6,9 +6,16 @@ use crate::camera::Camera;
 use crate::frame::{hybrid_list, list_stats, lod_list, originals_list, Mode};
 use crate::gpu::{GpuError, GpuModels, Renderer};
 use crate::lod::LodSet;
-use crate::metrics::{diff_image, downsample_linear, opaque, FrameQuality, ObjectQuality};
+use crate::metrics::{
+    diff_image, downsample_linear, measure_frame, opaque, summarize_objects, FrameQuality,
+};
 use crate::stream::{StreamConfig, Streamer};
 use format::path::{CameraPath, PathFrame};
+// The `--json` report: its schema lives in format (issue 14 item 2), read by the
+// benchmark tool.
+pub use format::schema::compare::{
+    AaFrame, AaQuality, AaReference, CompareFrame, CompareReport, CrossingStats,
+};
 use glam::Vec2;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -327,18 +334,8 @@ fn median(v: &mut [f64]) -> f64 {
     }
 }
 
-/// Frame-time behaviour at cell crossings (paper Fig. 14): per crossing, the maximum
-/// total frame time (GPU + streaming) in the crossing frame and the 9 after it,
-/// relative to the median of the other (in-cell) frames.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
-pub struct CrossingStats {
-    pub crossings: usize,
-    pub in_cell_median_ms: f64,
-    pub max_after_crossing_ms: f64,
-    /// max_after_crossing_ms / in_cell_median_ms.
-    pub ratio: f64,
-}
-
+/// Frame-time behaviour at cell crossings (paper Fig. 14); see
+/// [`CrossingStats`].
 pub fn crossing_stats(records: &[FrameRecord]) -> CrossingStats {
     let total = |r: &FrameRecord| r.frame_ms + r.stream_ms;
     let mut near = vec![false; records.len()];
@@ -380,117 +377,18 @@ pub const DEFAULT_REFERENCE_SS: u32 = 4;
 /// The largest `--reference-ss`.
 pub const MAX_REFERENCE_SS: u32 = 8;
 
-/// One frame of `player compare`.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
-pub struct CompareFrame {
-    pub frame: usize,
-    pub cell: Option<u32>,
-    /// Full-frame PSNR(Y) against the full-geometry frame, dB (capped).
-    pub psnr_y: f64,
-    /// Full-frame mean SSIM against the full-geometry frame.
-    pub ssim: f64,
-    /// Pixels where either frame is not sky.
-    pub object_pixels: usize,
-    /// PSNR(Y) over the object pixels, dB (capped); `None` without object pixels.
-    pub object_psnr_y_db: Option<f64>,
-    /// Mean SSIM over the windows centred on object pixels.
-    pub object_ssim: Option<f64>,
-    /// Both frames against the anti-aliased reference (`--reference-ss` > 1).
-    pub aa_reference: Option<AaFrame>,
-    pub triangles: u64,
-    pub reference_triangles: u64,
-    pub frame_ms: f64,
-    pub reference_frame_ms: f64,
-    pub frustum_frame_ms: f64,
-}
-
-/// One frame against the anti-aliased reference.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
-pub struct AaFrame {
-    /// The compared mode's frame (hybrid or lod).
-    pub compared: FrameQuality,
-    /// The full-geometry frame rendered at one sample per pixel (aliased).
-    pub full: FrameQuality,
-}
-
-/// One configuration's frames against the anti-aliased reference, over the path.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
-pub struct AaQuality {
-    /// Mean of the per-frame full-frame PSNR(Y), dB.
-    pub mean_psnr_y_db: f64,
-    pub min_psnr_y_db: f64,
-    pub mean_ssim: f64,
-    #[serde(flatten)]
-    pub object: ObjectQuality,
-}
-
-impl AaQuality {
-    fn summarize<'a>(frames: impl Iterator<Item = (usize, &'a FrameQuality)> + Clone) -> AaQuality {
-        AaQuality {
-            mean_psnr_y_db: mean(frames.clone().map(|(_, q)| q.psnr_y_db)),
-            min_psnr_y_db: frames
-                .clone()
-                .map(|(_, q)| q.psnr_y_db)
-                .fold(PSNR_CAP, f64::min),
-            mean_ssim: mean(frames.clone().map(|(_, q)| q.ssim)),
-            object: ObjectQuality::summarize(frames),
-        }
+/// One configuration's frames against the anti-aliased reference, summarised over
+/// the path.
+fn summarize_aa<'a>(frames: impl Iterator<Item = (usize, &'a FrameQuality)> + Clone) -> AaQuality {
+    AaQuality {
+        mean_psnr_y_db: mean(frames.clone().map(|(_, q)| q.psnr_y_db)),
+        min_psnr_y_db: frames
+            .clone()
+            .map(|(_, q)| q.psnr_y_db)
+            .fold(PSNR_CAP, f64::min),
+        mean_ssim: mean(frames.clone().map(|(_, q)| q.ssim)),
+        object: summarize_objects(frames),
     }
-}
-
-/// The anti-aliased reference (DESIGN.md "Measuring quality honestly"): full
-/// geometry rendered `supersampling_factor` times wider and higher and box-filtered
-/// in linear light. `compared` minus `full` is the error of the proxies (or LOD
-/// levels) beyond the aliasing that the one-sample full-geometry frame already has.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
-pub struct AaReference {
-    /// Per axis (`--reference-ss`).
-    pub supersampling_factor: u32,
-    /// supersampling_factor².
-    pub samples_per_pixel: u32,
-    /// The compared mode (hybrid or lod) against it.
-    pub compared: AaQuality,
-    /// The aliased full-geometry frame against it: the sampling noise alone.
-    pub full: AaQuality,
-}
-
-/// The result of `player compare`.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
-pub struct CompareReport {
-    pub frames: usize,
-    /// Full-frame figures against the aliased full-geometry frame: mean and minimum
-    /// of the per-frame PSNR(Y) in dB, mean SSIM.
-    pub mean_psnr_y: f64,
-    pub min_psnr_y: f64,
-    pub mean_ssim: f64,
-    /// The same over object pixels (where either frame is not sky): pooled
-    /// `object_psnr_y_db`, `min_object_psnr_y_db`, `worst_object_frame`,
-    /// `mean_object_ssim`, `object_pixel_fraction`.
-    #[serde(flatten)]
-    pub object: ObjectQuality,
-    /// Both frames against the anti-aliased reference; `None` with
-    /// `--reference-ss 1`.
-    pub aa_reference: Option<AaReference>,
-    pub mean_triangles: f64,
-    pub reference_triangles: f64,
-    /// Mean frame time of the compared mode (hybrid or lod) / mean full-geometry
-    /// frame time.
-    pub frame_time_ratio: f64,
-    /// Mean frame time of the compared mode / mean frustum-culled frame time (config
-    /// C vs B for the hybrid).
-    pub frame_time_ratio_frustum: f64,
-    pub adapter: String,
-    pub width: u32,
-    pub height: u32,
-    /// The compared configuration (`hybrid`, `lod`, ...).
-    pub mode: String,
-    /// The LOD threshold in pixels (`lod` mode only).
-    pub lod_pixel_error: Option<f32>,
-    /// Wall time of building the LOD chains (`lod` mode only), milliseconds.
-    pub lod_build_ms: Option<f64>,
-    pub crossing_prefetch: Option<CrossingStats>,
-    pub crossing_no_prefetch: Option<CrossingStats>,
-    pub per_frame: Vec<CompareFrame>,
 }
 
 /// Options of `player compare`.
@@ -605,10 +503,10 @@ pub fn compare(
             None => None,
         };
         // 3. The metrics: full frame and object pixels, against A and the AA reference.
-        let q = FrameQuality::measure(&reference, &hybrid, w, h);
+        let q = measure_frame(&reference, &hybrid, w, h);
         let aa = aa_reference.as_ref().map(|aa| AaFrame {
-            compared: FrameQuality::measure(aa, &hybrid, w, h),
-            full: FrameQuality::measure(aa, &reference, w, h),
+            compared: measure_frame(aa, &hybrid, w, h),
+            full: measure_frame(aa, &reference, w, h),
         });
         per_frame.push(CompareFrame {
             frame: i,
@@ -698,7 +596,7 @@ pub fn compare(
         mean_psnr_y: mean(per_frame.iter().map(|f| f.psnr_y)),
         min_psnr_y: finite_min.min(PSNR_CAP),
         mean_ssim: mean(per_frame.iter().map(|f| f.ssim)),
-        object: ObjectQuality::summarize(quality.iter().enumerate()),
+        object: summarize_objects(quality.iter().enumerate()),
         aa_reference: (ss > 1).then(|| {
             let aa = || {
                 per_frame
@@ -708,8 +606,8 @@ pub fn compare(
             AaReference {
                 supersampling_factor: ss,
                 samples_per_pixel: ss * ss,
-                compared: AaQuality::summarize(aa().map(|(i, a)| (i, &a.compared))),
-                full: AaQuality::summarize(aa().map(|(i, a)| (i, &a.full))),
+                compared: summarize_aa(aa().map(|(i, a)| (i, &a.compared))),
+                full: summarize_aa(aa().map(|(i, a)| (i, &a.full))),
             }
         }),
         mean_triangles: mean(per_frame.iter().map(|f| f.triangles as f64)),

@@ -1,0 +1,242 @@
+//! `player compare --json`: the image-quality and frame-time report of a compare
+//! along a camera path (issue 14 items 2 and 6), written by the player
+//! (`player/src/run.rs`) and read by the benchmark tool (`bench/`, the run files of
+//! `scripts/bench.sh`). player/README.md describes the keys.
+//!
+//! JSON (`serde_json::to_string_pretty`). A figure that is not a number (the mean of
+//! no frames, a ratio over a zero median) is written as `null` and reads back as NaN;
+//! every struct reads with `#[serde(default)]`, so a report written before a field
+//! existed (run files of older players) still reads, and unknown keys are ignored.
+//! Golden file: `format/tests/data/schema/compare.json`
+//! (`format/tests/schema_compare_golden.rs`).
+
+use serde::{Deserialize, Deserializer, Serialize};
+
+/// Frame-time behaviour at cell crossings (paper Fig. 14): per crossing, the maximum
+/// total frame time (GPU + streaming) in the crossing frame and the 9 after it,
+/// relative to the median of the other (in-cell) frames.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct CrossingStats {
+    pub crossings: usize,
+    #[serde(deserialize_with = "nan_if_null")]
+    pub in_cell_median_ms: f64,
+    #[serde(deserialize_with = "nan_if_null")]
+    pub max_after_crossing_ms: f64,
+    /// max_after_crossing_ms / in_cell_median_ms.
+    #[serde(deserialize_with = "nan_if_null")]
+    pub ratio: f64,
+}
+
+/// Image quality of one frame against one reference (both rendered with coverage
+/// alpha, `width × height` RGBA8); measured by `player::metrics::measure_frame`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct FrameQuality {
+    /// Full-frame PSNR(Y), capped at [`crate::metrics::PSNR_CAP`].
+    #[serde(deserialize_with = "nan_if_null")]
+    pub psnr_y_db: f64,
+    /// Full-frame mean SSIM on Y.
+    #[serde(deserialize_with = "nan_if_null")]
+    pub ssim: f64,
+    /// Pixels that are not background in the frame or in the reference.
+    pub object_pixels: usize,
+    /// PSNR(Y) over the object pixels, capped; `None` without object pixels.
+    pub object_psnr_y_db: Option<f64>,
+    /// Mean SSIM over the windows centred on object pixels; `None` without any.
+    pub object_ssim: Option<f64>,
+    /// Σ ΔY² over the object pixels (8-bit levels²), for pooling over a path. Not
+    /// written: the writer's pooling state.
+    #[serde(skip)]
+    pub object_sq_error: f64,
+    /// All pixels of the frame. Not written.
+    #[serde(skip)]
+    pub pixels: usize,
+}
+
+/// Object-pixel quality over a path (`player::metrics::summarize_objects`).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct ObjectQuality {
+    /// PSNR(Y) of the MSE pooled over every object pixel of every frame, capped
+    /// ([`crate::metrics::PSNR_CAP`] without any object pixel).
+    #[serde(deserialize_with = "nan_if_null")]
+    pub object_psnr_y_db: f64,
+    /// The lowest per-frame object PSNR(Y) ([`crate::metrics::PSNR_CAP`] without
+    /// object pixels).
+    #[serde(deserialize_with = "nan_if_null")]
+    pub min_object_psnr_y_db: f64,
+    /// The frame of that minimum.
+    pub worst_object_frame: Option<usize>,
+    /// Mean of the per-frame object SSIM over the frames that have object pixels
+    /// (1 without any).
+    #[serde(deserialize_with = "nan_if_null")]
+    pub mean_object_ssim: f64,
+    /// Object pixels / all pixels over the path (what the full-frame figures are
+    /// diluted by: 1 − this is sky).
+    #[serde(deserialize_with = "nan_if_null")]
+    pub object_pixel_fraction: f64,
+}
+
+/// One frame of `player compare`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct CompareFrame {
+    pub frame: usize,
+    pub cell: Option<u32>,
+    /// Full-frame PSNR(Y) against the full-geometry frame, dB (capped).
+    #[serde(deserialize_with = "nan_if_null")]
+    pub psnr_y: f64,
+    /// Full-frame mean SSIM against the full-geometry frame.
+    #[serde(deserialize_with = "nan_if_null")]
+    pub ssim: f64,
+    /// Pixels where either frame is not sky.
+    pub object_pixels: usize,
+    /// PSNR(Y) over the object pixels, dB (capped); `None` without object pixels.
+    pub object_psnr_y_db: Option<f64>,
+    /// Mean SSIM over the windows centred on object pixels.
+    pub object_ssim: Option<f64>,
+    /// Both frames against the anti-aliased reference (`--reference-ss` > 1).
+    pub aa_reference: Option<AaFrame>,
+    pub triangles: u64,
+    pub reference_triangles: u64,
+    #[serde(deserialize_with = "nan_if_null")]
+    pub frame_ms: f64,
+    #[serde(deserialize_with = "nan_if_null")]
+    pub reference_frame_ms: f64,
+    #[serde(deserialize_with = "nan_if_null")]
+    pub frustum_frame_ms: f64,
+}
+
+/// One frame against the anti-aliased reference.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct AaFrame {
+    /// The compared mode's frame (hybrid or lod).
+    pub compared: FrameQuality,
+    /// The full-geometry frame rendered at one sample per pixel (aliased).
+    pub full: FrameQuality,
+}
+
+/// One configuration's frames against the anti-aliased reference, over the path.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct AaQuality {
+    /// Mean of the per-frame full-frame PSNR(Y), dB.
+    #[serde(deserialize_with = "nan_if_null")]
+    pub mean_psnr_y_db: f64,
+    #[serde(deserialize_with = "nan_if_null")]
+    pub min_psnr_y_db: f64,
+    #[serde(deserialize_with = "nan_if_null")]
+    pub mean_ssim: f64,
+    #[serde(flatten)]
+    pub object: ObjectQuality,
+}
+
+/// The anti-aliased reference (DESIGN.md "Measuring quality honestly"): full
+/// geometry rendered `supersampling_factor` times wider and higher and box-filtered
+/// in linear light. `compared` minus `full` is the error of the proxies (or LOD
+/// levels) beyond the aliasing that the one-sample full-geometry frame already has.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct AaReference {
+    /// Per axis (`--reference-ss`).
+    pub supersampling_factor: u32,
+    /// supersampling_factor².
+    pub samples_per_pixel: u32,
+    /// The compared mode (hybrid or lod) against it.
+    pub compared: AaQuality,
+    /// The aliased full-geometry frame against it: the sampling noise alone.
+    pub full: AaQuality,
+}
+
+/// The result of `player compare` (its `--json` output).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct CompareReport {
+    pub frames: usize,
+    /// Full-frame figures against the aliased full-geometry frame: mean and minimum
+    /// of the per-frame PSNR(Y) in dB, mean SSIM.
+    #[serde(deserialize_with = "nan_if_null")]
+    pub mean_psnr_y: f64,
+    #[serde(deserialize_with = "nan_if_null")]
+    pub min_psnr_y: f64,
+    #[serde(deserialize_with = "nan_if_null")]
+    pub mean_ssim: f64,
+    /// The same over object pixels (where either frame is not sky): pooled
+    /// `object_psnr_y_db`, `min_object_psnr_y_db`, `worst_object_frame`,
+    /// `mean_object_ssim`, `object_pixel_fraction`.
+    #[serde(flatten)]
+    pub object: ObjectQuality,
+    /// Both frames against the anti-aliased reference; `None` with
+    /// `--reference-ss 1`.
+    pub aa_reference: Option<AaReference>,
+    #[serde(deserialize_with = "nan_if_null")]
+    pub mean_triangles: f64,
+    #[serde(deserialize_with = "nan_if_null")]
+    pub reference_triangles: f64,
+    /// Mean frame time of the compared mode (hybrid or lod) / mean full-geometry
+    /// frame time.
+    #[serde(deserialize_with = "nan_if_null")]
+    pub frame_time_ratio: f64,
+    /// Mean frame time of the compared mode / mean frustum-culled frame time (config
+    /// C vs B for the hybrid).
+    #[serde(deserialize_with = "nan_if_null")]
+    pub frame_time_ratio_frustum: f64,
+    pub adapter: String,
+    pub width: u32,
+    pub height: u32,
+    /// The compared configuration (`hybrid`, `lod`, ...); older players omit it.
+    pub mode: String,
+    /// The LOD threshold in pixels (`lod` mode only; the player's `f32`).
+    pub lod_pixel_error: Option<f32>,
+    /// Wall time of building the LOD chains (`lod` mode only), milliseconds.
+    pub lod_build_ms: Option<f64>,
+    pub crossing_prefetch: Option<CrossingStats>,
+    pub crossing_no_prefetch: Option<CrossingStats>,
+    pub per_frame: Vec<CompareFrame>,
+}
+
+/// serde_json writes a non-finite f64 as `null`: read it back as NaN.
+fn nan_if_null<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn nan_is_written_as_null_and_reads_back_as_nan() {
+        let c = CrossingStats {
+            crossings: 0,
+            in_cell_median_ms: 1.0,
+            max_after_crossing_ms: 0.0,
+            ratio: f64::NAN,
+        };
+        let json = serde_json::to_string(&c).unwrap();
+        assert!(json.contains("\"ratio\":null"), "{json}");
+        let back: CrossingStats = serde_json::from_str(&json).unwrap();
+        assert!(back.ratio.is_nan());
+        assert_eq!(back.in_cell_median_ms, 1.0);
+    }
+
+    #[test]
+    fn a_report_of_an_older_player_reads_with_defaults() {
+        // Before object pixels and the anti-aliased reference (run files up to
+        // 2026-11-21), with a key this schema does not know.
+        let json = r#"{"frames":1,"mean_psnr_y":40.5,"min_psnr_y":40.5,"mean_ssim":0.9,
+            "mean_triangles":100.0,"reference_triangles":1000.0,"frame_time_ratio":0.5,
+            "frame_time_ratio_frustum":0.7,"adapter":"llvmpipe","width":64,"height":64,
+            "something_new":[1,2],
+            "per_frame":[{"frame":0,"cell":null,"psnr_y":40.5,"ssim":0.9,"triangles":90,
+                          "reference_triangles":1000,"frame_ms":1.0,"reference_frame_ms":2.0,
+                          "frustum_frame_ms":1.5}]}"#;
+        let r: CompareReport = serde_json::from_str(json).unwrap();
+        assert_eq!(r.frames, 1);
+        assert_eq!(r.mode, "");
+        assert_eq!(r.object, ObjectQuality::default());
+        assert!(r.aa_reference.is_none() && r.per_frame[0].aa_reference.is_none());
+        assert_eq!(r.per_frame[0].object_psnr_y_db, None);
+    }
+}
