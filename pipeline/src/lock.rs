@@ -9,7 +9,12 @@
 //! Before the lock, [`create_output_dir`] makes the directory itself, with errors that
 //! name the path and say what hexbake was doing (issue 19: `--out` inside `/proc` or
 //! naming a regular file printed a bare "No such file or directory" / "File exists").
+//!
+//! The lock keeps out other runs on this host and others; the tasks of an earlier
+//! Slurm submission still writing into the output are kept out by
+//! [`refuse_while_queued`] (the submission is `format::schema::slurm`).
 
+use format::schema::slurm::read_submission;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
@@ -159,6 +164,49 @@ impl Drop for OutputLock {
     fn drop(&mut self) {
         let _ = std::fs::remove_file(&self.path);
     }
+}
+
+/// Refuses to start a run on `out` while tasks of its last Slurm submission are
+/// queued or running: they write into the output, so a second run would bake their
+/// jobs twice and could not tell their temp files from those of a killed run. The
+/// finalize job is not counted: where a task failed and the cluster lacks
+/// `kill_invalid_depend` it stays pending forever, and running it twice is harmless.
+/// Where `squeue` cannot run (no Slurm here) nothing is refused.
+pub fn refuse_while_queued(out: &Path) -> anyhow::Result<()> {
+    let Some(sub) = read_submission(out) else {
+        return Ok(());
+    };
+    let Ok(tasks) = queued(&[&sub.array_job]) else {
+        return Ok(());
+    };
+    if tasks.is_empty() {
+        return Ok(());
+    }
+    Err(anyhow::anyhow!(
+        "{}: tasks of Slurm array job {} (the last submission for this output) are still queued or running ({}); wait for them (`pipeline status {}`) or cancel them (`scancel {}`), then run again",
+        out.display(),
+        sub.array_job,
+        tasks.join(" "),
+        out.display(),
+        sub.array_job
+    ))
+}
+
+/// Ids among `ids` that squeue still lists (pending, running, completing).
+pub fn queued(ids: &[&str]) -> anyhow::Result<Vec<String>> {
+    let out = std::process::Command::new("squeue")
+        .args(["-h", "-o", "%i", "-j", &ids.join(",")])
+        .output()
+        .map_err(|e| anyhow::anyhow!("cannot run squeue: {e}"))?;
+    // squeue fails for ids it has forgotten: that means nothing is queued.
+    if !out.status.success() {
+        return Ok(Vec::new());
+    }
+    Ok(String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .map(|l| l.trim().to_string())
+        .filter(|l| !l.is_empty())
+        .collect())
 }
 
 #[cfg(test)]

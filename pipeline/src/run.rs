@@ -2,6 +2,8 @@
 //! (DESIGN.md "Data flow"). Jobs run in-process on a rayon pool (local executor)
 //! or as a Slurm job array (see [`crate::slurm`]); either way each job writes its
 //! packs and record atomically (worker::job), so a rerun redoes only what is missing.
+//! The files it writes besides packs (plan, partial, job records) are
+//! `format::schema` (re-exported here where callers reach them through `run`).
 
 use crate::lock::OutputLock;
 use anyhow::Context;
@@ -11,33 +13,14 @@ use format::pack::{BasePack, GridParams, Index, IndexEntry};
 use format::Scene;
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
-use serde::{Deserialize, Serialize};
+pub use format::schema::job::error_path;
+pub use format::schema::plan::{partial_path, read_partial, Partial, PlanFile};
+use format::schema::plan::plan_path;
+use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 use worker::job::{bake_cell_pack, done_record, plan_jobs, run_job, BuildPlan, Job, JobRecord};
 use worker::lod_chain::LodChains;
-
-/// `<out>/plan.json`: what the run planned, for `pipeline status` and Slurm tasks.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-pub struct PlanFile {
-    pub manifest: PathBuf,
-    pub name: String,
-    pub jobs: Vec<Job>,
-    /// `--set` overrides the run applied to the manifest (`KEY=VALUE`, canonical keys).
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub overrides: Vec<String>,
-    /// The bake and cell parameters in effect (after overrides); absent in plans
-    /// written before they were recorded.
-    #[serde(default)]
-    pub bake: Option<format::manifest::BakeParams>,
-    #[serde(default)]
-    pub cell_params: Option<format::manifest::CellParams>,
-}
-
-/// A job that failed: `<out>/jobs/<id>.error` holds the message.
-pub fn error_path(out: &Path, job: u32) -> PathBuf {
-    out.join("jobs").join(format!("{job}.error"))
-}
 
 #[derive(Debug, thiserror::Error)]
 pub enum RunError {
@@ -119,7 +102,7 @@ pub fn write_plan_and_base(l: &Loaded) -> Result<(), RunError> {
         cell_params: Some(l.plan.cells.clone()),
     };
     let text = serde_json::to_vec_pretty(&plan_file).expect("plan serializes");
-    format::pack::write_atomic(&l.out.join("plan.json"), &text).map_err(failed)?;
+    format::pack::write_atomic(&plan_path(&l.out), &text).map_err(failed)?;
     let mut base = BasePack::from_scene(&l.scene, grid_params(l), l.build.scene_fingerprint);
     let path = l.out.join("base.pack");
     // Issue 17: per-model patch tiling, bitfields and normal cones (worker
@@ -386,13 +369,13 @@ impl RunSummary {
 const STALE_TEMP_AGE: std::time::Duration = std::time::Duration::from_secs(3600);
 
 /// Takes the output lock, refuses while Slurm tasks of an earlier submission still
-/// write into the output ([`crate::slurm::refuse_while_queued`]), and removes the temp
+/// write into the output ([`crate::lock::refuse_while_queued`]), and removes the temp
 /// files an interrupted run left in the output, its `cells/`, `jobs/` and `lod/`
 /// ([`format::pack::remove_stale_temps`]).
 pub fn lock_output(out: &Path) -> Result<OutputLock, RunError> {
     std::fs::create_dir_all(out).map_err(failed)?;
     let lock = OutputLock::acquire(out).map_err(failed)?;
-    crate::slurm::refuse_while_queued(out)?;
+    crate::lock::refuse_while_queued(out).map_err(failed)?;
     for dir in [
         out.to_path_buf(),
         out.join("cells"),
@@ -446,52 +429,6 @@ pub fn run_local(l: &Loaded, force: bool, opts: &LocalOptions) -> Result<RunSumm
         wall_s: start.elapsed().as_secs_f64(),
         complete,
     })
-}
-
-/// `<out>/partial.json`: written by a `--cells` run that leaves cells unbaked, removed
-/// by any run after which every cell is baked.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Partial {
-    /// The `--cells` spec as given.
-    pub spec: String,
-    /// The cells the spec resolved to.
-    pub requested_cells: Vec<u32>,
-    /// Cells with a done pack (requested or not: jobs are baked whole).
-    pub baked_cells: usize,
-    /// Cells of the grid.
-    pub grid_cells: usize,
-    /// Cells not baked: not in the index, drawn as original geometry by the player.
-    pub not_baked_cells: Vec<u32>,
-    /// Requested cells that are not baked (their job failed); empty on success.
-    pub requested_not_baked: Vec<u32>,
-}
-
-impl Partial {
-    /// One line for people, e.g. `partial: 84 of 528 cells baked (62 requested: all baked)`.
-    pub fn line(&self) -> String {
-        let requested = if self.requested_not_baked.is_empty() {
-            "all baked".to_string()
-        } else {
-            format!("{} NOT baked", self.requested_not_baked.len())
-        };
-        format!(
-            "partial: {} of {} cells baked ({} requested by --cells {:?}: {}); cells not in the index are drawn as original geometry",
-            self.baked_cells,
-            self.grid_cells,
-            self.requested_cells.len(),
-            self.spec,
-            requested
-        )
-    }
-}
-
-pub fn partial_path(out: &Path) -> PathBuf {
-    out.join("partial.json")
-}
-
-/// Reads `<out>/partial.json`, if the bake is partial.
-pub fn read_partial(out: &Path) -> Option<Partial> {
-    serde_json::from_slice(&std::fs::read(partial_path(out)).ok()?).ok()
 }
 
 /// `pipeline run --cells` with the local executor: bakes only the jobs holding a

@@ -4,8 +4,10 @@
 //! it again submits only the jobs still missing. Waiting polls `squeue` with a
 //! timeout (`sbatch --wait` polls too slowly), unless `--no-wait`.
 
-use crate::run::{error_path, missing_jobs, prepare, Loaded, RunError, RunSummary};
-use serde::{Deserialize, Serialize};
+use crate::lock::queued;
+use crate::run::{missing_jobs, prepare, Loaded, RunError, RunSummary};
+use format::schema::job::error_path;
+use format::schema::slurm::{submission_path, Submission};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::{Duration, Instant};
@@ -34,20 +36,6 @@ pub struct SlurmArgs {
     /// Give up waiting after this many seconds (the jobs keep running).
     #[arg(long, default_value_t = 3600)]
     pub wait_timeout_s: u64,
-}
-
-/// `<out>/slurm/submitted.json`: the last submission.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-pub struct Submission {
-    pub array_job: String,
-    pub finalize_job: String,
-    /// Array index = job id.
-    pub jobs: Vec<u32>,
-}
-
-/// The output's last Slurm submission, if it has a readable one.
-pub fn read_submission(out: &Path) -> Option<Submission> {
-    serde_json::from_slice(&std::fs::read(out.join("slurm/submitted.json")).ok()?).ok()
 }
 
 fn failed(e: impl Into<anyhow::Error>) -> RunError {
@@ -109,49 +97,6 @@ fn sbatch(args: &[&str]) -> Result<String, RunError> {
     let text = String::from_utf8_lossy(&out.stdout);
     // --parsable prints "id" or "id;cluster".
     Ok(text.trim().split(';').next().unwrap_or("").to_string())
-}
-
-/// Refuses to start a run on `out` while tasks of its last Slurm submission are
-/// queued or running: they write into the output, so a second run would bake their
-/// jobs twice and could not tell their temp files from those of a killed run. The
-/// finalize job is not counted: where a task failed and the cluster lacks
-/// `kill_invalid_depend` it stays pending forever, and running it twice is harmless.
-/// Where `squeue` cannot run (no Slurm here) nothing is refused.
-pub fn refuse_while_queued(out: &Path) -> Result<(), RunError> {
-    let Some(sub) = read_submission(out) else {
-        return Ok(());
-    };
-    let Ok(tasks) = queued(&[&sub.array_job]) else {
-        return Ok(());
-    };
-    if tasks.is_empty() {
-        return Ok(());
-    }
-    Err(failed(anyhow::anyhow!(
-        "{}: tasks of Slurm array job {} (the last submission for this output) are still queued or running ({}); wait for them (`pipeline status {}`) or cancel them (`scancel {}`), then run again",
-        out.display(),
-        sub.array_job,
-        tasks.join(" "),
-        out.display(),
-        sub.array_job
-    )))
-}
-
-/// Ids among `ids` that squeue still lists (pending, running, completing).
-pub fn queued(ids: &[&str]) -> Result<Vec<String>, RunError> {
-    let out = Command::new("squeue")
-        .args(["-h", "-o", "%i", "-j", &ids.join(",")])
-        .output()
-        .map_err(|e| failed(anyhow::anyhow!("cannot run squeue: {e}")))?;
-    // squeue fails for ids it has forgotten: that means nothing is queued.
-    if !out.status.success() {
-        return Ok(Vec::new());
-    }
-    Ok(String::from_utf8_lossy(&out.stdout)
-        .lines()
-        .map(|l| l.trim().to_string())
-        .filter(|l| !l.is_empty())
-        .collect())
 }
 
 pub fn run_slurm(
@@ -221,7 +166,7 @@ pub fn run_slurm(
             jobs: missing.iter().map(|j| j.id).collect(),
         };
         std::fs::write(
-            dir.join("submitted.json"),
+            submission_path(&out),
             serde_json::to_vec_pretty(&submission).expect("serializes"),
         )
         .map_err(failed)?;
@@ -249,7 +194,7 @@ pub fn run_slurm(
         // 3. Wait for both (poll squeue).
         let deadline = Instant::now() + Duration::from_secs(args.wait_timeout_s);
         loop {
-            let q = queued(&[&array, &fin])?;
+            let q = queued(&[&array, &fin]).map_err(failed)?;
             if q.is_empty() {
                 break;
             }

@@ -2,8 +2,10 @@
 //! directory (job records, error files) and, when a Slurm submission is recorded and
 //! Slurm answers, from `squeue`.
 
-use crate::run::{error_path, PlanFile};
-use crate::slurm::{queued, read_submission};
+use crate::lock::queued;
+use format::schema::job::error_path;
+use format::schema::plan::{plan_path, PlanFile};
+use format::schema::slurm::read_submission;
 use serde::Serialize;
 use std::path::Path;
 use worker::job::done_record;
@@ -59,7 +61,7 @@ impl Status {
 pub fn status(out: &Path) -> anyhow::Result<Status> {
     use anyhow::Context;
     let plan: PlanFile = serde_json::from_slice(
-        &std::fs::read(out.join("plan.json"))
+        &std::fs::read(plan_path(out))
             .with_context(|| format!("{}: no plan.json: not a bake output", out.display()))?,
     )
     .with_context(|| format!("{}/plan.json", out.display()))?;

@@ -14,6 +14,9 @@
 //! <out>/lod/<hash>.lod       per-model LOD chains (crate::lod_chain), a cache
 //! ```
 //!
+//! The record, the job list and these paths are `format::schema::job` (one schema
+//! for the worker that writes records and the pipeline that reads them).
+//!
 //! A record lists, per cell, the content key of each proxy in pack order
 //! (`proxy_keys`): when the job is baked again (its fingerprint changed), every
 //! proxy whose key is unchanged is taken from the previous pack instead of derived
@@ -35,23 +38,11 @@ use format::fingerprint::{
 };
 use format::manifest::Plan;
 use format::pack::CellPack;
+pub use format::schema::job::{
+    cell_file, error_path, group_file, record_path, CellRecord, CellReport, Job, JobRecord, Unit,
+};
 use format::Scene;
-use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
-
-/// One job of a build.
-#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
-pub struct Job {
-    pub id: u32,
-    /// Ascending cell ids.
-    pub cells: Vec<u32>,
-    /// Ascending far-field group ids ([`crate::far_field`]); a job bakes cells or
-    /// groups, never both.
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub groups: Vec<u32>,
-    #[serde(with = "hex32")]
-    pub fingerprint: Fingerprint,
-}
 
 /// The jobs of a manifest and the fingerprints they depend on.
 #[derive(Clone, Debug)]
@@ -111,50 +102,9 @@ pub fn plan_jobs(plan: &Plan, scene: &Scene) -> BuildPlan {
     }
 }
 
-/// What one cell's bake reports besides its pack (statistics, times): it goes into
-/// the job record, never into pack bytes (times differ from run to run).
-pub type CellReport = serde_json::Value;
-
-/// One cell's entry in a job record.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-pub struct CellRecord {
-    pub cell: u32,
-    pub file: String,
-    pub bytes: u64,
-    #[serde(with = "hex32")]
-    pub checksum: [u8; 32],
-    pub report: CellReport,
-}
-
 /// `<out>/lod/`: the per-model LOD chain cache ([`crate::lod_chain`]).
 pub fn lod_dir(out: &Path) -> PathBuf {
     out.join("lod")
-}
-
-/// `jobs/<id>.json`.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-pub struct JobRecord {
-    pub job: u32,
-    #[serde(with = "hex32")]
-    pub fingerprint: Fingerprint,
-    pub cells: Vec<CellRecord>,
-    /// A far-field job's group packs (`cell` is the group id); records written
-    /// before the far field read as none.
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub groups: Vec<CellRecord>,
-    /// Wall time of the job in seconds.
-    pub wall_s: f64,
-    /// CPU time of the whole process while the job ran, in seconds (all threads). It is
-    /// the job's own only when the job had the process to itself (`worker job`, a Slurm
-    /// task, or a local run with one thread); see `shared_process`.
-    pub cpu_s: f64,
-    /// Other jobs ran in the same process at the same time (the local executor with
-    /// more than one thread), so `cpu_s` also counts theirs and is not this job's.
-    /// Records written before this field read as `false`.
-    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
-    pub shared_process: bool,
-    /// Where it ran.
-    pub host: String,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -163,60 +113,6 @@ pub enum JobError {
     Unit { unit: Unit, message: String },
     #[error("{path}: {message}")]
     Io { path: PathBuf, message: String },
-}
-
-pub fn cell_file(cell: u32) -> String {
-    format!("cells/{cell}.pack")
-}
-
-pub fn group_file(group: u32) -> String {
-    format!("groups/{group}.pack")
-}
-
-/// What a job bakes: a cell, or a far-field group ([`crate::far_field`]).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
-pub enum Unit {
-    Cell(u32),
-    Group(u32),
-}
-
-impl Unit {
-    pub fn id(self) -> u32 {
-        match self {
-            Unit::Cell(id) | Unit::Group(id) => id,
-        }
-    }
-
-    /// Its pack's path relative to the output directory.
-    pub fn file(self) -> String {
-        match self {
-            Unit::Cell(c) => cell_file(c),
-            Unit::Group(g) => group_file(g),
-        }
-    }
-}
-
-impl std::fmt::Display for Unit {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            Unit::Cell(c) => write!(f, "cell {c}"),
-            Unit::Group(g) => write!(f, "far-field group {g}"),
-        }
-    }
-}
-
-impl Job {
-    /// The cells, then the groups, the job bakes.
-    pub fn units(&self) -> impl Iterator<Item = Unit> + '_ {
-        self.cells
-            .iter()
-            .map(|&c| Unit::Cell(c))
-            .chain(self.groups.iter().map(|&g| Unit::Group(g)))
-    }
-}
-
-pub fn record_path(out: &Path, job: u32) -> PathBuf {
-    out.join("jobs").join(format!("{job}.json"))
 }
 
 /// Reads a job's record if the job is done (see the module docs), else `None`.
@@ -346,20 +242,6 @@ pub fn process_cpu_seconds() -> f64 {
     };
     // utime and stime are fields 14 and 15 of stat, i.e. 11 and 12 after the name.
     (ticks(11) + ticks(12)) / 100.0
-}
-
-mod hex32 {
-    use serde::{Deserialize, Deserializer, Serializer};
-
-    pub fn serialize<S: Serializer>(v: &[u8; 32], s: S) -> Result<S::Ok, S::Error> {
-        s.serialize_str(&format::fingerprint::to_hex(v))
-    }
-
-    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<[u8; 32], D::Error> {
-        let text = String::deserialize(d)?;
-        format::fingerprint::from_hex(&text)
-            .ok_or_else(|| serde::de::Error::custom("expected 64 hex digits"))
-    }
 }
 
 /// The proxies of the job's earlier bake, per cell, by key (issue 13, per-proxy
