@@ -31,8 +31,10 @@ pub type Fingerprint = [u8; 32];
 /// 8 — MVMesh textures from neighbouring centres fitted to the cell's need
 /// (`worker::capture::fitted_scale`);
 /// 9 — objective selection of representations with layered impostors (issue 16,
-/// `bake.quality`, worker `select.rs`, `impostor.rs`).
-pub const BAKE_REVISION: u32 = 9;
+/// `bake.quality`, worker `select.rs`, `impostor.rs`);
+/// 10 — the collapse and the speck tidying run on position-welded vertices, so
+/// UV-seamed models simplify as closed meshes (issue 18, `worker::simplify`).
+pub const BAKE_REVISION: u32 = 10;
 
 /// Hex form for file names, logs and reports.
 pub fn to_hex(f: &Fingerprint) -> String {

@@ -91,7 +91,9 @@ pub fn derive_mvmesh(
         .into_iter()
         .map(|culled| !culled)
         .collect();
-    tidy_selection(&mesh.triangles, &mut kept, settings.speck_triangles);
+    // On welded vertices: a UV-seamed model's faces are not specks (issue 18).
+    let welded = crate::simplify::welded_triangles(&mesh.positions, &mesh.triangles);
+    tidy_selection(&welded, &mut kept, settings.speck_triangles);
     let (input_triangles, carried) = start.select(&kept);
     times.weights_ms += ms_since(t);
 

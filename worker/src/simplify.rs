@@ -81,6 +81,23 @@
 //! 35.2–40.3 dB with 9,277–14,681 proxy triangles per cell; 1 px 39.9–44.2 dB with
 //! 14,022–30,148; 0.5 px 42.8–46.6 dB with 21,886–53,371 (BENCHMARKS.md).
 //!
+//! **Welding (issue 18, not in the paper).** Textured and flat-shaded models split
+//! a vertex wherever its UV or normal jumps (a UV-seamed box has 24 vertices at 8
+//! corners). On the split ids a seam is an open boundary, which the boundary
+//! condition and the link condition freeze, so such a model kept its seams and
+//! lost the rest, or fell apart. The collapse therefore runs on the
+//! *position-welded* topology: the input vertices its triangles use are grouped by
+//! bit-equal position (−0 = +0), each group acts as one vertex, its lowest id (the
+//! representative) standing for it, with the group's normalised normal sum, its
+//! highest weight and the OR of its view sets. An input triangle that welding would
+//! make degenerate or a repeat of an earlier welded one (a two-sided sheet) keeps its
+//! own ids. Each output corner is mapped back to an input id at the same position:
+//! a corner that did not move keeps its own id (and its UV, normal, colour); a corner
+//! renamed to a surviving group takes the group's copy whose normal is nearest the
+//! corner's old one (lowest id on a tie), so a box face keeps its own face's copies.
+//! View masks are the AND of the mapped-back ids' sets, as ever. The log names
+//! representatives. A mesh without two vertices at one position runs unchanged.
+//!
 //! [`validate`] checks every output (every test calls it).
 
 use glam::Vec3;
@@ -428,12 +445,12 @@ pub fn simplify_seeded(
         }
         chord_to_angle(chord) * ppr
     };
-    let mut collapser = Collapser::new(input);
-    collapser.deviation = tolerances.map(|t| Deviation::new(t, input.triangles.len()));
-    if let Some(dev) = collapser.deviation.as_mut() {
+    let deviation = tolerances.map(|t| {
+        let mut dev = Deviation::new(t, input.triangles.len());
         dev.seed(carried);
-    }
-    Ok(collapser.run(params.edge_length_tolerance, length))
+        dev
+    });
+    Ok(collapse_welded(input, deviation, params.edge_length_tolerance, length).simplified)
 }
 
 /// Checks the carried lists of [`simplify_seeded`] / [`collapse_within`].
@@ -489,18 +506,17 @@ pub fn collapse_within(
             found: tolerance.len(),
         });
     }
-    let mut collapser = Collapser::new(input);
     let mut dev = Deviation::new(tolerance, input.triangles.len());
     dev.seed(carried);
-    collapser.deviation = Some(dev);
-    let simplified = collapser.run(f32::INFINITY, length);
-    let mut dev = collapser.deviation.take().expect("set above");
-    let carried = (0..input.triangles.len())
-        .filter(|&t| collapser.alive[t])
-        .map(|t| std::mem::take(&mut dev.carried[t]))
+    let welded = collapse_welded(input, Some(dev), f32::INFINITY, length);
+    let mut dev = welded.deviation.expect("given above");
+    let carried = welded
+        .kept
+        .iter()
+        .map(|&t| std::mem::take(&mut dev.carried[t]))
         .collect();
     Ok(Tracked {
-        simplified,
+        simplified: welded.simplified,
         carried,
     })
 }
@@ -513,7 +529,260 @@ pub fn simplify_with(
     length_px: impl Fn(u32, u32) -> f32,
 ) -> Result<Simplified, SimplifyError> {
     check_input(input, edge_length_tolerance)?;
-    Ok(Collapser::new(input).run(edge_length_tolerance, length_px))
+    Ok(collapse_welded(input, None, edge_length_tolerance, length_px).simplified)
+}
+
+/// `triangles` with every vertex renamed to the lowest id at its bit-equal
+/// position (−0 = +0), the topology [`simplify`] collapses on (module docs,
+/// "Welding"); borrowed as they are when no two vertices share a position. For
+/// connectivity outside the collapse (e.g. `svmesh::tidy_selection`, whose specks
+/// would otherwise be every face of a UV-seamed box).
+pub fn welded_triangles<'t>(
+    positions: &[[f32; 3]],
+    triangles: &'t [[u32; 3]],
+) -> std::borrow::Cow<'t, [[u32; 3]]> {
+    let key = |v: u32| positions[v as usize].map(|x| (x + 0.0).to_bits());
+    let mut order: Vec<u32> = (0..positions.len() as u32).collect();
+    order.sort_unstable_by_key(|&v| (key(v), v));
+    let mut rep: Vec<u32> = (0..positions.len() as u32).collect();
+    let mut any = false;
+    for k in 1..order.len() {
+        if key(order[k]) == key(order[k - 1]) {
+            rep[order[k] as usize] = rep[order[k - 1] as usize];
+            any = true;
+        }
+    }
+    if !any {
+        return std::borrow::Cow::Borrowed(triangles);
+    }
+    std::borrow::Cow::Owned(
+        triangles
+            .iter()
+            .map(|t| t.map(|v| rep.get(v as usize).copied().unwrap_or(v)))
+            .collect(),
+    )
+}
+
+/// What [`collapse_welded`] returns.
+struct WeldedRun {
+    /// The result in `input`'s vertex ids.
+    simplified: Simplified,
+    /// The input triangles that survive, in order (one per output triangle).
+    kept: Vec<usize>,
+    /// The deviation bookkeeping after the run, when one was given.
+    deviation: Option<Deviation>,
+}
+
+/// The input's topology on position-welded vertices (module docs, "Welding").
+struct Weld {
+    normals: Vec<Vec3>,
+    weights: Vec<f32>,
+    view_sets: Option<Vec<u8>>,
+    /// Input triangles on representatives (or their own ids, see the docs).
+    triangles: Vec<[u32; 3]>,
+    /// Per representative with more than one copy: its copies, ascending (only ids
+    /// that welded triangle corners use); empty elsewhere.
+    copies: Vec<Vec<u32>>,
+}
+
+impl Weld {
+    /// `None` when no two vertices the triangles use share a position.
+    fn of(input: &SimplifyInput) -> Option<Weld> {
+        let n = input.positions.len();
+        let key = |v: u32| {
+            let p = input.positions[v as usize] + Vec3::ZERO; // −0 → +0
+            [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()]
+        };
+        let mut used = vec![false; n];
+        let mut order = Vec::new();
+        for tri in input.triangles {
+            for &v in tri {
+                if !std::mem::replace(&mut used[v as usize], true) {
+                    order.push(v);
+                }
+            }
+        }
+        order.sort_unstable_by_key(|&v| (key(v), v));
+        // Step 1: the representative of every used vertex.
+        let mut rep: Vec<u32> = (0..n as u32).collect();
+        let mut any = false;
+        for k in 1..order.len() {
+            if key(order[k]) == key(order[k - 1]) {
+                rep[order[k] as usize] = rep[order[k - 1] as usize];
+                any = true;
+            }
+        }
+        if !any {
+            return None;
+        }
+        // Step 2: welded triangles; dropped ones (degenerate or repeated in the
+        // input) become degenerate so the collapser drops them as before.
+        let mut seen_input = std::collections::HashSet::new();
+        let mut seen_welded = std::collections::HashSet::new();
+        let mut welded_corner = vec![false; n];
+        let triangles = input
+            .triangles
+            .iter()
+            .map(|&tri| {
+                let key = sorted(tri);
+                if key[0] == key[1] || key[1] == key[2] || !seen_input.insert(key) {
+                    return [tri[0]; 3];
+                }
+                let w = tri.map(|v| rep[v as usize]);
+                let wkey = sorted(w);
+                if wkey[0] == wkey[1] || wkey[1] == wkey[2] || !seen_welded.insert(wkey) {
+                    return tri; // a two-sided sheet or a sliver: its own ids
+                }
+                for v in tri {
+                    welded_corner[v as usize] = true;
+                }
+                w
+            })
+            .collect();
+        // Step 3: the groups' copies and attributes.
+        let mut copies = vec![Vec::new(); n];
+        for &v in &order {
+            if welded_corner[v as usize] {
+                copies[rep[v as usize] as usize].push(v);
+            }
+        }
+        let mut normals = input.normals.to_vec();
+        let mut weights = input.weights.to_vec();
+        let mut view_sets = input.view_sets.map(<[u8]>::to_vec);
+        for (r, group) in copies.iter_mut().enumerate() {
+            if group.len() < 2 {
+                group.clear();
+                continue;
+            }
+            group.sort_unstable();
+            let sum: Vec3 = group.iter().map(|&v| input.normals[v as usize]).sum();
+            normals[r] = sum.try_normalize().unwrap_or(input.normals[r]);
+            weights[r] = group
+                .iter()
+                .map(|&v| input.weights[v as usize])
+                .fold(f32::NEG_INFINITY, f32::max);
+            if let (Some(out), Some(sets)) = (view_sets.as_mut(), input.view_sets) {
+                out[r] = group.iter().fold(0, |acc, &v| acc | sets[v as usize]);
+            }
+        }
+        Some(Weld {
+            normals,
+            weights,
+            view_sets,
+            triangles,
+            copies,
+        })
+    }
+
+    /// An output triangle in input ids: `input` its input corners, `start` its
+    /// welded corners, `now` its corners after the collapse (module docs).
+    fn map_back(
+        &self,
+        input_normals: &[Vec3],
+        input: [u32; 3],
+        start: [u32; 3],
+        now: [u32; 3],
+    ) -> [u32; 3] {
+        let mut out = [u32::MAX; 3];
+        for k in 0..3 {
+            if now[k] == start[k] {
+                out[k] = input[k];
+            }
+        }
+        for k in 0..3 {
+            if out[k] != u32::MAX {
+                continue;
+            }
+            let group = &self.copies[now[k] as usize];
+            let old = input_normals[input[k] as usize];
+            out[k] = group
+                .iter()
+                .copied()
+                .filter(|c| {
+                    !out.contains(c) && !now.iter().enumerate().any(|(j, &x)| j != k && x == *c)
+                })
+                .fold((f32::NEG_INFINITY, now[k]), |best, c| {
+                    let d = input_normals[c as usize].dot(old);
+                    if d > best.0 {
+                        (d, c)
+                    } else {
+                        best
+                    }
+                })
+                .1;
+        }
+        if out[0] == out[1] || out[1] == out[2] || out[0] == out[2] {
+            now
+        } else {
+            out
+        }
+    }
+}
+
+/// Runs the collapse on the position-welded topology of `input` (module docs,
+/// "Welding") and maps the result back to `input`'s vertex ids.
+fn collapse_welded(
+    input: &SimplifyInput,
+    deviation: Option<Deviation>,
+    tolerance: f32,
+    length_px: impl Fn(u32, u32) -> f32,
+) -> WeldedRun {
+    let Some(weld) = Weld::of(input) else {
+        let mut collapser = Collapser::new(input);
+        collapser.deviation = deviation;
+        let simplified = collapser.run(tolerance, length_px);
+        let kept = (0..input.triangles.len())
+            .filter(|&t| collapser.alive[t])
+            .collect();
+        return WeldedRun {
+            simplified,
+            kept,
+            deviation: collapser.deviation,
+        };
+    };
+    let welded = SimplifyInput {
+        positions: input.positions,
+        normals: &weld.normals,
+        triangles: &weld.triangles,
+        weights: &weld.weights,
+        view_sets: weld.view_sets.as_deref(),
+    };
+    let mut collapser = Collapser::new(&welded);
+    collapser.deviation = deviation;
+    let mut simplified = collapser.run(tolerance, length_px);
+    let kept: Vec<usize> = (0..input.triangles.len())
+        .filter(|&t| collapser.alive[t])
+        .collect();
+    let mapped: Vec<[u32; 3]> = kept
+        .iter()
+        .map(|&t| {
+            weld.map_back(
+                input.normals,
+                input.triangles[t],
+                weld.triangles[t],
+                collapser.triangles[t],
+            )
+        })
+        .collect();
+    // Distinct welded triangles map to distinct ones; should a corner case of
+    // two-sided sheets break that, the representatives' triangles stand.
+    let mut keys: Vec<[u32; 3]> = mapped.iter().map(|&t| sorted(t)).collect();
+    keys.sort_unstable();
+    if keys.windows(2).all(|w| w[0] != w[1]) {
+        simplified.triangles = mapped;
+    }
+    if let Some(sets) = input.view_sets {
+        simplified.view_masks = simplified
+            .triangles
+            .iter()
+            .map(|t| sets[t[0] as usize] & sets[t[1] as usize] & sets[t[2] as usize])
+            .collect();
+    }
+    WeldedRun {
+        simplified,
+        kept,
+        deviation: collapser.deviation,
+    }
 }
 
 fn check_input(input: &SimplifyInput, tolerance: f32) -> Result<(), SimplifyError> {

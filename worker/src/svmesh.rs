@@ -312,7 +312,9 @@ pub fn derive_svmesh(
         let weights: Vec<f32> = states.iter().map(|s| s.weight()).collect();
         // Step 1 (and 4 for clusters): the triangles to simplify.
         let mut front = front_facing_from(mesh, item.transform, centre);
-        tidy_selection(&mesh.triangles, &mut front, settings.speck_triangles);
+        // On welded vertices: a UV-seamed model's faces are not specks (issue 18).
+        let welded = crate::simplify::welded_triangles(&mesh.positions, &mesh.triangles);
+        tidy_selection(&welded, &mut front, settings.speck_triangles);
         let seen = (items.len() > 1).then(|| {
             let seen = seen_triangles(&capture.capture, item);
             if start.carried.is_none() {

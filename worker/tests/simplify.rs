@@ -1266,3 +1266,226 @@ fn lod_chain_file_round_trips_and_refuses_damage() {
     flipped[last] ^= 1;
     assert!(format::lod::LodChainFile::decode(&flipped).is_err());
 }
+
+// ---------------------------------------------------------------- UV seams (issue 18)
+
+/// `mesh` with every vertex split per chart that uses it, as a textured model's
+/// vertices are along its UV seams: `chart[t]` is triangle t's chart. Positions and
+/// normals are copied bit for bit.
+fn split_into_charts(mesh: &TestMesh, chart: impl Fn(usize) -> u32) -> TestMesh {
+    let mut ids = std::collections::BTreeMap::new();
+    let mut out = TestMesh {
+        positions: Vec::new(),
+        normals: Vec::new(),
+        triangles: Vec::new(),
+    };
+    for (t, tri) in mesh.triangles.iter().enumerate() {
+        let c = chart(t);
+        out.triangles.push(tri.map(|v| {
+            *ids.entry((c, v)).or_insert_with(|| {
+                out.positions.push(mesh.positions[v as usize]);
+                out.normals.push(mesh.normals[v as usize]);
+                out.positions.len() as u32 - 1
+            })
+        }));
+    }
+    out
+}
+
+/// A cube of half-size `h` at `centre`, each face an `n`×`n` grid with its own
+/// vertices and its own (flat) normal, as a textured box has: 24 corners' copies
+/// for 8 corners, 6 charts. Shared edges are bit-equal. Face f's triangles are
+/// `2n²·f .. 2n²·(f+1)`.
+fn seamed_cube(n: u32, centre: Vec3, h: f32) -> TestMesh {
+    let coord = |i: u32| -h + 2.0 * h * i as f32 / n as f32;
+    let mut mesh = TestMesh {
+        positions: Vec::new(),
+        normals: Vec::new(),
+        triangles: Vec::new(),
+    };
+    for axis in 0..3 {
+        for sign in [-1.0f32, 1.0] {
+            let normal =
+                Vec3::from_array(std::array::from_fn(|k| if k == axis { sign } else { 0.0 }));
+            // (u, v) axes with u × v = normal.
+            let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+            let (u, v) = if sign > 0.0 { (u, v) } else { (v, u) };
+            let base = mesh.positions.len() as u32;
+            for j in 0..=n {
+                for i in 0..=n {
+                    let mut p = [0.0f32; 3];
+                    p[axis] = sign * h;
+                    p[u] = coord(i);
+                    p[v] = coord(j);
+                    mesh.positions.push(centre + Vec3::from_array(p));
+                    mesh.normals.push(normal);
+                }
+            }
+            for j in 0..n {
+                for i in 0..n {
+                    let at = |di: u32, dj: u32| base + (j + dj) * (n + 1) + i + di;
+                    mesh.triangles.push([at(0, 0), at(1, 0), at(1, 1)]);
+                    mesh.triangles.push([at(0, 0), at(1, 1), at(0, 1)]);
+                }
+            }
+        }
+    }
+    mesh
+}
+
+/// Whether `triangles` close up once vertices at one position count as one: every
+/// directed edge has its reverse, and no triangle is degenerate in positions.
+fn closed_by_position(positions: &[Vec3], triangles: &[[u32; 3]]) -> Result<(), String> {
+    let key = |v: u32| positions[v as usize].to_array().map(f32::to_bits);
+    let mut edges: Vec<_> = triangles
+        .iter()
+        .flat_map(|t| (0..3).map(move |k| (key(t[k]), key(t[(k + 1) % 3]))))
+        .collect();
+    edges.sort_unstable();
+    if let Some(w) = edges.windows(2).find(|w| w[0] == w[1]) {
+        return Err(format!("edge {:?} used twice in one direction", w[0]));
+    }
+    for &(a, b) in &edges {
+        if a == b {
+            return Err(format!("degenerate edge at {a:?}"));
+        }
+        if edges.binary_search(&(b, a)).is_err() {
+            return Err(format!("open edge {a:?} -> {b:?}"));
+        }
+    }
+    Ok(())
+}
+
+/// SV parameters with a huge T_l and a 0.5 px deviation bound from a prism `eye`
+/// distance away, so only the bound and the topology rules stop the collapse.
+fn bounded_params(prism: Prism) -> (SimplifyParams, DeviationBound) {
+    let bound = DeviationBound {
+        max_px: 0.5,
+        region: prism,
+    };
+    let params = SimplifyParams {
+        edge_length_tolerance: 1e9,
+        length: ProjectedLength::MaxOverPrism {
+            prism,
+            pixels_per_radian: pixels_per_radian(256),
+        },
+        deviation: Some(bound),
+    };
+    (params, bound)
+}
+
+fn prism_at(x: f32, z: f32) -> Prism {
+    Prism {
+        centre: Vec2::new(x, z),
+        cell_size: 10.0,
+        min_y: 1.6,
+        max_y: 4.0,
+    }
+}
+
+/// Issue 18: a textured box (split along its UV seams into six faces) simplifies
+/// to a closed proxy of a few triangles, not to six loose faces or nothing; every
+/// output triangle keeps the copies of its own face (its UVs), and every input
+/// vertex stays within the bound.
+#[test]
+fn uv_seamed_cube_simplifies_to_a_closed_proxy() {
+    let mesh = seamed_cube(8, Vec3::new(0.0, 3.0, 40.0), 2.0);
+    assert_eq!(mesh.positions.len(), 6 * 81);
+    let w = vec![0.125f32; mesh.positions.len()];
+    let (params, bound) = bounded_params(prism_at(0.0, 0.0));
+    let out = simplify(&input_of(&mesh, &w), &params).unwrap();
+    validate(mesh.positions.len(), &mesh.triangles, &out).unwrap();
+    closed_by_position(&mesh.positions, &out.triangles).unwrap();
+    assert!(
+        (12..=48).contains(&out.triangles.len()),
+        "{} triangles of {}",
+        out.triangles.len(),
+        mesh.triangles.len()
+    );
+    let ppr = pixels_per_radian(256);
+    assert_eq!(bound_violation(&mesh, &out.triangles, &bound, ppr), None);
+    // Each output triangle's corners are copies of one face (vertex v is on face
+    // v / 81).
+    for t in &out.triangles {
+        assert!(t.iter().all(|&v| v / 81 == t[0] / 81), "{t:?} mixes faces");
+    }
+}
+
+/// Issue 18: a bumpy sphere split into eight UV charts (by octant) simplifies like
+/// the welded sphere: closed, much smaller, within the bound.
+#[test]
+fn uv_seamed_sphere_simplifies_like_the_welded_one() {
+    let sphere = icosphere(3, Vec3::new(0.0, 3.0, 40.0), 3.0, &[0.3, -0.2, 0.1, 0.0]);
+    let octant = |t: usize| {
+        let c: Vec3 = sphere.triangles[t]
+            .iter()
+            .map(|&v| sphere.positions[v as usize] - Vec3::new(0.0, 3.0, 40.0))
+            .sum();
+        u32::from(c.x > 0.0) | u32::from(c.y > 0.0) << 1 | u32::from(c.z > 0.0) << 2
+    };
+    let mesh = split_into_charts(&sphere, octant);
+    assert!(mesh.positions.len() > sphere.positions.len() + 50);
+    let (params, bound) = bounded_params(prism_at(0.0, 0.0));
+    let w = vec![0.125f32; mesh.positions.len()];
+    let out = simplify(&input_of(&mesh, &w), &params).unwrap();
+    validate(mesh.positions.len(), &mesh.triangles, &out).unwrap();
+    closed_by_position(&mesh.positions, &out.triangles).unwrap();
+    let ws = vec![0.125f32; sphere.positions.len()];
+    let welded = simplify(&input_of(&sphere, &ws), &params).unwrap();
+    assert!(
+        out.triangles.len() <= welded.triangles.len() * 3 / 2 + 8,
+        "seamed {} vs welded {} triangles",
+        out.triangles.len(),
+        welded.triangles.len()
+    );
+    assert!(!out.triangles.is_empty() && out.triangles.len() < mesh.triangles.len() / 2);
+    let ppr = pixels_per_radian(256);
+    assert_eq!(bound_violation(&mesh, &out.triangles, &bound, ppr), None);
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(48))]
+
+    /// Issue 18: a closed bumpy sphere cut into random charts (any triangle may be
+    /// its own chart) stays closed and valid, within the bound, deterministically.
+    #[test]
+    fn uv_seamed_spheres_stay_closed(
+        bumps in prop::collection::vec(-1.0f32..1.0, 1..16),
+        charts in prop::collection::vec(0u32..4, 1..40),
+        x in -20.0f32..20.0,
+        z in -20.0f32..20.0,
+    ) {
+        let sphere = icosphere(2, Vec3::new(0.0, 3.0, 30.0), 3.0, &bumps);
+        let mesh = split_into_charts(&sphere, |t| charts[t % charts.len()]);
+        let (params, bound) = bounded_params(prism_at(x, z));
+        let w = vec![0.125f32; mesh.positions.len()];
+        let out = simplify(&input_of(&mesh, &w), &params).unwrap();
+        validate(mesh.positions.len(), &mesh.triangles, &out).unwrap();
+        if let Err(e) = closed_by_position(&mesh.positions, &out.triangles) {
+            prop_assert!(false, "{}", e);
+        }
+        prop_assert!(!out.triangles.is_empty());
+        let ppr = pixels_per_radian(256);
+        prop_assert_eq!(bound_violation(&mesh, &out.triangles, &bound, ppr), None);
+        prop_assert_eq!(simplify(&input_of(&mesh, &w), &params).unwrap(), out);
+    }
+}
+
+/// Issue 18: the speck tidying of the bake (`svmesh::tidy_selection`) on the welded
+/// triangles keeps a textured box whole; on its split ids every face is a piece of
+/// two triangles, a "speck", and the box was unselected to nothing (the
+/// 0-triangle proxies of the textured plaza).
+#[test]
+fn tidying_keeps_a_uv_seamed_box() {
+    let mesh = seamed_cube(1, Vec3::ZERO, 1.0);
+    assert_eq!((mesh.positions.len(), mesh.triangles.len()), (24, 12));
+    let positions: Vec<[f32; 3]> = mesh.positions.iter().map(|p| p.to_array()).collect();
+    let mut split = vec![true; 12];
+    worker::svmesh::tidy_selection(&mesh.triangles, &mut split, 4);
+    assert!(split.iter().all(|s| !s), "faces of split ids are specks");
+    let welded = worker::simplify::welded_triangles(&positions, &mesh.triangles);
+    assert!(welded.iter().flatten().all(|&v| v < 24));
+    let mut selected = vec![true; 12];
+    assert_eq!(worker::svmesh::tidy_selection(&welded, &mut selected, 4), 0);
+    assert!(selected.iter().all(|&s| s));
+}
