@@ -9,7 +9,7 @@
 # the release build. Per scene the player runs one compare (full, frustum and hybrid
 # per frame, plus a no-prefetch pass), two renders, and on park-2m two lod compares.
 # BENCH_SIZE=512x512 makes the player part ~2× faster (PSNR then differs a little).
-#   1. scripts/fetch-models.sh; cargo build --release -p pipeline -p player
+#   1. scripts/fetch-models.sh; cargo build --release -p pipeline -p player -p hexbake-bench
 #   2. bake the BENCH_FULL_SCENES fully (default none; --full: all three parks;
 #      resumable: done jobs are skipped)
 #   3. bake park-2m and park-4m along park-walk.ron only (--cells path:...: the
@@ -24,7 +24,7 @@
 #      (Table 5); the sample is cells 275 (centre), 264 and 517 (edges), 0 and 527
 #      (corners) of the 50-unit grid, mapped by position onto other grids (grid:50:ID);
 #      each setting's bake is then measured by `player compare` over `worker check`'s
-#      16 viewpoints in each sampled cell (`pipeline benchmarks views`): the FPS, PSNR
+#      16 viewpoints in each sampled cell (`hexbake-bench views`): the FPS, PSNR
 #      and triangles rows of Tables 3–5; and our deviation bound (not in the paper)
 #      bake.max_deviation_px ∈ {0 (the paper's algorithm), 0.5, 1, 2}
 #   6. cell load times; one JSON of raw results in docs/bench/run-<UTC time>.json
@@ -60,7 +60,15 @@
 #   BENCH_BUILD=0       skip the release build (binaries must exist)
 #   BENCH_BAKE=0        skip every bake (outputs must exist): a player-only run whose
 #                       tables take the bakes from earlier run files
-#   BENCH_BIN_DIR       where pipeline and player are  (default $CARGO_TARGET_DIR/release or target/release)
+#   BENCH_BIN_DIR       where pipeline, player and hexbake-bench are
+#                       (default $CARGO_TARGET_DIR/release or target/release)
+#
+# The tables, plots, run files, cell load timing and the sweeps' view paths are
+# hexbake-bench's (bench/, beside the product). The labels of the work files
+# (bake-<label>.txt, compare-<label>.txt, ...), the sweep parameters and their
+# `sweep=PARAM:VALUE` lines are a contract with it, defined once in
+# bench/src/labels.rs (RunLabel, SweepParam) and checked against this script by
+# bench/tests/bench_sh_contract.rs.
 set -uo pipefail
 
 cd "$(dirname "$0")/.."
@@ -124,6 +132,7 @@ fi
 BIN_DIR=${BENCH_BIN_DIR:-${CARGO_TARGET_DIR:-target}/release}
 PIPELINE=$BIN_DIR/pipeline
 PLAYER=$BIN_DIR/player
+BENCH=$BIN_DIR/hexbake-bench
 RUN_ID=$(date -u +%Y%m%dT%H%M%SZ)
 WORK=$BENCH_OUT/bench-work/$RUN_ID
 mkdir -p "$WORK" "$BENCH_RESULTS"
@@ -188,7 +197,7 @@ if [ "$BENCH_FETCH" = 1 ]; then
 fi
 if [ "$BENCH_BUILD" = 1 ]; then
     say "building release binaries"
-    logged - - cargo build --release -p pipeline -p player
+    logged - - cargo build --release -p pipeline -p player -p hexbake-bench
     [ "$RC" = 0 ] || { echo "bench.sh: build failed" >&2; exit 1; }
 fi
 
@@ -291,7 +300,7 @@ size=${BENCH_SIZE:-path default}"
     done
 
     say "cell load times $scene"
-    logged "$WORK/load-$scene.json" "$WORK/load-$scene.err" "$PIPELINE" benchmarks load "$out" --label "$scene"
+    logged "$WORK/load-$scene.json" "$WORK/load-$scene.err" "$BENCH" load "$out" --label "$scene"
     [ "$RC" = 0 ] || rm -f "$WORK/load-$scene.json"
 }
 
@@ -308,9 +317,9 @@ sweep_compare() {
     fi
     say "player compare $label over $BENCH_SWEEP_VIEWS views per sampled cell"
     logged - "$WORK/views-$label.err" \
-        "$PIPELINE" benchmarks views "$out" --per-cell "$BENCH_SWEEP_VIEWS" --path "$out/views.ron"
+        "$BENCH" views "$out" --per-cell "$BENCH_SWEEP_VIEWS" --path "$out/views.ron"
     if [ "$RC" != 0 ]; then
-        FAILED+=("pipeline benchmarks views $label (exit $RC, see $WORK/views-$label.err)")
+        FAILED+=("hexbake-bench views $label (exit $RC, see $WORK/views-$label.err)")
         return
     fi
     logged "$WORK/compare-$label.json" "$WORK/compare-$label.err" \
@@ -374,9 +383,9 @@ fi
 # 6. Results and tables.
 RESULT=$BENCH_RESULTS/run-$RUN_ID.json
 say "collecting $RESULT"
-"$PIPELINE" benchmarks collect "$WORK" --out "$RESULT" || FAILED+=("collect")
+"$BENCH" collect "$WORK" --out "$RESULT" || FAILED+=("collect")
 say "regenerating $BENCH_DOC"
-"$PIPELINE" benchmarks tables --results "$BENCH_RESULTS" --write "$BENCH_DOC" || FAILED+=("tables")
+"$BENCH" tables --results "$BENCH_RESULTS" --write "$BENCH_DOC" || FAILED+=("tables")
 
 if [ "${#FAILED[@]}" -gt 0 ]; then
     printf '\nbench.sh: finished with failures:\n' >&2

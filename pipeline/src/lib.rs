@@ -1,8 +1,5 @@
 //! hexbake's coordinator: plan, executors (local rayon, Slurm), resume, reports.
 
-pub mod bench_plot;
-pub mod bench_tables;
-pub mod benchmarks;
 pub mod export;
 pub mod heatmap;
 pub mod inspect;

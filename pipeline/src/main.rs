@@ -83,10 +83,6 @@ enum Command {
         #[arg(long)]
         out: Option<PathBuf>,
     },
-    /// Benchmark plumbing for scripts/bench.sh (collect results, time cell loads,
-    /// regenerate BENCHMARKS.md's tables).
-    #[command(hide = true, subcommand)]
-    Benchmarks(BenchCommand),
     /// Write one cell of a bake as glTF 2.0 binary (GLB): its originals and its
     /// SV / MV / cluster proxies with their capture textures.
     Export {
@@ -110,56 +106,6 @@ enum Command {
         /// Print JSON instead of text.
         #[arg(long)]
         json: bool,
-    },
-}
-
-/// `pipeline benchmarks ...`: the pieces `scripts/bench.sh` calls.
-#[derive(Subcommand)]
-enum BenchCommand {
-    /// Turn a bench.sh work folder into one run file (docs/bench/run-<id>.json).
-    Collect {
-        work: PathBuf,
-        #[arg(long)]
-        out: PathBuf,
-    },
-    /// Time loading the cell packs of a bake (open + validate + decode).
-    Load {
-        out: PathBuf,
-        /// Label of the bake in the results.
-        #[arg(long, default_value = "")]
-        label: String,
-        /// Cells to time, spread over the index (0: all).
-        #[arg(long, default_value_t = 64)]
-        sample: usize,
-    },
-    /// Write a camera path of explicit views: `worker check`'s viewpoints in each
-    /// cell of a (partial) bake, so the player can measure it cell by cell.
-    Views {
-        out: PathBuf,
-        /// Cells (comma-separated ids; default: the cells of `<out>/partial.json`).
-        #[arg(long, value_delimiter = ',')]
-        cells: Option<Vec<u32>>,
-        /// Views per cell.
-        #[arg(long, default_value_t = 16)]
-        per_cell: usize,
-        /// Frame size, WIDTHxHEIGHT.
-        #[arg(long, default_value = "1024x1024")]
-        size: String,
-        /// The path file to write.
-        #[arg(long)]
-        path: PathBuf,
-    },
-    /// Regenerate the marked tables of a document from the run files, and the plots.
-    Tables {
-        /// Folder of run files (and where the plots go).
-        #[arg(long, default_value = "docs/bench")]
-        results: PathBuf,
-        /// The document to rewrite between its `<!-- bench:NAME -->` markers.
-        #[arg(long, default_value = "BENCHMARKS.md")]
-        write: PathBuf,
-        /// How the document links the plots (default: --results as given).
-        #[arg(long)]
-        plot_prefix: Option<String>,
     },
 }
 
@@ -335,7 +281,6 @@ fn run(cli: Cli) -> Result<(), Failure> {
             print_json_or_text(json, &summary, || format!("{}\n", summary.line()));
             Ok(())
         }
-        Command::Benchmarks(cmd) => benchmarks(cmd).map_err(|error| Failure { code: 1, error }),
         Command::Inspect { pack, json } if pack.is_dir() => {
             let check = pipeline::inspect::check_bake(&pack).map_err(bad_input)?;
             print_json_or_text(json, &check, || {
@@ -364,70 +309,6 @@ fn run(cli: Cli) -> Result<(), Failure> {
             Ok(())
         }
     }
-}
-
-fn benchmarks(cmd: BenchCommand) -> anyhow::Result<()> {
-    use anyhow::Context;
-    match cmd {
-        BenchCommand::Collect { work, out } => {
-            let run = pipeline::benchmarks::collect(&work)?;
-            if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
-                std::fs::create_dir_all(dir).with_context(|| dir.display().to_string())?;
-            }
-            let text = serde_json::to_vec_pretty(&run)?;
-            format::pack::write_atomic(&out, &text).with_context(|| out.display().to_string())?;
-            println!(
-                "{}: {} bakes, {} compares, {} renders, {} load timings, {} commands",
-                out.display(),
-                run.bakes.len(),
-                run.compares.len(),
-                run.renders.len(),
-                run.load_times.len(),
-                run.commands.len()
-            );
-        }
-        BenchCommand::Load { out, label, sample } => {
-            let t = pipeline::benchmarks::time_cell_loads(&out, &label, sample)?;
-            println!("{}", serde_json::to_string_pretty(&t)?);
-        }
-        BenchCommand::Views {
-            out,
-            cells,
-            per_cell,
-            size,
-            path,
-        } => {
-            let resolution = size
-                .split_once('x')
-                .and_then(|(w, h)| Some((w.parse().ok()?, h.parse().ok()?)))
-                .filter(|&(w, h): &(u32, u32)| w > 0 && h > 0)
-                .with_context(|| {
-                    format!("--size {size:?}: expected WIDTHxHEIGHT, e.g. 1024x1024")
-                })?;
-            let p = pipeline::benchmarks::check_view_path(&out, cells, per_cell, resolution)?;
-            let text = ron::ser::to_string_pretty(&p, ron::ser::PrettyConfig::default())?;
-            format::pack::write_atomic(&path, text.as_bytes())
-                .with_context(|| path.display().to_string())?;
-            println!("{}: {} views", path.display(), p.views.len());
-        }
-        BenchCommand::Tables {
-            results,
-            write,
-            plot_prefix,
-        } => {
-            let prefix = plot_prefix.unwrap_or_else(|| results.display().to_string());
-            let r = pipeline::bench_tables::regenerate(&results, &write, &prefix)?;
-            println!(
-                "{}: {} sections from {} run file(s) in {}; {} plot(s)",
-                write.display(),
-                r.sections,
-                r.runs,
-                results.display(),
-                r.plots.len()
-            );
-        }
-    }
-    Ok(())
 }
 
 /// Prints the summary of a `--cells` run; Ok when every requested cell is baked.

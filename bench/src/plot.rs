@@ -3,8 +3,8 @@
 //! vertical lines — from `player compare`'s per-frame output. Drawn with tiny-skia;
 //! labels use a small built-in 3×5 font (tiny-skia draws no text).
 
-use crate::benchmarks::CompareSummary;
-use crate::pixel_font::{draw_text, text_width};
+use crate::results::CompareReport;
+use pipeline::pixel_font::{draw_text, text_width};
 use tiny_skia::{Color, Paint, PathBuilder, Pixmap, Rect, Stroke, Transform};
 
 const W: f32 = 1200.0;
@@ -29,7 +29,7 @@ struct Series<'a> {
 }
 
 /// Frames where the current cell differs from the previous frame's.
-pub fn crossing_frames(s: &CompareSummary) -> Vec<usize> {
+pub fn crossing_frames(s: &CompareReport) -> Vec<usize> {
     s.per_frame
         .windows(2)
         .filter(|w| w[0].cell != w[1].cell)
@@ -40,8 +40,8 @@ pub fn crossing_frames(s: &CompareSummary) -> Vec<usize> {
 /// Renders the plot of `hybrid` (and `lod` when given) as PNG bytes.
 pub fn render_walk_plot(
     title: &str,
-    hybrid: &CompareSummary,
-    lod: Option<&CompareSummary>,
+    hybrid: &CompareReport,
+    lod: Option<&CompareReport>,
 ) -> anyhow::Result<Vec<u8>> {
     let h = TOP + 2.0 * PANEL_H + GAP + BOTTOM;
     let mut pm =
@@ -282,10 +282,10 @@ fn stroke_rect(pm: &mut Pixmap, x: f32, y: f32, w: f32, h: f32, c: [u8; 3], widt
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::benchmarks::CompareFrame;
+    use crate::results::CompareFrame;
 
-    fn summary() -> CompareSummary {
-        CompareSummary {
+    fn summary() -> CompareReport {
+        CompareReport {
             frames: 6,
             per_frame: (0..6)
                 .map(|i| CompareFrame {
@@ -298,7 +298,7 @@ mod tests {
                     ..CompareFrame::default()
                 })
                 .collect(),
-            ..CompareSummary::default()
+            ..CompareReport::default()
         }
     }
 

@@ -1,117 +1,51 @@
 //! BENCHMARKS.md's measured tables, regenerated from `docs/bench/*.json`
-//! ([`crate::benchmarks`]) side by side with the paper's published numbers
-//! (000 §4: Tables 2–8 and Fig. 14, typed in below with their table and row).
+//! ([`crate::results`]) side by side with the paper's published numbers
+//! (000 §4: Tables 2–8 and Fig. 14, from `bench/data/paper-tables.ron` with their
+//! table and row, [`crate::paper`]).
 //!
 //! Each table lives between `<!-- bench:NAME begin -->` and `<!-- bench:NAME end -->`
 //! in the document; [`replace_sections`] rewrites only what is between the markers,
 //! so the hand-written text around them (explanations, "why we are worse") stays.
 
-use crate::benchmarks::{
-    BakeResult, CompareResult, CompareSummary, LoadTime, Merged, RenderResult,
+use crate::labels::{RunLabel, SweepParam};
+use crate::paper::{paper, PaperRow, PaperTables, SweepTable};
+use crate::results::{
+    BakeResult, CompareReport, CompareResult, CompareStats, LoadTime, Merged, RenderResult,
 };
-use crate::report::Report;
+use pipeline::report::Report;
 use std::collections::{BTreeMap, BTreeSet};
 use std::fmt::Write;
 use std::path::Path;
 
-// ---------------------------------------------------------------------------------
-// The paper's numbers (000 = Chen et al. 2003). Scenes in the order 2M, 4M, 8M.
-
-/// The paper's scene names for our park scenes.
-pub const SCENES: [(&str, &str); 3] = [("park-2m", "2M"), ("park-4m", "4M"), ("park-8m", "8M")];
-
-/// Table 2, "Total" polygons of the 2M/4M/8M scenes (text of §4.1.1).
-pub const PAPER_SCENE_POLYGONS: [f64; 3] = [2_017_700.0, 4_188_885.0, 8_004_863.0];
-
-/// One row of a paper table: our statistic's name and the paper's values per column.
-pub struct PaperRow {
-    pub name: &'static str,
-    pub values: &'static [f64],
+/// Our park scenes and the paper's names for them (2M, 4M, 8M), from the data file.
+pub fn scenes() -> [(&'static str, &'static str); 3] {
+    let s = &paper().scenes;
+    [0, 1, 2].map(|k| (s[k].ours.as_str(), s[k].paper.as_str()))
 }
 
-/// Table 7 "Performance of configuration C for different scene complexities"
-/// (2M, 4M, 8M; all with cell size 50, T_s 5, T_l 4.5).
-pub mod table7 {
-    pub const POLYGONS_INSIDE_A_VIEWCELL: [f64; 3] = [4_145.0, 9_308.0, 18_302.0];
-    pub const POLYGONS_SV_AND_MV: [f64; 3] = [18_829.0, 39_981.0, 75_891.0];
-    pub const POLYGONS_FOR_A_VIEWCELL: [f64; 3] = [22_974.0, 49_290.0, 94_193.0];
-    /// "Simplified:original" as 1:x.
-    pub const SIMPLIFIED_TO_ORIGINAL: [f64; 3] = [87.8, 85.0, 85.0];
-    pub const FPS: [f64; 3] = [353.3, 278.0, 220.4];
-    pub const PSNR_DB: [f64; 3] = [44.92, 39.54, 37.34];
-    pub const TEXTURE_KB_IN_FRUSTUM: [f64; 3] = [112.4, 544.1, 992.4];
-    /// "Avg. polygon count inside view frustum" (outside the parenthesis).
-    pub const POLYGONS_IN_FRUSTUM: [f64; 3] = [4_548.0, 13_102.0, 23_580.0];
+/// A scene-indexed paper row as its three columns.
+fn per_scene(row: &PaperRow) -> [f64; 3] {
+    PaperTables::per_scene(row)
 }
 
-/// Table 3 "Simplification performance under different T_s" (4M-50-T_s-4.5),
-/// columns T_s = 3, 5, 7.
-pub mod table3 {
-    pub const T_S: [f64; 3] = [3.0, 5.0, 7.0];
-    pub const SV_CLUSTERED_PERCENT: [f64; 3] = [9.8, 18.7, 25.5];
-    pub const SV_SINGLE_PERCENT: [f64; 3] = [64.8, 64.9, 62.4];
-    pub const MV_PERCENT: [f64; 3] = [25.3, 16.3, 12.1];
-    pub const POLYGONS_INSIDE_A_VIEWCELL: [f64; 3] = [9_308.0, 9_308.0, 9_308.0];
-    pub const POLYGONS_SV_AND_MV: [f64; 3] = [40_742.0, 39_981.0, 39_360.0];
-    pub const POLYGONS_FOR_A_VIEWCELL: [f64; 3] = [50_050.0, 49_290.0, 48_669.0];
-    pub const SIMPLIFIED_TO_ORIGINAL: [f64; 3] = [83.7, 85.0, 86.1];
-    pub const FPS: [f64; 3] = [271.5, 278.0, 281.9];
-    pub const PSNR_DB: [f64; 3] = [39.64, 39.54, 39.46];
-    /// "Avg. polygon count inside view frustum" (outside the parenthesis).
-    pub const POLYGONS_IN_FRUSTUM: [f64; 3] = [13_235.0, 13_102.0, 13_026.0];
+/// Table 3's T_s = 5 column of a percentage row (the paper's only published split).
+fn table3_t5(row: &Option<PaperRow>) -> f64 {
+    let col = paper().table3.column_of(5.0);
+    match (row, col) {
+        (Some(r), Some(c)) => r.values[c],
+        _ => f64::NAN,
+    }
 }
 
-/// Table 4 "Simplification performance under different T_l" (4M-50-5-T_l),
-/// columns T_l = 3.0, 4.5, 6.0.
-pub mod table4 {
-    pub const T_L: [f64; 3] = [3.0, 4.5, 6.0];
-    pub const POLYGONS_INSIDE_A_VIEWCELL: [f64; 3] = [9_308.0, 9_308.0, 9_308.0];
-    pub const POLYGONS_SV_AND_MV: [f64; 3] = [46_249.0, 39_981.0, 35_226.0];
-    pub const POLYGONS_FOR_A_VIEWCELL: [f64; 3] = [55_557.0, 49_290.0, 44_535.0];
-    pub const SIMPLIFIED_TO_ORIGINAL: [f64; 3] = [75.4, 85.0, 94.1];
-    pub const FPS: [f64; 3] = [265.4, 278.0, 289.2];
-    pub const PSNR_DB: [f64; 3] = [39.98, 39.54, 39.13];
-    /// "Avg. polygon count inside view frustum" (outside the parenthesis).
-    pub const POLYGONS_IN_FRUSTUM: [f64; 3] = [14_741.0, 13_102.0, 11_701.0];
-}
-
-/// Table 5 "4M scene under different cell sizes 50 and 100".
-pub mod table5 {
-    pub const CELL_SIZE: [f64; 2] = [50.0, 100.0];
-    /// "Viewcells" 22×24 and 11×12.
-    pub const VIEWCELLS: [&str; 2] = ["22 × 24", "11 × 12"];
-    pub const POLYGONS_INSIDE_A_VIEWCELL: [f64; 2] = [9_308.0, 38_986.0];
-    pub const POLYGONS_SV_AND_MV: [f64; 2] = [39_981.0, 45_356.0];
-    pub const POLYGONS_FOR_A_VIEWCELL: [f64; 2] = [49_290.0, 84_342.0];
-    pub const SIMPLIFIED_TO_ORIGINAL: [f64; 2] = [85.0, 49.7];
-    pub const FPS: [f64; 2] = [278.0, 255.5];
-    pub const PSNR_DB: [f64; 2] = [39.54, 39.62];
-    /// "Avg. polygon count inside view frustum" (outside the parenthesis).
-    pub const POLYGONS_IN_FRUSTUM: [f64; 2] = [13_102.0, 17_457.0];
-}
-
-/// Table 6 "Performance of the three configurations on a 8M-scene" (A, B, C).
-pub mod table6 {
-    pub const POLYGONS: [f64; 3] = [8_004_863.0, 2_443_969.0, 23_580.0];
-    pub const FRAME_TIME_MS: [f64; 3] = [1_247.0, 349.1, 4.54];
-    pub const FPS: [f64; 3] = [0.802, 2.864, 220.4];
-    pub const SPEEDUP: [f64; 3] = [1.0, 3.57, 274.8];
-}
-
-/// Table 8 "Storage and loading time for different scene complexities" (2M, 4M, 8M).
-pub mod table8 {
-    /// "Total secondary storage requirement (MB)".
-    pub const SV_MV_MB: [f64; 3] = [101.4, 218.6, 408.8];
-    pub const TEXTURES_MB: [f64; 3] = [209.3, 440.5, 850.8];
-    pub const TOTAL_MB: [f64; 3] = [310.7, 659.1, 1_260.0];
-    pub const ORIGINAL_MESHES_MB: [f64; 3] = [27.8, 59.6, 112.6];
-    /// "Average run-time requirement (KB) for a cell".
-    pub const CELL_POLYGONS_KB: [f64; 3] = [71.4, 154.2, 287.2];
-    pub const CELL_TEXTURES_KB: [f64; 3] = [481.2, 1_011.0, 1_965.0];
-    pub const CELL_TOTAL_KB: [f64; 3] = [552.6, 1_165.0, 2_252.0];
-    /// "Average loading time (ms) for a cell" at 55 and 35 MB/s.
-    pub const LOAD_MS_55: [f64; 3] = [10.0, 21.2, 41.0];
-    pub const LOAD_MS_35: [f64; 3] = [15.8, 33.3, 64.4];
+/// The paper's table of a sweep (none for our deviation bound).
+fn sweep_table(param: SweepParam) -> Option<&'static SweepTable> {
+    let p = paper();
+    match param {
+        SweepParam::Ts => Some(&p.table3),
+        SweepParam::Tl => Some(&p.table4),
+        SweepParam::CellSize => Some(&p.table5),
+        SweepParam::Deviation => None,
+    }
 }
 
 // ---------------------------------------------------------------------------------
@@ -327,13 +261,13 @@ impl<'a> Ctx<'a> {
         if let Some(b) = self.bake(scene).filter(|b| b.report.is_some()) {
             return Some(("", b));
         }
-        self.bake(&format!("{scene}-path"))
+        self.bake(&RunLabel::PathBake(scene).to_string())
             .filter(|b| b.report.is_some())
             .map(|b| ("path", b))
     }
     /// The bake the player ran on for a scene (the label the compare names).
     fn hybrid_compare(&self, scene: &str) -> Option<&'a CompareResult> {
-        self.compare(&format!("{scene}-hybrid"))
+        self.compare(&RunLabel::Hybrid(scene).to_string())
     }
 }
 
@@ -386,10 +320,9 @@ pub fn sections(m: &Merged, plot_prefix: &str) -> BTreeMap<String, String> {
     };
     let mut s = BTreeMap::new();
     s.insert("per-cell".to_string(), per_cell(&ctx));
-    s.insert("sweep-ts".to_string(), sweep(&ctx, "T_s"));
-    s.insert("sweep-tl".to_string(), sweep(&ctx, "T_l"));
-    s.insert("sweep-cell".to_string(), sweep(&ctx, "cell_size"));
-    s.insert("sweep-deviation".to_string(), sweep(&ctx, "deviation"));
+    for param in SweepParam::ALL {
+        s.insert(param.section().to_string(), sweep(&ctx, param));
+    }
     s.insert("runtime".to_string(), runtime(&ctx));
     s.insert("hybrid-vs-lod".to_string(), hybrid_vs_lod(&ctx));
     s.insert("crossings".to_string(), crossings(&ctx));
@@ -405,12 +338,13 @@ pub fn sections(m: &Merged, plot_prefix: &str) -> BTreeMap<String, String> {
 /// Table 3's T_s = 5 column, the paper's only published split).
 fn per_cell(ctx: &Ctx) -> String {
     let mut m = String::new();
-    let bakes: Vec<_> = SCENES.iter().map(|(s, _)| ctx.scene_bake(s)).collect();
+    let bakes: Vec<_> = scenes().iter().map(|(s, _)| ctx.scene_bake(s)).collect();
     if bakes.iter().all(Option::is_none) {
         return NOT_MEASURED.into();
     }
+    let (t3, t7, t8) = (&paper().table3, &paper().table7, &paper().table8);
     let mut cols = vec!["per cell (c 50, T_s 5, T_l 4.5)".to_string()];
-    for ((_, paper), b) in SCENES.iter().zip(&bakes) {
+    for ((_, paper), b) in scenes().iter().zip(&bakes) {
         cols.push(format!("{paper} paper"));
         cols.push(match b.and_then(|(_, b)| b.report.as_ref()) {
             Some(r) => format!("{paper} ours{}", coverage(r)),
@@ -421,25 +355,25 @@ fn per_cell(ctx: &Ctx) -> String {
     let rows: [StatRow<[f64; 3]>; 9] = [
         (
             "polygons inside a cell (Table 7)",
-            table7::POLYGONS_INSIDE_A_VIEWCELL,
+            per_scene(&t7.polygons_inside_a_viewcell),
             |r| r.averages().polygons_inside_a_cell,
             int,
         ),
         (
             "SVMesh from clustered objects % (Table 3)",
-            [f64::NAN, table3::SV_CLUSTERED_PERCENT[1], f64::NAN],
+            [f64::NAN, table3_t5(&t3.sv_clustered_percent), f64::NAN],
             |r| r.averages().sv_clustered_percent,
             |v| fixed(v, 1),
         ),
         (
             "SVMesh from single objects % (Table 3)",
-            [f64::NAN, table3::SV_SINGLE_PERCENT[1], f64::NAN],
+            [f64::NAN, table3_t5(&t3.sv_single_percent), f64::NAN],
             |r| r.averages().sv_single_percent,
             |v| fixed(v, 1),
         ),
         (
             "MVMesh % (Table 3)",
-            [f64::NAN, table3::MV_PERCENT[1], f64::NAN],
+            [f64::NAN, table3_t5(&t3.mv_percent), f64::NAN],
             |r| r.averages().mv_percent,
             |v| fixed(v, 1),
         ),
@@ -451,29 +385,25 @@ fn per_cell(ctx: &Ctx) -> String {
         ),
         (
             "polygons of SVMesh & MVMesh (Table 7)",
-            table7::POLYGONS_SV_AND_MV,
+            per_scene(&t7.polygons_sv_and_mv),
             |r| r.averages().polygons_sv_and_mv,
             int,
         ),
         (
             "polygons for a cell (Table 7)",
-            table7::POLYGONS_FOR_A_VIEWCELL,
+            per_scene(&t7.polygons_for_a_viewcell),
             |r| r.averages().polygons_for_a_cell,
             int,
         ),
         (
             "simplified : original (Table 7)",
-            table7::SIMPLIFIED_TO_ORIGINAL,
+            per_scene(&t7.simplified_to_original),
             |r| r.averages().simplified_to_original,
             ratio,
         ),
         (
             "texture texels per cell, KB raw RGBA8 (paper: DXT3 KB × 4, Table 8)",
-            [
-                table8::CELL_TEXTURES_KB[0] * 4.0,
-                table8::CELL_TEXTURES_KB[1] * 4.0,
-                table8::CELL_TEXTURES_KB[2] * 4.0,
-            ],
+            per_scene(&t8.cell_textures_kb).map(|kb| kb * 4.0),
             |r| r.averages().texture_kb * 1.024,
             int,
         ),
@@ -498,8 +428,8 @@ fn per_cell(ctx: &Ctx) -> String {
     m
 }
 
-/// Tables 3 / 4 / 5: one sweep over the fixed cell sample.
-fn sweep(ctx: &Ctx, param: &str) -> String {
+/// Tables 3 / 4 / 5 (and our deviation bound): one sweep over the fixed cell sample.
+fn sweep(ctx: &Ctx, param: SweepParam) -> String {
     let mut points: Vec<(f64, &BakeResult)> = ctx
         .m
         .bakes
@@ -519,14 +449,16 @@ fn sweep(ctx: &Ctx, param: &str) -> String {
         return NOT_MEASURED.into();
     }
     // The deviation bound is ours (worker simplify.rs): no paper columns.
-    let (table, paper_values, symbol): (&str, &[f64], &str) = match param {
-        "T_s" => ("Table 3", &table3::T_S, "T_s"),
-        "T_l" => ("Table 4", &table4::T_L, "T_l"),
-        "deviation" => ("not in the paper", &[], "deviation px"),
-        _ => ("Table 5", &table5::CELL_SIZE, "cell size"),
+    let table = sweep_table(param);
+    let table_name = table.map_or("not in the paper", |t| t.table.as_str());
+    let symbol = param.symbol();
+    let has_paper = table.is_some();
+    let paper_col = |v: f64| table.and_then(|t| t.column_of(v));
+    // The paper's value of `row` in the column of swept value `v`, formatted.
+    let paper_cell = |row: Option<&PaperRow>, v: f64, fmt: fn(f64) -> String| -> String {
+        row.zip(paper_col(v))
+            .map_or("–".into(), |(r, i)| fmt(r.values[i]))
     };
-    let has_paper = !paper_values.is_empty();
-    let paper_col = |v: f64| paper_values.iter().position(|p| (p - v).abs() < 1e-6);
     // One point's two cells (paper, ours), or only ours.
     let pair = |cells: &mut Vec<String>, paper: String, ours: String| {
         if has_paper {
@@ -534,7 +466,7 @@ fn sweep(ctx: &Ctx, param: &str) -> String {
         }
         cells.push(ours);
     };
-    let mut cols = vec![format!("4M, {symbol} ({table})")];
+    let mut cols = vec![format!("4M, {symbol} ({table_name})")];
     for (v, b) in &points {
         let cells = b.report.as_ref().map_or(0, |r| r.cells);
         pair(
@@ -545,110 +477,69 @@ fn sweep(ctx: &Ctx, param: &str) -> String {
     }
     let mut m = String::new();
     table_header(&mut m, &cols);
-    let paper_rows: Vec<StatRow<Vec<f64>>> = match param {
-        "T_s" => vec![
+    // Statistic rows: name, the paper's row (Table 3 alone has the percentages),
+    // our value from a report, formatting.
+    type SweepRow = (
+        &'static str,
+        Option<&'static PaperRow>,
+        fn(&Report) -> f64,
+        fn(f64) -> String,
+    );
+    let mut paper_rows: Vec<SweepRow> = Vec::new();
+    if let Some(t) = table.filter(|t| t.sv_clustered_percent.is_some()) {
+        paper_rows.extend::<[SweepRow; 3]>([
             (
                 "SVMesh from clustered objects %",
-                table3::SV_CLUSTERED_PERCENT.to_vec(),
+                t.sv_clustered_percent.as_ref(),
                 |r| r.averages().sv_clustered_percent,
                 |v| fixed(v, 1),
             ),
             (
                 "SVMesh from single objects %",
-                table3::SV_SINGLE_PERCENT.to_vec(),
+                t.sv_single_percent.as_ref(),
                 |r| r.averages().sv_single_percent,
                 |v| fixed(v, 1),
             ),
             (
                 "MVMesh %",
-                table3::MV_PERCENT.to_vec(),
+                t.mv_percent.as_ref(),
                 |r| r.averages().mv_percent,
                 |v| fixed(v, 1),
             ),
-            (
-                "polygons inside a cell",
-                table3::POLYGONS_INSIDE_A_VIEWCELL.to_vec(),
-                |r| r.averages().polygons_inside_a_cell,
-                int,
-            ),
-            (
-                "polygons of SVMesh & MVMesh",
-                table3::POLYGONS_SV_AND_MV.to_vec(),
-                |r| r.averages().polygons_sv_and_mv,
-                int,
-            ),
-            (
-                "polygons for a cell",
-                table3::POLYGONS_FOR_A_VIEWCELL.to_vec(),
-                |r| r.averages().polygons_for_a_cell,
-                int,
-            ),
-            (
-                "simplified : original",
-                table3::SIMPLIFIED_TO_ORIGINAL.to_vec(),
-                |r| r.averages().simplified_to_original,
-                ratio,
-            ),
-        ],
-        "T_l" | "deviation" => vec![
-            (
-                "polygons inside a cell",
-                table4::POLYGONS_INSIDE_A_VIEWCELL.to_vec(),
-                |r| r.averages().polygons_inside_a_cell,
-                int,
-            ),
-            (
-                "polygons of SVMesh & MVMesh",
-                table4::POLYGONS_SV_AND_MV.to_vec(),
-                |r| r.averages().polygons_sv_and_mv,
-                int,
-            ),
-            (
-                "polygons for a cell",
-                table4::POLYGONS_FOR_A_VIEWCELL.to_vec(),
-                |r| r.averages().polygons_for_a_cell,
-                int,
-            ),
-            (
-                "simplified : original",
-                table4::SIMPLIFIED_TO_ORIGINAL.to_vec(),
-                |r| r.averages().simplified_to_original,
-                ratio,
-            ),
-        ],
-        _ => vec![
-            (
-                "polygons inside a cell",
-                table5::POLYGONS_INSIDE_A_VIEWCELL.to_vec(),
-                |r| r.averages().polygons_inside_a_cell,
-                int,
-            ),
-            (
-                "polygons of SVMesh & MVMesh",
-                table5::POLYGONS_SV_AND_MV.to_vec(),
-                |r| r.averages().polygons_sv_and_mv,
-                int,
-            ),
-            (
-                "polygons for a cell",
-                table5::POLYGONS_FOR_A_VIEWCELL.to_vec(),
-                |r| r.averages().polygons_for_a_cell,
-                int,
-            ),
-            (
-                "simplified : original",
-                table5::SIMPLIFIED_TO_ORIGINAL.to_vec(),
-                |r| r.averages().simplified_to_original,
-                ratio,
-            ),
-        ],
-    };
-    if param == "cell_size" {
+        ]);
+    }
+    paper_rows.extend::<[SweepRow; 4]>([
+        (
+            "polygons inside a cell",
+            table.map(|t| &t.polygons_inside_a_viewcell),
+            |r| r.averages().polygons_inside_a_cell,
+            int,
+        ),
+        (
+            "polygons of SVMesh & MVMesh",
+            table.map(|t| &t.polygons_sv_and_mv),
+            |r| r.averages().polygons_sv_and_mv,
+            int,
+        ),
+        (
+            "polygons for a cell",
+            table.map(|t| &t.polygons_for_a_viewcell),
+            |r| r.averages().polygons_for_a_cell,
+            int,
+        ),
+        (
+            "simplified : original",
+            table.map(|t| &t.simplified_to_original),
+            |r| r.averages().simplified_to_original,
+            ratio,
+        ),
+    ]);
+    if let Some(viewcells) = table.and_then(|t| t.viewcells.as_ref()) {
         let mut cells = vec!["cells (grid)".to_string()];
         for (v, b) in &points {
             cells.push(
                 paper_col(*v)
-                    .map(|i| table5::VIEWCELLS[i].to_string())
+                    .map(|i| viewcells.values[i].clone())
                     .unwrap_or("–".into()),
             );
             cells.push(
@@ -664,7 +555,7 @@ fn sweep(ctx: &Ctx, param: &str) -> String {
         for (v, b) in &points {
             pair(
                 &mut cells,
-                paper_col(*v).map_or("–".into(), |i| fmt(paper[i])),
+                paper_cell(paper, *v, fmt),
                 b.report.as_ref().map_or("–".into(), |r| fmt(pick(r))),
             );
         }
@@ -684,12 +575,7 @@ fn sweep(ctx: &Ctx, param: &str) -> String {
     row(&mut m, &cells);
     // Performance rows: `player compare` over `worker check`'s viewpoints in the
     // sampled cells (bench.sh labels the compare like the bake).
-    let (fps, psnr, tris): (&[f64], &[f64], &[f64]) = match param {
-        "T_s" => (&table3::FPS, &table3::PSNR_DB, &table3::POLYGONS_IN_FRUSTUM),
-        "T_l" => (&table4::FPS, &table4::PSNR_DB, &table4::POLYGONS_IN_FRUSTUM),
-        _ => (&table5::FPS, &table5::PSNR_DB, &table5::POLYGONS_IN_FRUSTUM),
-    };
-    let summaries: Vec<Option<&CompareSummary>> = points
+    let summaries: Vec<Option<&CompareReport>> = points
         .iter()
         .map(|(_, b)| {
             ctx.compare(&b.label)
@@ -701,14 +587,14 @@ fn sweep(ctx: &Ctx, param: &str) -> String {
     if summaries.iter().any(Option::is_some) {
         type PerfRow<'r> = (
             &'r str,
-            Option<&'r [f64]>,
-            fn(&CompareSummary) -> f64,
+            Option<&'r PaperRow>,
+            fn(&CompareReport) -> f64,
             fn(f64) -> String,
         );
         let perf_rows: [PerfRow; 5] = [
             (
                 "PSNR(Y) pooled over the views, dB",
-                Some(psnr),
+                table.map(|t| &t.psnr_db),
                 pooled_psnr_y,
                 |v| fixed(v, 2),
             ),
@@ -716,13 +602,13 @@ fn sweep(ctx: &Ctx, param: &str) -> String {
             ("SSIM mean", None, |c| c.mean_ssim, |v| fixed(v, 4)),
             (
                 "FPS (ours: lavapipe, hybrid draw)",
-                Some(fps),
+                table.map(|t| &t.fps),
                 |c| 1e3 / c.mean_ms(|f| f.frame_ms),
                 |v| fixed(v, 1),
             ),
             (
                 "triangles per frame (in frustum)",
-                Some(tris),
+                table.map(|t| &t.polygons_in_frustum),
                 |c| c.mean_triangles,
                 int,
             ),
@@ -732,9 +618,7 @@ fn sweep(ctx: &Ctx, param: &str) -> String {
             for ((v, _), summary) in points.iter().zip(&summaries) {
                 pair(
                     &mut cells,
-                    paper
-                        .and_then(|p| paper_col(*v).map(|i| fmt(p[i])))
-                        .unwrap_or("–".into()),
+                    paper_cell(paper, *v, fmt),
                     summary.map_or("–".into(), |c| fmt(pick(c))),
                 );
             }
@@ -767,7 +651,7 @@ fn sweep(ctx: &Ctx, param: &str) -> String {
             &mut m,
             "\nThe paper's FPS and PSNR are means along its walk; ours are over {views} \
              views, `worker check`'s viewpoints in the sampled cells (16 per cell in \
-             bench.sh, `pipeline benchmarks views`), from `player compare --no-crossings` with every texture \
+             bench.sh, `hexbake-bench views`), from `player compare --no-crossings` with every texture \
              uploaded before its frame (no pending proxies). PSNR is pooled (the mean \
              squared error over all views, then PSNR): views of edge and corner cells \
              that look off the park show only sky, score the 100 dB cap and would \
@@ -786,8 +670,8 @@ fn sweep(ctx: &Ctx, param: &str) -> String {
 
 /// PSNR(Y) of the mean squared error over every frame of a compare (frames at the
 /// player's 100 dB cap count as error-free).
-pub fn pooled_psnr_y(c: &CompareSummary) -> f64 {
-    let mse = crate::benchmarks::mean(
+pub fn pooled_psnr_y(c: &CompareReport) -> f64 {
+    let mse = crate::results::mean(
         c.per_frame
             .iter()
             .map(|f| 255.0 * 255.0 / 10f64.powf(f.psnr_y / 10.0)),
@@ -798,7 +682,7 @@ pub fn pooled_psnr_y(c: &CompareSummary) -> f64 {
 /// Tables 6–7: the player along the path.
 fn runtime(ctx: &Ctx) -> String {
     let mut m = String::new();
-    let compares: Vec<_> = SCENES
+    let compares: Vec<_> = scenes()
         .iter()
         .map(|(s, _)| ctx.hybrid_compare(s).filter(|c| c.available))
         .collect();
@@ -818,7 +702,7 @@ fn runtime(ctx: &Ctx) -> String {
         "along `{}`",
         paths.into_iter().collect::<Vec<_>>().join("`, `")
     )];
-    for ((_, paper), c) in SCENES.iter().zip(&compares) {
+    for ((_, paper), c) in scenes().iter().zip(&compares) {
         cols.push(format!("{paper} paper"));
         cols.push(match c {
             Some(c) => format!(
@@ -831,19 +715,26 @@ fn runtime(ctx: &Ctx) -> String {
         cols.push("vs paper".to_string());
     }
     table_header(&mut m, &cols);
-    let frustum: Vec<Option<&RenderResult>> = SCENES
+    let frustum: Vec<Option<&RenderResult>> = scenes()
         .iter()
-        .map(|(s, _)| ctx.render(&format!("{s}-frustum")).filter(|r| r.available))
+        .map(|(s, _)| {
+            ctx.render(&RunLabel::Frustum(s).to_string())
+                .filter(|r| r.available)
+        })
         .collect();
-    let hybrid_render: Vec<Option<&RenderResult>> = SCENES
+    let hybrid_render: Vec<Option<&RenderResult>> = scenes()
         .iter()
-        .map(|(s, _)| ctx.render(&format!("{s}-hybrid")).filter(|r| r.available))
+        .map(|(s, _)| {
+            ctx.render(&RunLabel::Hybrid(s).to_string())
+                .filter(|r| r.available)
+        })
         .collect();
+    let (t6, t7) = (&paper().table6, &paper().table7);
     let paper_a = |k: usize| {
         if k == 2 {
-            table6::POLYGONS[0]
+            t6.polygons.values[0]
         } else {
-            PAPER_SCENE_POLYGONS[k]
+            paper().scene_polygons.total.values[k]
         }
     };
     let mut add = |name: &str,
@@ -864,14 +755,14 @@ fn runtime(ctx: &Ctx) -> String {
     let nan = f64::NAN;
     add(
         "triangles per frame, C hybrid (Tables 6–7)",
-        table7::POLYGONS_IN_FRUSTUM,
+        per_scene(&t7.polygons_in_frustum),
         per(&|k| s(k).map_or(nan, |s| s.mean_triangles)),
         int,
         &|o, p| verdict(o, p),
     );
     add(
         "triangles per frame, B frustum (Table 6)",
-        [nan, nan, table6::POLYGONS[1]],
+        [nan, nan, t6.polygons.values[1]],
         per(&|k| frustum[k].map_or(nan, |r| r.mean_triangles())),
         int,
         &|_, _| String::new(),
@@ -885,7 +776,7 @@ fn runtime(ctx: &Ctx) -> String {
     );
     add(
         "PSNR(Y) mean, dB (Table 7)",
-        table7::PSNR_DB,
+        per_scene(&t7.psnr_db),
         per(&|k| s(k).map_or(nan, |s| s.mean_psnr_y)),
         |v| fixed(v, 2),
         &verdict_db,
@@ -916,7 +807,7 @@ fn runtime(ctx: &Ctx) -> String {
         [
             nan,
             nan,
-            table6::FRAME_TIME_MS[2] / table6::FRAME_TIME_MS[1],
+            t6.frame_time_ms.values[2] / t6.frame_time_ms.values[1],
         ],
         per(&|k| s(k).map_or(nan, |s| s.frame_time_ratio_frustum)),
         |v| fixed(v, 4),
@@ -927,7 +818,7 @@ fn runtime(ctx: &Ctx) -> String {
         [
             nan,
             nan,
-            table6::FRAME_TIME_MS[2] / table6::FRAME_TIME_MS[0],
+            t6.frame_time_ms.values[2] / t6.frame_time_ms.values[0],
         ],
         per(&|k| s(k).map_or(nan, |s| s.frame_time_ratio)),
         |v| fixed(v, 4),
@@ -935,14 +826,14 @@ fn runtime(ctx: &Ctx) -> String {
     );
     add(
         "C frame time, ms (mean)",
-        [nan, nan, table6::FRAME_TIME_MS[2]],
+        [nan, nan, t6.frame_time_ms.values[2]],
         per(&|k| s(k).map_or(nan, |s| s.mean_ms(|f| f.frame_ms))),
         |v| fixed(v, 2),
         &|_, _| String::new(),
     );
     add(
         "C frames per second (Table 7)",
-        table7::FPS,
+        per_scene(&t7.fps),
         per(&|k| s(k).map_or(nan, |s| 1e3 / s.mean_ms(|f| f.frame_ms))),
         |v| fixed(v, 1),
         &|_, _| String::new(),
@@ -1012,14 +903,13 @@ fn hybrid_vs_lod(ctx: &Ctx) -> String {
         ],
     );
     let mut notes = Vec::new();
-    for (scene, paper) in SCENES {
+    for (scene, paper) in scenes() {
         let h = ctx.hybrid_compare(scene);
-        let lod_prefix = format!("{scene}-lod");
         let lods: Vec<&CompareResult> = ctx
             .m
             .compares
             .keys()
-            .filter(|k| **k == lod_prefix || k.starts_with(&format!("{lod_prefix}-")))
+            .filter(|k| RunLabel::lod_of(k).is_some_and(|(s, _)| s == scene))
             .filter_map(|k| ctx.compare(k))
             .collect();
         if h.is_none() && lods.is_empty() {
@@ -1031,11 +921,13 @@ fn hybrid_vs_lod(ctx: &Ctx) -> String {
             entries.push(("lod".into(), None));
         }
         for l in &lods {
+            // The player's threshold (an f32) as it wrote it, else bench.sh's.
             let err = l
                 .summary
                 .as_ref()
                 .and_then(|s| s.lod_pixel_error)
-                .or(l.lod_pixel_error);
+                .map(|e| e.to_string())
+                .or(l.lod_pixel_error.map(|e| e.to_string()));
             let name = match err {
                 Some(e) => format!("lod, {e} px"),
                 None => "lod".into(),
@@ -1162,7 +1054,7 @@ fn crossings(ctx: &Ctx) -> String {
             "ratio".into(),
         ],
     );
-    for (scene, paper) in SCENES {
+    for (scene, paper) in scenes() {
         let Some(s) = ctx
             .hybrid_compare(scene)
             .filter(|c| c.available)
@@ -1204,12 +1096,13 @@ fn crossings(ctx: &Ctx) -> String {
 /// Table 8: storage and cell load time.
 fn storage(ctx: &Ctx) -> String {
     let mut m = String::new();
-    let bakes: Vec<_> = SCENES.iter().map(|(s, _)| ctx.scene_bake(s)).collect();
+    let bakes: Vec<_> = scenes().iter().map(|(s, _)| ctx.scene_bake(s)).collect();
     if bakes.iter().all(Option::is_none) {
         return NOT_MEASURED.into();
     }
+    let t8 = &paper().table8;
     let mut cols = vec!["storage (Table 8)".to_string()];
-    for ((_, paper), b) in SCENES.iter().zip(&bakes) {
+    for ((_, paper), b) in scenes().iter().zip(&bakes) {
         cols.push(format!("{paper} paper"));
         cols.push(match b.and_then(|(_, b)| b.report.as_ref()) {
             Some(r) => format!("{paper} ours{}", coverage(r)),
@@ -1230,7 +1123,7 @@ fn storage(ctx: &Ctx) -> String {
             1.0
         }
     };
-    let loads: Vec<Option<&LoadTime>> = SCENES
+    let loads: Vec<Option<&LoadTime>> = scenes()
         .iter()
         .zip(&bakes)
         .map(|((s, _), b)| {
@@ -1252,55 +1145,55 @@ fn storage(ctx: &Ctx) -> String {
     let f1 = |v: f64| fixed(v, 1);
     add(
         "SVMesh & MVMesh (cell meshes, tables), MB",
-        table8::SV_MV_MB,
+        per_scene(&t8.sv_mv_mb),
         &|r| mb(r.storage.mesh_bytes as f64 * scale(r)),
         f1,
     );
     add(
         "textures, MB",
-        table8::TEXTURES_MB,
+        per_scene(&t8.textures_mb),
         &|r| mb(r.storage.texture_bytes as f64 * scale(r)),
         f1,
     );
     add(
         "total (cells + index), MB",
-        table8::TOTAL_MB,
+        per_scene(&t8.total_mb),
         &|r| mb((r.storage.cell_bytes as f64 * scale(r)) + r.storage.index_bytes as f64),
         f1,
     );
     add(
         "original meshes (base.pack), MB",
-        table8::ORIGINAL_MESHES_MB,
+        per_scene(&t8.original_meshes_mb),
         &|r| mb(r.storage.base_bytes as f64),
         f1,
     );
     add(
         "per cell: meshes, KB",
-        table8::CELL_POLYGONS_KB,
+        per_scene(&t8.cell_polygons_kb),
         &|r| kb(r.storage.mesh_bytes as f64 / r.cells.max(1) as f64),
         f1,
     );
     add(
         "per cell: textures, KB",
-        table8::CELL_TEXTURES_KB,
+        per_scene(&t8.cell_textures_kb),
         &|r| kb(r.storage.texture_bytes as f64 / r.cells.max(1) as f64),
         f1,
     );
     add(
         "per cell: total, KB",
-        table8::CELL_TOTAL_KB,
+        per_scene(&t8.cell_total_kb),
         &|r| kb(r.storage.per_cell_bytes),
         f1,
     );
     add(
         "cell load at 55 MB/s (size ÷ speed), ms",
-        table8::LOAD_MS_55,
+        per_scene(&t8.load_ms_55),
         &|r| r.storage.per_cell_bytes / 55e6 * 1e3,
         f1,
     );
     add(
         "cell load at 35 MB/s (size ÷ speed), ms",
-        table8::LOAD_MS_35,
+        per_scene(&t8.load_ms_35),
         &|r| r.storage.per_cell_bytes / 35e6 * 1e3,
         f1,
     );
@@ -1319,8 +1212,8 @@ fn storage(ctx: &Ctx) -> String {
         "\nPaper: DXT3 textures (1:4). Ours: lossless RGBA8 in zstd (format/README.md); \
          \"meshes\" is every non-texture byte of the cell packs. Totals of a partial bake \
          (\"N of M cells\") are its per-cell average × M. The measured load time is CPU \
-         (mmap, blake3 of every section, zstd, decode) on this machine, from `pipeline \
-         benchmarks load`; the paper's is disk time at the given speed."
+         (mmap, blake3 of every section, zstd, decode) on this machine, from `hexbake-bench \
+         load`; the paper's is disk time at the given speed."
     );
     m
 }
@@ -1402,7 +1295,7 @@ fn bake_time(ctx: &Ctx) -> String {
 /// Links to the per-frame plots (written next to the run files).
 fn plots(ctx: &Ctx) -> String {
     let mut m = String::new();
-    for (scene, paper) in SCENES {
+    for (scene, paper) in scenes() {
         if ctx
             .hybrid_compare(scene)
             .is_some_and(|c| c.available && c.summary.is_some())
@@ -1450,7 +1343,7 @@ fn machine(ctx: &Ctx) -> String {
             "memory".into(),
         ],
     );
-    let get = |r: &crate::benchmarks::BenchRun, k: &str| {
+    let get = |r: &crate::results::BenchRun, k: &str| {
         r.machine.get(k).cloned().unwrap_or_else(|| "–".into())
     };
     for (file, run) in ctx.m.runs.iter().filter(|(f, _)| used.contains(f)) {
@@ -1561,8 +1454,8 @@ mod tests {
 
     #[test]
     fn pooled_psnr_averages_squared_errors() {
-        use crate::benchmarks::CompareFrame;
-        let frames = |ps: &[f64]| CompareSummary {
+        use crate::results::CompareFrame;
+        let frames = |ps: &[f64]| CompareReport {
             per_frame: ps
                 .iter()
                 .map(|&psnr_y| CompareFrame {
@@ -1601,7 +1494,7 @@ fn plot_lod<'a>(
     merged: &'a Merged,
     scene: &str,
     hybrid_triangles: f64,
-) -> Option<&'a crate::benchmarks::CompareSummary> {
+) -> Option<&'a CompareReport> {
     let available = |label: &str| {
         merged
             .compares
@@ -1609,20 +1502,21 @@ fn plot_lod<'a>(
             .filter(|(_, c)| c.available)
             .and_then(|(_, c)| c.summary.as_ref())
     };
-    if let Some(s) = available(&format!("{scene}-lod")) {
+    let default = RunLabel::Lod {
+        scene,
+        pixel_error: None,
+    };
+    if let Some(s) = available(&default.to_string()) {
         return Some(s);
     }
-    let prefix = format!("{scene}-lod-");
     merged
         .compares
         .keys()
-        .filter(|k| k.starts_with(&prefix))
+        .filter(|k| RunLabel::lod_of(k).is_some_and(|(s, e)| s == scene && e.is_some()))
         .filter_map(|k| available(k))
         .filter(|s| s.mean_triangles > 0.0)
         .min_by(|a, b| {
-            let d = |s: &crate::benchmarks::CompareSummary| {
-                (s.mean_triangles / hybrid_triangles.max(1.0)).ln().abs()
-            };
+            let d = |s: &CompareReport| (s.mean_triangles / hybrid_triangles.max(1.0)).ln().abs();
             d(a).total_cmp(&d(b))
         })
 }
@@ -1643,18 +1537,18 @@ pub fn regenerate(
     plot_prefix: &str,
 ) -> anyhow::Result<Regenerated> {
     use anyhow::Context;
-    let runs = crate::benchmarks::read_runs(results)?;
+    let runs = crate::results::read_runs(results)?;
     let n_runs = runs.len();
-    let merged = crate::benchmarks::merge(runs);
+    let merged = crate::results::merge(runs);
     let text =
         std::fs::read_to_string(doc).with_context(|| format!("{}: cannot read", doc.display()))?;
     let secs = sections(&merged, plot_prefix);
     let new = replace_sections(&text, &secs).with_context(|| doc.display().to_string())?;
     let mut plots = Vec::new();
-    for (scene, _) in SCENES {
+    for (scene, _) in scenes() {
         let Some((_, compare)) = merged
             .compares
-            .get(&format!("{scene}-hybrid"))
+            .get(&RunLabel::Hybrid(scene).to_string())
             .filter(|(_, c)| c.available)
         else {
             continue;
@@ -1666,11 +1560,8 @@ pub fn regenerate(
             .file_name()
             .map_or(compare.path.clone(), |n| n.to_string_lossy().into_owned());
         let lod = plot_lod(&merged, scene, hybrid.mean_triangles);
-        let png = crate::bench_plot::render_walk_plot(
-            &format!("{scene} along {path_name}"),
-            hybrid,
-            lod,
-        )?;
+        let png =
+            crate::plot::render_walk_plot(&format!("{scene} along {path_name}"), hybrid, lod)?;
         let path = results.join(plot_file_name(scene));
         format::pack::write_atomic(&path, &png).with_context(|| path.display().to_string())?;
         plots.push(path);

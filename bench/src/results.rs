@@ -3,11 +3,12 @@
 //! `docs/bench/`.
 //!
 //! `bench.sh` runs the bakes and the player and leaves its raw outputs in a work
-//! folder; `pipeline benchmarks collect` turns that folder into one [`BenchRun`] JSON
+//! folder; `hexbake-bench collect` turns that folder into one [`BenchRun`] JSON
 //! (machine, exact commands, every bake's report, the player's compare output and
-//! per-frame CSVs, cell load times). `pipeline benchmarks tables` (see
-//! [`crate::bench_tables`]) regenerates BENCHMARKS.md's measured tables from those
-//! files and draws the per-frame plots ([`crate::bench_plot`]).
+//! per-frame CSVs, cell load times). `hexbake-bench tables` (see [`crate::tables`])
+//! regenerates BENCHMARKS.md's measured tables from those files and draws the
+//! per-frame plots ([`crate::plot`]). The labels in the file names are
+//! [`crate::labels::RunLabel`]s.
 //!
 //! Work folder layout (all written by `bench.sh`):
 //!
@@ -15,20 +16,23 @@
 //! meta.txt              key=value lines: date, git_commit, nproc, cpu_model, ...
 //! commands.tsv          wall_s <TAB> exit <TAB> command, one line per command run
 //! bake-<label>.txt      key=value: label, scene, manifest, out, cells, set (repeated),
-//!                       sweep=PARAM:VALUE (repeated), wall_s, exit
+//!                       sweep=PARAM:VALUE (repeated, PARAM a SweepParam key),
+//!                       wall_s, exit
 //! compare-<label>.txt   key=value: label, scene, mode, out, path, size, wall_s, exit,
 //!                       lod_pixel_error (lod), note (why a mode is not available)
 //! compare-<label>.json  `player compare --json` stdout (absent when it failed)
 //! compare-<label>.err   its stderr
 //! render-<label>.txt    key=value: label, scene, mode, out, path, size, wall_s, exit
 //! render-<label>/frames.csv
-//! load-<label>.json     `pipeline benchmarks load --json` stdout
+//! load-<label>.json     `hexbake-bench load` stdout
 //! ```
 
-use crate::report::Report;
+use crate::labels::SweepParam;
 use anyhow::Context;
 use format::pack::{BasePack, CellPack, Index, PackFile};
-use serde::{Deserialize, Deserializer, Serialize};
+pub use format::schema::compare::{CompareFrame, CompareReport, CrossingStats};
+use pipeline::report::Report;
+use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -61,12 +65,10 @@ pub struct CommandLine {
     pub exit: i32,
 }
 
-/// A parameter sweep point (paper Tables 3–5).
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
+/// A parameter sweep point (paper Tables 3–5, and the deviation bound).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Sweep {
-    /// `T_s`, `T_l` or `cell_size`.
-    pub param: String,
+    pub param: SweepParam,
     pub value: f64,
 }
 
@@ -94,76 +96,16 @@ pub struct BakeResult {
     pub report: Option<Report>,
 }
 
-/// Crossing statistics of `player compare` (paper Fig. 14).
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
-pub struct Crossings {
-    pub crossings: usize,
-    #[serde(deserialize_with = "nan_if_null")]
-    pub in_cell_median_ms: f64,
-    #[serde(deserialize_with = "nan_if_null")]
-    pub max_after_crossing_ms: f64,
-    #[serde(deserialize_with = "nan_if_null")]
-    pub ratio: f64,
-}
-
-/// One frame of `player compare`.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
-pub struct CompareFrame {
-    pub frame: usize,
-    pub cell: Option<u32>,
-    #[serde(deserialize_with = "nan_if_null")]
-    pub psnr_y: f64,
-    #[serde(deserialize_with = "nan_if_null")]
-    pub ssim: f64,
-    pub triangles: u64,
-    pub reference_triangles: u64,
-    #[serde(deserialize_with = "nan_if_null")]
-    pub frame_ms: f64,
-    #[serde(deserialize_with = "nan_if_null")]
-    pub reference_frame_ms: f64,
-    #[serde(deserialize_with = "nan_if_null")]
-    pub frustum_frame_ms: f64,
-}
-
-/// `player compare --json` (player/README.md names the keys); unknown keys are kept
-/// out, missing ones default.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
-pub struct CompareSummary {
-    pub frames: usize,
-    #[serde(deserialize_with = "nan_if_null")]
-    pub mean_psnr_y: f64,
-    #[serde(deserialize_with = "nan_if_null")]
-    pub min_psnr_y: f64,
-    #[serde(deserialize_with = "nan_if_null")]
-    pub mean_ssim: f64,
-    #[serde(deserialize_with = "nan_if_null")]
-    pub mean_triangles: f64,
-    #[serde(deserialize_with = "nan_if_null")]
-    pub reference_triangles: f64,
-    #[serde(deserialize_with = "nan_if_null")]
-    pub frame_time_ratio: f64,
-    #[serde(deserialize_with = "nan_if_null")]
-    pub frame_time_ratio_frustum: f64,
-    pub adapter: String,
-    pub width: u32,
-    pub height: u32,
-    /// The compared configuration (`hybrid`, `lod`); older players omit it.
-    pub mode: String,
-    /// `--lod-pixel-error` of a `lod` compare.
-    pub lod_pixel_error: Option<f64>,
-    /// Time to build the LOD chains of a `lod` compare, ms.
-    pub lod_build_ms: Option<f64>,
-    pub crossing_prefetch: Option<Crossings>,
-    pub crossing_no_prefetch: Option<Crossings>,
-    pub per_frame: Vec<CompareFrame>,
-}
-
-impl CompareSummary {
+/// Reader's figures of a `player compare` report.
+pub trait CompareStats {
     /// The lowest per-frame SSIM (NaN without frames).
-    pub fn min_ssim(&self) -> f64 {
+    fn min_ssim(&self) -> f64;
+    /// Mean frame time of one configuration in ms (NaN without frames).
+    fn mean_ms(&self, pick: fn(&CompareFrame) -> f64) -> f64;
+}
+
+impl CompareStats for CompareReport {
+    fn min_ssim(&self) -> f64 {
         self.per_frame
             .iter()
             .map(|f| f.ssim)
@@ -171,8 +113,7 @@ impl CompareSummary {
             .fold(f64::NAN, f64::min)
     }
 
-    /// Mean frame time of one configuration in ms (NaN without frames).
-    pub fn mean_ms(&self, pick: fn(&CompareFrame) -> f64) -> f64 {
+    fn mean_ms(&self, pick: fn(&CompareFrame) -> f64) -> f64 {
         mean(self.per_frame.iter().map(pick))
     }
 }
@@ -196,7 +137,8 @@ pub struct CompareResult {
     pub available: bool,
     /// Why not available (the player's message).
     pub message: Option<String>,
-    pub summary: Option<CompareSummary>,
+    /// `player compare --json` (older run files lack the newer keys: defaults).
+    pub summary: Option<CompareReport>,
 }
 
 /// One row of `frames.csv` (player/README.md).
@@ -241,7 +183,7 @@ impl RenderResult {
     }
 }
 
-/// Cell load times of one bake (`pipeline benchmarks load`).
+/// Cell load times of one bake (`hexbake-bench load`).
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct LoadTime {
@@ -265,10 +207,6 @@ pub fn mean(v: impl Iterator<Item = f64>) -> f64 {
     } else {
         s / n as f64
     }
-}
-
-fn nan_if_null<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
-    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
 }
 
 // ---------------------------------------------------------------------------------
@@ -322,7 +260,7 @@ pub fn time_cell_loads(out: &Path, label: &str, sample: usize) -> anyhow::Result
 // ---------------------------------------------------------------------------------
 // Check viewpoints of sampled cells as a camera path.
 
-/// The camera path of `pipeline benchmarks views`: `per_cell` viewpoints of each of
+/// The camera path of `hexbake-bench views`: `per_cell` viewpoints of each of
 /// `cells` (default: the cells a partial bake was asked for, `<out>/partial.json`)
 /// on the bake's own grid (its `base.pack`), placed as `worker check` places them
 /// (`worker::check::check_views`: spread over the cell's prism, directions evenly
@@ -343,7 +281,7 @@ pub fn check_view_path(
     let cells = match cells {
         Some(c) => c,
         None => {
-            crate::run::read_partial(out)
+            pipeline::run::read_partial(out)
                 .with_context(|| {
                     format!(
                         "{}: not a partial bake (no readable partial.json): give --cells",
@@ -512,14 +450,15 @@ fn parse_sweeps(f: &Fields, file: &Path) -> anyhow::Result<Vec<Sweep>> {
         .map(|s| {
             let (param, value) = s
                 .split_once(':')
-                .and_then(|(p, v)| Some((p, v.parse::<f64>().ok()?)))
+                .and_then(|(p, v)| Some((SweepParam::from_key(p)?, v.parse::<f64>().ok()?)))
                 .with_context(|| {
-                    format!("{}: sweep={s:?}: expected PARAM:VALUE", file.display())
+                    format!(
+                        "{}: sweep={s:?}: expected PARAM:VALUE, PARAM one of {}",
+                        file.display(),
+                        SweepParam::ALL.map(SweepParam::key).join(", ")
+                    )
                 })?;
-            Ok(Sweep {
-                param: param.to_string(),
-                value,
-            })
+            Ok(Sweep { param, value })
         })
         .collect()
 }
@@ -591,7 +530,7 @@ pub fn collect(work: &Path) -> anyhow::Result<BenchRun> {
         let summary = std::fs::read(&json)
             .ok()
             .filter(|b| !b.is_empty())
-            .map(|b| serde_json::from_slice::<CompareSummary>(&b))
+            .map(|b| serde_json::from_slice::<CompareReport>(&b))
             .transpose()
             .with_context(|| json.display().to_string())?;
         let available = f.exit() == 0 && summary.is_some();
@@ -688,7 +627,7 @@ pub fn read_runs(dir: &Path) -> anyhow::Result<Vec<(String, BenchRun)>> {
             .with_context(|| format!("{}: not a bench run file", path.display()))?;
         if run.schema != BENCH_SCHEMA {
             anyhow::bail!(
-                "{}: schema {} (this pipeline reads {BENCH_SCHEMA})",
+                "{}: schema {} (hexbake-bench reads {BENCH_SCHEMA})",
                 path.display(),
                 run.schema
             );
@@ -767,7 +706,7 @@ mod tests {
                           "frame_ms":1.0,"reference_frame_ms":2.0,"frustum_frame_ms":1.5},
                          {"frame":1,"cell":null,"psnr_y":51.0,"ssim":1.0,"triangles":110,"reference_triangles":1000,
                           "frame_ms":1.0,"reference_frame_ms":2.0,"frustum_frame_ms":1.5}]}"#;
-        let s: CompareSummary = serde_json::from_str(json).unwrap();
+        let s: CompareReport = serde_json::from_str(json).unwrap();
         assert_eq!(s.per_frame.len(), 2);
         assert!(s.crossing_prefetch.as_ref().unwrap().ratio.is_nan());
         assert_eq!(s.min_ssim(), 0.8);
