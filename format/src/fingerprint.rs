@@ -33,8 +33,10 @@ pub type Fingerprint = [u8; 32];
 /// 9 — objective selection of representations with layered impostors (issue 16,
 /// `bake.quality`, worker `select.rs`, `impostor.rs`);
 /// 10 — the collapse and the speck tidying run on position-welded vertices, so
-/// UV-seamed models simplify as closed meshes (issue 18, `worker::simplify`).
-pub const BAKE_REVISION: u32 = 10;
+/// UV-seamed models simplify as closed meshes (issue 18, `worker::simplify`);
+/// 11 — captures stored as BC1 with punch-through alpha (format version 4, issue 15,
+/// `Texture::from_rgba8_bc1_coverage`).
+pub const BAKE_REVISION: u32 = 11;
 
 /// Hex form for file names, logs and reports.
 pub fn to_hex(f: &Fingerprint) -> String {

@@ -118,19 +118,44 @@ fn golden_v3_packs_decode_to_the_samples() {
     );
 }
 
+/// Version 4 (issue 15): coverage textures are BC1 with punch-through alpha, their
+/// colours premultiplied by coverage; the cell file holds [`sample::small_cell_v4`].
+#[test]
+fn golden_v4_packs_decode_to_the_samples() {
+    assert_eq!(
+        BasePack::decode(&PackFile::open(&golden("base-v4.pack")).unwrap()).unwrap(),
+        sample::small_base()
+    );
+    let cell = CellPack::read(&golden("cell-v4.pack")).unwrap();
+    assert_eq!(cell, sample::small_cell_v4());
+    let coverage = &cell.proxies[0].views[0].texture;
+    assert_eq!(coverage.encoding, TextureEncoding::Bc1);
+    let texels = coverage.to_rgba8().unwrap();
+    assert!(texels.chunks(4).any(|t| t == [0, 0, 0, 0]));
+    assert!(texels.chunks(4).any(|t| t[3] == 255));
+    assert_eq!(
+        CellPack::decode_group(&PackFile::open(&golden("group-v4.pack")).unwrap()).unwrap(),
+        sample::small_group()
+    );
+    assert_eq!(
+        Index::read(&golden("index-v4.pack")).unwrap(),
+        sample::small_index_v2()
+    );
+}
+
 #[test]
 fn regenerating_the_golden_packs_gives_the_same_bytes() {
     assert_eq!(
-        FORMAT_VERSION, 3,
+        FORMAT_VERSION, 4,
         "a new version needs new golden files; keep the old ones"
     );
-    check_or_bless("base-v3.pack", sample::small_base().encode().unwrap());
-    check_or_bless("cell-v3.pack", sample::small_cell_v2().encode().unwrap());
+    check_or_bless("base-v4.pack", sample::small_base().encode().unwrap());
+    check_or_bless("cell-v4.pack", sample::small_cell_v4().encode().unwrap());
     check_or_bless(
-        "group-v3.pack",
+        "group-v4.pack",
         sample::small_group().encode_group().unwrap(),
     );
-    check_or_bless("index-v3.pack", sample::small_index_v2().encode().unwrap());
+    check_or_bless("index-v4.pack", sample::small_index_v2().encode().unwrap());
 }
 
 /// Issue 16: a cell pack with a layered impostor (section `layered-impostors`)
@@ -138,10 +163,14 @@ fn regenerating_the_golden_packs_gives_the_same_bytes() {
 /// section still sees the cell's other proxies unchanged.
 #[test]
 fn golden_layered_impostor_pack() {
-    let path = golden("cell-impostor-v3.pack");
-    if FORMAT_VERSION == 3 {
+    assert_eq!(
+        CellPack::read(&golden("cell-impostor-v3.pack")).unwrap(),
+        sample::small_cell_impostor()
+    );
+    let path = golden("cell-impostor-v4.pack");
+    if FORMAT_VERSION == 4 {
         check_or_bless(
-            "cell-impostor-v3.pack",
+            "cell-impostor-v4.pack",
             sample::small_cell_impostor().encode().unwrap(),
         );
     }
@@ -158,7 +187,7 @@ fn golden_layered_impostor_pack() {
         .section_info(format::pack::SectionKind::LAYERED_IMPOSTORS)
         .is_some());
     // Packs without impostors carry no such section (their bytes do not change).
-    assert!(PackFile::read(&golden("cell-v3.pack"))
+    assert!(PackFile::read(&golden("cell-v4.pack"))
         .unwrap()
         .section_info(format::pack::SectionKind::LAYERED_IMPOSTORS)
         .is_none());
@@ -169,10 +198,10 @@ fn golden_packs_exercise_every_codec() {
     use format::pack::Codec;
     let mut seen = std::collections::BTreeSet::new();
     for name in [
-        "base-v3.pack",
-        "cell-v3.pack",
-        "group-v3.pack",
-        "index-v3.pack",
+        "base-v4.pack",
+        "cell-v4.pack",
+        "group-v4.pack",
+        "index-v4.pack",
     ] {
         for s in PackFile::read(&golden(name)).unwrap().sections() {
             seen.insert(s.codec as u32);

@@ -398,8 +398,9 @@ fn dilate(rgba: &mut [u8], filled: &mut [bool], w: usize, h: usize) {
     }
 }
 
-/// Encodes a capture texture for a pack (issue 15): block-compressed, BC1 when every
-/// texel is covered (alpha 255), BC3 otherwise (alpha carries coverage), and returns it
+/// Encodes a capture texture for a pack (issue 15): BC1, with punch-through alpha in
+/// the blocks where coverage is partial (format version 4: uncovered texels decode as
+/// transparent black, colours premultiplied by coverage), and returns it
 /// with the world → texture matrix it is to be sampled with. Block textures are padded
 /// to multiples of 4 by replicating the last column and row; the matrix's `s` and `t`
 /// rows are scaled by `width / padded_width` and `height / padded_height`, so texture
@@ -411,7 +412,7 @@ fn dilate(rgba: &mut [u8], filled: &mut [bool], w: usize, h: usize) {
 pub fn pack_texture(
     texture: &ProjectedTexture,
 ) -> Result<(format::pack::Texture, [f32; 16]), String> {
-    let t = format::pack::Texture::from_rgba8_block_trimmed(
+    let t = format::pack::Texture::from_rgba8_bc1_coverage(
         texture.width,
         texture.height,
         &texture.rgba,

@@ -371,7 +371,23 @@ pub fn small_cell_v2() -> CellPack {
     cell
 }
 
-/// The content of `tests/data/cell-impostor-v3.pack` (issue 16): [`small_cell_v2`]
+/// The content of `tests/data/cell-v4.pack`: [`small_cell_v2`] with its BC3 capture
+/// written as format 4 writes coverage textures, BC1 with punch-through alpha
+/// ([`Texture::from_rgba8_bc1_coverage`]).
+pub fn small_cell_v4() -> CellPack {
+    let mut cell = small_cell_v2();
+    let mut covered = capture_like_rgba(13, 10, 11);
+    for t in covered.chunks_exact_mut(4) {
+        if t[..3] == [135, 180, 235] {
+            t[3] = 0; // background: not covered
+        }
+    }
+    cell.proxies[0].views[0].texture =
+        Texture::from_rgba8_bc1_coverage(13, 10, &covered).expect("BC1 coverage sample");
+    cell
+}
+
+/// The content of `tests/data/cell-impostor-v3.pack` and `cell-impostor-v4.pack` (issue 16): [`small_cell_v2`]
 /// plus a LayeredImpostor of instance 2 with three overlapping layers; its RGBA8
 /// texture carries depth codes in alpha (0 outside a disc, 1..=255 inside).
 pub fn small_cell_impostor() -> CellPack {
