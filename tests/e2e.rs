@@ -864,7 +864,7 @@ mod random_manifests {
                (model: Procedural(\"sphere\"), target_height: {}, translation: ({}, {}, {}), rotation_y_deg: {}, scale: {}, tint: ({}, {}, {})),\n\
                (model: Procedural(\"box\"), target_height: 6.0, translation: (60.0, 0.0, 40.0), rotation_y_deg: 0.0)]),\n\
              cells: (cell_size: {}, min_eye_height: {}, max_eye_height: {}),\n\
-             bake: (image_res: {}, self_occluding_tolerance_px: {}, edge_length_tolerance: {}, t_c0: {}, t_c1: {}, max_deviation_px: {}),\n\
+             bake: (image_res: {}, self_occluding_tolerance_px: {}, edge_length_tolerance_px: {}, t_c0: {}, t_c1: {}, max_deviation_px: {}),\n\
              cells_per_job: {})\n",
             n[0], n[1], n[2], n[3], n[4], n[5], n[6], n[7], n[8], n[9], n[10], n[11], n[12],
             n[13], n[14], n[15], i[0], n[16], n[17], n[18], n[19], n[20], i[1]

@@ -91,7 +91,7 @@ pub fn params_fingerprint(bake: &BakeParams, cells: &CellParams) -> Fingerprint 
     let BakeParams {
         image_res,
         self_occluding_tolerance_px,
-        edge_length_tolerance,
+        edge_length_tolerance_px,
         t_c0,
         t_c1,
         clustering,
@@ -105,7 +105,7 @@ pub fn params_fingerprint(bake: &BakeParams, cells: &CellParams) -> Fingerprint 
         &mut h,
         &[
             *self_occluding_tolerance_px,
-            *edge_length_tolerance,
+            *edge_length_tolerance_px,
             *t_c0,
             *t_c1,
             *max_deviation_px,
@@ -190,7 +190,7 @@ mod tests {
         let variants: Vec<Change> = vec![
             |b, _| b.image_res = 512,
             |b, _| b.self_occluding_tolerance_px = 3.0,
-            |b, _| b.edge_length_tolerance = 6.0,
+            |b, _| b.edge_length_tolerance_px = 6.0,
             |b, _| b.t_c0 = 1e-3,
             |b, _| b.t_c1 = 1e-3,
             |b, _| b.clustering = false,

@@ -66,23 +66,73 @@
 //! 10⁶ units keep f32 precise to 0.06 units or better anywhere in a scene (its spacing
 //! at 10⁶ is 2⁻⁴), and squared distances far from overflow; a million cells is 40
 //! times the paper's largest park grid (22 × 24) and bounds the plan, the job
-//! journal and the index. `pipeline run --set` checks its overrides with the same
-//! functions ([`check_ground`], [`check_cells`]).
+//! journal and the index.
+//!
+//! **Overrides** (`pipeline run --set KEY=VALUE`, [`overrides`]) replace values of
+//! the raw manifest before stage 2, so there is one validator: an overridden value
+//! is refused with the same message as the same value in the file, located at the
+//! override instead of file:line:column ([`ManifestError::Override`]).
+//!
+//! **Renamed parameters** ([`RENAMED`]): a name that changed to carry its unit
+//! (`bake.edge_length_tolerance` → `bake.edge_length_tolerance_px`) is refused with
+//! a message naming the new one, at its line and column.
 
 use crate::field_positions::{FieldPositions, TextPosition};
 use crate::scene::Ground;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
+pub mod overrides;
+pub use overrides::{parse_override, Override, OverrideError};
+
+/// A parameter renamed to say its unit: the old dotted name, the new one and the
+/// unit. A manifest or `--set` using the old name is refused with a message that
+/// names the new one ([`renamed_message`]); serialised plans and reports with the
+/// old key still read (a serde alias).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Renamed {
+    pub old: &'static str,
+    pub new: &'static str,
+    pub unit: &'static str,
+}
+
+/// The renamed manifest parameters (issue 14: units in names).
+pub const RENAMED: &[Renamed] = &[Renamed {
+    old: "bake.edge_length_tolerance",
+    new: "bake.edge_length_tolerance_px",
+    unit: "pixels",
+}];
+
+/// "`bake.edge_length_tolerance` was renamed `bake.edge_length_tolerance_px`
+/// (pixels)" for an old name, `None` for any other.
+pub fn renamed_message(field: &str) -> Option<String> {
+    RENAMED
+        .iter()
+        .find(|r| r.old == field)
+        .map(|r| format!("`{}` was renamed `{}` ({})", r.old, r.new, r.unit))
+}
+
 /// Bake parameters with the paper's names and defaults (000 §3.1, §4.1.2).
+///
+/// One shape and one default per parameter: the manifest's raw layer, `--set`
+/// overrides and the serialised form (`plan.json`, `report.json`) all take the
+/// defaults of [`BakeParams::default`] for a missing field. (Plans and reports
+/// written before a parameter existed therefore read with today's default, not the
+/// value they were baked with; their jobs' fingerprints hash [`crate::fingerprint::BAKE_REVISION`],
+/// so such outputs are rebaked anyway.)
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
 pub struct BakeParams {
     /// Capture resolution: pixels across one 60° side face (DESIGN.md). Default 1024.
     pub image_res: u32,
     /// Self-occluding error tolerance T_s in pixels. Default 5.
     pub self_occluding_tolerance_px: f32,
-    /// Projected edge-length tolerance T_l. Default 4.5.
-    pub edge_length_tolerance: f32,
+    /// Projected edge-length tolerance T_l in pixels (000 §3.1.3.3). Default 4.5.
+    /// Named `edge_length_tolerance` before issue 14: plans and reports written then
+    /// still read (the alias); a manifest or `--set` using the old name is refused
+    /// with a message naming this one ([`RENAMED`]).
+    #[serde(alias = "edge_length_tolerance")]
+    pub edge_length_tolerance_px: f32,
     /// Interior-silhouette (C0) depth-jump threshold T_C0. Default 3.4e-4.
     pub t_c0: f32,
     /// Sharp-edge (C1) depth-slope-change threshold T_C1. Default 1.28e-4.
@@ -94,16 +144,14 @@ pub struct BakeParams {
     /// Deviation bound of the edge collapse in pixels (not in the paper; worker
     /// `simplify.rs`, "Deviation bound"): no collapse may move the surface farther
     /// than this, seen from anywhere in the cell. 0 = off (the paper's algorithm as
-    /// written). Default 0.5. Plans and reports written before the bound existed
-    /// read as 0 (they were baked without it).
-    #[serde(default)]
+    /// written). Default [`DEFAULT_MAX_DEVIATION_PX`] (0.5), in a manifest, an
+    /// override and a serialised plan alike; [`BakeParams::deviation_bound_px`] is
+    /// the one reading of "0 = off".
     pub max_deviation_px: f32,
     /// The far field shared by 7-cell groups (issue 13; worker `far_field.rs`): an
     /// outside object that is a single-view object for the whole group's region gets
     /// one proxy for the group, stored once in `groups/<id>.pack`. Default on;
     /// `false` gives every cell its own proxy of every object (the paper's layout).
-    /// Plans written before it existed read as off (they were baked without it).
-    #[serde(default)]
     pub far_field: bool,
     /// Objective selection of representations (paper 004; issue 16; worker
     /// `select.rs`): the quality floor every proxy must meet on its own pixels from
@@ -112,8 +160,15 @@ pub struct BakeParams {
     /// paper); `quality: ()` selects with [`QualityFloor::default`]. Not on by default
     /// because it does not pay yet: on park-2m cells it costs +50 % bake CPU for 0.6 %
     /// of objects drawn as layered impostors (BENCHMARKS.md, issue 16).
-    #[serde(default)]
     pub quality: Option<QualityFloor>,
+}
+
+impl BakeParams {
+    /// The deviation bound of the edge collapse in pixels, `None` when off
+    /// (`max_deviation_px` = 0). A validated plan has no other value below or at 0.
+    pub fn deviation_bound_px(&self) -> Option<f32> {
+        (self.max_deviation_px != 0.0).then_some(self.max_deviation_px)
+    }
 }
 
 /// The quality floor of the objective selection (`bake.quality`, paper 004 §3–4):
@@ -121,6 +176,7 @@ pub struct BakeParams {
 /// of the region, its PSNR on luminance and its SSIM over the object's pixels (where
 /// the object or the candidate is drawn) reach these.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
 pub struct QualityFloor {
     /// Default 30 dB: an RMS error of 8 levels of Y (3 %) over the object's pixels,
     /// the usual threshold of acceptable lossy image coding, and 004's finding that
@@ -163,7 +219,7 @@ impl Default for BakeParams {
         BakeParams {
             image_res: 1024,
             self_occluding_tolerance_px: 5.0,
-            edge_length_tolerance: 4.5,
+            edge_length_tolerance_px: 4.5,
             t_c0: 3.4e-4,
             t_c1: 1.28e-4,
             clustering: true,
@@ -308,21 +364,46 @@ pub enum ManifestError {
         field: String,
         message: String,
     },
+    /// A `--set` override ([`overrides`]) whose value the validator refuses (the
+    /// same `message` as for the value in the file) or that does not parse as the
+    /// field's type. `set` is the override as `KEY=VALUE` with its canonical key.
+    #[error("{}: --set {set}: {message}", path.display())]
+    Override {
+        path: PathBuf,
+        set: String,
+        field: String,
+        message: String,
+    },
 }
 
 impl ManifestError {
     /// `(line, column)` of the error, 1-based; `None` for a read error.
     pub fn line_column(&self) -> Option<(usize, usize)> {
         match self {
-            ManifestError::Read { .. } => None,
+            ManifestError::Read { .. } | ManifestError::Override { .. } => None,
             ManifestError::At { line, column, .. } => Some((*line, *column)),
+        }
+    }
+
+    /// The message without its location (file:line:column, or the override): the
+    /// same text for a value refused in the file and through `--set`.
+    pub fn message(&self) -> String {
+        match self {
+            ManifestError::Read { source, .. } => format!("cannot read manifest: {source}"),
+            ManifestError::At { message, .. } | ManifestError::Override { message, .. } => {
+                message.clone()
+            }
         }
     }
 
     /// Dotted path of the field involved; `None` for a read error or when unknown.
     pub fn field(&self) -> Option<&str> {
         match self {
-            ManifestError::At { field, .. } if !field.is_empty() => Some(field),
+            ManifestError::At { field, .. } | ManifestError::Override { field, .. }
+                if !field.is_empty() =>
+            {
+                Some(field)
+            }
             _ => None,
         }
     }
@@ -330,6 +411,13 @@ impl ManifestError {
 
 /// Reads, parses and validates the manifest at `path`.
 pub fn parse_manifest(path: &Path) -> Result<Plan, ManifestError> {
+    parse_manifest_with(path, &[])
+}
+
+/// [`parse_manifest`] with `--set` overrides applied, in order, to the raw manifest
+/// before validation: an overridden value is checked by the same rules as the
+/// file's ([`overrides`]).
+pub fn parse_manifest_with(path: &Path, overrides: &[Override]) -> Result<Plan, ManifestError> {
     use std::io::Read;
     let read_error = |source| ManifestError::Read {
         path: path.to_path_buf(),
@@ -347,12 +435,21 @@ pub fn parse_manifest(path: &Path) -> Result<Plan, ManifestError> {
             format!("the file is larger than the manifest limit of {MAX_MANIFEST_BYTES} bytes"),
         )));
     }
-    parse_manifest_str(&text, path)
+    parse_manifest_str_with(&text, path, overrides)
 }
 
 /// Parses and validates manifest `text`; `path` names it in messages and anchors
 /// relative paths (its folder), so it need not exist.
 pub fn parse_manifest_str(text: &str, path: &Path) -> Result<Plan, ManifestError> {
+    parse_manifest_str_with(text, path, &[])
+}
+
+/// [`parse_manifest_str`] with `--set` overrides (see [`parse_manifest_with`]).
+pub fn parse_manifest_str_with(
+    text: &str,
+    path: &Path,
+    overrides: &[Override],
+) -> Result<Plan, ManifestError> {
     // Stage 1: ron → raw structs; ron's errors carry a position.
     let options =
         ron::Options::default().with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME);
@@ -367,13 +464,23 @@ pub fn parse_manifest_str(text: &str, path: &Path) -> Result<Plan, ManifestError
             message: format!("brackets nested more than {MAX_NESTING} deep"),
         });
     }
-    let raw: RawManifest = options
+    let mut raw: RawManifest = options
         .from_str(text)
         .map_err(|e| ron_error(path, &positions, e))?;
+    // Stage 1½: the overrides replace raw values (only their type is checked here).
+    for o in overrides {
+        overrides::apply(&mut raw, o).map_err(|message| ManifestError::Override {
+            path: path.to_path_buf(),
+            set: o.to_string(),
+            field: o.key.to_string(),
+            message,
+        })?;
+    }
     // Stage 2: validate and resolve.
     Validator {
         path,
         positions: &positions,
+        overrides,
     }
     .plan(raw)
 }
@@ -657,7 +764,7 @@ struct RawCells {
 struct RawBake {
     image_res: u32,
     self_occluding_tolerance_px: f32,
-    edge_length_tolerance: f32,
+    edge_length_tolerance_px: f32,
     t_c0: f32,
     t_c1: f32,
     clustering: bool,
@@ -690,7 +797,7 @@ impl Default for RawBake {
         RawBake {
             image_res: d.image_res,
             self_occluding_tolerance_px: d.self_occluding_tolerance_px,
-            edge_length_tolerance: d.edge_length_tolerance,
+            edge_length_tolerance_px: d.edge_length_tolerance_px,
             t_c0: d.t_c0,
             t_c1: d.t_c1,
             clustering: d.clustering,
@@ -744,10 +851,12 @@ fn ron_error(
                 at = key;
             }
             let field = positions.path_at(at).unwrap_or_else(|| found.clone());
-            let message = format!(
-                "unknown field `{found}`, expected one of {}",
-                one_of(expected)
-            );
+            let message = renamed_message(&field).unwrap_or_else(|| {
+                format!(
+                    "unknown field `{found}`, expected one of {}",
+                    one_of(expected)
+                )
+            });
             (field, message)
         }
         E::MissingStructField { field, .. } => {
@@ -804,16 +913,34 @@ fn ron_error(
 struct Validator<'a> {
     path: &'a Path,
     positions: &'a FieldPositions,
+    /// The `--set` overrides applied to the raw manifest: an error at a field one of
+    /// them set names the override instead of a place in the file.
+    overrides: &'a [Override],
 }
 
 impl Validator<'_> {
-    /// An error at the field `field` (dotted path).
+    /// An error at the field `field` (dotted path): at the last override that set
+    /// it, else at its place in the file.
     fn error(&self, field: &str, message: String) -> ManifestError {
-        let at = self.positions.nearest_position(field);
-        ManifestError::At {
+        match self.overrides.iter().rev().find(|o| o.key == field) {
+            Some(o) => self.override_error(o, field, message),
+            None => {
+                let at = self.positions.nearest_position(field);
+                ManifestError::At {
+                    path: self.path.to_path_buf(),
+                    line: at.line,
+                    column: at.column,
+                    field: field.to_string(),
+                    message: format!("`{field}` {message}"),
+                }
+            }
+        }
+    }
+
+    fn override_error(&self, o: &Override, field: &str, message: String) -> ManifestError {
+        ManifestError::Override {
             path: self.path.to_path_buf(),
-            line: at.line,
-            column: at.column,
+            set: o.to_string(),
             field: field.to_string(),
             message: format!("`{field}` {message}"),
         }
@@ -822,6 +949,22 @@ impl Validator<'_> {
     /// A [`Violation`] of a shared rule, at its field.
     fn violation(&self, v: Violation) -> ManifestError {
         self.error(&v.field, v.message)
+    }
+
+    /// A [`Violation`] of the cell rule: at the override that set its field, else at
+    /// the last cell override (eye heights out of order name the max, but setting
+    /// the min may be what broke them), else at its place in the file.
+    fn cell_violation(&self, v: Violation) -> ManifestError {
+        let set_field = self.overrides.iter().any(|o| o.key == v.field);
+        match self
+            .overrides
+            .iter()
+            .rev()
+            .find(|o| o.key.starts_with("cells."))
+        {
+            Some(o) if !set_field => self.override_error(o, &v.field, v.message),
+            _ => self.violation(v),
+        }
     }
 
     /// An object height: > 0, at least [`MIN_LENGTH`], at most [`MAX_COORDINATE`].
@@ -1163,7 +1306,7 @@ impl Validator<'_> {
             min_eye_height: raw.cells.min_eye_height,
             max_eye_height: raw.cells.max_eye_height,
         };
-        check_cells(&ground, &cells).map_err(|e| self.violation(e))?;
+        check_cells(&ground, &cells).map_err(|e| self.cell_violation(e))?;
 
         // Bake parameters.
         let b = raw.bake;
@@ -1179,8 +1322,8 @@ impl Validator<'_> {
                 "bake.self_occluding_tolerance_px",
                 b.self_occluding_tolerance_px,
             )?,
-            edge_length_tolerance: self
-                .positive("bake.edge_length_tolerance", b.edge_length_tolerance)?,
+            edge_length_tolerance_px: self
+                .positive("bake.edge_length_tolerance_px", b.edge_length_tolerance_px)?,
             t_c0: self.positive("bake.t_c0", b.t_c0)?,
             t_c1: self.positive("bake.t_c1", b.t_c1)?,
             clustering: b.clustering,
@@ -1260,19 +1403,34 @@ mod lexical_tests {
 mod bake_params_tests {
     use super::{BakeParams, DEFAULT_MAX_DEVIATION_PX};
 
-    /// Plans and reports written before the deviation bound existed still read, as
-    /// bakes without it; new ones round-trip.
+    /// One default per parameter (issue 14): a serialised plan missing a field reads
+    /// it at [`BakeParams::default`], as a manifest does; the old key of a renamed
+    /// field still reads; new ones round-trip.
     #[test]
-    fn old_bake_params_read_without_the_deviation_bound() {
+    fn serialised_bake_params_read_with_the_one_default_and_old_keys() {
         let old = r#"{"image_res":1024,"self_occluding_tolerance_px":5.0,
-            "edge_length_tolerance":4.5,"t_c0":0.00034,"t_c1":0.000128,
+            "edge_length_tolerance":6.0,"t_c0":0.00034,"t_c1":0.000128,
             "clustering":true,"occlusion_culling":false}"#;
         let p: BakeParams = serde_json::from_str(old).unwrap();
-        assert_eq!(p.max_deviation_px, 0.0);
-        assert!(!p.far_field);
+        assert_eq!(p.edge_length_tolerance_px, 6.0);
+        assert_eq!(p.max_deviation_px, DEFAULT_MAX_DEVIATION_PX);
+        assert_eq!(p.deviation_bound_px(), Some(DEFAULT_MAX_DEVIATION_PX));
+        assert!(p.far_field);
+        assert_eq!(
+            BakeParams {
+                edge_length_tolerance_px: 4.5,
+                ..p
+            },
+            BakeParams::default()
+        );
         let d = BakeParams::default();
         assert_eq!(d.max_deviation_px, DEFAULT_MAX_DEVIATION_PX);
         let back: BakeParams = serde_json::from_str(&serde_json::to_string(&d).unwrap()).unwrap();
         assert_eq!(back, d);
+        let off = BakeParams {
+            max_deviation_px: 0.0,
+            ..d
+        };
+        assert_eq!(off.deviation_bound_px(), None);
     }
 }

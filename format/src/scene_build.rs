@@ -209,7 +209,7 @@ pub fn instances_manifest(plan: &Plan) -> Result<String, SceneError> {
     let b = &plan.bake;
     let c = &plan.cells;
     Ok(format!(
-        "// {name} as an instance list (`pipeline scene {manifest} --as-instances`).\n(\n    name: {name:?},\n    ground: (min: ({:?}, {:?}), max: ({:?}, {:?})),\n    scene: Instances([\n        {}\n    ]),\n    cells: (cell_size: {:?}, min_eye_height: {:?}, max_eye_height: {:?}),\n    bake: (image_res: {}, self_occluding_tolerance_px: {:?}, edge_length_tolerance: {:?}, t_c0: {:?}, t_c1: {:?}, clustering: {}, occlusion_culling: {}, max_deviation_px: {:?}, far_field: {}),\n    cells_per_job: {},\n    output: {:?},\n)\n",
+        "// {name} as an instance list (`pipeline scene {manifest} --as-instances`).\n(\n    name: {name:?},\n    ground: (min: ({:?}, {:?}), max: ({:?}, {:?})),\n    scene: Instances([\n        {}\n    ]),\n    cells: (cell_size: {:?}, min_eye_height: {:?}, max_eye_height: {:?}),\n    bake: (image_res: {}, self_occluding_tolerance_px: {:?}, edge_length_tolerance_px: {:?}, t_c0: {:?}, t_c1: {:?}, clustering: {}, occlusion_culling: {}, max_deviation_px: {:?}, far_field: {}),\n    cells_per_job: {},\n    output: {:?},\n)\n",
         plan.ground.min[0],
         plan.ground.min[1],
         plan.ground.max[0],
@@ -220,7 +220,7 @@ pub fn instances_manifest(plan: &Plan) -> Result<String, SceneError> {
         c.max_eye_height,
         b.image_res,
         b.self_occluding_tolerance_px,
-        b.edge_length_tolerance,
+        b.edge_length_tolerance_px,
         b.t_c0,
         b.t_c1,
         b.clustering,

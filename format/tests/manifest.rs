@@ -481,3 +481,212 @@ mod hostile {
         }
     }
 }
+
+// ---------------------------------------------------------------------------------
+// Issue 14 item 4: one validator for the file and `--set`, units in names.
+
+/// `GOOD` with `bake` replaced by `bake_fields` (the inside of `bake: (...)`).
+fn with_bake(bake_fields: &str) -> String {
+    GOOD.replace(
+        "bake: (image_res: 256, clustering: false),",
+        &format!("bake: ({bake_fields}),"),
+    )
+}
+
+fn overrides(sets: &[&str]) -> Vec<format::manifest::Override> {
+    sets.iter()
+        .map(|s| format::manifest::parse_override(s).unwrap())
+        .collect()
+}
+
+/// The old name of a renamed parameter is refused at its line and column with a
+/// message that names the new one; so is the old key of `--set`.
+#[test]
+fn old_parameter_names_are_refused_naming_the_new_one() {
+    let text = with_bake("image_res: 256, edge_length_tolerance: 4.5");
+    let (err, shown) = parse_err(&text);
+    let (line, column) = position_of(&text, "edge_length_tolerance");
+    assert_eq!(err.line_column(), Some((line, column)), "{shown}");
+    assert_eq!(err.field(), Some("bake.edge_length_tolerance"));
+    assert_eq!(
+        shown,
+        format!(
+            "m.ron:{line}:{column}: `bake.edge_length_tolerance` was renamed \
+             `bake.edge_length_tolerance_px` (pixels)"
+        )
+    );
+    let e = format::manifest::parse_override("bake.edge_length_tolerance=4.5").unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        "--set bake.edge_length_tolerance: `bake.edge_length_tolerance` was renamed \
+         `bake.edge_length_tolerance_px` (pixels)"
+    );
+    // The new name and the paper's short name work.
+    let (_dir, path) = write_manifest(&with_bake("edge_length_tolerance_px: 6.0"));
+    assert_eq!(
+        parse_manifest(&path).unwrap().bake.edge_length_tolerance_px,
+        6.0
+    );
+    for key in ["T_l", "tl", "bake.edge_length_tolerance_px"] {
+        let o = format::manifest::parse_override(&format!("{key}=6")).unwrap();
+        assert_eq!(o.key, "bake.edge_length_tolerance_px");
+    }
+}
+
+/// A value set by `--set` and the same value written in the manifest give the
+/// identical plan, for every kind of parameter.
+#[test]
+fn an_override_and_the_same_value_in_the_manifest_give_the_identical_plan() {
+    use format::manifest::parse_manifest_str_with;
+    let (_dir, path) = write_manifest(GOOD);
+    let cases: &[(&str, &str, &str)] = &[
+        // (bake fields in the file, the same through --set, bake fields for the --set run)
+        (
+            "image_res: 512, clustering: false",
+            "bake.image_res=512",
+            "image_res: 256, clustering: false",
+        ),
+        (
+            "image_res: 256, clustering: false, edge_length_tolerance_px: 6.0",
+            "T_l=6.0",
+            "image_res: 256, clustering: false",
+        ),
+        (
+            "image_res: 256, clustering: false, self_occluding_tolerance_px: 3",
+            "T_s=3",
+            "image_res: 256, clustering: false",
+        ),
+        (
+            "image_res: 256, clustering: false, max_deviation_px: 0.0",
+            "deviation=0",
+            "image_res: 256, clustering: false",
+        ),
+        (
+            "image_res: 256, clustering: true",
+            "bake.clustering=on",
+            "image_res: 256, clustering: false",
+        ),
+        (
+            "image_res: 256, clustering: false, quality: (min_psnr_db: 35.0)",
+            "min_psnr_db=35",
+            "image_res: 256, clustering: false",
+        ),
+        (
+            "image_res: 256, clustering: false, quality: ()",
+            "bake.quality=on",
+            "image_res: 256, clustering: false",
+        ),
+        (
+            "image_res: 256, clustering: false, far_field: false",
+            "bake.far_field=false",
+            "image_res: 256, clustering: false",
+        ),
+    ];
+    for (in_file, set, base) in cases {
+        let a = parse_manifest_str_with(&with_bake(in_file), &path, &[]).unwrap();
+        let b = parse_manifest_str_with(&with_bake(base), &path, &overrides(&[set])).unwrap();
+        assert_eq!(a, b, "{set}");
+    }
+    // Cells and cells_per_job.
+    let a = parse_manifest_str_with(
+        &GOOD
+            .replace("cell_size: 50.0", "cell_size: 100.0")
+            .replace("cells_per_job: 2", "cells_per_job: 1"),
+        &path,
+        &[],
+    )
+    .unwrap();
+    let b = parse_manifest_str_with(
+        GOOD,
+        &path,
+        &overrides(&["cell_size=100", "cells_per_job=1"]),
+    )
+    .unwrap();
+    assert_eq!(a, b);
+}
+
+/// An out-of-range value gives the same message through `--set` as in the file;
+/// only the location differs (the override instead of file:line:column).
+#[test]
+fn out_of_range_values_give_the_same_message_in_the_file_and_through_set() {
+    use format::manifest::parse_manifest_str_with;
+    let (_dir, path) = write_manifest(GOOD);
+    let cases: &[(&str, &str, &str)] = &[
+        (
+            "bake: (image_res: 256, clustering: false)",
+            "bake: (image_res: 8, clustering: false)",
+            "bake.image_res=8",
+        ),
+        (
+            "bake: (image_res: 256, clustering: false)",
+            "bake: (image_res: 256, clustering: false, self_occluding_tolerance_px: -1)",
+            "T_s=-1",
+        ),
+        (
+            "bake: (image_res: 256, clustering: false)",
+            "bake: (image_res: 256, clustering: false, edge_length_tolerance_px: 0)",
+            "T_l=0",
+        ),
+        (
+            "bake: (image_res: 256, clustering: false)",
+            "bake: (image_res: 256, clustering: false, max_deviation_px: -0.5)",
+            "deviation=-0.5",
+        ),
+        (
+            "bake: (image_res: 256, clustering: false)",
+            "bake: (image_res: 256, clustering: false, quality: (min_ssim: 1.5))",
+            "bake.quality.min_ssim=1.5",
+        ),
+        (
+            "cell_size: 50.0",
+            "cell_size: 0.001",
+            "cells.cell_size=0.001",
+        ),
+        ("cell_size: 50.0", "cell_size: 1e30", "cell_size=1e30"),
+        (
+            "max_eye_height: 12.0",
+            "max_eye_height: 1e30",
+            "cells.max_eye_height=1e30",
+        ),
+        (
+            "min_eye_height: 6.0",
+            "min_eye_height: -1",
+            "cells.min_eye_height=-1",
+        ),
+        ("cells_per_job: 2", "cells_per_job: 0", "cells_per_job=0"),
+    ];
+    for (from, to, set) in cases {
+        let in_file = parse_manifest_str_with(&GOOD.replace(from, to), &path, &[]).unwrap_err();
+        let through_set = parse_manifest_str_with(GOOD, &path, &overrides(&[set])).unwrap_err();
+        assert_eq!(in_file.message(), through_set.message(), "{set}");
+        assert_eq!(in_file.field(), through_set.field(), "{set}");
+        assert!(in_file.line_column().is_some(), "{set}");
+        let canonical = format::manifest::parse_override(set).unwrap().to_string();
+        assert_eq!(
+            through_set.to_string(),
+            format!(
+                "{}: --set {canonical}: {}",
+                path.display(),
+                in_file.message()
+            ),
+        );
+    }
+}
+
+/// One default per parameter: a manifest that leaves `bake` out, a `--set` that
+/// does not touch it and a serialised plan without the field all give
+/// `BakeParams::default()` (0.5 px for the deviation bound).
+#[test]
+fn every_parameter_has_one_default() {
+    let (_dir, path) =
+        write_manifest(&GOOD.replace("    bake: (image_res: 256, clustering: false),\n", ""));
+    let plan = parse_manifest(&path).unwrap();
+    let d = format::manifest::BakeParams::default();
+    assert_eq!(plan.bake, d);
+    assert_eq!(
+        plan.bake.max_deviation_px,
+        format::manifest::DEFAULT_MAX_DEVIATION_PX
+    );
+    let from_json: format::manifest::BakeParams = serde_json::from_str("{}").unwrap();
+    assert_eq!(from_json, d);
+}

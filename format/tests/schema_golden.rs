@@ -96,12 +96,30 @@ fn plan_round_trips() {
     // The far-field jobs come last, with groups and no cells.
     let last = p.jobs.last().unwrap();
     assert!(last.cells.is_empty() && !last.groups.is_empty());
-    assert_eq!(p.overrides.len(), 2);
+    assert_eq!(
+        p.overrides,
+        ["bake.edge_length_tolerance_px=6.0", "cells_per_job=2"]
+    );
     let bake = p.bake.as_ref().unwrap();
+    assert_eq!(bake.edge_length_tolerance_px, 6.0);
     assert_eq!(bake.image_res, 256);
     assert_eq!(bake.max_deviation_px, 0.5);
     assert!(bake.quality.is_some());
     assert_eq!(p.cell_params.as_ref().unwrap().cell_size, 50.0);
+}
+
+/// Issue 14: a plan written before `edge_length_tolerance` was renamed
+/// `edge_length_tolerance_px` reads (the old key is an alias), and is written back
+/// with the new key.
+#[test]
+fn plan_before_the_unit_rename_reads() {
+    let text = std::fs::read_to_string(data("plan-before-units.json")).unwrap();
+    assert!(text.contains("\"edge_length_tolerance\": 6.0"));
+    let p: PlanFile = serde_json::from_str(&text).unwrap();
+    assert_eq!(p.bake.as_ref().unwrap().edge_length_tolerance_px, 6.0);
+    let now: PlanFile = round_trip("plan.json");
+    assert_eq!(p.bake, now.bake);
+    assert_eq!(p.jobs, now.jobs);
 }
 
 /// A plan from before overrides and parameters were recorded reads without them.

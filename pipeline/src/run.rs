@@ -57,9 +57,8 @@ pub fn load_with(
     out: Option<&Path>,
     overrides: &[crate::overrides::Override],
 ) -> Result<Loaded, RunError> {
-    let mut plan =
-        format::manifest::parse_manifest(manifest).map_err(|e| RunError::BadInput(e.into()))?;
-    crate::overrides::apply_overrides(&mut plan, overrides)
+    // The overrides replace raw manifest values before validation (one validator).
+    let plan = format::manifest::parse_manifest_with(manifest, overrides)
         .map_err(|e| RunError::BadInput(e.into()))?;
     let scene = plan
         .load_scene()

@@ -125,7 +125,7 @@ fn set_overrides_make_a_different_bake() {
     let plan: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out.join("plan.json")).unwrap()).unwrap();
     assert_eq!(plan["overrides"], serde_json::json!(["cells_per_job=1"]));
-    assert_eq!(plan["bake"]["edge_length_tolerance"], 4.5);
+    assert_eq!(plan["bake"]["edge_length_tolerance_px"], 4.5);
     // A different T_l on the same output: the job's fingerprint differs, so it is
     // baked again rather than taken for done.
     let (o, v) = run_json(
@@ -143,10 +143,10 @@ fn set_overrides_make_a_different_bake() {
     assert_eq!(v["jobs_baked"], 2, "{v}");
     let report: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
-    assert_eq!(report["bake"]["edge_length_tolerance"], 6.0);
+    assert_eq!(report["bake"]["edge_length_tolerance_px"], 6.0);
     assert_eq!(
         report["overrides"],
-        serde_json::json!(["cells_per_job=1", "bake.edge_length_tolerance=6.0"])
+        serde_json::json!(["cells_per_job=1", "bake.edge_length_tolerance_px=6.0"])
     );
 }
 

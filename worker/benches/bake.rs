@@ -34,9 +34,9 @@ fn main() {
         .ok()
         .and_then(|s| s.parse().ok())
     {
-        plan.bake.edge_length_tolerance = t;
+        plan.bake.edge_length_tolerance_px = t;
     }
-    eprintln!("T_l = {}", plan.bake.edge_length_tolerance);
+    eprintln!("T_l = {}", plan.bake.edge_length_tolerance_px);
     let t = Instant::now();
     let scene = plan.load_scene().expect("scene");
     eprintln!(

@@ -50,9 +50,10 @@ enum Command {
         /// Where the worst view's PNGs go (default: no pictures).
         #[arg(long)]
         out: Option<PathBuf>,
-        /// Override T_l (edge-length tolerance) of the manifest.
+        /// Override T_l (edge-length tolerance, pixels) of the manifest
+        /// (`--set bake.edge_length_tolerance_px=V`: validated as in the manifest).
         #[arg(long)]
-        edge_length_tolerance: Option<f32>,
+        edge_length_tolerance_px: Option<f32>,
         /// Override the deviation bound (pixels; 0 = the paper's algorithm as written).
         #[arg(long)]
         max_deviation_px: Option<f32>,
@@ -220,23 +221,25 @@ fn run(cli: Cli) -> Result<(), Failure> {
             views,
             res,
             out,
-            edge_length_tolerance,
+            edge_length_tolerance_px,
             max_deviation_px,
             no_lod_chain,
             no_far_field,
             json,
         } => {
-            let mut plan = format::manifest::parse_manifest(&manifest).map_err(bad_input)?;
-            if let Some(t) = edge_length_tolerance {
-                plan.bake.edge_length_tolerance = t;
-            }
-            if let Some(d) = max_deviation_px {
-                // A bad value fails in the bake (SimplifyError::BadDeviation).
-                plan.bake.max_deviation_px = d;
-            }
-            if no_far_field {
-                plan.bake.far_field = false;
-            }
+            // The overrides go through the manifest's one validator, like `--set`.
+            let overrides = [
+                edge_length_tolerance_px.map(|t| ("bake.edge_length_tolerance_px", t.to_string())),
+                max_deviation_px.map(|d| ("bake.max_deviation_px", d.to_string())),
+                no_far_field.then(|| ("bake.far_field", "false".to_string())),
+            ]
+            .into_iter()
+            .flatten()
+            .map(|(key, value)| format::manifest::parse_override(&format!("{key}={value}")))
+            .collect::<Result<Vec<_>, _>>()
+            .map_err(bad_input)?;
+            let plan =
+                format::manifest::parse_manifest_with(&manifest, &overrides).map_err(bad_input)?;
             let scene = plan.load_scene().map_err(bad_input)?;
             let grid = worker::grid::HexGrid::new(scene.ground, plan.cells.cell_size);
             let groups = worker::far_field::CellGroups::new(&grid);

@@ -68,7 +68,7 @@ impl ProxySettings {
     pub fn new(params: &BakeParams, cell_size: f32) -> ProxySettings {
         ProxySettings {
             image_res: params.image_res,
-            edge_length_tolerance: params.edge_length_tolerance,
+            edge_length_tolerance: params.edge_length_tolerance_px,
             t_c0: params.t_c0,
             t_c1: params.t_c1,
             cell_size,
@@ -80,12 +80,14 @@ impl ProxySettings {
     }
 
     /// [`ProxySettings::new`] plus the bake's deviation bound over the cell's prism
-    /// (`bake.max_deviation_px`; exactly 0 = none; a negative or non-finite value is
-    /// passed on, and [`simplify`] refuses it with [`SimplifyError::BadDeviation`]).
+    /// (`bake.max_deviation_px`, read by [`BakeParams::deviation_bound_px`]: exactly
+    /// 0 = none; a negative or non-finite value, which only a hand-built
+    /// `BakeParams` can hold, is passed on, and [`simplify`] refuses it with
+    /// [`SimplifyError::BadDeviation`]).
     pub fn for_cell(params: &BakeParams, cell_size: f32, prism: Prism) -> ProxySettings {
         ProxySettings {
-            deviation: (params.max_deviation_px != 0.0).then_some(DeviationBound {
-                max_px: params.max_deviation_px,
+            deviation: params.deviation_bound_px().map(|max_px| DeviationBound {
+                max_px,
                 region: prism,
             }),
             lod_region: Some(prism),
