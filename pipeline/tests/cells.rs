@@ -160,7 +160,15 @@ fn bad_cells_and_set_arguments_exit_2() {
         (vec!["--cells", "path:nope.ron"], "nope.ron"),
         (vec!["--cells", "x"], "expected a cell id"),
         (vec!["--set", "T_x=1"], "unknown key"),
-        (vec!["--set", "T_s=-2"], "must be a finite number > 0"),
+        // The manifest's own message, naming the override (issue 14).
+        (
+            vec!["--set", "T_s=-2"],
+            "--set bake.self_occluding_tolerance_px=-2: `bake.self_occluding_tolerance_px` must be > 0, found -2",
+        ),
+        (
+            vec!["--set", "bake.edge_length_tolerance=6"],
+            "`bake.edge_length_tolerance` was renamed `bake.edge_length_tolerance_px` (pixels)",
+        ),
         (
             vec!["--cells", "0", "--executor", "slurm"],
             "local executor only",
