@@ -91,6 +91,14 @@ pub struct GltfScene {
     pub notes: Vec<String>,
 }
 
+/// A node met in the walk (step 2a): its world transform and its parent's index and
+/// world transform.
+struct Visit<'a> {
+    node: gltf::Node<'a>,
+    world: Mat4,
+    parent: Option<(usize, Mat4)>,
+}
+
 /// One mesh's primitives placed in a model: `offset + linear · p`, winding flipped
 /// when `mirrored` (the linear part's determinant is negative).
 struct Part<'a> {
@@ -195,7 +203,7 @@ fn parse_scene(path: &Path, bytes: &[u8], options: GltfOptions) -> Result<GltfSc
     // Step 2a: every node in depth-first order with its world transform and its
     // parent (index and world transform); then, when grouping, the parents of two
     // or more mesh nodes.
-    let mut visits: Vec<(gltf::Node, Mat4, Option<(usize, Mat4)>)> = Vec::new();
+    let mut visits: Vec<Visit> = Vec::new();
     let mut stack: Vec<(gltf::Node, Mat4, Vec<usize>)> = scene
         .nodes()
         .map(|n| (n, Mat4::IDENTITY, Vec::new()))
@@ -218,7 +226,11 @@ fn parse_scene(path: &Path, bytes: &[u8], options: GltfOptions) -> Result<GltfSc
             skinned.push(node.index());
         }
         let parent_of = ancestors.last().map(|&p| (p, parent));
-        visits.push((node.clone(), world, parent_of));
+        visits.push(Visit {
+            node: node.clone(),
+            world,
+            parent: parent_of,
+        });
         ancestors.push(node.index());
         let children: Vec<_> = node.children().collect();
         for child in children.into_iter().rev() {
@@ -228,7 +240,7 @@ fn parse_scene(path: &Path, bytes: &[u8], options: GltfOptions) -> Result<GltfSc
     // Parent index → its mesh children (in visit order), for parents of two or more.
     let mut by_parent: BTreeMap<usize, Vec<usize>> = BTreeMap::new();
     if options.group_by_parent {
-        for (k, (node, _, parent)) in visits.iter().enumerate() {
+        for (k, Visit { node, parent, .. }) in visits.iter().enumerate() {
             if let (Some(_), Some((p, _))) = (node.mesh(), parent) {
                 by_parent.entry(*p).or_default().push(k);
             }
@@ -240,8 +252,16 @@ fn parse_scene(path: &Path, bytes: &[u8], options: GltfOptions) -> Result<GltfSc
         .flat_map(|(&p, members)| members.iter().map(move |&k| (k, p)))
         .collect();
     // Step 2b: place the mesh nodes (a group where its first member is visited).
-    for (k, (node, world, parent)) in visits.iter().enumerate() {
-        let (node, world) = (node, *world);
+    for (
+        k,
+        Visit {
+            node,
+            world,
+            parent,
+        },
+    ) in visits.iter().enumerate()
+    {
+        let world = *world;
         let at = || Location::Element(format!("node {}", node.index()));
         if let Some(mesh) = node.mesh() {
             if mesh
@@ -254,7 +274,7 @@ fn parse_scene(path: &Path, bytes: &[u8], options: GltfOptions) -> Result<GltfSc
         if let (Some(&p), Some((_, parent_world))) = (grouped.get(&k), parent) {
             if by_parent[&p][0] == k {
                 let members: Vec<&gltf::Node> =
-                    by_parent[&p].iter().map(|&m| &visits[m].0).collect();
+                    by_parent[&p].iter().map(|&m| &visits[m].node).collect();
                 let parent_node = document.nodes().nth(p).expect("visited parent");
                 place_group(
                     path,
