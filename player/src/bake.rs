@@ -8,8 +8,8 @@
 //! the decoded capture texels, ready for upload.
 
 use crate::camera::Aabb;
-use crate::gpu::{normal_matrix, InstanceRaw, ProxyVertex, MAX_VIEWS};
 use crate::grid::CellGrid;
+use crate::vertex::{normal_matrix, InstanceRaw, ProxyVertex, MAX_VIEWS};
 use format::pack::{BasePack, CellPack, Index, PackError, PackFile, ProxyKind, TextureEncoding};
 use glam::{Mat4, Vec3};
 use std::path::{Path, PathBuf};

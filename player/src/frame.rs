@@ -8,8 +8,9 @@
 
 use crate::bake::Bake;
 use crate::camera::{Camera, Frustum};
-use crate::gpu::{DrawList, GpuModels, InstanceRaw};
+use crate::gpu::{DrawList, GpuModels};
 use crate::stream::{CurrentCell, Far, PendingDraw, ResidentCell};
+use crate::vertex::InstanceRaw;
 use std::collections::BTreeMap;
 
 /// Rendering configuration.

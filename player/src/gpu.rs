@@ -10,18 +10,21 @@
 //! per-instance transforms. Proxies are de-indexed world-space triangle lists carrying
 //! each triangle's view mask and centroid (flat attributes), one draw per proxy.
 
+mod setup;
+
 use crate::camera::Camera;
 use crate::metrics::srgb_to_linear;
-use bytemuck::{Pod, Zeroable};
+use crate::vertex::{Globals, InstanceRaw, ModelVertex, ProxyUniform, ProxyVertex};
+use bytemuck::Zeroable;
 use format::pack::{BasePack, Texture, TextureEncoding};
-use glam::{Mat3, Mat4, Vec3};
+use glam::{Mat4, Vec3};
 use std::time::Instant;
 use wgpu::util::DeviceExt;
 
+/// Most views a proxy may have: the pack's limit ([`crate::vertex::MAX_VIEWS`]).
+pub use crate::vertex::MAX_VIEWS;
 /// Background colour (sRGB8): the CPU rasterizer's, [`format::shading::SKY`].
 pub use format::shading::SKY;
-/// Most views a proxy may have: the pack's limit.
-pub const MAX_VIEWS: usize = format::pack::cell::MAX_MV_VIEWS;
 
 /// The WGSL source: `shader.wgsl` after [`format::shading::wgsl_constants`] (the
 /// shading, sRGB and view-limit constants, from their Rust home).
@@ -71,93 +74,6 @@ impl std::fmt::Display for AdapterSummary {
             self.name, self.backend, self.device_type, self.driver
         )
     }
-}
-
-/// One vertex of an original model (model space).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-pub struct ModelVertex {
-    pub pos: [f32; 3],
-    pub normal: [f32; 3],
-    /// sRGB8.
-    pub albedo: [u8; 4],
-    /// Texture coordinate of the model's albedo texture (0 without one).
-    pub uv: [f32; 2],
-}
-
-/// Per-instance data of an original.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
-pub struct InstanceRaw {
-    pub model: [[f32; 4]; 4],
-    /// Inverse-transpose of the linear part (normals → world), columns.
-    pub normal: [[f32; 4]; 3],
-    /// Linear RGB multiplier, w unused.
-    pub tint: [f32; 4],
-}
-
-impl InstanceRaw {
-    pub fn new(transform: Mat4, tint: Vec3) -> InstanceRaw {
-        let n = normal_matrix(&transform);
-        InstanceRaw {
-            model: transform.to_cols_array_2d(),
-            normal: [
-                n.x_axis.extend(0.0).to_array(),
-                n.y_axis.extend(0.0).to_array(),
-                n.z_axis.extend(0.0).to_array(),
-            ],
-            tint: tint.extend(1.0).to_array(),
-        }
-    }
-}
-
-/// Inverse-transpose of a transform's linear part (as the worker's rasterizer).
-pub fn normal_matrix(m: &Mat4) -> Mat3 {
-    let linear = Mat3::from_mat4(*m);
-    if linear.determinant().abs() > 1e-30 {
-        linear.inverse().transpose()
-    } else {
-        linear
-    }
-}
-
-/// One vertex of a proxy triangle list (world space).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
-pub struct ProxyVertex {
-    pub pos: [f32; 3],
-    pub normal: [f32; 3],
-    /// sRGB8.
-    pub albedo: [u8; 4],
-    /// Linear RGB multiplier.
-    pub tint: [f32; 3],
-    /// Views that see this vertex's triangle (bit i = view i).
-    pub mask: u32,
-    /// The triangle's centroid (chooses the views, §3.2).
-    pub centroid: [f32; 3],
-    /// The proxy's kind (`format::pack::ProxyKind` as u32) for the representation
-    /// colouring ([`crate::overlay::Representation`]).
-    pub kind: u32,
-}
-
-/// A proxy's per-view uniform block.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-pub struct ProxyUniform {
-    pub tex_from_world: [[f32; 16]; MAX_VIEWS],
-    pub view_eye: [[f32; 4]; MAX_VIEWS],
-    pub counts: [u32; 4],
-}
-
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-struct Globals {
-    clip_from_world: [f32; 16],
-    eye: [f32; 4],
-    /// x: 1 = colour by representation ([`Renderer::set_representation_colours`]).
-    debug: [u32; 4],
-    /// Linear RGB per [`crate::overlay::Representation`].
-    palette: [[f32; 4]; 8],
 }
 
 /// The models of a bake on the GPU (uploaded once).
@@ -390,302 +306,54 @@ impl Renderer {
         width: u32,
         height: u32,
     ) -> Result<Renderer, GpuError> {
-        let device_bc = device
-            .features()
-            .contains(wgpu::Features::TEXTURE_COMPRESSION_BC);
+        // Step 0: the frame size must fit the device's textures.
         let max = device.limits().max_texture_dimension_2d;
         if width == 0 || height == 0 || width > max || height > max {
             return Err(GpuError::BadSize { width, height, max });
         }
-        let color = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("color"),
-            size: wgpu::Extent3d {
-                width,
-                height,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: COLOR_FORMAT,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-            view_formats: &[],
-        });
-        let color_view = color.create_view(&Default::default());
-        let depth = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("depth"),
-            size: wgpu::Extent3d {
-                width,
-                height,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: DEPTH_FORMAT,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
-            view_formats: &[],
-        });
-        let depth_view = depth.create_view(&Default::default());
-        let align = wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
-        let padded_row = (width * 4).div_ceil(align) * align;
-        let readback = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("readback"),
-            size: padded_row as u64 * height as u64,
-            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-            mapped_at_creation: false,
-        });
-
-        let shader = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("player shaders"),
-            source: wgpu::ShaderSource::Wgsl(shader_source().into()),
-        });
-        let globals_bgl = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("globals"),
-            entries: &[wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            }],
-        });
-        let mut proxy_entries = vec![
-            wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: wgpu::ShaderStages::FRAGMENT,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            },
-            wgpu::BindGroupLayoutEntry {
-                binding: 1,
-                visibility: wgpu::ShaderStages::FRAGMENT,
-                ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
-                count: None,
-            },
-        ];
-        for i in 0..MAX_VIEWS as u32 {
-            proxy_entries.push(wgpu::BindGroupLayoutEntry {
-                binding: 2 + i,
-                visibility: wgpu::ShaderStages::FRAGMENT,
-                ty: wgpu::BindingType::Texture {
-                    sample_type: wgpu::TextureSampleType::Float { filterable: true },
-                    view_dimension: wgpu::TextureViewDimension::D2,
-                    multisampled: false,
-                },
-                count: None,
-            });
-        }
-        let proxy_bgl = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("proxy"),
-            entries: &proxy_entries,
-        });
-        let albedo_bgl = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("albedo"),
-            entries: &[
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                        multisampled: false,
-                    },
-                    count: None,
-                },
-                wgpu::BindGroupLayoutEntry {
-                    binding: 1,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
-                    count: None,
-                },
-            ],
-        });
-        // Group 1 is the proxies' (same shader module); the lit pipeline uses 0 and 2.
-        let lit_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("lit"),
-            bind_group_layouts: &[Some(&globals_bgl), None, Some(&albedo_bgl)],
-            immediate_size: 0,
-        });
-        let proxy_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("proxy"),
-            bind_group_layouts: &[Some(&globals_bgl), Some(&proxy_bgl)],
-            immediate_size: 0,
-        });
-        let primitive = wgpu::PrimitiveState {
-            topology: wgpu::PrimitiveTopology::TriangleList,
-            front_face: wgpu::FrontFace::Ccw,
-            cull_mode: Some(wgpu::Face::Back),
-            ..Default::default()
-        };
-        let depth_stencil = Some(wgpu::DepthStencilState {
-            format: DEPTH_FORMAT,
-            depth_write_enabled: Some(true),
-            depth_compare: Some(wgpu::CompareFunction::Less),
-            stencil: Default::default(),
-            bias: Default::default(),
-        });
-        let targets = [Some(wgpu::ColorTargetState {
-            format: COLOR_FORMAT,
-            blend: None,
-            write_mask: wgpu::ColorWrites::ALL,
-        })];
-        let model_attrs = wgpu::vertex_attr_array![
-            0 => Float32x3, 1 => Float32x3, 2 => Unorm8x4, 11 => Float32x2
-        ];
-        let inst_attrs = wgpu::vertex_attr_array![
-            3 => Float32x4, 4 => Float32x4, 5 => Float32x4, 6 => Float32x4,
-            7 => Float32x4, 8 => Float32x4, 9 => Float32x4, 10 => Float32x4
-        ];
-        let lit_buffers = [
-            Some(wgpu::VertexBufferLayout {
-                array_stride: std::mem::size_of::<ModelVertex>() as u64,
-                step_mode: wgpu::VertexStepMode::Vertex,
-                attributes: &model_attrs,
-            }),
-            Some(wgpu::VertexBufferLayout {
-                array_stride: std::mem::size_of::<InstanceRaw>() as u64,
-                step_mode: wgpu::VertexStepMode::Instance,
-                attributes: &inst_attrs,
-            }),
-        ];
-        // The lit and proxy pipelines differ only in layout, entry points and buffers.
-        let make_pipeline =
-            |label: &str,
-             layout: &wgpu::PipelineLayout,
-             vs: &str,
-             fs: &str,
-             buffers: &[Option<wgpu::VertexBufferLayout>]| {
-                device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                    label: Some(label),
-                    layout: Some(layout),
-                    vertex: wgpu::VertexState {
-                        module: &shader,
-                        entry_point: Some(vs),
-                        compilation_options: Default::default(),
-                        buffers,
-                    },
-                    primitive,
-                    depth_stencil: depth_stencil.clone(),
-                    multisample: Default::default(),
-                    fragment: Some(wgpu::FragmentState {
-                        module: &shader,
-                        entry_point: Some(fs),
-                        compilation_options: Default::default(),
-                        targets: &targets,
-                    }),
-                    multiview_mask: None,
-                    cache: None,
-                })
-            };
-        let lit_pipeline = make_pipeline("lit", &lit_layout, "vs_lit", "fs_lit", &lit_buffers);
-        let ground_pipeline =
-            make_pipeline("ground", &lit_layout, "vs_lit", "fs_ground", &lit_buffers);
-        let proxy_attrs = wgpu::vertex_attr_array![
-            0 => Float32x3, 1 => Float32x3, 2 => Unorm8x4, 3 => Float32x3, 4 => Uint32, 5 => Float32x3,
-            6 => Uint32
-        ];
-        let proxy_buffers = [Some(wgpu::VertexBufferLayout {
-            array_stride: std::mem::size_of::<ProxyVertex>() as u64,
-            step_mode: wgpu::VertexStepMode::Vertex,
-            attributes: &proxy_attrs,
-        })];
-        let proxy_pipeline = make_pipeline(
-            "proxy",
-            &proxy_layout,
-            "vs_proxy",
-            "fs_proxy",
-            &proxy_buffers,
-        );
-        let globals = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("globals"),
-            size: std::mem::size_of::<Globals>() as u64,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let globals_bg = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("globals"),
-            layout: &globals_bgl,
-            entries: &[wgpu::BindGroupEntry {
-                binding: 0,
-                resource: globals.as_entire_binding(),
-            }],
-        });
-        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
-            label: Some("capture"),
-            address_mode_u: wgpu::AddressMode::ClampToEdge,
-            address_mode_v: wgpu::AddressMode::ClampToEdge,
-            mag_filter: wgpu::FilterMode::Linear,
-            min_filter: wgpu::FilterMode::Linear,
-            ..Default::default()
-        });
-        let dummy = device.create_texture_with_data(
-            &queue,
-            &wgpu::TextureDescriptor {
-                label: Some("no view"),
-                size: wgpu::Extent3d {
-                    width: 1,
-                    height: 1,
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: wgpu::TextureFormat::Rgba8UnormSrgb,
-                usage: wgpu::TextureUsages::TEXTURE_BINDING,
-                view_formats: &[],
-            },
-            wgpu::util::TextureDataOrder::LayerMajor,
-            &[0, 0, 0, 0],
-        );
-        let dummy_view = dummy.create_view(&Default::default());
-        let instances = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("instances"),
-            size: 1 << 16,
-            usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let white_albedo = albedo_bind_group(
-            &device,
-            &queue,
-            &albedo_bgl,
-            "white albedo",
-            (1, 1),
-            &[255; 4],
-            [format::albedo::Wrap::Repeat; 2],
-        );
+        // Step 1: the offscreen colour and depth targets and the readback buffer.
+        let targets = setup::targets(&device, width, height);
+        // Step 2: bind group layouts: 0 the frame's globals (every pipeline), 1 a
+        // proxy's views (proxy pipeline), 2 a model's albedo (lit pipelines).
+        let globals_bgl = setup::globals_layout(&device);
+        let proxy_bgl = setup::proxy_layout(&device);
+        let albedo_bgl = setup::albedo_layout(&device);
+        // Step 3: the shader and the lit, ground and proxy pipelines.
+        let pipelines = setup::pipelines(&device, &globals_bgl, &proxy_bgl, &albedo_bgl);
+        // Step 4: globals buffer and group, capture sampler, placeholder textures,
+        // instance buffer.
+        let shared = setup::shared(&device, &queue, &globals_bgl, &albedo_bgl);
+        // Step 5: BC capture textures natively where the device samples them and
+        // HEXBAKE_NO_BC does not turn it off.
+        let native_bc = device
+            .features()
+            .contains(wgpu::Features::TEXTURE_COMPRESSION_BC)
+            && std::env::var_os(NO_BC_ENV).is_none();
         Ok(Renderer {
-            ground_pipeline,
-            albedo_bgl,
-            white_albedo,
             device,
             queue,
             adapter,
             width,
             height,
-            color,
-            color_view,
-            depth_view,
-            readback,
-            padded_row,
-            lit_pipeline,
-            proxy_pipeline,
-            globals,
-            globals_bg,
+            color: targets.color,
+            color_view: targets.color_view,
+            depth_view: targets.depth_view,
+            readback: targets.readback,
+            padded_row: targets.padded_row,
+            lit_pipeline: pipelines.lit,
+            ground_pipeline: pipelines.ground,
+            proxy_pipeline: pipelines.proxy,
+            albedo_bgl,
+            white_albedo: shared.white_albedo,
+            globals: shared.globals,
+            globals_bg: shared.globals_bg,
             proxy_bgl,
-            sampler,
-            dummy_view,
-            native_bc: device_bc && std::env::var_os(NO_BC_ENV).is_none(),
-            instances,
+            sampler: shared.sampler,
+            dummy_view: shared.dummy_view,
+            instances: shared.instances,
             coverage_alpha: false,
             representation_colours: false,
+            native_bc,
         })
     }
 
@@ -906,7 +574,7 @@ impl Renderer {
         let (vertices, clusters) = crate::patches::cluster_proxy_vertices(vertices);
         let vertices = vertices.as_slice();
         let contents: &[u8] = if vertices.is_empty() {
-            bytemuck::bytes_of(&ZERO_VERTEX)
+            bytemuck::bytes_of(&ProxyVertex::ZERO)
         } else {
             bytemuck::cast_slice(vertices)
         };
@@ -1388,13 +1056,3 @@ fn albedo_bind_group(
         ],
     })
 }
-
-const ZERO_VERTEX: ProxyVertex = ProxyVertex {
-    pos: [0.0; 3],
-    normal: [0.0; 3],
-    albedo: [0; 4],
-    tint: [0.0; 3],
-    mask: 0,
-    centroid: [0.0; 3],
-    kind: 0,
-};

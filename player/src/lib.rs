@@ -49,5 +49,6 @@ pub mod patches;
 pub mod run;
 pub mod stream;
 pub mod testdata;
+pub mod vertex;
 #[cfg(feature = "view")]
 pub mod view;

@@ -31,7 +31,7 @@
 
 use crate::bake::Bake;
 use crate::camera::{Aabb, Camera};
-use crate::gpu::InstanceRaw;
+use crate::vertex::InstanceRaw;
 use format::pack::BasePack;
 use format::Mesh;
 use glam::{Mat4, Vec3};

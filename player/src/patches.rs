@@ -9,7 +9,8 @@
 //! `HEXBAKE_PATCH_BITFIELDS=0` turns the bitfields off, `HEXBAKE_PATCH_BACKFACE=0` the
 //! back-face test; with both off the originals are drawn whole as before.
 
-use crate::gpu::{DrawList, InstanceRaw, PatchedDraw};
+use crate::gpu::{DrawList, PatchedDraw};
+use crate::vertex::InstanceRaw;
 use format::pack::BasePack;
 use format::patch_visibility::{
     select_patches, ModelPatchView, PatchBounds, PatchTests, SamplingSphere,
@@ -229,8 +230,8 @@ fn cluster_of(n: Vec3) -> u8 {
 /// returns the clusters with their normal cones. Every mode draws the reordered
 /// buffer, so switching the test off changes nothing but the culling.
 pub fn cluster_proxy_vertices(
-    vertices: &[crate::gpu::ProxyVertex],
-) -> (Vec<crate::gpu::ProxyVertex>, Vec<ProxyCluster>) {
+    vertices: &[crate::vertex::ProxyVertex],
+) -> (Vec<crate::vertex::ProxyVertex>, Vec<ProxyCluster>) {
     let tris = vertices.len() / 3;
     let normal = |t: usize| {
         let [a, b, c] = [0, 1, 2].map(|k| Vec3::from(vertices[3 * t + k].pos).as_dvec3());
@@ -265,7 +266,7 @@ pub fn cluster_proxy_vertices(
 
 /// Normal cone, box centre and plane offset of a run of triangles, as the bake
 /// computes them for patches ([`PatchBounds::of_triangles`]).
-fn cone_of(v: &[crate::gpu::ProxyVertex]) -> PatchBounds {
+fn cone_of(v: &[crate::vertex::ProxyVertex]) -> PatchBounds {
     PatchBounds::of_triangles(
         v.chunks_exact(3)
             .map(|t| [0, 1, 2].map(|k| Vec3::from(t[k].pos).as_dvec3())),
@@ -300,7 +301,7 @@ pub fn proxy_ranges(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::gpu::ProxyVertex;
+    use crate::vertex::ProxyVertex;
     use bytemuck::Zeroable;
 
     /// A closed box of 12 triangles as proxy vertices.

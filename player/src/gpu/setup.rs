@@ -1,0 +1,317 @@
+//! The renderer's fixed GPU objects, built once by [`Renderer::with_device`]
+//! (`super::Renderer`): the offscreen targets, the three bind group layouts, the
+//! three pipelines, and the shared buffers, sampler and placeholder textures. One
+//! function per object or family, in the order `with_device` calls them.
+
+use super::{albedo_bind_group, shader_source, COLOR_FORMAT, DEPTH_FORMAT};
+use crate::vertex::{Globals, InstanceRaw, ModelVertex, ProxyVertex, MAX_VIEWS};
+use wgpu::util::DeviceExt;
+
+/// The offscreen colour and depth targets and the colour readback buffer.
+pub(super) struct Targets {
+    pub color: wgpu::Texture,
+    pub color_view: wgpu::TextureView,
+    pub depth_view: wgpu::TextureView,
+    pub readback: wgpu::Buffer,
+    /// Bytes per readback row: `width × 4` rounded up to
+    /// `COPY_BYTES_PER_ROW_ALIGNMENT`.
+    pub padded_row: u32,
+}
+
+/// Step 1: a `width × height` `Rgba8UnormSrgb` colour target (copied back for
+/// [`super::Renderer::read_pixels`]) and a `Depth32Float` depth target.
+pub(super) fn targets(device: &wgpu::Device, width: u32, height: u32) -> Targets {
+    let target = |label: &str, format, usage| {
+        device.create_texture(&wgpu::TextureDescriptor {
+            label: Some(label),
+            size: wgpu::Extent3d {
+                width,
+                height,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage,
+            view_formats: &[],
+        })
+    };
+    let color = target(
+        "color",
+        COLOR_FORMAT,
+        wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+    );
+    let color_view = color.create_view(&Default::default());
+    let depth = target(
+        "depth",
+        DEPTH_FORMAT,
+        wgpu::TextureUsages::RENDER_ATTACHMENT,
+    );
+    let depth_view = depth.create_view(&Default::default());
+    let align = wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+    let padded_row = (width * 4).div_ceil(align) * align;
+    let readback = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("readback"),
+        size: padded_row as u64 * height as u64,
+        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+        mapped_at_creation: false,
+    });
+    Targets {
+        color,
+        color_view,
+        depth_view,
+        readback,
+        padded_row,
+    }
+}
+
+/// A uniform buffer binding.
+fn uniform_entry(binding: u32, visibility: wgpu::ShaderStages) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Uniform,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+/// A filterable 2D texture binding of the fragment stage.
+fn texture_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::FRAGMENT,
+        ty: wgpu::BindingType::Texture {
+            sample_type: wgpu::TextureSampleType::Float { filterable: true },
+            view_dimension: wgpu::TextureViewDimension::D2,
+            multisampled: false,
+        },
+        count: None,
+    }
+}
+
+/// A filtering sampler binding of the fragment stage.
+fn sampler_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::FRAGMENT,
+        ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+        count: None,
+    }
+}
+
+/// Step 2a: group 0 of every pipeline: the frame's [`Globals`].
+pub(super) fn globals_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("globals"),
+        entries: &[uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT)],
+    })
+}
+
+/// Step 2b: group 1 of the proxy pipeline: the proxy's
+/// [`ProxyUniform`](crate::vertex::ProxyUniform) (binding 0), the capture sampler
+/// (1) and one texture per view (2 … 2 + [`MAX_VIEWS`]).
+pub(super) fn proxy_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
+    let mut entries = vec![
+        uniform_entry(0, wgpu::ShaderStages::FRAGMENT),
+        sampler_entry(1),
+    ];
+    entries.extend((0..MAX_VIEWS as u32).map(|i| texture_entry(2 + i)));
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("proxy"),
+        entries: &entries,
+    })
+}
+
+/// Step 2c: group 2 of the lit pipelines: a model's albedo texture (binding 0) and
+/// its sampler (1), built by `albedo_bind_group`.
+pub(super) fn albedo_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("albedo"),
+        entries: &[texture_entry(0), sampler_entry(1)],
+    })
+}
+
+/// The renderer's pipelines.
+pub(super) struct Pipelines {
+    /// Originals: `vs_lit` / `fs_lit` over [`ModelVertex`] × [`InstanceRaw`].
+    pub lit: wgpu::RenderPipeline,
+    /// The ground: the lit pipeline's layout and vertices, `fs_ground`.
+    pub ground: wgpu::RenderPipeline,
+    /// Proxies: `vs_proxy` / `fs_proxy` over [`ProxyVertex`].
+    pub proxy: wgpu::RenderPipeline,
+}
+
+/// Step 3: the shader module and the three pipelines. All draw counter-clockwise
+/// triangle lists with back faces culled, depth-tested (less) and written, into the
+/// colour target without blending; they differ in layout, entry points and vertex
+/// buffers. Group 1 is the proxies' (one shader module); the lit pipelines use
+/// groups 0 and 2.
+pub(super) fn pipelines(
+    device: &wgpu::Device,
+    globals: &wgpu::BindGroupLayout,
+    proxy: &wgpu::BindGroupLayout,
+    albedo: &wgpu::BindGroupLayout,
+) -> Pipelines {
+    let shader = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("player shaders"),
+        source: wgpu::ShaderSource::Wgsl(shader_source().into()),
+    });
+    let lit_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some("lit"),
+        bind_group_layouts: &[Some(globals), None, Some(albedo)],
+        immediate_size: 0,
+    });
+    let proxy_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some("proxy"),
+        bind_group_layouts: &[Some(globals), Some(proxy)],
+        immediate_size: 0,
+    });
+    let targets = [Some(wgpu::ColorTargetState {
+        format: COLOR_FORMAT,
+        blend: None,
+        write_mask: wgpu::ColorWrites::ALL,
+    })];
+    let pipeline = |label: &str,
+                    layout: &wgpu::PipelineLayout,
+                    (vs, fs): (&str, &str),
+                    buffers: &[Option<wgpu::VertexBufferLayout>]| {
+        device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some(label),
+            layout: Some(layout),
+            vertex: wgpu::VertexState {
+                module: &shader,
+                entry_point: Some(vs),
+                compilation_options: Default::default(),
+                buffers,
+            },
+            primitive: wgpu::PrimitiveState {
+                topology: wgpu::PrimitiveTopology::TriangleList,
+                front_face: wgpu::FrontFace::Ccw,
+                cull_mode: Some(wgpu::Face::Back),
+                ..Default::default()
+            },
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: DEPTH_FORMAT,
+                depth_write_enabled: Some(true),
+                depth_compare: Some(wgpu::CompareFunction::Less),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &shader,
+                entry_point: Some(fs),
+                compilation_options: Default::default(),
+                targets: &targets,
+            }),
+            multiview_mask: None,
+            cache: None,
+        })
+    };
+    let lit_buffers = [Some(ModelVertex::layout()), Some(InstanceRaw::layout())];
+    Pipelines {
+        lit: pipeline("lit", &lit_layout, ("vs_lit", "fs_lit"), &lit_buffers),
+        ground: pipeline("ground", &lit_layout, ("vs_lit", "fs_ground"), &lit_buffers),
+        proxy: pipeline(
+            "proxy",
+            &proxy_layout,
+            ("vs_proxy", "fs_proxy"),
+            &[Some(ProxyVertex::layout())],
+        ),
+    }
+}
+
+/// What the pipelines bind besides per-model and per-proxy data.
+pub(super) struct Shared {
+    /// The [`Globals`] buffer and its group 0.
+    pub globals: wgpu::Buffer,
+    pub globals_bg: wgpu::BindGroup,
+    /// The capture textures' sampler: clamped, bilinear, no mipmaps.
+    pub sampler: wgpu::Sampler,
+    /// A transparent 1 × 1 texture bound where a proxy has no view.
+    pub dummy_view: wgpu::TextureView,
+    /// Per-instance data of the frame (grown by `render` when needed).
+    pub instances: wgpu::Buffer,
+    /// Group 2 of untextured models and the ground: a white texel.
+    pub white_albedo: wgpu::BindGroup,
+}
+
+/// Step 4: the globals buffer and group, the capture sampler, the placeholder
+/// textures and the instance buffer.
+pub(super) fn shared(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    globals_layout: &wgpu::BindGroupLayout,
+    albedo_layout: &wgpu::BindGroupLayout,
+) -> Shared {
+    let globals = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("globals"),
+        size: std::mem::size_of::<Globals>() as u64,
+        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let globals_bg = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("globals"),
+        layout: globals_layout,
+        entries: &[wgpu::BindGroupEntry {
+            binding: 0,
+            resource: globals.as_entire_binding(),
+        }],
+    });
+    let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+        label: Some("capture"),
+        address_mode_u: wgpu::AddressMode::ClampToEdge,
+        address_mode_v: wgpu::AddressMode::ClampToEdge,
+        mag_filter: wgpu::FilterMode::Linear,
+        min_filter: wgpu::FilterMode::Linear,
+        ..Default::default()
+    });
+    let dummy = device.create_texture_with_data(
+        queue,
+        &wgpu::TextureDescriptor {
+            label: Some("no view"),
+            size: wgpu::Extent3d {
+                width: 1,
+                height: 1,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::Rgba8UnormSrgb,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        },
+        wgpu::util::TextureDataOrder::LayerMajor,
+        &[0, 0, 0, 0],
+    );
+    let dummy_view = dummy.create_view(&Default::default());
+    let instances = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("instances"),
+        size: 1 << 16,
+        usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let white_albedo = albedo_bind_group(
+        device,
+        queue,
+        albedo_layout,
+        "white albedo",
+        (1, 1),
+        &[255; 4],
+        [format::albedo::Wrap::Repeat; 2],
+    );
+    Shared {
+        globals,
+        globals_bg,
+        sampler,
+        dummy_view,
+        instances,
+        white_albedo,
+    }
+}
