@@ -324,7 +324,7 @@ sweep_compare() {
     fi
     logged "$WORK/compare-$label.json" "$WORK/compare-$label.err" \
         "$PLAYER" compare "$out" --path "$out/views.ron" --json --no-crossings \
-        --upload-budget 1073741824 "${SIZE[@]}"
+        --upload-budget-mib 1024 "${SIZE[@]}"
     printf 'label=%s\nmode=hybrid\nscene=%s\nout=%s\npath=%s\nsize=%s\nwall_s=%s\nexit=%s\n' \
         "$label" "$sweep_name" "$out" "$out/views.ron" "${BENCH_SIZE:-path default}" "$WALL" "$RC" \
         >"$WORK/compare-$label.txt"

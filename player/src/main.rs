@@ -25,9 +25,14 @@ struct StreamArgs {
     /// Turn the prefetch thread off (cells load on demand; paper Fig. 14).
     #[arg(long)]
     no_prefetch: bool,
-    /// Texture bytes uploaded per drawn frame from the FIFO queue.
-    #[arg(long, default_value_t = 4 << 20)]
-    upload_budget: u64,
+    /// Texture data uploaded per drawn frame from the FIFO queue, in MiB (fractions
+    /// allowed: 0.25 is 256 KiB).
+    #[arg(long, default_value_t = 4.0, value_parser = parse_mib)]
+    upload_budget_mib: f64,
+    /// The old name of `--upload-budget-mib` (bytes): refused with a message that
+    /// names the new flag (issue 14, units in names).
+    #[arg(long = "upload-budget", hide = true, value_parser = renamed_upload_budget)]
+    upload_budget_renamed: Option<u64>,
     /// `render`/`compare`: the display rate a path stands for. A path frame is
     /// 1 / frame_rate seconds of walking (0.1 s on the parks' walk), in which a
     /// player drawing at this rate draws display_hz / frame_rate frames, each with
@@ -64,7 +69,7 @@ impl StreamArgs {
     fn config(&self) -> StreamConfig {
         StreamConfig {
             prefetch: !self.no_prefetch,
-            upload_budget_bytes: self.upload_budget,
+            upload_budget_bytes: mib_to_bytes(self.upload_budget_mib),
             memory_budget_bytes: self.memory_budget_mib << 20,
             pending: self.pending,
             ..Default::default()
@@ -77,6 +82,34 @@ fn parse_hz(s: &str) -> Result<f32, String> {
         .ok()
         .filter(|v| v.is_finite() && *v > 0.0)
         .ok_or_else(|| format!("{s:?}: expected a positive number of frames per second"))
+}
+
+fn parse_mib(s: &str) -> Result<f64, String> {
+    s.parse::<f64>()
+        .ok()
+        .filter(|v| v.is_finite() && *v >= 0.0 && mib_to_bytes(*v) < u64::MAX)
+        .ok_or_else(|| format!("{s:?}: expected a number of MiB >= 0"))
+}
+
+/// MiB (2^20 bytes) to whole bytes, rounded.
+fn mib_to_bytes(mib: f64) -> u64 {
+    (mib * (1u64 << 20) as f64).round() as u64
+}
+
+/// `--upload-budget BYTES` was renamed `--upload-budget-mib MIB`.
+fn renamed_upload_budget(s: &str) -> Result<u64, String> {
+    let hint = s
+        .parse::<u64>()
+        .map(|bytes| {
+            format!(
+                ": {bytes} bytes is `--upload-budget-mib {}`",
+                bytes as f64 / (1u64 << 20) as f64
+            )
+        })
+        .unwrap_or_default();
+    Err(format!(
+        "`--upload-budget` (bytes) was renamed `--upload-budget-mib` (MiB per drawn frame){hint}"
+    ))
 }
 
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
@@ -422,6 +455,33 @@ mod tests {
             Command::Render { stream, .. } => Ok(stream),
             _ => unreachable!("parsed a render command"),
         }
+    }
+
+    /// Issue 14: the upload budget is given in MiB like the memory budget; the old
+    /// byte flag is refused with a message naming the new one.
+    #[test]
+    fn the_upload_budget_is_in_mib_and_the_old_flag_names_the_new_one() {
+        let s = stream_args(&["--upload-budget-mib", "0.25"]).unwrap();
+        assert_eq!(s.config().upload_budget_bytes, 256 << 10);
+        let s = stream_args(&["--upload-budget-mib", "1024"]).unwrap();
+        assert_eq!(s.config().upload_budget_bytes, 1 << 30);
+        assert_eq!(
+            stream_args(&[]).unwrap().config().upload_budget_bytes,
+            4 << 20
+        );
+        for bad in ["-1", "nan", "lots"] {
+            let arg = format!("--upload-budget-mib={bad}");
+            assert!(stream_args(&[&arg]).is_err(), "{bad}");
+        }
+        let e = stream_args(&["--upload-budget", "1073741824"])
+            .err()
+            .expect("the old flag is refused")
+            .to_string();
+        assert!(
+            e.contains("was renamed `--upload-budget-mib`")
+                && e.contains("`--upload-budget-mib 1024`"),
+            "{e}"
+        );
     }
 
     #[test]
