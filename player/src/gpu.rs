@@ -558,16 +558,19 @@ impl Renderer {
     }
 
     /// Creates a proxy's vertex and uniform buffers; textures come later through
-    /// [`Renderer::upload_view_texture`].
+    /// [`Renderer::upload_view_texture`]. `views`: each view's world → texture matrix,
+    /// eye, and whether its colours are premultiplied by coverage (BC1 textures:
+    /// punch-through alpha in format 4, fully opaque before, where it changes nothing).
     pub fn create_proxy(
         &self,
         vertices: &[ProxyVertex],
-        views: &[([f32; 16], [f32; 3])],
+        views: &[([f32; 16], [f32; 3], bool)],
     ) -> GpuProxy {
         let mut u = ProxyUniform::zeroed();
-        for (i, (m, eye)) in views.iter().take(MAX_VIEWS).enumerate() {
+        for (i, (m, eye, premultiplied)) in views.iter().take(MAX_VIEWS).enumerate() {
             u.tex_from_world[i] = *m;
             u.view_eye[i] = [eye[0], eye[1], eye[2], 1.0];
+            u.counts[1] |= u32::from(*premultiplied) << i;
         }
         u.counts[0] = views.len().min(MAX_VIEWS) as u32;
         // Issue 17: triangles grouped by normal cluster for the per-frame test.

@@ -16,6 +16,8 @@
 // eye_i → centroid and viewer → centroid), blended with weights inversely
 // proportional to those angles. A texel outside [0,1]², behind the capture or with
 // alpha < 0.5 (nothing captured there) falls back to the other view, then to lit.
+// The choice of views depends on the triangle only, so vs_proxy makes it (once per
+// vertex, not per pixel) and passes the two views' projective coordinates.
 //
 // Layered impostors (kind 4, paper 001): see impostor_layer below.
 
@@ -111,7 +113,7 @@ fn fs_ground(i: LitOut) -> @location(0) vec4<f32> {
 struct Proxy {
     tex_from_world: array<mat4x4<f32>, MAX_VIEWS>,
     view_eye: array<vec4<f32>, MAX_VIEWS>,
-    // x: number of views
+    // x: number of views; y: bit i = view i's colours are premultiplied by coverage
     counts: vec4<u32>,
 };
 @group(1) @binding(0) var<uniform> p: Proxy;
@@ -137,26 +139,81 @@ struct ProxyIn {
 
 struct ProxyOut {
     @builtin(position) clip: vec4<f32>,
-    @location(0) world: vec3<f32>,
     @location(1) normal: vec3<f32>,
     @location(2) albedo: vec3<f32>,
-    @location(3) @interpolate(flat) mask: u32,
-    @location(4) @interpolate(flat) centroid: vec3<f32>,
+    // The two views drawn for this triangle (MAX_VIEWS = none): best0 | best1 << 8.
+    @location(3) @interpolate(flat) views: u32,
+    // Their blend weights when both have data (inversely proportional to the angles).
+    @location(4) @interpolate(flat) weights: vec2<f32>,
     @location(5) @interpolate(flat) kind: u32,
+    // Projective texture coordinates of the two views (tex_from_world · world, not yet
+    // divided by w): affine in the world position, so interpolating them per vertex
+    // is exact and saves two matrix products per pixel.
+    @location(6) tc0: vec4<f32>,
+    @location(7) tc1: vec4<f32>,
+    // Layered impostors: the layer's depth codes (lo | hi << 8).
+    @location(8) @interpolate(flat) mask: u32,
 };
 
+fn angle_between(a: vec3<f32>, b: vec3<f32>) -> f32 {
+    return acos(clamp(dot(normalize(a), normalize(b)), -1.0, 1.0));
+}
+
+// The view choice depends only on the triangle (its mask and centroid, flat) and the
+// eye, so it is made once per vertex here instead of once per pixel: of the views in
+// the mask, the two whose direction to the centroid is closest to the viewer's.
 @vertex
 fn vs_proxy(v: ProxyIn) -> ProxyOut {
     var o: ProxyOut;
     o.clip = g.clip_from_world * vec4<f32>(v.pos, 1.0);
-    o.world = v.pos;
     o.normal = v.normal;
     o.albedo = srgb_to_linear(v.albedo.rgb) * v.tint;
     o.mask = v.mask;
-    o.centroid = v.centroid;
     o.kind = v.kind;
+    o.weights = vec2<f32>(0.5, 0.5);
     if g.debug.x != 0u {
         o.albedo = g.palette[min(v.kind, 7u)].rgb;
+    }
+    let world = vec4<f32>(v.pos, 1.0);
+    if v.kind == 4u {
+        o.views = 0u | (MAX_VIEWS << 8u);
+        o.tc0 = p.tex_from_world[0] * world;
+        o.tc1 = vec4<f32>(0.0);
+        return o;
+    }
+    let n = min(p.counts.x, MAX_VIEWS);
+    let to_poly = v.centroid - g.eye.xyz;
+    var best0 = MAX_VIEWS;
+    var best1 = MAX_VIEWS;
+    var a0 = 1e9;
+    var a1 = 1e9;
+    for (var k = 0u; k < n; k = k + 1u) {
+        if ((v.mask >> k) & 1u) == 0u {
+            continue;
+        }
+        let a = angle_between(v.centroid - p.view_eye[k].xyz, to_poly);
+        if a < a0 {
+            best1 = best0;
+            a1 = a0;
+            best0 = k;
+            a0 = a;
+        } else if a < a1 {
+            best1 = k;
+            a1 = a;
+        }
+    }
+    o.views = best0 | (best1 << 8u);
+    let s = a0 + a1;
+    if best1 != MAX_VIEWS && s > 1e-6 {
+        o.weights = vec2<f32>(a1 / s, a0 / s);
+    }
+    o.tc0 = vec4<f32>(0.0);
+    o.tc1 = vec4<f32>(0.0);
+    if best0 != MAX_VIEWS {
+        o.tc0 = p.tex_from_world[best0] * world;
+    }
+    if best1 != MAX_VIEWS {
+        o.tc1 = p.tex_from_world[best1] * world;
     }
     return o;
 }
@@ -174,9 +231,9 @@ fn sample_view(i: u32, uv: vec2<f32>) -> vec4<f32> {
     }
 }
 
-// Projective lookup of view i at a world point; alpha 0 = no data there.
-fn project_view(i: u32, world: vec3<f32>) -> vec4<f32> {
-    let tc = p.tex_from_world[i] * vec4<f32>(world, 1.0);
+// Projective lookup of view i at texture coordinates tc (before the divide by w);
+// alpha 0 = no data there.
+fn project_view(i: u32, tc: vec4<f32>) -> vec4<f32> {
     if tc.w <= 0.0 {
         return vec4<f32>(0.0);
     }
@@ -188,11 +245,13 @@ fn project_view(i: u32, world: vec3<f32>) -> vec4<f32> {
     if c.a < 0.5 {
         return vec4<f32>(0.0);
     }
+    if ((p.counts.y >> i) & 1u) != 0u {
+        // Colours premultiplied by coverage (BC1 with punch-through alpha, format 4):
+        // the uncovered taps are transparent black, so colour / alpha is the mean
+        // of the covered taps.
+        return vec4<f32>(c.rgb / c.a, 1.0);
+    }
     return vec4<f32>(c.rgb, 1.0);
-}
-
-fn angle_between(a: vec3<f32>, b: vec3<f32>) -> f32 {
-    return acos(clamp(dot(normalize(a), normalize(b)), -1.0, 1.0));
 }
 
 // Layered impostor (paper 001 §4; kind 4): a layer quad shows view 0's texels whose
@@ -201,7 +260,7 @@ fn angle_between(a: vec3<f32>, b: vec3<f32>) -> f32 {
 // depth only where the layer has surface. The code is read from the nearest texel,
 // the colour bilinearly (worker impostor.rs does the same on the CPU).
 fn impostor_layer(i: ProxyOut) -> vec4<f32> {
-    let tc = p.tex_from_world[0] * vec4<f32>(i.world, 1.0);
+    let tc = i.tc0;
     if tc.w <= 0.0 {
         discard;
     }
@@ -232,47 +291,21 @@ fn fs_proxy(i: ProxyOut) -> @location(0) vec4<f32> {
     if g.debug.x != 0u {
         return vec4<f32>(lit, 1.0);
     }
-    let n = min(p.counts.x, MAX_VIEWS);
-    let to_poly = i.centroid - g.eye.xyz;
-    // The two views of the mask closest in direction to viewer → polygon.
-    var best0 = MAX_VIEWS;
-    var best1 = MAX_VIEWS;
-    var a0 = 1e9;
-    var a1 = 1e9;
-    for (var k = 0u; k < n; k = k + 1u) {
-        if ((i.mask >> k) & 1u) == 0u {
-            continue;
-        }
-        let a = angle_between(i.centroid - p.view_eye[k].xyz, to_poly);
-        if a < a0 {
-            best1 = best0;
-            a1 = a0;
-            best0 = k;
-            a0 = a;
-        } else if a < a1 {
-            best1 = k;
-            a1 = a;
-        }
-    }
+    let best0 = i.views & 0xffu;
+    let best1 = i.views >> 8u;
     if best0 == MAX_VIEWS {
         return vec4<f32>(lit, 1.0);
     }
-    let c0 = project_view(best0, i.world);
+    let c0 = project_view(best0, i.tc0);
     var c1 = vec4<f32>(0.0);
     if best1 != MAX_VIEWS {
-        c1 = project_view(best1, i.world);
+        c1 = project_view(best1, i.tc1);
     }
     var w0 = c0.a;
     var w1 = c1.a;
     if w0 > 0.0 && w1 > 0.0 {
-        let s = a0 + a1;
-        if s > 1e-6 {
-            w0 = a1 / s;
-            w1 = a0 / s;
-        } else {
-            w0 = 0.5;
-            w1 = 0.5;
-        }
+        w0 = i.weights.x;
+        w1 = i.weights.y;
     }
     if w0 + w1 <= 0.0 {
         return vec4<f32>(lit, 1.0);

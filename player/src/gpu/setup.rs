@@ -117,7 +117,8 @@ pub(super) fn globals_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
 /// (1) and one texture per view (2 … 2 + [`MAX_VIEWS`]).
 pub(super) fn proxy_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
     let mut entries = vec![
-        uniform_entry(0, wgpu::ShaderStages::FRAGMENT),
+        // The vertex stage chooses each triangle's views (shader.wgsl vs_proxy).
+        uniform_entry(0, wgpu::ShaderStages::VERTEX_FRAGMENT),
         sampler_entry(1),
     ];
     entries.extend((0..MAX_VIEWS as u32).map(|i| texture_entry(2 + i)));
