@@ -199,6 +199,52 @@ pub(super) fn primitive_triangles(
     Ok(triangles)
 }
 
+/// The error of primitive `primitive` of `mesh` in `path`: its location names both.
+/// Shared by the model loader and the scene loader (`gltf_scene.rs`).
+pub(super) fn primitive_error<'p>(
+    path: &'p Path,
+    mesh: &gltf::Mesh,
+    primitive: &gltf::Primitive,
+) -> impl Fn(String) -> LoadError + 'p {
+    let (mesh, primitive) = (mesh.index(), primitive.index());
+    move |what| {
+        let at = Location::Element(format!("mesh {mesh} primitive {primitive}"));
+        parse_error(path, FORMAT, what, at)
+    }
+}
+
+/// How every primitive reader starts: `None` for points and lines; for a triangle
+/// primitive its mode, its attribute reader and its POSITION attribute (mesh space).
+/// Shared by the model loader and the scene loader (`gltf_scene.rs`).
+#[allow(clippy::type_complexity)]
+pub(super) fn open_triangle_primitive<'a, 's>(
+    buffers: &'s [gltf::buffer::Data],
+    primitive: &'a gltf::Primitive<'a>,
+    err: &dyn Fn(String) -> LoadError,
+) -> Result<
+    Option<(
+        gltf::mesh::Mode,
+        gltf::mesh::Reader<'a, 's, impl Clone + Fn(gltf::Buffer<'a>) -> Option<&'s [u8]>>,
+        Vec<[f32; 3]>,
+    )>,
+    LoadError,
+> {
+    use gltf::mesh::Mode;
+    let mode = primitive.mode();
+    if !matches!(
+        mode,
+        Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+    ) {
+        return Ok(None);
+    }
+    let reader = primitive.reader(move |b| buffers.get(b.index()).map(|d| &d.0[..]));
+    let positions: Vec<[f32; 3]> = reader
+        .read_positions()
+        .ok_or_else(|| err("no POSITION attribute".into()))?
+        .collect();
+    Ok(Some((mode, reader, positions)))
+}
+
 /// One primitive in world space; `None` for points and lines.
 fn read_primitive(
     path: &Path,
@@ -207,28 +253,14 @@ fn read_primitive(
     primitive: &gltf::Primitive,
     world: Mat4,
 ) -> Result<Option<Prim>, LoadError> {
-    use gltf::mesh::Mode;
-    let at = || {
-        Location::Element(format!(
-            "mesh {} primitive {}",
-            mesh.index(),
-            primitive.index()
-        ))
-    };
-    let err = |what: String| parse_error(path, FORMAT, what, at());
-    let mode = primitive.mode();
-    if !matches!(
-        mode,
-        Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
-    ) {
+    let err = primitive_error(path, mesh, primitive);
+    let Some((mode, reader, mut positions)) = open_triangle_primitive(buffers, primitive, &err)?
+    else {
         return Ok(None);
+    };
+    for p in &mut positions {
+        *p = world.transform_point3(Vec3::from(*p)).to_array();
     }
-    let reader = primitive.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
-    let positions: Vec<[f32; 3]> = reader
-        .read_positions()
-        .ok_or_else(|| err("no POSITION attribute".into()))?
-        .map(|p| world.transform_point3(Vec3::from(p)).to_array())
-        .collect();
     let colors = reader
         .read_colors(0)
         .map(|c| c.into_rgba_f32().collect::<Vec<_>>());

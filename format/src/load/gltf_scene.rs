@@ -38,7 +38,9 @@
 //! Models are in the file's units and frame (glTF is y-up, right-handed, as hexbake);
 //! nothing is normalised. Cameras, lights and animations are not read.
 
-use super::gltf::{open_document, primitive_triangles, MAX_DEPTH};
+use super::gltf::{
+    open_document, open_triangle_primitive, primitive_error, primitive_triangles, MAX_DEPTH,
+};
 use super::{parse_error, LoadError, Location, ModelFormat};
 use crate::albedo::{AlbedoMap, AlbedoTexture, Wrap, MAX_TEXTURE_SIDE};
 use crate::cleanup::{finish_mesh_with_uvs, RawMesh};
@@ -140,42 +142,37 @@ pub fn parse_gltf_scene(path: &Path, bytes: &[u8]) -> Result<GltfScene, LoadErro
     })
 }
 
+/// Refuses a file that requires extensions hexbake does not read (any but
+/// [`REQUIRED_OK`]), naming them.
+fn refuse_required_extensions<'e>(
+    path: &Path,
+    required: impl Iterator<Item = &'e str>,
+) -> Result<(), LoadError> {
+    let refused: Vec<&str> = required.filter(|e| !REQUIRED_OK.contains(e)).collect();
+    if refused.is_empty() {
+        return Ok(());
+    }
+    Err(parse_error(
+        path,
+        FORMAT,
+        format!(
+            "the file requires glTF extensions hexbake does not read: {}",
+            refused.join(", ")
+        ),
+        Location::Unknown,
+    ))
+}
+
 fn parse_scene(path: &Path, bytes: &[u8], options: GltfOptions) -> Result<GltfScene, LoadError> {
     let err = |what: String, at: Location| parse_error(path, FORMAT, what, at);
     // Step 1: document, buffers, extensions (required ones are checked first: the
     // validator would only say "unsupported extension").
     if let Ok(g) = gltf::Gltf::from_slice_without_validation(bytes) {
-        let refused: Vec<&str> = g
-            .extensions_required()
-            .filter(|e| !REQUIRED_OK.contains(e))
-            .collect();
-        if !refused.is_empty() {
-            return Err(err(
-                format!(
-                    "the file requires glTF extensions hexbake does not read: {}",
-                    refused.join(", ")
-                ),
-                Location::Unknown,
-            ));
-        }
+        refuse_required_extensions(path, g.extensions_required())?;
     }
     let (document, buffers) = open_document(path, bytes)?;
     let mut notes = Vec::new();
-    let required: Vec<&str> = document.extensions_required().collect();
-    let refused: Vec<&str> = required
-        .iter()
-        .copied()
-        .filter(|e| !REQUIRED_OK.contains(e))
-        .collect();
-    if !refused.is_empty() {
-        return Err(err(
-            format!(
-                "the file requires glTF extensions hexbake does not read: {}",
-                refused.join(", ")
-            ),
-            Location::Unknown,
-        ));
-    }
+    refuse_required_extensions(path, document.extensions_required())?;
     let used: Vec<&str> = document.extensions_used().collect();
     if !used.is_empty() {
         notes.push(format!(
@@ -621,27 +618,10 @@ fn read_scene_primitive(
     primitive: &gltf::Primitive,
     textured: bool,
 ) -> Result<Option<ScenePrim>, LoadError> {
-    use gltf::mesh::Mode;
-    let at = || {
-        Location::Element(format!(
-            "mesh {} primitive {}",
-            mesh.index(),
-            primitive.index()
-        ))
-    };
-    let err = |what: String| parse_error(path, FORMAT, what, at());
-    let mode = primitive.mode();
-    if !matches!(
-        mode,
-        Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
-    ) {
+    let err = primitive_error(path, mesh, primitive);
+    let Some((mode, reader, positions)) = open_triangle_primitive(buffers, primitive, &err)? else {
         return Ok(None);
-    }
-    let reader = primitive.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
-    let positions: Vec<[f32; 3]> = reader
-        .read_positions()
-        .ok_or_else(|| err("no POSITION attribute".into()))?
-        .collect();
+    };
     let n = positions.len();
     let pbr = primitive.material().pbr_metallic_roughness();
     let factor = pbr.base_color_factor();
