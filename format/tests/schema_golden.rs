@@ -55,9 +55,11 @@ fn job_record_round_trips() {
         hex("606fda84e366dc7230e6fea3ff6a8f5f9977b895b4354e86d97a7842c248ed18")
     );
     // The per-cell report keys `pipeline report` and the proxy reuse read.
-    assert_eq!(c.report["far_group"], 1);
-    assert_eq!(c.report["proxy_keys"].as_array().unwrap().len(), 2);
-    assert_eq!(c.report["stage_ms"]["simplify"], 76.373);
+    assert_eq!(c.report.far_group, Some(1));
+    assert_eq!(c.report.proxy_keys.len(), 2);
+    assert_eq!(c.report.stage_ms.simplify, 76.373);
+    assert_eq!(c.report.quality.error_histogram[0], 10678);
+    assert_eq!((c.report.mv_objects, c.report.mv_polygons), (8, 2357));
     assert!(r.groups.is_empty());
     assert!(r.shared_process);
     assert_eq!((r.wall_s, r.cpu_s, r.host.as_str()), (2.5, 4.75, "node-1"));
@@ -84,7 +86,12 @@ fn old_job_record_reads_with_defaults() {
     assert_eq!(r.job, 3);
     assert!(r.groups.is_empty());
     assert!(!r.shared_process);
-    assert_eq!(r.cells[0].report["sv_objects"], 3);
+    // Its cell report has only some of today's keys: the rest read as 0.
+    let report = &r.cells[0].report;
+    assert_eq!(report.sv_objects, 3);
+    assert_eq!(report.stage_ms.split, 1.5);
+    assert_eq!((report.mv_objects, report.quality.measured_proxies), (0, 0));
+    assert!(report.proxy_keys.is_empty() && report.far_group.is_none());
 }
 
 #[test]

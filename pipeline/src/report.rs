@@ -19,30 +19,7 @@ pub use format::schema::report::{
 };
 use std::collections::BTreeMap;
 use std::path::Path;
-use worker::job::done_record;
-
-fn num(v: &serde_json::Value, key: &str) -> f64 {
-    v.get(key).and_then(|x| x.as_f64()).unwrap_or(0.0)
-}
-
-/// Proxies of a cell's or group's report (one content key each).
-fn key_count(r: &serde_json::Value) -> u64 {
-    r.get("proxy_keys")
-        .and_then(|k| k.as_array())
-        .map_or(0, |k| k.len() as u64)
-}
-
-/// A report's per-stage milliseconds.
-fn stage_ms(r: &serde_json::Value) -> Vec<(String, f64)> {
-    r.get("stage_ms")
-        .and_then(|s| s.as_object())
-        .map(|m| {
-            m.iter()
-                .map(|(k, v)| (k.clone(), v.as_f64().unwrap_or(0.0)))
-                .collect()
-        })
-        .unwrap_or_default()
-}
+use worker::job::{done_record, CellReport};
 
 /// Stored bytes of a pack's `textures` section, from its own section table (0 for a
 /// pack that does not open).
@@ -90,7 +67,7 @@ pub fn build_report(out: &Path) -> anyhow::Result<Report> {
     let (mut cpu_s, mut shared_process) = (0.0, false);
     // Far-field groups first: every cell line adds its group's proxies (what the
     // cell draws).
-    let mut groups: BTreeMap<u32, serde_json::Value> = BTreeMap::new();
+    let mut groups: BTreeMap<u32, CellReport> = BTreeMap::new();
     let mut far = FarFieldStats::default();
     // Only valid done records count (a stale or torn record is not a baked cell);
     // each is checked once (it reads and hashes every pack it lists).
@@ -101,11 +78,11 @@ pub fn build_report(out: &Path) -> anyhow::Result<Report> {
             let r = &g.report;
             far.groups += 1;
             far.group_bytes += g.bytes;
-            far.bytes_shared += g.bytes * (num(r, "far_objects") as u64).saturating_sub(1);
-            far.group_proxies += key_count(r);
-            report.proxies_reused += num(r, "reused_proxies") as u64;
-            for (k, ms) in stage_ms(r) {
-                *report.stage_s.entry(k).or_default() += ms / 1000.0;
+            far.bytes_shared += g.bytes * u64::from(r.far_objects).saturating_sub(1);
+            far.group_proxies += r.proxy_keys.len() as u64;
+            report.proxies_reused += u64::from(r.reused_proxies);
+            for (k, ms) in r.stage_ms.entries() {
+                *report.stage_s.entry(k.to_string()).or_default() += ms / 1000.0;
             }
             report.storage.group_texture_bytes += stored_texture_bytes(&out.join(&g.file));
             report.storage.group_bytes += g.bytes;
@@ -128,40 +105,37 @@ pub fn build_report(out: &Path) -> anyhow::Result<Report> {
         for c in &record.cells {
             let r = &c.report;
             // What the cell draws: its own proxies plus its group's far field.
-            let group = r
-                .get("far_group")
-                .and_then(|g| g.as_u64())
-                .and_then(|g| groups.get(&(g as u32)));
-            let both = |key: &str| num(r, key) + group.map_or(0.0, |g| num(g, key));
+            let group = r.far_group.and_then(|g| groups.get(&g));
+            let both = |f: fn(&CellReport) -> f64| f(r) + group.map_or(0.0, f);
             let mut line = CellLine {
                 cell: c.cell,
-                polygons_inside: num(r, "polygons_inside"),
-                sv_polygons: both("sv_polygons"),
-                mv_polygons: num(r, "mv_polygons"),
-                cluster_polygons: both("cluster_polygons"),
-                sv_objects: both("sv_objects"),
-                mv_objects: num(r, "mv_objects"),
-                cluster_objects: both("cluster_objects"),
-                culled_objects: num(r, "culled_objects"),
-                outside_original_polygons: both("outside_original_polygons"),
-                texture_bytes: both("texture_bytes"),
+                polygons_inside: r.polygons_inside as f64,
+                sv_polygons: both(|r| r.sv_polygons as f64),
+                mv_polygons: r.mv_polygons as f64,
+                cluster_polygons: both(|r| r.cluster_polygons as f64),
+                sv_objects: both(|r| r.sv_objects.into()),
+                mv_objects: r.mv_objects.into(),
+                cluster_objects: both(|r| r.cluster_objects.into()),
+                culled_objects: r.culled_objects.into(),
+                outside_original_polygons: both(|r| r.outside_original_polygons as f64),
+                texture_bytes: both(|r| r.texture_bytes as f64),
                 pack_bytes: c.bytes,
-                impostor_objects: both("impostor_objects"),
-                impostor_polygons: both("impostor_polygons"),
-                selection_culled: num(r, "selection_culled"),
+                impostor_objects: both(|r| r.impostor_objects.into()),
+                impostor_polygons: both(|r| r.impostor_polygons as f64),
+                selection_culled: r.selection_culled.into(),
                 ..CellLine::default()
             };
             quality_of(&mut line, r, group);
-            far.far_objects_per_cell += num(r, "far_objects");
-            far.cell_proxies += key_count(r);
-            for (k, ms) in stage_ms(r) {
-                line.stage_ms.insert(k.clone(), ms);
+            far.far_objects_per_cell += f64::from(r.far_objects);
+            far.cell_proxies += r.proxy_keys.len() as u64;
+            for (k, ms) in r.stage_ms.entries() {
+                line.stage_ms.insert(k.to_string(), ms);
                 line.bake_ms += ms;
-                *report.stage_s.entry(k).or_default() += ms / 1000.0;
+                *report.stage_s.entry(k.to_string()).or_default() += ms / 1000.0;
             }
             report.storage.texture_bytes += stored_texture_bytes(&out.join(&c.file));
-            report.proxies += key_count(r);
-            report.proxies_reused += num(r, "reused_proxies") as u64;
+            report.proxies += r.proxy_keys.len() as u64;
+            report.proxies_reused += u64::from(r.reused_proxies);
             report.storage.cell_bytes += c.bytes;
             report.cell_lines.push(line);
         }
@@ -218,22 +192,17 @@ pub fn build_report(out: &Path) -> anyhow::Result<Report> {
 
 /// The quality figures of a cell's record `r` and its far-field group's `group`
 /// (issue 16): measured proxies add up, the worst view is the worse of the two.
-fn quality_of(line: &mut CellLine, r: &serde_json::Value, group: Option<&serde_json::Value>) {
+fn quality_of(line: &mut CellLine, r: &CellReport, group: Option<&CellReport>) {
     line.worst_view_psnr_db = format::metrics::PSNR_CAP;
     line.worst_view_ssim = 1.0;
-    for q in std::iter::once(r)
-        .chain(group)
-        .filter_map(|v| v.get("quality"))
-    {
-        line.measured_proxies += num(q, "measured_proxies");
-        if num(q, "measured_proxies") > 0.0 {
-            line.worst_view_psnr_db = line.worst_view_psnr_db.min(num(q, "worst_psnr_db"));
-            line.worst_view_ssim = line.worst_view_ssim.min(num(q, "worst_ssim"));
+    for q in std::iter::once(r).chain(group).map(|v| &v.quality) {
+        line.measured_proxies += f64::from(q.measured_proxies);
+        if q.measured_proxies > 0 {
+            line.worst_view_psnr_db = line.worst_view_psnr_db.min(q.worst_psnr_db);
+            line.worst_view_ssim = line.worst_view_ssim.min(q.worst_ssim);
         }
-        if let Some(h) = q.get("error_histogram").and_then(|h| h.as_array()) {
-            for (a, b) in line.error_histogram.iter_mut().zip(h) {
-                *a += b.as_u64().unwrap_or(0);
-            }
+        for (a, b) in line.error_histogram.iter_mut().zip(q.error_histogram) {
+            *a += b;
         }
     }
 }

@@ -306,7 +306,7 @@ fn write_index(l: &Loaded, done: &[(&Job, JobRecord)]) -> Result<Index, RunError
     let listed = |g: u32| groups.binary_search_by_key(&g, |e| e.cell_id).is_ok();
     for (job, record) in done {
         for c in &record.cells {
-            let group = c.report["far_group"].as_u64().map(|g| g as u32);
+            let group = c.report.far_group;
             if group.is_some_and(|g| !listed(g)) {
                 continue;
             }

@@ -39,7 +39,8 @@ use format::fingerprint::{
 use format::manifest::Plan;
 use format::pack::CellPack;
 pub use format::schema::job::{
-    cell_file, error_path, group_file, record_path, CellRecord, CellReport, Job, JobRecord, Unit,
+    cell_file, error_path, group_file, record_path, CellQualityReport, CellRecord, CellReport, Job,
+    JobRecord, StageMs, Unit,
 };
 use format::Scene;
 use std::path::{Path, PathBuf};
@@ -280,14 +281,12 @@ pub fn previous_proxies(out: &Path, job: &Job) -> std::collections::BTreeMap<Uni
         let Ok(pack) = pack else {
             continue;
         };
-        let keys: Vec<Fingerprint> = c.report["proxy_keys"]
-            .as_array()
-            .map(|a| {
-                a.iter()
-                    .filter_map(|k| k.as_str().and_then(format::fingerprint::from_hex))
-                    .collect()
-            })
-            .unwrap_or_default();
+        let keys: Vec<Fingerprint> = c
+            .report
+            .proxy_keys
+            .iter()
+            .filter_map(|k| format::fingerprint::from_hex(k))
+            .collect();
         if pack.cell_id != c.cell || keys.len() != pack.proxies.len() {
             continue;
         }
@@ -337,54 +336,52 @@ pub fn bake_cell_pack(
     let pack = bake.to_pack(*fingerprint).map_err(|e| e.to_string())?;
     let s = &bake.stats;
     let t = &s.times;
-    // The keys `pipeline report` reads (the paper's Tables 3–8 per cell).
-    let report = serde_json::json!({
-        "instances": s.instances,
-        "originals": s.originals,
-        "polygons_inside": s.polygons_inside,
-        "sv_objects": s.sv_count,
-        "sv_polygons": s.sv_polygons,
-        "mv_objects": s.mv_count,
-        "mv_polygons": s.mv_polygons,
-        "clusters": s.cluster_count,
-        "cluster_objects": s.cluster_members,
-        "cluster_polygons": s.cluster_polygons,
-        "culled_objects": s.culled,
-        "outside_original_polygons": s.proxied_original_polygons,
-        "simplified_ratio": s.simplified_ratio,
-        "texture_bytes": s.texture_bytes,
-        "views": s.views,
-        "reused_proxies": s.reused_proxies,
-        // A cell: objects drawn from its group's far field; a group: its cells.
-        "far_objects": s.far_objects,
-        "far_group": bake.far_group,
-        // Issue 16: layered impostors and the objective selection's figures.
-        "impostors": s.impostor_count,
-        "impostor_objects": s.impostor_members,
-        "impostor_polygons": s.impostor_polygons,
-        "selection_culled": s.selection_culled,
-        "quality": {
-            "measured_proxies": s.quality.measured,
-            "worst_psnr_db": s.quality.worst_psnr_db,
-            "worst_ssim": s.quality.worst_ssim,
-            "error_histogram": s.quality.error_histogram,
-        },
-        // Per proxy, in pack order: its content key (crate::bake::proxy_key), read
-        // back by `previous_proxies` when the job is baked again.
-        "proxy_keys": bake
+    // What `pipeline report` reads (the paper's Tables 3–8 per cell), the quality
+    // check, and per proxy in pack order its content key (crate::bake::proxy_key),
+    // read back by `previous_proxies` when the job is baked again.
+    let report = CellReport {
+        cluster_objects: s.cluster_members,
+        cluster_polygons: s.cluster_polygons,
+        clusters: s.cluster_count,
+        culled_objects: s.culled,
+        far_group: bake.far_group,
+        far_objects: s.far_objects,
+        impostor_objects: s.impostor_members,
+        impostor_polygons: s.impostor_polygons,
+        impostors: s.impostor_count,
+        instances: s.instances,
+        mv_objects: s.mv_count,
+        mv_polygons: s.mv_polygons,
+        originals: s.originals,
+        outside_original_polygons: s.proxied_original_polygons,
+        polygons_inside: s.polygons_inside,
+        proxy_keys: bake
             .proxies
             .iter()
             .map(|p| format::fingerprint::to_hex(&p.key))
-            .collect::<Vec<_>>(),
-        "total_ms": t.total_ms,
-        "stage_ms": {
-            "split": t.split_ms,
-            "cluster": t.cluster_ms,
-            "capture": t.capture_ms,
-            "weights": t.weights_ms,
-            "simplify": t.simplify_ms,
-            "select": t.select_ms,
+            .collect(),
+        quality: CellQualityReport {
+            error_histogram: s.quality.error_histogram,
+            measured_proxies: s.quality.measured,
+            worst_psnr_db: s.quality.worst_psnr_db,
+            worst_ssim: s.quality.worst_ssim,
         },
-    });
+        reused_proxies: s.reused_proxies,
+        selection_culled: s.selection_culled,
+        simplified_ratio: s.simplified_ratio,
+        stage_ms: StageMs {
+            capture: t.capture_ms,
+            cluster: t.cluster_ms,
+            select: t.select_ms,
+            simplify: t.simplify_ms,
+            split: t.split_ms,
+            weights: t.weights_ms,
+        },
+        sv_objects: s.sv_count,
+        sv_polygons: s.sv_polygons,
+        texture_bytes: s.texture_bytes,
+        total_ms: t.total_ms,
+        views: s.views,
+    };
     Ok((pack, report))
 }

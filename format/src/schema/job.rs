@@ -67,9 +67,103 @@ impl Job {
     }
 }
 
-/// What one cell's bake reports besides its pack (statistics, times): it goes into
-/// the job record, never into pack bytes (times differ from run to run).
-pub type CellReport = serde_json::Value;
+/// What one cell's (or far-field group's) bake reports besides its pack: the
+/// statistics `pipeline report` turns into the paper's Tables 3–8, the quality
+/// check, the proxies' content keys and the stage times. It goes into the job
+/// record, never into pack bytes (times differ from run to run).
+///
+/// The fields are in alphabetical order, the order in which the record has always
+/// held them (it was written from a JSON map before it had a type), so records stay
+/// byte-identical. A record written before a field existed reads it as 0 / empty.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct CellReport {
+    /// Objects in clusters of two or more, their proxies' triangles, the clusters.
+    pub cluster_objects: u32,
+    pub cluster_polygons: u64,
+    pub clusters: u32,
+    /// Outside objects culled (back-facing or occluded from the whole region, or
+    /// below a pixel for the objective selection).
+    pub culled_objects: u32,
+    /// A cell: its far-field group (`None` without the far field); a group: `None`.
+    pub far_group: Option<u32>,
+    /// A cell: objects drawn from its group's far field; a group: its cells.
+    pub far_objects: u32,
+    /// Layered impostors (issue 16): objects, quad triangles, impostors.
+    pub impostor_objects: u32,
+    pub impostor_polygons: u64,
+    pub impostors: u32,
+    /// Instances of the scene.
+    pub instances: u32,
+    /// Multi-view objects and their proxies' triangles.
+    pub mv_objects: u32,
+    pub mv_polygons: u64,
+    /// Instances drawn as originals (inside the cell) and their triangles.
+    pub originals: u32,
+    /// Triangles of the proxied objects' full models.
+    pub outside_original_polygons: u64,
+    pub polygons_inside: u64,
+    /// Per proxy, in pack order: its content key (64 hex digits), read back when the
+    /// job is baked again to reuse unchanged proxies.
+    pub proxy_keys: Vec<String>,
+    pub quality: CellQualityReport,
+    /// Proxies taken from the job's earlier bake by key instead of derived.
+    pub reused_proxies: u32,
+    /// Outside objects the objective selection culled (also in `culled_objects`).
+    pub selection_culled: u32,
+    /// (SV + MV + cluster triangles) / `outside_original_polygons`.
+    pub simplified_ratio: f64,
+    pub stage_ms: StageMs,
+    /// Single-view objects and their proxies' triangles.
+    pub sv_objects: u32,
+    pub sv_polygons: u64,
+    /// Decoded RGBA8 bytes of the proxies' textures.
+    pub texture_bytes: u64,
+    /// Wall time of the unit's bake in ms.
+    pub total_ms: f64,
+    /// Captures taken.
+    pub views: u32,
+}
+
+/// The objective selection's quality check of a cell's proxies (issue 16).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct CellQualityReport {
+    /// |ΔY| over the measured object pixels, bins of 8 levels (last ≥ 56).
+    pub error_histogram: [u64; 8],
+    /// Proxies whose kept candidate was measured; the figures below count only
+    /// when it is not 0.
+    pub measured_proxies: u32,
+    /// The worst sample view's object-pixel PSNR(Y) and SSIM.
+    pub worst_psnr_db: f64,
+    pub worst_ssim: f64,
+}
+
+/// Bake time per stage in ms (summed over the unit's objects and threads).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct StageMs {
+    pub capture: f64,
+    pub cluster: f64,
+    pub select: f64,
+    pub simplify: f64,
+    pub split: f64,
+    pub weights: f64,
+}
+
+impl StageMs {
+    /// (stage name, ms) in the record's order.
+    pub fn entries(&self) -> [(&'static str, f64); 6] {
+        [
+            ("capture", self.capture),
+            ("cluster", self.cluster),
+            ("select", self.select),
+            ("simplify", self.simplify),
+            ("split", self.split),
+            ("weights", self.weights),
+        ]
+    }
+}
 
 /// One cell's (or far-field group's) entry in a job record.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
