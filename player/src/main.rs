@@ -112,6 +112,18 @@ fn renamed_upload_budget(s: &str) -> Result<u64, String> {
     ))
 }
 
+/// `--yaw` was renamed `--yaw-deg`.
+#[cfg(feature = "view")]
+fn renamed_yaw(_: &str) -> Result<f32, String> {
+    Err("`--yaw` was renamed `--yaw-deg` (degrees)".into())
+}
+
+/// `--pitch` was renamed `--pitch-deg`.
+#[cfg(feature = "view")]
+fn renamed_pitch(_: &str) -> Result<f32, String> {
+    Err("`--pitch` was renamed `--pitch-deg` (degrees)".into())
+}
+
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
     let (w, h) = s
         .split_once('x')
@@ -174,10 +186,16 @@ enum Command {
         screenshot: Option<PathBuf>,
         /// Start heading in degrees (0 = +x, 90 = +z).
         #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
-        yaw: f32,
+        yaw_deg: f32,
         /// Start pitch in degrees (positive = up).
         #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
-        pitch: f32,
+        pitch_deg: f32,
+        /// The old names of `--yaw-deg` and `--pitch-deg`: refused with a message
+        /// that names the new flag (issue 14, units in names).
+        #[arg(long = "yaw", hide = true, allow_hyphen_values = true, value_parser = renamed_yaw)]
+        yaw_renamed: Option<f32>,
+        #[arg(long = "pitch", hide = true, allow_hyphen_values = true, value_parser = renamed_pitch)]
+        pitch_renamed: Option<f32>,
         /// Start mode (M flips hybrid → full → lod): hybrid, full or lod.
         #[arg(long, default_value = "hybrid")]
         mode: Mode,
@@ -273,8 +291,11 @@ fn main() -> ExitCode {
             start,
             exit_after,
             screenshot,
-            yaw,
-            pitch,
+            yaw_deg,
+            pitch_deg,
+            // Always `None`: their parsers refuse the old flags.
+            yaw_renamed: _,
+            pitch_renamed: _,
             mode,
             colours,
             no_overlay,
@@ -285,8 +306,8 @@ fn main() -> ExitCode {
                 size: stream.size.unwrap_or((1024, 768)),
                 stream: stream.config(),
                 start,
-                yaw_deg: yaw,
-                pitch_deg: pitch,
+                yaw_deg,
+                pitch_deg,
                 mode,
                 colours,
                 overlay: !no_overlay,
@@ -454,6 +475,36 @@ mod tests {
         match Cli::try_parse_from(argv)?.command {
             Command::Render { stream, .. } => Ok(stream),
             _ => unreachable!("parsed a render command"),
+        }
+    }
+
+    /// Issue 14: `view`'s angles carry their unit; the old flags name the new ones.
+    #[cfg(feature = "view")]
+    #[test]
+    fn view_angles_are_in_degrees_and_the_old_flags_name_the_new_ones() {
+        let ok = Cli::try_parse_from([
+            "player",
+            "view",
+            "out",
+            "--yaw-deg",
+            "-16",
+            "--pitch-deg",
+            "5",
+        ])
+        .unwrap();
+        let Command::View {
+            yaw_deg, pitch_deg, ..
+        } = ok.command
+        else {
+            panic!("a view command")
+        };
+        assert_eq!((yaw_deg, pitch_deg), (-16.0, 5.0));
+        for (old, new) in [("--yaw", "`--yaw-deg`"), ("--pitch", "`--pitch-deg`")] {
+            let e = Cli::try_parse_from(["player", "view", "out", old, "-16"])
+                .err()
+                .expect("the old flag is refused")
+                .to_string();
+            assert!(e.contains(&format!("was renamed {new} (degrees)")), "{e}");
         }
     }
 
