@@ -92,12 +92,20 @@ enum Command {
         #[arg(long, value_parser = parse_vec3)]
         target: Option<Vec3>,
         #[arg(long, default_value_t = 60.0)]
-        fov: f32,
+        fov_deg: f32,
+        /// The old name of `--fov-deg`: refused with a message naming it (issue 14).
+        #[arg(long = "fov", hide = true, value_parser = renamed_fov)]
+        fov_renamed: Option<f32>,
         #[arg(long, default_value_t = 1024)]
         size: u32,
         #[arg(long)]
         out: PathBuf,
     },
+}
+
+/// `view --fov` was renamed `--fov-deg`.
+fn renamed_fov(_: &str) -> Result<f32, String> {
+    Err("`--fov` was renamed `--fov-deg` (degrees)".into())
 }
 
 fn parse_vec3(s: &str) -> Result<Vec3, String> {
@@ -377,7 +385,9 @@ fn run(cli: Cli) -> Result<(), Failure> {
             manifest,
             eye,
             target,
-            fov,
+            fov_deg,
+            // Always `None`: its parser refuses the old flag.
+            fov_renamed: _,
             size,
             out,
         } => {
@@ -396,9 +406,17 @@ fn run(cli: Cli) -> Result<(), Failure> {
                 scene.ground.max[1] + 0.15 * d,
             ));
             let far = 4.0 * (w + d + eye.y);
-            let view =
-                worker::raster::View::look_at_fov(eye, target, Vec3::Y, fov, size, size, 0.5, far)
-                    .map_err(bad_input)?;
+            let view = worker::raster::View::look_at_fov(
+                eye,
+                target,
+                Vec3::Y,
+                fov_deg,
+                size,
+                size,
+                0.5,
+                far,
+            )
+            .map_err(bad_input)?;
             let ground = scene.ground.mesh();
             let items = DrawItem::scene_with_ground(&scene, &ground);
             let instances = scene.instances.len();
