@@ -209,7 +209,7 @@ pub fn instances_manifest(plan: &Plan) -> Result<String, SceneError> {
     let b = &plan.bake;
     let c = &plan.cells;
     Ok(format!(
-        "// {name} as an instance list (`pipeline scene {manifest} --as-instances`).\n(\n    name: {name:?},\n    ground: (min: ({:?}, {:?}), max: ({:?}, {:?})),\n    scene: Instances([\n        {}\n    ]),\n    cells: (cell_size: {:?}, min_eye_height: {:?}, max_eye_height: {:?}),\n    bake: (image_res: {}, self_occluding_tolerance_px: {:?}, edge_length_tolerance_px: {:?}, t_c0: {:?}, t_c1: {:?}, clustering: {}, occlusion_culling: {}, max_deviation_px: {:?}, far_field: {}),\n    cells_per_job: {},\n    output: {:?},\n)\n",
+        "// {name} as an instance list (`pipeline scene {manifest} --as-instances`).\n(\n    name: {name:?},\n    ground: (min: ({:?}, {:?}), max: ({:?}, {:?})),\n    scene: Instances([\n        {}\n    ]),\n    cells: (cell_size: {:?}, min_eye_height: {:?}, max_eye_height: {:?}),\n    bake: (image_res: {}, self_occluding_tolerance_px: {:?}, edge_length_tolerance_px: {:?}, t_c0: {:?}, t_c1: {:?}, clustering: {}, occlusion_culling: {}, max_deviation_px: {:?}, far_field: {}{}),\n    cells_per_job: {},\n    output: {:?},\n)\n",
         plan.ground.min[0],
         plan.ground.min[1],
         plan.ground.max[0],
@@ -227,6 +227,11 @@ pub fn instances_manifest(plan: &Plan) -> Result<String, SceneError> {
         b.occlusion_culling,
         b.max_deviation_px,
         b.far_field,
+        // Objective selection is opt-in: written only when the manifest has it.
+        b.quality.as_ref().map_or(String::new(), |q| format!(
+            ", quality: (min_psnr_db: {:?}, min_ssim: {:?})",
+            q.min_psnr_db, q.min_ssim
+        )),
         plan.cells_per_job,
         std::path::absolute(&plan.output)
             .unwrap_or_else(|_| plan.output.clone())

@@ -349,3 +349,16 @@ proptest! {
         }
     }
 }
+
+/// `pipeline scene --as-instances` writes a manifest whose bake parameters are the
+/// original's, `bake.quality` included (the demo turns objective selection on).
+#[test]
+fn instance_list_keeps_every_bake_parameter() {
+    let plan = parse_manifest(&repo_root().join("manifests/demo.ron")).unwrap();
+    assert!(plan.bake.quality.is_some(), "the demo selects by quality");
+    let text = format::scene_build::instances_manifest(&plan).unwrap();
+    let listed = parse_manifest_str(&text, Path::new("demo-instances.ron")).unwrap();
+    assert_eq!(listed.bake, plan.bake);
+    assert_eq!(listed.cells, plan.cells);
+    assert_eq!(listed.cells_per_job, plan.cells_per_job);
+}
