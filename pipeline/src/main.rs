@@ -4,6 +4,7 @@
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;
 use std::process::ExitCode;
+use worker::cli::{bad_input, exit_code, failed, restore_default_sigpipe, Failure};
 
 #[derive(Parser)]
 #[command(
@@ -115,36 +116,16 @@ enum ExecutorArg {
     Slurm,
 }
 
-/// An error with the exit code it maps to.
-struct Failure {
-    code: u8,
-    error: anyhow::Error,
-}
-
-fn bad_input(error: impl Into<anyhow::Error>) -> Failure {
-    Failure {
-        code: 2,
-        error: error.into(),
-    }
-}
-
 fn from_run(e: pipeline::run::RunError) -> Failure {
     match e {
-        pipeline::run::RunError::BadInput(error) => Failure { code: 2, error },
-        pipeline::run::RunError::Failed(error) => Failure { code: 1, error },
+        pipeline::run::RunError::BadInput(error) => bad_input(error),
+        pipeline::run::RunError::Failed(error) => failed(error),
     }
 }
 
 fn main() -> ExitCode {
     restore_default_sigpipe();
-    let cli = Cli::parse();
-    match run(cli) {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(f) => {
-            eprintln!("error: {}", worker::error_text(f.error.as_ref()));
-            ExitCode::from(f.code)
-        }
-    }
+    exit_code(run(Cli::parse()))
 }
 
 fn run(cli: Cli) -> Result<(), Failure> {
@@ -222,26 +203,8 @@ fn run(cli: Cli) -> Result<(), Failure> {
                 ExecutorArg::Slurm => pipeline::slurm::run_slurm(&loaded, force, &slurm, !json),
             }
             .map_err(from_run)?;
-            if json {
-                println!(
-                    "{}",
-                    serde_json::to_string_pretty(&summary).expect("summary serializes")
-                );
-            } else {
-                println!("{}", summary.line());
-            }
-            if summary.complete {
-                Ok(())
-            } else {
-                Err(Failure {
-                    code: 1,
-                    error: anyhow::anyhow!(
-                        "{} job(s) failed or pending; `pipeline status {}` lists them",
-                        summary.jobs_failed.len().max(1),
-                        summary.out.display()
-                    ),
-                })
-            }
+            print_json_or_text(json, &summary, || format!("{}\n", summary.line()));
+            completed(&summary, "job(s) failed or pending")
         }
         Command::Status { out, json } => {
             let status = pipeline::status::status(&out).map_err(bad_input)?;
@@ -249,8 +212,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
             Ok(())
         }
         Command::Report { out, json } => {
-            let r =
-                pipeline::report::write_report(&out).map_err(|error| Failure { code: 1, error })?;
+            let r = pipeline::report::write_report(&out).map_err(failed)?;
             print_json_or_text(json, &r, || pipeline::report::to_markdown(&r));
             if let Some(jobs) = r.jobs_line() {
                 eprintln!(
@@ -266,8 +228,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
             let loaded = pipeline::run::load(&manifest, out.as_deref()).map_err(from_run)?;
             pipeline::run::assemble(&loaded).map_err(from_run)?;
             let _ = std::fs::remove_file(pipeline::run::partial_path(&loaded.out));
-            pipeline::report::write_report(&loaded.out)
-                .map_err(|error| Failure { code: 1, error })?;
+            pipeline::report::write_report(&loaded.out).map_err(failed)?;
             println!("assembled {}", loaded.out.join("index.pack").display());
             Ok(())
         }
@@ -289,22 +250,18 @@ fn run(cli: Cli) -> Result<(), Failure> {
             if check.problems.is_empty() {
                 Ok(())
             } else {
-                Err(Failure {
-                    code: 1,
-                    error: anyhow::anyhow!(
-                        "{}: {} of {} cell packs do not belong to this bake or are damaged",
-                        pack.display(),
-                        check.problems.len(),
-                        check.cells_indexed
-                    ),
-                })
+                Err(failed(anyhow::anyhow!(
+                    "{}: {} of {} cell packs do not belong to this bake or are damaged",
+                    pack.display(),
+                    check.problems.len(),
+                    check.cells_indexed
+                )))
             }
         }
         Command::Inspect { pack, json } => {
             // A pack that fails validation is a failure of the data (exit 1), not of
             // the command line; the message names the file and the bad section.
-            let text = pipeline::inspect::inspect(&pack, json)
-                .map_err(|error| Failure { code: 1, error })?;
+            let text = pipeline::inspect::inspect(&pack, json).map_err(failed)?;
             print!("{text}");
             Ok(())
         }
@@ -335,29 +292,20 @@ fn finish_selected(
             None => {}
         }
     }
-    if summary.complete {
-        Ok(())
-    } else {
-        Err(Failure {
-            code: 1,
-            error: anyhow::anyhow!(
-                "{} requested job(s) failed; `pipeline status {}` lists them",
-                summary.jobs_failed.len().max(1),
-                summary.out.display()
-            ),
-        })
-    }
+    completed(summary, "requested job(s) failed")
 }
 
-/// Like other Unix tools, end quietly when stdout is a closed pipe (`| head`) instead
-/// of panicking in `println!`: restore the default SIGPIPE action Rust ignores.
-fn restore_default_sigpipe() {
-    #[cfg(unix)]
-    // SAFETY: called first thing in main, before any thread starts; setting a
-    // signal's disposition to SIG_DFL has no other precondition.
-    unsafe {
-        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+/// Success when every job of the run is done, else a failure that counts the jobs
+/// (`jobs`: what they are) and points at `pipeline status`.
+fn completed(summary: &pipeline::run::RunSummary, jobs: &str) -> Result<(), Failure> {
+    if summary.complete {
+        return Ok(());
     }
+    Err(failed(anyhow::anyhow!(
+        "{} {jobs}; `pipeline status {}` lists them",
+        summary.jobs_failed.len().max(1),
+        summary.out.display()
+    )))
 }
 
 /// Prints `value` as pretty JSON when `json`, else the text `text` makes (which ends

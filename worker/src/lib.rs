@@ -6,6 +6,7 @@ pub mod bake;
 pub mod capture;
 pub mod check;
 pub mod classify;
+pub mod cli;
 pub mod cluster;
 pub mod diagnostics;
 pub mod far_field;

@@ -8,6 +8,7 @@ use clap::{Parser, Subcommand};
 use glam::Vec3;
 use std::path::PathBuf;
 use std::process::ExitCode;
+use worker::cli::{bad_input, exit_code, failed, restore_default_sigpipe, Failure};
 use worker::raster::{render, CullMode, DrawItem};
 
 #[derive(Parser)]
@@ -91,6 +92,7 @@ enum Command {
         /// Point looked at x,y,z (default: the ground's centre).
         #[arg(long, value_parser = parse_vec3)]
         target: Option<Vec3>,
+        /// Vertical field of view in degrees.
         #[arg(long, default_value_t = 60.0)]
         fov_deg: f32,
         /// The old name of `--fov-deg`: refused with a message naming it (issue 14).
@@ -121,34 +123,9 @@ fn parse_vec3(s: &str) -> Result<Vec3, String> {
     }
 }
 
-struct Failure {
-    code: u8,
-    error: anyhow::Error,
-}
-
-fn bad_input(error: impl Into<anyhow::Error>) -> Failure {
-    Failure {
-        code: 2,
-        error: error.into(),
-    }
-}
-
-fn failed(error: impl Into<anyhow::Error>) -> Failure {
-    Failure {
-        code: 1,
-        error: error.into(),
-    }
-}
-
 fn main() -> ExitCode {
     restore_default_sigpipe();
-    match run(Cli::parse()) {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(f) => {
-            eprintln!("error: {}", worker::error_text(f.error.as_ref()));
-            ExitCode::from(f.code)
-        }
-    }
+    exit_code(run(Cli::parse()))
 }
 
 fn run(cli: Cli) -> Result<(), Failure> {
@@ -427,16 +404,5 @@ fn run(cli: Cli) -> Result<(), Failure> {
             println!("{}: {instances} instances drawn", out.display());
             Ok(())
         }
-    }
-}
-
-/// Like other Unix tools, end quietly when stdout is a closed pipe (`| head`) instead
-/// of panicking in `println!`: restore the default SIGPIPE action Rust ignores.
-fn restore_default_sigpipe() {
-    #[cfg(unix)]
-    // SAFETY: called first thing in main, before any thread starts; setting a
-    // signal's disposition to SIG_DFL has no other precondition.
-    unsafe {
-        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
 }
