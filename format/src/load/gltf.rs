@@ -72,24 +72,7 @@ pub(crate) fn parse(path: &Path, bytes: &[u8]) -> Result<Parsed, LoadError> {
     // Walk the node tree depth-first, composing transforms.
     let mut prims: Vec<Prim> = Vec::new();
     let mut nodes_with_geometry = 0usize;
-    let mut stack: Vec<(gltf::Node, Mat4, Vec<usize>)> = scene
-        .nodes()
-        .map(|n| (n, Mat4::IDENTITY, Vec::new()))
-        .collect();
-    stack.reverse();
-    while let Some((node, parent, mut ancestors)) = stack.pop() {
-        let at = || Location::Element(format!("node {}", node.index()));
-        if ancestors.contains(&node.index()) {
-            return Err(err("node hierarchy has a cycle".into(), at()));
-        }
-        if ancestors.len() >= MAX_DEPTH {
-            return Err(err(format!("node hierarchy deeper than {MAX_DEPTH}"), at()));
-        }
-        let local = Mat4::from_cols_array_2d(&node.transform().matrix());
-        let world = parent * local;
-        if !world.is_finite() {
-            return Err(err("node transform is not finite".into(), at()));
-        }
+    walk_nodes(path, &scene, |node, world, _| {
         if let Some(mesh) = node.mesh() {
             let before = prims.len();
             for primitive in mesh.primitives() {
@@ -101,12 +84,8 @@ pub(crate) fn parse(path: &Path, bytes: &[u8]) -> Result<Parsed, LoadError> {
                 nodes_with_geometry += 1;
             }
         }
-        ancestors.push(node.index());
-        let children: Vec<_> = node.children().collect();
-        for child in children.into_iter().rev() {
-            stack.push((child, world, ancestors.clone()));
-        }
-    }
+        Ok(())
+    })?;
 
     // Concatenate the primitives.
     let any_colors = prims
@@ -147,6 +126,45 @@ pub(crate) fn parse(path: &Path, bytes: &[u8]) -> Result<Parsed, LoadError> {
         nodes: nodes_with_geometry,
         parts: prims.len(),
     })
+}
+
+/// Walks the node tree of `scene` depth-first in document order, composing
+/// transforms, and calls `visit` with each node, its world transform and its parent
+/// (index and world transform; `None` for a root node). Refuses a cycle, a hierarchy
+/// deeper than [`MAX_DEPTH`] and a transform that is not finite, where it meets
+/// them. Shared by the model loader and the scene loader (`gltf_scene.rs`).
+pub(super) fn walk_nodes<'a>(
+    path: &Path,
+    scene: &gltf::Scene<'a>,
+    mut visit: impl FnMut(&gltf::Node<'a>, Mat4, Option<(usize, Mat4)>) -> Result<(), LoadError>,
+) -> Result<(), LoadError> {
+    let err = |what: String, at: Location| parse_error(path, FORMAT, what, at);
+    let mut stack: Vec<(gltf::Node, Mat4, Vec<usize>)> = scene
+        .nodes()
+        .map(|n| (n, Mat4::IDENTITY, Vec::new()))
+        .collect();
+    stack.reverse();
+    while let Some((node, parent, mut ancestors)) = stack.pop() {
+        let at = || Location::Element(format!("node {}", node.index()));
+        if ancestors.contains(&node.index()) {
+            return Err(err("node hierarchy has a cycle".into(), at()));
+        }
+        if ancestors.len() >= MAX_DEPTH {
+            return Err(err(format!("node hierarchy deeper than {MAX_DEPTH}"), at()));
+        }
+        let local = Mat4::from_cols_array_2d(&node.transform().matrix());
+        let world = parent * local;
+        if !world.is_finite() {
+            return Err(err("node transform is not finite".into(), at()));
+        }
+        visit(&node, world, ancestors.last().map(|&p| (p, parent)))?;
+        ancestors.push(node.index());
+        let children: Vec<_> = node.children().collect();
+        for child in children.into_iter().rev() {
+            stack.push((child, world, ancestors.clone()));
+        }
+    }
+    Ok(())
 }
 
 /// The triangles of a primitive of `mode` (triangles, strip or fan) from its indices

@@ -39,7 +39,7 @@
 //! nothing is normalised. Cameras, lights and animations are not read.
 
 use super::gltf::{
-    open_document, open_triangle_primitive, primitive_error, primitive_triangles, MAX_DEPTH,
+    open_document, open_triangle_primitive, primitive_error, primitive_triangles, walk_nodes,
 };
 use super::{parse_error, LoadError, Location, ModelFormat};
 use crate::albedo::{AlbedoMap, AlbedoTexture, Wrap, MAX_TEXTURE_SIDE};
@@ -201,39 +201,17 @@ fn parse_scene(path: &Path, bytes: &[u8], options: GltfOptions) -> Result<GltfSc
     // parent (index and world transform); then, when grouping, the parents of two
     // or more mesh nodes.
     let mut visits: Vec<Visit> = Vec::new();
-    let mut stack: Vec<(gltf::Node, Mat4, Vec<usize>)> = scene
-        .nodes()
-        .map(|n| (n, Mat4::IDENTITY, Vec::new()))
-        .collect();
-    stack.reverse();
-    while let Some((node, parent, mut ancestors)) = stack.pop() {
-        let at = || Location::Element(format!("node {}", node.index()));
-        if ancestors.contains(&node.index()) {
-            return Err(err("node hierarchy has a cycle".into(), at()));
-        }
-        if ancestors.len() >= MAX_DEPTH {
-            return Err(err(format!("node hierarchy deeper than {MAX_DEPTH}"), at()));
-        }
-        let local = Mat4::from_cols_array_2d(&node.transform().matrix());
-        let world = parent * local;
-        if !world.is_finite() {
-            return Err(err("node transform is not finite".into(), at()));
-        }
+    walk_nodes(path, &scene, |node, world, parent| {
         if node.skin().is_some() {
             skinned.push(node.index());
         }
-        let parent_of = ancestors.last().map(|&p| (p, parent));
         visits.push(Visit {
             node: node.clone(),
             world,
-            parent: parent_of,
+            parent,
         });
-        ancestors.push(node.index());
-        let children: Vec<_> = node.children().collect();
-        for child in children.into_iter().rev() {
-            stack.push((child, world, ancestors.clone()));
-        }
-    }
+        Ok(())
+    })?;
     // Parent index → its mesh children (in visit order), for parents of two or more.
     let mut by_parent: BTreeMap<usize, Vec<usize>> = BTreeMap::new();
     if options.group_by_parent {
@@ -321,7 +299,13 @@ fn parse_scene(path: &Path, bytes: &[u8], options: GltfOptions) -> Result<GltfSc
                             offset: None,
                             mirrored,
                         };
-                        let name = model_name(&mesh, texture, split, mirrored);
+                        let name = model_name(
+                            mesh.name(),
+                            || format!("mesh{}", mesh.index()),
+                            texture,
+                            split,
+                            mirrored,
+                        );
                         let model = build_model(
                             path,
                             &document,
@@ -437,18 +421,13 @@ fn place_group(
     }
     let split = by_texture.len() > 1;
     for (texture, parts) in by_texture {
-        let mut name = parent
-            .name()
-            .filter(|n| !n.is_empty())
-            .map(str::to_string)
-            .unwrap_or_else(|| format!("node{}", parent.index()));
-        if split {
-            name.push_str(if texture.is_some() {
-                "-textured"
-            } else {
-                "-plain"
-            });
-        }
+        let name = model_name(
+            parent.name(),
+            || format!("node{}", parent.index()),
+            texture,
+            split,
+            false,
+        );
         let model = build_model(path, document, buffers, &parts, texture, name, textures)?;
         if let Some(m) = model {
             let id = u32::try_from(models.len())
@@ -464,14 +443,20 @@ fn place_group(
     Ok(())
 }
 
-/// The name of a node's model: the mesh's name (else `mesh<N>`), with `-textured`
-/// / `-plain` when the mesh is `split` by texture and `-mirrored`.
-fn model_name(mesh: &gltf::Mesh, texture: Option<usize>, split: bool, mirrored: bool) -> String {
-    let mut name = mesh
-        .name()
+/// The name of a model: `name` (the mesh's, or a group's parent node's), else
+/// `unnamed()` (`mesh<N>`, `node<N>`), with `-textured` / `-plain` when the mesh or
+/// group is `split` by texture and `-mirrored`.
+fn model_name(
+    name: Option<&str>,
+    unnamed: impl FnOnce() -> String,
+    texture: Option<usize>,
+    split: bool,
+    mirrored: bool,
+) -> String {
+    let mut name = name
         .filter(|n| !n.is_empty())
         .map(str::to_string)
-        .unwrap_or_else(|| format!("mesh{}", mesh.index()));
+        .unwrap_or_else(unnamed);
     if split {
         name.push_str(if texture.is_some() {
             "-textured"
