@@ -25,6 +25,26 @@ pub struct Model {
     pub albedo_map: Option<AlbedoMap>,
 }
 
+impl Model {
+    /// A model of `mesh` and, when textured, `albedo_map`, with its content hash: the
+    /// mesh's, or for a textured model [`AlbedoMap::model_hash`] of that and the
+    /// texture.
+    pub fn new(name: String, source: String, mesh: Mesh, albedo_map: Option<AlbedoMap>) -> Model {
+        let mesh_hash = mesh.content_hash();
+        let content_hash = match &albedo_map {
+            Some(map) => map.model_hash(&mesh_hash),
+            None => mesh_hash,
+        };
+        Model {
+            name,
+            source,
+            mesh,
+            content_hash,
+            albedo_map,
+        }
+    }
+}
+
 /// One placed copy of a model.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Instance {

@@ -310,14 +310,7 @@ fn build_with_placements(plan: &Plan) -> Result<(Scene, Option<Vec<park::Placeme
         } else {
             format!("{base_name}#{uses}")
         };
-        let content_hash = mesh.content_hash();
-        models.push(Model {
-            name,
-            source: source.describe(),
-            mesh,
-            content_hash,
-            albedo_map: None,
-        });
+        models.push(Model::new(name, source.describe(), mesh, None));
     }
 
     // Step 3b: a city's building variants, generated (models after the props).
@@ -340,14 +333,12 @@ fn build_with_placements(plan: &Plan) -> Result<(Scene, Option<Vec<park::Placeme
     if let Some(params) = &city_params {
         for v in 0..params.variants {
             let mesh = crate::city::building_mesh(&crate::city::BuildingStyle::draw(params, v));
-            let content_hash = mesh.content_hash();
-            models.push(Model {
-                name: format!("building-{v}"),
-                source: format!("city:{}:building-{v}", params.seed),
+            models.push(Model::new(
+                format!("building-{v}"),
+                format!("city:{}:building-{v}", params.seed),
                 mesh,
-                content_hash,
-                albedo_map: None,
-            });
+                None,
+            ));
         }
     }
 
@@ -485,18 +476,12 @@ fn build_gltf_scene(plan: &Plan, spec: &crate::manifest::GltfSpec) -> Result<Sce
         } else {
             format!("{}#{uses}", m.name)
         };
-        let mesh_hash = m.mesh.content_hash();
-        let content_hash = match &m.albedo_map {
-            Some(map) => map.model_hash(&mesh_hash),
-            None => mesh_hash,
-        };
-        models.push(Model {
-            source: format!("{}:{}", file.display(), m.name),
+        models.push(Model::new(
             name,
-            mesh: m.mesh,
-            content_hash,
-            albedo_map: m.albedo_map,
-        });
+            format!("{}:{}", file.display(), m.name),
+            m.mesh,
+            m.albedo_map,
+        ));
     }
     let mut instances = Vec::with_capacity(gltf.instances.len());
     for i in &gltf.instances {

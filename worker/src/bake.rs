@@ -837,17 +837,7 @@ fn select_region(
             let members: Vec<u32> = proxy.members.iter().map(|m| m.instance).collect();
             let originals: Vec<DrawItem> = members
                 .iter()
-                .map(|&i| {
-                    let inst = &scene.instances[i as usize];
-                    DrawItem {
-                        mesh: &scene.models[inst.model as usize].mesh,
-                        transform: inst.transform,
-                        tint: inst.tint,
-                        object_id: i,
-                        triangles: None,
-                        albedo_map: scene.models[inst.model as usize].albedo_map.as_ref(),
-                    }
-                })
+                .map(|&i| DrawItem::instance(scene, i))
                 .collect();
             // Culled: less than a pixel from the whole region.
             let Some((lo, hi)) = crate::capture::items_aabb(&originals) else {

@@ -164,17 +164,7 @@ pub fn check_cell(
             what: format!("{views} views of {res} px"),
         });
     }
-    let item_of = |i: u32| {
-        let inst = &scene.instances[i as usize];
-        DrawItem {
-            mesh: &scene.models[inst.model as usize].mesh,
-            transform: inst.transform,
-            tint: inst.tint,
-            object_id: i,
-            triangles: None,
-            albedo_map: scene.models[inst.model as usize].albedo_map.as_ref(),
-        }
-    };
+    let item_of = |i: u32| DrawItem::instance(scene, i);
     // Reference: every instance as its model.
     let reference_items: Vec<DrawItem> = (0..scene.instances.len() as u32)
         .filter(|&i| {

@@ -855,14 +855,7 @@ mod tests {
     }
 
     fn model(mesh: Mesh) -> Model {
-        let content_hash = mesh.content_hash();
-        Model {
-            name: "m".into(),
-            source: "test".into(),
-            mesh,
-            content_hash,
-            albedo_map: None,
-        }
+        Model::new("m".into(), "test".into(), mesh, None)
     }
 
     #[test]

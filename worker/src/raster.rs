@@ -101,22 +101,27 @@ impl<'a> DrawItem<'a> {
         }
     }
 
+    /// Instance `i` of `scene` as its model, whole, with the model's texture (object
+    /// id = `i`).
+    pub fn instance(scene: &'a format::Scene, i: u32) -> DrawItem<'a> {
+        let inst = &scene.instances[i as usize];
+        let model = &scene.models[inst.model as usize];
+        DrawItem {
+            mesh: &model.mesh,
+            transform: inst.transform,
+            tint: inst.tint,
+            object_id: i,
+            triangles: None,
+            albedo_map: model.albedo_map.as_ref(),
+        }
+    }
+
     /// Every instance of `scene` (object id = instance index), whole, then the ground
     /// (`ground` = `scene.ground.mesh()`): a view of the scene as `worker render` and
     /// the tests draw it.
     pub fn scene_with_ground(scene: &'a format::Scene, ground: &'a Mesh) -> Vec<DrawItem<'a>> {
-        let mut items: Vec<DrawItem> = scene
-            .instances
-            .iter()
-            .enumerate()
-            .map(|(i, inst)| DrawItem {
-                mesh: &scene.models[inst.model as usize].mesh,
-                transform: inst.transform,
-                tint: inst.tint,
-                object_id: i as u32,
-                triangles: None,
-                albedo_map: scene.models[inst.model as usize].albedo_map.as_ref(),
-            })
+        let mut items: Vec<DrawItem> = (0..scene.instances.len() as u32)
+            .map(|i| DrawItem::instance(scene, i))
             .collect();
         items.push(DrawItem::ground(ground));
         items

@@ -145,14 +145,7 @@ fn no_culled_object_covers_a_pixel_from_1000_views_in_a_city() {
                         (c - eye).dot(dir) > 0.0
                     })
                 })
-                .map(|(i, inst)| DrawItem {
-                    mesh: &scene.models[inst.model as usize].mesh,
-                    transform: inst.transform,
-                    tint: inst.tint,
-                    object_id: i as u32,
-                    triangles: None,
-                    albedo_map: None,
-                })
+                .map(|(i, _)| DrawItem::instance(&scene, i as u32))
                 .collect();
             let frame = render(&view, &items, CullMode::Back);
             misses += frame
@@ -183,14 +176,7 @@ fn box_mesh(lo: [f32; 3], hi: [f32; 3]) -> format::Mesh {
 }
 
 fn model(mesh: format::Mesh) -> Model {
-    let content_hash = mesh.content_hash();
-    Model {
-        name: "m".into(),
-        source: "test".into(),
-        mesh,
-        content_hash,
-        albedo_map: None,
-    }
+    Model::new("m".into(), "test".into(), mesh, None)
 }
 
 #[test]
