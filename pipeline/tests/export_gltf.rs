@@ -17,15 +17,6 @@ mod common;
 use common::*;
 use format::pack::{CellPack, Index, ProxyKind};
 
-fn assert_bad_input(out: &Output, says: &[&str]) {
-    let err = stderr(out);
-    assert_eq!(out.status.code(), Some(2), "{err}");
-    assert!(!err.contains("panicked"), "{err}");
-    for s in says {
-        assert!(err.contains(s), "expected {s:?} in: {err}");
-    }
-}
-
 /// The validator's runner, or why it cannot run.
 fn validator() -> Result<PathBuf, String> {
     let script = repo().join("tools/gltf-validate.mjs");

@@ -24,15 +24,6 @@ fn position_in(path: &Path, needle: &str) -> (usize, usize) {
     (line, text[line_start..offset].chars().count() + 1)
 }
 
-fn assert_bad_input(out: &Output, says: &[&str]) {
-    let err = stderr(out);
-    assert_eq!(out.status.code(), Some(2), "{err}");
-    assert!(!err.contains("panicked"), "{err}");
-    for s in says {
-        assert!(err.contains(s), "expected {s:?} in: {err}");
-    }
-}
-
 /// `cell_size: 0.001` on the demo's ground panicked in the worker's grid (exit 101).
 #[test]
 fn scene_and_run_refuse_a_grid_too_large_with_its_position() {

@@ -9,6 +9,8 @@
 //! `<repo>/models` and skip with a note when it is absent. Set `HEXBAKE_PICTURES=<dir>`
 //! to get the bunny's class maps as PNGs.
 
+mod common;
+use common::models_dir;
 use glam::{DVec3, Mat4, Vec3};
 use proptest::prelude::*;
 use std::path::PathBuf;
@@ -258,13 +260,6 @@ fn sphere_mesh(centre: Vec3, radius: f32, rings: u32, segments: u32) -> format::
         }
     }
     mesh_from(positions, triangles)
-}
-
-fn models_dir() -> PathBuf {
-    match std::env::var_os("HEXBAKE_MODELS") {
-        Some(dir) => PathBuf::from(dir),
-        None => PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../models"),
-    }
 }
 
 /// The model as the bake sees it (format's loader: welded, smooth normals, albedo).

@@ -1,10 +1,11 @@
 //! SVMesh / MVMesh / clustering / bake_cell / check_cell (paper 000 §3.1.2–§3.1.6,
 //! issue 4). Every proxy mesh goes through `simplify::validate`.
 
+mod common;
+use common::{in_pool, models_dir, repo};
 use format::manifest::{parse_manifest, BakeParams, CellParams};
 use format::{Ground, Instance, Model, Scene};
 use glam::{Mat4, Vec3};
-use std::path::PathBuf;
 use worker::bake::{bake_cell, bake_cell_with, Assignment, CellBake};
 use worker::check::{check_cell, psnr_y};
 use worker::grid::HexGrid;
@@ -17,16 +18,6 @@ use worker::raster::{
 use worker::selfocc::{choose_representation, object_self_occluding_error, Representation};
 use worker::simplify::{validate, validate_view_masks, Simplified};
 use worker::svmesh::{derive_svmesh, ProxySettings};
-
-fn repo() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..")
-}
-
-fn models_dir() -> PathBuf {
-    std::env::var_os("HEXBAKE_MODELS")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| repo().join("models"))
-}
 
 /// Validates every proxy member of a bake against its input triangles (and MV masks).
 fn validate_bake(scene: &Scene, bake: &CellBake) {
@@ -69,14 +60,6 @@ fn busy_cell(scene: &Scene, grid: &HexGrid) -> u32 {
     (0..counts.len() as u32)
         .max_by_key(|&i| (counts[i as usize], std::cmp::Reverse(i)))
         .unwrap()
-}
-
-fn in_pool<T: Send>(threads: usize, f: impl FnOnce() -> T + Send) -> T {
-    rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .unwrap()
-        .install(f)
 }
 
 #[test]
@@ -467,22 +450,10 @@ fn write_bunny_picture(
 
 // ---- Captures, projective texturing, clustering ----
 
-fn demo_item(scene: &Scene, i: u32) -> DrawItem<'_> {
-    let inst = &scene.instances[i as usize];
-    DrawItem {
-        mesh: &scene.models[inst.model as usize].mesh,
-        transform: inst.transform,
-        tint: inst.tint,
-        object_id: i,
-        triangles: None,
-        albedo_map: None,
-    }
-}
-
 #[test]
 fn capture_texture_matrix_maps_vertices_onto_their_capture_pixels() {
     let (scene, _, _, _) = demo();
-    let item = demo_item(&scene, 0);
+    let item = DrawItem::instance(&scene, 0);
     let (lo, hi) = scene.instance_bounds(0);
     let eye = (lo + hi) * 0.5 + Vec3::new(60.0, 25.0, -40.0);
     let cap = worker::capture::capture_objects(eye, &[item], 512).unwrap();
@@ -526,7 +497,7 @@ fn capture_texture_matrix_maps_vertices_onto_their_capture_pixels() {
 #[test]
 fn projective_texturing_from_the_capture_eye_reproduces_the_lit_render() {
     let (scene, _, _, _) = demo();
-    let item = demo_item(&scene, 1);
+    let item = DrawItem::instance(&scene, 1);
     let (lo, hi) = scene.instance_bounds(1);
     let target = (lo + hi) * 0.5;
     let eye = target + Vec3::new(-50.0, 15.0, 45.0);

@@ -3,6 +3,8 @@
 //! Set `HEXBAKE_PNG_DIR=/some/dir` to keep PNGs of the golden captures for a person
 //! to look at.
 
+mod common;
+use common::in_pool;
 use format::Mesh;
 use glam::{Mat4, Vec2, Vec3, Vec4};
 use proptest::prelude::*;
@@ -213,9 +215,7 @@ fn golden_view() -> View {
 }
 
 fn models_dir() -> Option<PathBuf> {
-    let dir = std::env::var_os("HEXBAKE_MODELS")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../models"));
+    let dir = common::models_dir();
     dir.is_dir().then_some(dir)
 }
 
@@ -688,14 +688,6 @@ fn golden_scenes_have_the_expected_structure() {
 }
 
 // ---------------------------------------------------------------- determinism
-
-fn in_pool<T: Send>(threads: usize, f: impl FnOnce() -> T + Send) -> T {
-    rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .unwrap()
-        .install(f)
-}
 
 #[test]
 fn output_is_identical_for_any_thread_count() {

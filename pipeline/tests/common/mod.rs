@@ -21,6 +21,17 @@ pub fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
+/// Asserts the run refused its input (exit 2) without panicking, naming each of
+/// `says` in its message.
+pub fn assert_bad_input(out: &Output, says: &[&str]) {
+    let err = stderr(out);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    for s in says {
+        assert!(err.contains(s), "expected {s:?} in: {err}");
+    }
+}
+
 /// Both streams, for assertion messages.
 pub fn text(o: &Output) -> String {
     format!(
