@@ -110,11 +110,11 @@ impl Mesh {
     pub fn content_hash(&self) -> [u8; 32] {
         let mut h = blake3::Hasher::new();
         h.update(b"hexbake mesh v1");
-        hash_f32s(&mut h, &self.positions);
-        hash_f32s(&mut h, &self.normals);
+        hash_triples(&mut h, &self.positions, f32::to_le_bytes);
+        hash_triples(&mut h, &self.normals, f32::to_le_bytes);
         h.update(&(self.albedo.len() as u64).to_le_bytes());
         h.update(self.albedo.as_flattened());
-        hash_u32s(&mut h, &self.triangles);
+        hash_triples(&mut h, &self.triangles, u32::to_le_bytes);
         *h.finalize().as_bytes()
     }
 
@@ -123,8 +123,8 @@ impl Mesh {
     pub fn geometry_hash(&self) -> [u8; 32] {
         let mut h = blake3::Hasher::new();
         h.update(b"hexbake geometry v1");
-        hash_f32s(&mut h, &self.positions);
-        hash_u32s(&mut h, &self.triangles);
+        hash_triples(&mut h, &self.positions, f32::to_le_bytes);
+        hash_triples(&mut h, &self.triangles, u32::to_le_bytes);
         *h.finalize().as_bytes()
     }
 
@@ -170,22 +170,13 @@ impl Mesh {
     }
 }
 
-fn hash_f32s(h: &mut blake3::Hasher, values: &[[f32; 3]]) {
+/// Hashes `values` as their count (u64) then every component as `to_le_bytes` of it.
+fn hash_triples<T: Copy>(h: &mut blake3::Hasher, values: &[[T; 3]], to_le_bytes: fn(T) -> [u8; 4]) {
     h.update(&(values.len() as u64).to_le_bytes());
     let bytes: Vec<u8> = values
         .as_flattened()
         .iter()
-        .flat_map(|x| x.to_le_bytes())
-        .collect();
-    h.update(&bytes);
-}
-
-fn hash_u32s(h: &mut blake3::Hasher, values: &[[u32; 3]]) {
-    h.update(&(values.len() as u64).to_le_bytes());
-    let bytes: Vec<u8> = values
-        .as_flattened()
-        .iter()
-        .flat_map(|x| x.to_le_bytes())
+        .flat_map(|&x| to_le_bytes(x))
         .collect();
     h.update(&bytes);
 }

@@ -147,6 +147,18 @@ pub fn references(
     let Some((lo, hi)) = items_aabb(originals) else {
         return Vec::new();
     };
+    farthest_first(eyes, capture_eye)
+        .into_iter()
+        .filter_map(|k| {
+            let view = sample_view(eyes[k], lo, hi, image_res)?;
+            Some((eyes[k], render(&view, originals, CullMode::Back)))
+        })
+        .collect()
+}
+
+/// The indices of `eyes`, farthest from `capture_eye` first (ties by index:
+/// deterministic).
+fn farthest_first(eyes: &[Vec3], capture_eye: Vec3) -> Vec<usize> {
     let mut order: Vec<usize> = (0..eyes.len()).collect();
     order.sort_by(|&a, &b| {
         let (da, db) = (
@@ -156,13 +168,13 @@ pub fn references(
         db.total_cmp(&da).then(a.cmp(&b))
     });
     order
-        .into_iter()
-        .filter_map(|k| {
-            let view = View::tight_around(eyes[k], lo, hi, image_res * SUPERSAMPLE).ok()?;
-            (view.width as u64 * view.height as u64 <= 4096 * 4096)
-                .then(|| (eyes[k], render(&view, originals, CullMode::Back)))
-        })
-        .collect()
+}
+
+/// The supersampled view from `eye` framing the box `lo`..`hi`; `None` when it
+/// cannot be framed (the eye inside it) or would be over 4096² pixels.
+fn sample_view(eye: Vec3, lo: Vec3, hi: Vec3, image_res: u32) -> Option<View> {
+    let view = View::tight_around(eye, lo, hi, image_res * SUPERSAMPLE).ok()?;
+    (view.width as u64 * view.height as u64 <= 4096 * 4096).then_some(view)
 }
 
 /// The thresholds a candidate must reach in every view (PSNR dB, SSIM).
@@ -275,24 +287,13 @@ pub fn select_among(
         .map(|_| Some((fresh(), 0.0, 0, 0.0)))
         .collect();
     let (mut m_sse, mut m_px, mut m_ssim) = (0.0f64, 0usize, 0.0f64);
-    let mut order: Vec<usize> = (0..eyes.len()).collect();
-    order.sort_by(|&a, &b| {
-        let (da, db) = (
-            eyes[a].distance_squared(capture_eye),
-            eyes[b].distance_squared(capture_eye),
-        );
-        db.total_cmp(&da).then(a.cmp(&b))
-    });
-    for k in order {
+    for k in farthest_first(eyes, capture_eye) {
         if alive.iter().all(Option::is_none) {
             break;
         }
-        let Ok(view) = View::tight_around(eyes[k], lo, hi, image_res * SUPERSAMPLE) else {
+        let Some(view) = sample_view(eyes[k], lo, hi, image_res) else {
             continue;
         };
-        if view.width as u64 * view.height as u64 > 4096 * 4096 {
-            continue;
-        }
         let reference = render(&view, originals, CullMode::Back);
         let frame = draw_candidate(&view, mesh, eyes[k]);
         let c = compare(&reference, &frame, &mut mesh_m.error_histogram);

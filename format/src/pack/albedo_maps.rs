@@ -183,20 +183,15 @@ pub(crate) fn decode(
             ));
         };
         let len = r.width as usize * r.height as usize * 4;
-        let end = at
-            .checked_add(len)
-            .filter(|&e| e <= bytes.len())
-            .ok_or_else(|| {
-                malformed(
-                    file,
-                    kind,
-                    at as u64,
-                    format!(
-                        "texture {k}: {len} bytes of texels, only {} left",
-                        bytes.len() - at
-                    ),
-                )
-            })?;
+        let end = data_end(
+            file,
+            kind,
+            &bytes,
+            at,
+            len,
+            || format!("texture {k}"),
+            "texels",
+        )?;
         textures.push(AlbedoTexture {
             width: r.width,
             height: r.height,
@@ -205,14 +200,7 @@ pub(crate) fn decode(
         });
         at = end;
     }
-    if at != bytes.len() {
-        return Err(malformed(
-            file,
-            kind,
-            at as u64,
-            format!("{} trailing bytes after the texels", bytes.len() - at),
-        ));
-    }
+    no_trailing_bytes(file, kind, &bytes, at, "texels")?;
     // 2. Texture coordinates.
     let kind = SectionKind::TEXCOORDS;
     let bytes = pack.section(kind)?;
@@ -245,21 +233,8 @@ pub(crate) fn decode(
             ));
         };
         let len = vertex_counts[r.model as usize] as usize * 8;
-        let end = at
-            .checked_add(len)
-            .filter(|&e| e <= bytes.len())
-            .ok_or_else(|| {
-                malformed(
-                    file,
-                    kind,
-                    at as u64,
-                    format!(
-                        "model {}: {len} bytes of texture coordinates, only {} left",
-                        r.model,
-                        bytes.len() - at
-                    ),
-                )
-            })?;
+        let owner = || format!("model {}", r.model);
+        let end = data_end(file, kind, &bytes, at, len, owner, "texture coordinates")?;
         let uvs: Vec<[f32; 2]> = bytes[at..end]
             .chunks_exact(8)
             .map(bytemuck::pod_read_unaligned::<[f32; 2]>)
@@ -281,18 +256,54 @@ pub(crate) fn decode(
         });
         at = end;
     }
-    if at != bytes.len() {
-        return Err(malformed(
-            file,
-            kind,
-            at as u64,
-            format!(
-                "{} trailing bytes after the texture coordinates",
-                bytes.len() - at
-            ),
-        ));
-    }
+    no_trailing_bytes(file, kind, &bytes, at, "texture coordinates")?;
     Ok(out)
+}
+
+/// The end of the `len` bytes of `what` (of `owner()`, e.g. `texture 3`) at `at` in
+/// `bytes`; malformed when they run past the section.
+fn data_end(
+    file: &std::path::Path,
+    kind: SectionKind,
+    bytes: &[u8],
+    at: usize,
+    len: usize,
+    owner: impl FnOnce() -> String,
+    what: &str,
+) -> Result<usize, PackError> {
+    at.checked_add(len)
+        .filter(|&e| e <= bytes.len())
+        .ok_or_else(|| {
+            malformed(
+                file,
+                kind,
+                at as u64,
+                format!(
+                    "{}: {len} bytes of {what}, only {} left",
+                    owner(),
+                    bytes.len() - at
+                ),
+            )
+        })
+}
+
+/// Malformed when bytes follow the `what` that end at `at`.
+fn no_trailing_bytes(
+    file: &std::path::Path,
+    kind: SectionKind,
+    bytes: &[u8],
+    at: usize,
+    what: &str,
+) -> Result<(), PackError> {
+    if at == bytes.len() {
+        return Ok(());
+    }
+    Err(malformed(
+        file,
+        kind,
+        at as u64,
+        format!("{} trailing bytes after the {what}", bytes.len() - at),
+    ))
 }
 
 /// `(count, end of the record table)` of a section starting with `u32 count, u32

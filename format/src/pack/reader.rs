@@ -49,16 +49,18 @@ pub struct PackScan {
 pub fn scan(bytes: &[u8], file: &Path) -> Result<PackScan, PackError> {
     let f = || file.to_path_buf();
     let found = bytes.len() as u64;
+    // Bytes `start..end` of the file, or `Truncated` naming `what`.
+    let take = |start: usize, end: usize, what: &'static str| {
+        bytes.get(start..end).ok_or_else(|| PackError::Truncated {
+            file: f(),
+            what,
+            needed: end as u64,
+            found,
+        })
+    };
     // 1. Magic, file kind and version come first, so that a future version with a
     //    different header layout still gets a clear FutureVersion error.
-    let Some(magic) = bytes.get(0..8) else {
-        return Err(PackError::Truncated {
-            file: f(),
-            what: "magic",
-            needed: 8,
-            found,
-        });
-    };
+    let magic = take(0, 8, "magic")?;
     if magic != MAGIC {
         let mut m = [0u8; 8];
         m.copy_from_slice(magic);
@@ -67,14 +69,7 @@ pub fn scan(bytes: &[u8], file: &Path) -> Result<PackScan, PackError> {
             found: m,
         });
     }
-    let Some(kv) = bytes.get(8..16) else {
-        return Err(PackError::Truncated {
-            file: f(),
-            what: "file kind and version",
-            needed: 16,
-            found,
-        });
-    };
+    let kv = take(8, 16, "file kind and version")?;
     let raw_kind = u32::from_le_bytes([kv[0], kv[1], kv[2], kv[3]]);
     let version = u32::from_le_bytes([kv[4], kv[5], kv[6], kv[7]]);
     let file_kind = FileKind::from_u32(raw_kind).ok_or(PackError::UnknownFileKind {
@@ -103,14 +98,7 @@ pub fn scan(bytes: &[u8], file: &Path) -> Result<PackScan, PackError> {
     }
 
     // 2. The v1 header.
-    let Some(hb) = bytes.get(..HEADER_SIZE) else {
-        return Err(PackError::Truncated {
-            file: f(),
-            what: "header",
-            needed: HEADER_SIZE as u64,
-            found,
-        });
-    };
+    let hb = take(0, HEADER_SIZE, "header")?;
     let header: Header = bytemuck::pod_read_unaligned(hb);
     let bad =
         |field: &'static str, offset: u64, expected: String, found: String| PackError::BadHeader {
@@ -138,14 +126,7 @@ pub fn scan(bytes: &[u8], file: &Path) -> Result<PackScan, PackError> {
     }
     let table_len = header.section_count as usize * ENTRY_SIZE;
     let table_end = HEADER_SIZE + table_len;
-    let Some(table) = bytes.get(HEADER_SIZE..table_end) else {
-        return Err(PackError::Truncated {
-            file: f(),
-            what: "section table",
-            needed: table_end as u64,
-            found,
-        });
-    };
+    let table = take(HEADER_SIZE, table_end, "section table")?;
     let expected_sum = header_checksum(&hb[..HEADER_CHECKED_LEN], table);
     if expected_sum != header.header_checksum {
         return Err(PackError::HeaderChecksum {
