@@ -9,8 +9,9 @@
 //! - [`stream`]: current cell, prefetch thread, timestamped priority queue, FIFO
 //!   texture uploads under a per-frame budget, LRU eviction.
 //! - [`frame`]: draw lists of configurations A (`full`), B (`frustum`), C (`hybrid`).
-//! - [`grid`]: the worker's hex-grid layout, replicated (the player never links the
-//!   worker); [`camera`]: camera, frustum culling.
+//! - [`grid`]: the current cell, on `format::grid::HexGrid` (the worker's own
+//!   layout, from `format`: the player never links the worker); [`camera`]: camera,
+//!   frustum culling.
 //! - [`lod`]: the distance-LOD baseline (`--mode lod`, issue 8): meshoptimizer
 //!   chains per model, level chosen by projected pixel error.
 //! - [`metrics`]: PSNR on luminance and SSIM, over whole frames and over object

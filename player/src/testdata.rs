@@ -326,6 +326,22 @@ pub fn write_synthetic_bake_with(
     })
 }
 
+/// A centre for [`write_quad_bake`]'s quad and a 64 × 64 capture of it from 20 units
+/// in front (+z), 40° high: the projective-texture tests' setting.
+pub fn quad_in_front() -> (Vec3, Camera) {
+    let centre = Vec3::new(50.0, 6.0, 50.0);
+    let capture = Camera {
+        eye: Vec3::new(50.0, 6.0, 70.0),
+        dir: Vec3::NEG_Z,
+        fov_y_deg: 40.0,
+        width: 64,
+        height: 64,
+        near: 0.5,
+        far: 100.0,
+    };
+    (centre, capture)
+}
+
 /// A one-object bake: a 10 × 10 quad facing +z centred at `centre`, grey, drawn in
 /// every cell as an SvMesh proxy textured by `texture` captured with `capture`; the
 /// ground is 100 × 100 with 50-unit cells.

@@ -1,5 +1,5 @@
-//! The player's current-cell lookup replicates worker::grid::HexGrid (odd-q flat-top
-//! layout, DESIGN.md "Hex grid"): hand values on the demo park's grid.
+//! The player's current-cell lookup is `format::grid::HexGrid`, the worker's own grid
+//! (odd-q flat-top layout, DESIGN.md "Hex grid"): hand values on the demo park's grid.
 
 use format::manifest::CellParams;
 use format::Ground;

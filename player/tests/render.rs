@@ -9,7 +9,7 @@ use player::gpu::{GpuError, Renderer, SKY};
 use player::metrics::psnr_y;
 use player::run::{compare, render, CompareOptions, Player, RenderOptions, CSV_HEADER};
 use player::stream::{PendingDraw, StreamConfig, Streamer};
-use player::testdata::{capture_camera, write_quad_bake, write_synthetic_bake};
+use player::testdata::{capture_camera, quad_in_front, write_quad_bake, write_synthetic_bake};
 
 fn open(dir: &std::path::Path, size: (u32, u32)) -> Option<Player> {
     match Player::open(dir, size) {
@@ -100,16 +100,7 @@ fn every_mode_draws_objects_and_frustum_culling_changes_no_pixel() {
 #[test]
 fn projective_texture_shows_the_capture_with_u_right_and_v_down() {
     let dir = tempfile::tempdir().unwrap();
-    let centre = Vec3::new(50.0, 6.0, 50.0);
-    let capture = Camera {
-        eye: Vec3::new(50.0, 6.0, 70.0),
-        dir: Vec3::NEG_Z,
-        fov_y_deg: 40.0,
-        width: 64,
-        height: 64,
-        near: 0.5,
-        far: 100.0,
-    };
+    let (centre, capture) = quad_in_front();
     // Quadrants: top-left red, top-right green, bottom-left blue, bottom-right yellow.
     let rgba: Vec<u8> = (0..64 * 64)
         .flat_map(|i| {

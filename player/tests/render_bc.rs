@@ -10,7 +10,7 @@ use player::frame::Mode;
 use player::gpu::GpuError;
 use player::run::Player;
 use player::stream::{StreamConfig, Streamer};
-use player::testdata::write_quad_bake;
+use player::testdata::{quad_in_front, write_quad_bake};
 
 fn open(dir: &std::path::Path, size: (u32, u32)) -> Option<Player> {
     match Player::open(dir, size) {
@@ -50,16 +50,7 @@ fn capture_like(opaque: bool) -> Vec<u8> {
 /// frames and the texture bytes uploaded.
 fn frames(tex: &Texture, native: bool) -> Option<(Vec<Vec<u8>>, u64, bool)> {
     let dir = tempfile::tempdir().unwrap();
-    let centre = Vec3::new(50.0, 6.0, 50.0);
-    let capture = Camera {
-        eye: Vec3::new(50.0, 6.0, 70.0),
-        dir: Vec3::NEG_Z,
-        fov_y_deg: 40.0,
-        width: 64,
-        height: 64,
-        near: 0.5,
-        far: 100.0,
-    };
+    let (centre, capture) = quad_in_front();
     write_quad_bake(dir.path(), centre, &capture, tex.clone()).unwrap();
     let mut p = open(dir.path(), (96, 96))?;
     p.renderer.set_native_bc(native);
