@@ -106,14 +106,7 @@ pub fn capture_pictures(
     })?;
 
     // 2. Render the object alone, classify its pixels, weight its vertices.
-    let item = DrawItem {
-        mesh: &model.mesh,
-        transform: inst.transform,
-        tint: inst.tint,
-        object_id: instance,
-        triangles: None,
-        albedo_map: model.albedo_map.as_ref(),
-    };
+    let item = DrawItem::instance(scene, instance);
     let capture = render(&view, &[item], CullMode::Back);
     // The thresholds are on window depth with the near plane at the cell's side face
     // (the paper's capture window), not on the tight frustum's own near/far.

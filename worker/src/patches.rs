@@ -34,7 +34,7 @@ use format::patch_visibility::{
     select_patches, ModelPatchView, PatchBounds, PatchTests, SamplingSphere,
 };
 use format::Mesh;
-use glam::{DVec3, Mat4, Vec3};
+use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 use std::cmp::Reverse;
 use std::collections::{BTreeSet, BinaryHeap};
@@ -372,14 +372,7 @@ fn sample_bits(
     let samples = dirs * preset.shell_radius.len();
     let words = samples.div_ceil(32);
     let mut bits = vec![0u32; patch_count * words];
-    let item = DrawItem {
-        mesh,
-        transform: Mat4::IDENTITY,
-        tint: Vec3::ONE,
-        object_id: 0,
-        triangles: None,
-        albedo_map: None,
-    };
+    let item = DrawItem::whole(mesh, 0);
     for (shell_index, &shell) in preset.shell_radius.iter().enumerate() {
         for (d, dir) in sphere.directions.iter().enumerate() {
             let s = d + shell_index * dirs;
@@ -501,14 +494,7 @@ pub fn measure_error(
             }
             first = end;
         }
-        let full_item = DrawItem {
-            mesh,
-            transform: Mat4::IDENTITY,
-            tint: Vec3::ONE,
-            object_id: 0,
-            triangles: None,
-            albedo_map: None,
-        };
+        let full_item = DrawItem::whole(mesh, 0);
         let part_item = DrawItem {
             triangles: Some(&chosen),
             ..full_item

@@ -91,11 +91,17 @@ impl<'a> DrawItem<'a> {
     /// views of the scene — `worker render` and the player draw it, so views are not
     /// objects floating in the sky (issue 18); captures of single objects do not.
     pub fn ground(mesh: &'a Mesh) -> DrawItem<'a> {
+        DrawItem::whole(mesh, GROUND_ID)
+    }
+
+    /// All of `mesh` as it stands (identity transform, no tint, vertex albedo only),
+    /// written as `object_id`.
+    pub fn whole(mesh: &'a Mesh, object_id: u32) -> DrawItem<'a> {
         DrawItem {
             mesh,
             transform: Mat4::IDENTITY,
             tint: Vec3::ONE,
-            object_id: GROUND_ID,
+            object_id,
             triangles: None,
             albedo_map: None,
         }

@@ -123,6 +123,21 @@ pub struct Measured {
     pub error_histogram: [u64; 8],
 }
 
+impl Measured {
+    /// Before any view: capped PSNR, SSIM 1, passed.
+    fn unmeasured() -> Measured {
+        Measured {
+            worst_psnr_db: format::metrics::PSNR_CAP,
+            worst_ssim: 1.0,
+            pooled_psnr_db: format::metrics::PSNR_CAP,
+            mean_ssim: 1.0,
+            views: 0,
+            passed: true,
+            error_histogram: [0; 8],
+        }
+    }
+}
+
 /// How a candidate is drawn for measuring.
 pub enum Candidate<'a> {
     /// A layered impostor.
@@ -202,31 +217,12 @@ pub fn measure_against(
     candidate: &Candidate,
     thresholds: &Thresholds,
 ) -> Measured {
-    let mut m = Measured {
-        worst_psnr_db: format::metrics::PSNR_CAP,
-        worst_ssim: 1.0,
-        pooled_psnr_db: format::metrics::PSNR_CAP,
-        mean_ssim: 1.0,
-        views: 0,
-        passed: true,
-        error_histogram: [0; 8],
-    };
+    let mut m = Measured::unmeasured();
     let (mut sse, mut pixels, mut ssim_sum) = (0.0f64, 0usize, 0.0f64);
     for (eye, reference) in references {
         let frame = draw_candidate(&reference.view, candidate, *eye);
         let c = compare(reference, &frame, &mut m.error_histogram);
-        m.views += 1;
-        m.worst_psnr_db = m.worst_psnr_db.min(c.psnr_db);
-        m.worst_ssim = m.worst_ssim.min(c.ssim);
-        sse += c.sq_error;
-        pixels += c.pixels;
-        ssim_sum += c.ssim;
-    }
-    if pixels > 0 {
-        m.pooled_psnr_db = capped_psnr_of_mse(sse / pixels as f64);
-    }
-    if m.views > 0 {
-        m.mean_ssim = ssim_sum / m.views as f64;
+        add_view(&mut m, &c, (&mut sse, &mut pixels, &mut ssim_sum));
     }
     m.passed = m.pooled_psnr_db >= thresholds.psnr_db && m.mean_ssim >= thresholds.ssim;
     m
@@ -265,15 +261,7 @@ pub fn select_among(
     image_res: u32,
     floor: &QualityFloor,
 ) -> (Measured, Option<(usize, Measured)>) {
-    let fresh = || Measured {
-        worst_psnr_db: format::metrics::PSNR_CAP,
-        worst_ssim: 1.0,
-        pooled_psnr_db: format::metrics::PSNR_CAP,
-        mean_ssim: 1.0,
-        views: 0,
-        passed: true,
-        error_histogram: [0; 8],
-    };
+    let fresh = Measured::unmeasured;
     let mut mesh_m = fresh();
     if candidates.is_empty() {
         mesh_m.views = 0;

@@ -241,21 +241,13 @@ pub(crate) fn draw_item(scene: &Scene, instance: u32) -> Result<DrawItem<'_>, Pr
         .instances
         .get(instance as usize)
         .ok_or(ProxyError::NoInstance { instance })?;
-    let model = scene
-        .models
-        .get(inst.model as usize)
-        .ok_or(ProxyError::NoModel {
+    if scene.models.get(inst.model as usize).is_none() {
+        return Err(ProxyError::NoModel {
             instance,
             model: inst.model,
-        })?;
-    Ok(DrawItem {
-        mesh: &model.mesh,
-        transform: inst.transform,
-        tint: inst.tint,
-        object_id: instance,
-        triangles: None,
-        albedo_map: model.albedo_map.as_ref(),
-    })
+        });
+    }
+    Ok(DrawItem::instance(scene, instance))
 }
 
 /// Derives the SVMesh of `instances` (one object, or a cluster) seen from the cell

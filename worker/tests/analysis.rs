@@ -692,14 +692,7 @@ fn cube_vertex_weights() {
     let mesh = box_mesh(Vec3::splat(-10.0), Vec3::splat(10.0));
     let eye = Vec3::new(1.0, 0.9, 0.8).normalize() * 300.0;
     let view = design_view(eye, Vec3::ZERO, 128);
-    let item = DrawItem {
-        mesh: &mesh,
-        transform: Mat4::IDENTITY,
-        tint: Vec3::ONE,
-        object_id: 4,
-        triangles: None,
-        albedo_map: None,
-    };
+    let item = DrawItem::whole(&mesh, 4);
     let capture = ray_cast_capture(&[item], &view, CullMode::None);
     let classes = classify(&capture, 4, DEFAULT_T_C0, DEFAULT_T_C1);
     let states = vertex_states(
@@ -764,14 +757,7 @@ fn hidden_and_outside_front_facing_vertices_weigh_0_05() {
     let mesh = mesh_from(positions, triangles);
 
     let view = design_view(Vec3::new(0.0, 0.0, 300.0), Vec3::ZERO, 256);
-    let item = DrawItem {
-        mesh: &mesh,
-        transform: Mat4::IDENTITY,
-        tint: Vec3::ONE,
-        object_id: 9,
-        triangles: None,
-        albedo_map: None,
-    };
+    let item = DrawItem::whole(&mesh, 9);
     let capture = ray_cast_capture(&[item], &view, CullMode::None);
     let classes = classify(&capture, 9, DEFAULT_T_C0, DEFAULT_T_C1);
     let weights = vertex_weights(
@@ -845,14 +831,7 @@ fn vertex_just_behind_an_occluding_edge_is_hidden() {
     positions.extend(occluder.positions.iter().copied());
     triangles.extend(occluder.triangles.iter().map(|t| t.map(|i| i + base)));
     let mesh = mesh_from(positions, triangles);
-    let item = DrawItem {
-        mesh: &mesh,
-        transform: Mat4::IDENTITY,
-        tint: Vec3::ONE,
-        object_id: 3,
-        triangles: None,
-        albedo_map: None,
-    };
+    let item = DrawItem::whole(&mesh, 3);
     let capture = ray_cast_capture(&[item], &view, CullMode::None);
 
     // Preconditions: the centre vertex's own pixel shows the box, the pixel to its
@@ -893,14 +872,7 @@ fn convex_mesh_front_facing_vertices_are_visible_both_ways() {
         (Vec3::new(170.0, -60.0, 90.0), 320),
     ] {
         let view = design_view(eye, Vec3::ZERO, size);
-        let item = DrawItem {
-            mesh: &mesh,
-            transform: Mat4::IDENTITY,
-            tint: Vec3::ONE,
-            object_id: 2,
-            triangles: None,
-            albedo_map: None,
-        };
+        let item = DrawItem::whole(&mesh, 2);
         let capture = ray_cast_capture(&[item], &view, CullMode::None);
         let tolerance = DepthTolerance::default();
         let front = front_facing_vertices(&mesh, Mat4::IDENTITY, eye);

@@ -175,14 +175,7 @@ fn sphere_mesh(centre: Vec3, r: f32, stacks: u32, slices: u32) -> Mesh {
 }
 
 fn item(mesh: &Mesh, object_id: u32) -> DrawItem<'_> {
-    DrawItem {
-        mesh,
-        transform: Mat4::IDENTITY,
-        tint: Vec3::ONE,
-        object_id,
-        triangles: None,
-        albedo_map: None,
-    }
+    DrawItem::whole(mesh, object_id)
 }
 
 /// A view with an exact pixel mapping: eye at the origin looking down −z, a 90°

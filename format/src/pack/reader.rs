@@ -441,6 +441,16 @@ impl PackFile {
         self.scan.sections.iter().find(|s| s.kind == kind)
     }
 
+    /// The section table entry of `kind`, or `MissingSection`.
+    fn required_section_info(&self, kind: SectionKind) -> Result<SectionInfo, PackError> {
+        self.section_info(kind)
+            .copied()
+            .ok_or_else(|| PackError::MissingSection {
+                file: self.file.clone(),
+                section: kind,
+            })
+    }
+
     fn stored(&self, s: &SectionInfo) -> &[u8] {
         // In bounds: checked by `scan` against the same bytes.
         self.bytes()
@@ -472,12 +482,7 @@ impl PackFile {
     /// A section's decoded content: borrowed for raw sections, decompressed now for
     /// compressed ones (nothing is decompressed until asked for).
     pub fn section(&self, kind: SectionKind) -> Result<Cow<'_, [u8]>, PackError> {
-        let s = *self
-            .section_info(kind)
-            .ok_or_else(|| PackError::MissingSection {
-                file: self.file.clone(),
-                section: kind,
-            })?;
+        let s = self.required_section_info(kind)?;
         let stored = self.stored(&s);
         match s.codec {
             Codec::Raw => Ok(Cow::Borrowed(stored)),
@@ -495,12 +500,7 @@ impl PackFile {
     /// Zero-copy typed view of a raw section: `Ok(Some(slice))` when the section is
     /// stored raw, `Ok(None)` when it is compressed (use [`PackFile::section_vec`]).
     pub fn raw_slice<T: Pod>(&self, kind: SectionKind) -> Result<Option<&[T]>, PackError> {
-        let s = *self
-            .section_info(kind)
-            .ok_or_else(|| PackError::MissingSection {
-                file: self.file.clone(),
-                section: kind,
-            })?;
+        let s = self.required_section_info(kind)?;
         if s.codec != Codec::Raw {
             return Ok(None);
         }
