@@ -100,20 +100,11 @@ pub(crate) fn parse(path: &Path, bytes: &[u8]) -> Result<Parsed, LoadError> {
             .map_err(|_| err("too many vertices".into(), Location::Unknown))?;
         raw.positions.extend_from_slice(&p.positions);
         if let Some(colors) = &mut raw.colors {
-            for i in 0..p.positions.len() {
-                let c = p
-                    .colors
-                    .as_ref()
-                    .and_then(|c| c.get(i))
-                    .copied()
-                    .unwrap_or([1.0; 4]);
-                colors.push([
-                    linear_to_srgb_powf(c[0] * p.factor[0]),
-                    linear_to_srgb_powf(c[1] * p.factor[1]),
-                    linear_to_srgb_powf(c[2] * p.factor[2]),
-                    255,
-                ]);
-            }
+            colors.extend(vertex_srgb8(
+                p.colors.as_deref(),
+                p.factor,
+                p.positions.len(),
+            ));
         }
         raw.triangles.extend(
             p.triangles
@@ -261,6 +252,25 @@ pub(super) fn open_triangle_primitive<'a, 's>(
         .ok_or_else(|| err("no POSITION attribute".into()))?
         .collect();
     Ok(Some((mode, reader, positions)))
+}
+
+/// The sRGB8 colours of a primitive's `n` vertices: `COLOR_0` (`colors`; white
+/// where absent) × the base colour `factor`, both linear; alpha 255. Shared by the
+/// model loader and the scene loader (`gltf_scene.rs`).
+pub(super) fn vertex_srgb8(
+    colors: Option<&[[f32; 4]]>,
+    factor: [f32; 4],
+    n: usize,
+) -> impl Iterator<Item = [u8; 4]> + '_ {
+    (0..n).map(move |i| {
+        let c = colors.and_then(|c| c.get(i)).copied().unwrap_or([1.0; 4]);
+        [
+            linear_to_srgb_powf(c[0] * factor[0]),
+            linear_to_srgb_powf(c[1] * factor[1]),
+            linear_to_srgb_powf(c[2] * factor[2]),
+            255,
+        ]
+    })
 }
 
 /// One primitive in world space; `None` for points and lines.

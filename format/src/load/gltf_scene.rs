@@ -39,13 +39,13 @@
 //! nothing is normalised. Cameras, lights and animations are not read.
 
 use super::gltf::{
-    open_document, open_triangle_primitive, primitive_error, primitive_triangles, walk_nodes,
+    open_document, open_triangle_primitive, primitive_error, primitive_triangles, vertex_srgb8,
+    walk_nodes,
 };
 use super::{parse_error, LoadError, Location, ModelFormat};
 use crate::albedo::{AlbedoMap, AlbedoTexture, Wrap, MAX_TEXTURE_SIDE};
 use crate::cleanup::{finish_mesh_with_uvs, RawMesh};
 use crate::mesh::Mesh;
-use crate::srgb::linear_to_srgb_powf;
 use glam::{Mat3, Mat4};
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -271,11 +271,7 @@ fn parse_scene(path: &Path, bytes: &[u8], options: GltfOptions) -> Result<GltfSc
             // Groups in order of first appearance among the primitives.
             let mut groups: Vec<(Option<usize>, Vec<gltf::Primitive>)> = Vec::new();
             for p in mesh.primitives() {
-                let texture = p
-                    .material()
-                    .pbr_metallic_roughness()
-                    .base_color_texture()
-                    .map(|t| t.texture().index());
+                let texture = base_color_texture(&p);
                 match groups.iter_mut().find(|(t, _)| *t == texture) {
                     Some((_, prims)) => prims.push(p),
                     None => groups.push((texture, vec![p])),
@@ -386,11 +382,7 @@ fn place_group(
         let affine = Mat4::from_mat3(baked) * local;
         let linear = Mat3::from_mat4(affine);
         for p in mesh.primitives() {
-            let texture = p
-                .material()
-                .pbr_metallic_roughness()
-                .base_color_texture()
-                .map(|t| t.texture().index());
+            let texture = base_color_texture(&p);
             let slot = match by_texture.iter().position(|(t, _)| *t == texture) {
                 Some(i) => i,
                 None => {
@@ -441,6 +433,16 @@ fn place_group(
         }
     }
     Ok(())
+}
+
+/// The texture index of a primitive's base colour, if it has one (a mesh's models
+/// are split by it).
+fn base_color_texture(primitive: &gltf::Primitive) -> Option<usize> {
+    primitive
+        .material()
+        .pbr_metallic_roughness()
+        .base_color_texture()
+        .map(|t| t.texture().index())
 }
 
 /// The name of a model: `name` (the mesh's, or a group's parent node's), else
@@ -612,21 +614,7 @@ fn read_scene_primitive(
     let factor = pbr.base_color_factor();
     let colors_f: Option<Vec<[f32; 4]>> =
         reader.read_colors(0).map(|c| c.into_rgba_f32().collect());
-    let colors: Vec<[u8; 4]> = (0..n)
-        .map(|i| {
-            let c = colors_f
-                .as_ref()
-                .and_then(|c| c.get(i))
-                .copied()
-                .unwrap_or([1.0; 4]);
-            [
-                linear_to_srgb_powf(c[0] * factor[0]),
-                linear_to_srgb_powf(c[1] * factor[1]),
-                linear_to_srgb_powf(c[2] * factor[2]),
-                255,
-            ]
-        })
-        .collect();
+    let colors: Vec<[u8; 4]> = vertex_srgb8(colors_f.as_deref(), factor, n).collect();
     let uvs = if textured {
         let set = pbr.base_color_texture().map_or(0, |t| t.tex_coord());
         let uvs: Vec<[f32; 2]> = reader
