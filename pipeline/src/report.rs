@@ -385,46 +385,37 @@ fn quality_section(m: &mut String, r: &Report) {
 fn averages_table(m: &mut String, t: &PaperTable) {
     use std::fmt::Write;
     let _ = writeln!(m, "| statistic | value |\n|---|---|");
+    // (statistic, value, decimals); the simplification ratio reads "1:x".
     let rows = [
         (
             "Avg. polygon no. inside a viewcell",
-            format!("{:.0}", t.polygons_inside_a_cell),
+            t.polygons_inside_a_cell,
+            0,
         ),
         (
             "Avg. percentage of SVMeshes from clustered objects (%)",
-            format!("{:.1}", t.sv_clustered_percent),
+            t.sv_clustered_percent,
+            1,
         ),
         (
             "Avg. percentage of SVMeshes from single objects (%)",
-            format!("{:.1}", t.sv_single_percent),
+            t.sv_single_percent,
+            1,
         ),
-        (
-            "Avg. percentage of MVMeshes (%)",
-            format!("{:.1}", t.mv_percent),
-        ),
-        (
-            "Avg. percentage of culled objects (%)",
-            format!("{:.1}", t.culled_percent),
-        ),
+        ("Avg. percentage of MVMeshes (%)", t.mv_percent, 1),
+        ("Avg. percentage of culled objects (%)", t.culled_percent, 1),
         (
             "Avg. polygon no. for SVMesh & MVMesh",
-            format!("{:.0}", t.polygons_sv_and_mv),
+            t.polygons_sv_and_mv,
+            0,
         ),
-        (
-            "Avg. polygon no. for a viewcell",
-            format!("{:.0}", t.polygons_for_a_cell),
-        ),
-        (
-            "Simplified:original",
-            format!("1:{:.1}", t.simplified_to_original),
-        ),
-        (
-            "Avg. texture size per cell (KB)",
-            format!("{:.1}", t.texture_kb),
-        ),
+        ("Avg. polygon no. for a viewcell", t.polygons_for_a_cell, 0),
+        ("Simplified:original", t.simplified_to_original, 1),
+        ("Avg. texture size per cell (KB)", t.texture_kb, 1),
     ];
-    for (k, v) in rows {
-        let _ = writeln!(m, "| {k} | {v} |");
+    for (k, v, decimals) in rows {
+        let ratio = if k == "Simplified:original" { "1:" } else { "" };
+        let _ = writeln!(m, "| {k} | {ratio}{v:.decimals$} |");
     }
 }
 

@@ -17,6 +17,14 @@ mod common;
 use common::*;
 use format::pack::{CellPack, Index, ProxyKind};
 
+/// `pipeline export OUT --cell CELL -o GLB EXTRA…`.
+fn export(out: &str, cell: u32, glb: &Path, extra: &[&str]) -> Output {
+    let cell = cell.to_string();
+    let mut args = vec!["export", out, "--cell", &cell, "-o", glb.to_str().unwrap()];
+    args.extend_from_slice(extra);
+    pipeline(&args)
+}
+
 /// The validator's runner, or why it cannot run.
 fn validator() -> Result<PathBuf, String> {
     let script = repo().join("tools/gltf-validate.mjs");
@@ -54,10 +62,9 @@ fn exported_demo_cell_passes_the_khronos_gltf_validator() {
     let out = dir.path().join("demo");
     let out_s = out.to_str().unwrap();
     let glb = dir.path().join("cell.glb");
-    let glb_s = glb.to_str().unwrap();
 
     // Bad input, before there is a bake: a clear message and exit 2.
-    let o = pipeline(&["export", out_s, "--cell", "0", "-o", glb_s]);
+    let o = export(out_s, 0, &glb, &[]);
     assert_bad_input(&o, &["no such bake directory"]);
 
     let o = pipeline(&[
@@ -69,31 +76,16 @@ fn exported_demo_cell_passes_the_khronos_gltf_validator() {
     ]);
     assert!(o.status.success(), "{}", text(&o));
 
-    let o = pipeline(&["export", out_s, "--cell", "100000", "-o", glb_s]);
+    let o = export(out_s, 100000, &glb, &[]);
     assert_bad_input(&o, &["--cell 100000", "cells"]);
     let nowhere = dir.path().join("no/such/folder/cell.glb");
-    let o = pipeline(&[
-        "export",
-        out_s,
-        "--cell",
-        "0",
-        "-o",
-        nowhere.to_str().unwrap(),
-    ]);
+    let o = export(out_s, 0, &nowhere, &[]);
     assert_bad_input(&o, &["does not exist"]);
 
     // The export of a cell with every kind of representation.
     let cell = cell_with_every_kind(&out)
         .expect("the demo bake has a cell with originals, SV, MV and cluster proxies");
-    let o = pipeline(&[
-        "export",
-        out_s,
-        "--cell",
-        &cell.to_string(),
-        "-o",
-        glb_s,
-        "--json",
-    ]);
+    let o = export(out_s, cell, &glb, &["--json"]);
     assert!(o.status.success(), "{}", text(&o));
     let summary: serde_json::Value = serde_json::from_slice(&o.stdout).expect("JSON summary");
     eprintln!("export of cell {cell}: {summary}");
@@ -185,14 +177,7 @@ fn exported_cell_of_a_textured_gltf_scene_carries_the_model_textures() {
         .expect("a cell holds a textured original")
         .cell_id;
     let glb = dir.path().join("cell.glb");
-    let o = pipeline(&[
-        "export",
-        out_s,
-        "--cell",
-        &cell.to_string(),
-        "-o",
-        glb.to_str().unwrap(),
-    ]);
+    let o = export(out_s, cell, &glb, &[]);
     assert!(o.status.success(), "{}", text(&o));
     let doc = gltf::Gltf::from_slice(&std::fs::read(&glb).unwrap()).expect("a GLB gltf reads");
     let textured_original = doc
@@ -262,15 +247,7 @@ fn exported_cell_of_the_textured_plaza_passes_the_khronos_gltf_validator() {
             .is_some()
     }));
     let glb = dir.path().join("plaza-cell.glb");
-    let o = pipeline(&[
-        "export",
-        out_s,
-        "--cell",
-        &cell.to_string(),
-        "-o",
-        glb.to_str().unwrap(),
-        "--json",
-    ]);
+    let o = export(out_s, cell, &glb, &["--json"]);
     assert!(o.status.success(), "{}", text(&o));
     let summary: serde_json::Value = serde_json::from_slice(&o.stdout).expect("JSON summary");
     eprintln!("export of textured plaza cell {cell}: {summary}");
