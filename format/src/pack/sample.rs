@@ -575,6 +575,29 @@ pub fn synthetic_cell(
     }
 }
 
+/// One fuzz input for a pack reader (the `fuzz/` targets of the base, cell and index
+/// packs): `read` of `bytes` as they are, every section of them decoded, `read` of
+/// them resealed ([`reseal`]) and of a structure-aware edit ([`mutate_decoded`], an
+/// edit picked by a hash of the bytes). Results are dropped: a panic is the bug.
+pub fn exercise_reader<T, E>(bytes: &[u8], read: impl Fn(&[u8]) -> Result<T, E>) {
+    let _ = read(bytes);
+    if let Ok(pack) = super::PackFile::from_bytes(bytes) {
+        for s in pack.sections() {
+            let _ = pack.section(s.kind);
+        }
+    }
+    let mut resealed = bytes.to_vec();
+    if reseal(&mut resealed) {
+        let _ = read(&resealed);
+    }
+    let pick = bytes
+        .iter()
+        .fold(0u64, |h, &b| h.rotate_left(5) ^ u64::from(b));
+    if let Some(edited) = mutate_decoded(bytes, pick) {
+        let _ = read(&edited);
+    }
+}
+
 /// Recomputes, in place, every section checksum and the header checksum of `bytes`
 /// wherever the header and table are readable enough to locate them; returns whether
 /// anything could be resealed. For fuzzers and tests only: it lets a mutated pack get
