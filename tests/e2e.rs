@@ -608,6 +608,39 @@ fn open_player(dir: &Path, size: (u32, u32)) -> Option<player::run::Player> {
     }
 }
 
+/// The CPU rasterizer's render of `scene` and the player's full-geometry frame of
+/// its bake from `eye` towards `target` (60° high, `size`², near 0.25, far the
+/// bake's extent; both draw the ground, issue 18) as RGBA8 bytes, and the pixels the
+/// CPU render covers.
+fn cpu_and_gpu_frames(
+    p: &mut player::run::Player,
+    scene: &format::Scene,
+    eye: glam::Vec3,
+    target: glam::Vec3,
+    size: u32,
+) -> (Vec<u8>, Vec<u8>, usize) {
+    let far = p.bake.extent;
+    let view =
+        worker::raster::View::look_at_fov(eye, target, glam::Vec3::Y, 60.0, size, size, 0.25, far)
+            .unwrap();
+    let ground = scene.ground.mesh();
+    let items = worker::raster::DrawItem::scene_with_ground(scene, &ground);
+    let cap = worker::raster::render(&view, &items, worker::raster::CullMode::Back);
+    let cpu: Vec<u8> = cap.color.iter().flatten().copied().collect();
+    let cam = player::camera::Camera {
+        eye,
+        dir: target - eye,
+        fov_y_deg: 60.0,
+        width: size,
+        height: size,
+        near: 0.25,
+        far,
+    };
+    p.draw(&cam, player::frame::Mode::Full, None);
+    let gpu = p.renderer.read_pixels().unwrap();
+    (cpu, gpu, cap.covered_pixels())
+}
+
 /// The player's full-geometry frame and the CPU rasterizer's capture of the same
 /// view agree (PSNR(Y) ≥ 40 dB): one shading formula on both paths (DESIGN.md).
 #[test]
@@ -625,28 +658,9 @@ fn player_renders_like_the_cpu_rasterizer() {
         (Vec3::new(30.0, 6.0, 40.0), Vec3::new(150.0, 6.0, 120.0)),
         (Vec3::new(200.0, 10.0, 20.0), Vec3::new(150.0, 3.0, 200.0)),
     ];
-    for (k, (eye, target)) in views.iter().enumerate() {
-        let far = p.bake.extent;
-        let view =
-            worker::raster::View::look_at_fov(*eye, *target, Vec3::Y, 60.0, 256, 256, 0.25, far)
-                .unwrap();
-        let ground = scene.ground.mesh();
-        let items = worker::raster::DrawItem::scene_with_ground(&scene, &ground);
-        // Both renderers draw the ground (issue 18).
-        let cap = worker::raster::render(&view, &items, worker::raster::CullMode::Back);
-        assert!(cap.covered_pixels() > 500, "view {k} shows objects");
-        let cpu: Vec<u8> = cap.color.iter().flatten().copied().collect();
-        let cam = player::camera::Camera {
-            eye: *eye,
-            dir: *target - *eye,
-            fov_y_deg: 60.0,
-            width: 256,
-            height: 256,
-            near: 0.25,
-            far,
-        };
-        p.draw(&cam, player::frame::Mode::Full, None);
-        let gpu = p.renderer.read_pixels().unwrap();
+    for (k, &(eye, target)) in views.iter().enumerate() {
+        let (cpu, gpu, covered) = cpu_and_gpu_frames(&mut p, &scene, eye, target, 256);
+        assert!(covered > 500, "view {k} shows objects");
         let psnr = player::metrics::psnr_y(&cpu, &gpu);
         eprintln!("view {k}: CPU vs GPU PSNR(Y) {psnr:.2} dB");
         assert!(psnr >= 40.0, "view {k}: {psnr:.2} dB");
@@ -694,27 +708,9 @@ fn textured_gltf_scene_bakes_and_renders_alike_on_cpu_and_gpu() {
         (Vec3::new(-8.0, 2.0, 5.0), Vec3::new(-4.0, 1.0, 0.0)),
         (Vec3::new(7.0, 5.0, -6.0), Vec3::new(3.0, 0.5, 0.5)),
     ];
-    for (k, (eye, target)) in views.iter().enumerate() {
-        let far = p.bake.extent;
-        let view =
-            worker::raster::View::look_at_fov(*eye, *target, Vec3::Y, 60.0, 192, 192, 0.25, far)
-                .unwrap();
-        let ground = scene.ground.mesh();
-        let items = worker::raster::DrawItem::scene_with_ground(&scene, &ground);
-        let cap = worker::raster::render(&view, &items, worker::raster::CullMode::Back);
-        assert!(cap.covered_pixels() > 2000, "view {k} shows the crates");
-        let cpu: Vec<u8> = cap.color.iter().flatten().copied().collect();
-        let cam = player::camera::Camera {
-            eye: *eye,
-            dir: *target - *eye,
-            fov_y_deg: 60.0,
-            width: 192,
-            height: 192,
-            near: 0.25,
-            far,
-        };
-        p.draw(&cam, player::frame::Mode::Full, None);
-        let gpu = p.renderer.read_pixels().unwrap();
+    for (k, &(eye, target)) in views.iter().enumerate() {
+        let (cpu, gpu, covered) = cpu_and_gpu_frames(&mut p, &scene, eye, target, 192);
+        assert!(covered > 2000, "view {k} shows the crates");
         for (name, rgba) in [("cpu", &cpu), ("gpu", &gpu)] {
             worker::picture::write_rgba(
                 &pictures.join(format!("view{k}-{name}.png")),
