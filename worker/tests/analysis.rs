@@ -726,12 +726,9 @@ fn cube_vertex_weights() {
     assert_eq!(weights, vec![0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.25]);
 }
 
-/// A grid facing the eye with a box of the same object in front of its middle: the
-/// middle vertex is front-facing but hidden (0.05); so is a vertex outside the window.
-/// The ray oracle agrees.
-#[test]
-fn hidden_and_outside_front_facing_vertices_weigh_0_05() {
-    // 3×3 grid in the plane z = 0, spacing 20, facing +z; then an occluder box.
+/// A 3×3 vertex grid in the plane z = 0 (spacing 20, centred, facing +z), then the
+/// box `lo`..`hi` ([`box_mesh`]) in the same vertex and triangle lists.
+fn grid_and_box(lo: Vec3, hi: Vec3) -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
     let mut positions = Vec::new();
     for j in 0..3 {
         for i in 0..3 {
@@ -746,10 +743,21 @@ fn hidden_and_outside_front_facing_vertices_weigh_0_05() {
             triangles.push([a, a + 4, a + 3]);
         }
     }
-    let occluder = box_mesh(Vec3::new(-5.0, -5.0, 20.0), Vec3::new(5.0, 5.0, 30.0));
+    let occluder = box_mesh(lo, hi);
     let base = positions.len() as u32;
     positions.extend(occluder.positions.iter().copied());
     triangles.extend(occluder.triangles.iter().map(|t| t.map(|i| i + base)));
+    (positions, triangles)
+}
+
+/// A grid facing the eye with a box of the same object in front of its middle: the
+/// middle vertex is front-facing but hidden (0.05); so is a vertex outside the window.
+/// The ray oracle agrees.
+#[test]
+fn hidden_and_outside_front_facing_vertices_weigh_0_05() {
+    // 3×3 grid in the plane z = 0, spacing 20, facing +z; then an occluder box.
+    let (mut positions, mut triangles) =
+        grid_and_box(Vec3::new(-5.0, -5.0, 20.0), Vec3::new(5.0, 5.0, 30.0));
     // A far-off vertex with its own front-facing triangle, outside the window.
     let off = positions.len() as u32;
     positions.extend([[500.0, 0.0, 0.0], [520.0, 0.0, 0.0], [500.0, 20.0, 0.0]]);
@@ -794,6 +802,7 @@ fn hidden_and_outside_front_facing_vertices_weigh_0_05() {
     }
     // The occluder's front corners are visible both ways, its back corners not (their
     // triangles face away; the rays pass through the box's front face).
+    let base = 9; // the occluder's first vertex, after the grid's
     for v in 0..8u32 {
         let z_front = v & 4 != 0;
         assert_eq!(rays[(base + v) as usize], z_front, "occluder vertex {v}");
@@ -812,24 +821,8 @@ fn vertex_just_behind_an_occluding_edge_is_hidden() {
     let view = design_view(eye, Vec3::ZERO, 256);
     let footprint = worker::visibility::pixel_footprint(&view, 300.0);
     let edge_x = 0.7 * footprint * 270.0 / 300.0; // box front face at depth 270
-    let mut positions = Vec::new();
-    for j in 0..3 {
-        for i in 0..3 {
-            positions.push([-20.0 + 20.0 * i as f32, -20.0 + 20.0 * j as f32, 0.0]);
-        }
-    }
-    let mut triangles = Vec::new();
-    for j in 0..2u32 {
-        for i in 0..2u32 {
-            let a = j * 3 + i;
-            triangles.push([a, a + 1, a + 4]);
-            triangles.push([a, a + 4, a + 3]);
-        }
-    }
-    let occluder = box_mesh(Vec3::new(-30.0, -30.0, 20.0), Vec3::new(edge_x, 30.0, 30.0));
-    let base = positions.len() as u32;
-    positions.extend(occluder.positions.iter().copied());
-    triangles.extend(occluder.triangles.iter().map(|t| t.map(|i| i + base)));
+    let (positions, triangles) =
+        grid_and_box(Vec3::new(-30.0, -30.0, 20.0), Vec3::new(edge_x, 30.0, 30.0));
     let mesh = mesh_from(positions, triangles);
     let item = DrawItem::whole(&mesh, 3);
     let capture = ray_cast_capture(&[item], &view, CullMode::None);
