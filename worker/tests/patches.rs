@@ -9,7 +9,8 @@ use format::Mesh;
 use glam::Vec3;
 use proptest::prelude::*;
 use worker::patches::{
-    bake_patch_set, measure_error, model_patches, normal_cluster, tile_patches, PatchPreset,
+    bake_patch_set, measure_error, model_patches, normal_cluster, tile_patches, PatchError,
+    PatchPreset,
 };
 
 fn building(variant: u32) -> Mesh {
@@ -26,6 +27,19 @@ fn building(variant: u32) -> Mesh {
         tint_max: [1.0; 3],
     };
     building_mesh(&BuildingStyle::draw(&p, variant))
+}
+
+/// Prints a measurement of `patches` patches as `label: … of triangles drawn, … pixels differ`.
+fn print_error(label: &str, patches: usize, e: &PatchError) {
+    eprintln!(
+        "{label}: {patches} patches, {:.1} % of triangles drawn, {} of {} pixels \
+         differ ({} of {} views)",
+        100.0 * e.triangles_drawn as f64 / e.triangles_full as f64,
+        e.differing_pixels,
+        e.covered_pixels,
+        e.views_with_error,
+        e.views
+    );
 }
 
 fn sphere_mesh() -> Mesh {
@@ -166,16 +180,7 @@ fn error_and_savings_from_random_views() {
             backface: false,
         });
         for (what, e) in [("both", both), ("cones", cones), ("bitfields", bits)] {
-            eprintln!(
-                "{name}: {what}: {} patches, {:.1} % of triangles drawn, {} of {} pixels \
-                 differ ({} of {} views)",
-                model.patches.len(),
-                100.0 * e.triangles_drawn as f64 / e.triangles_full as f64,
-                e.differing_pixels,
-                e.covered_pixels,
-                e.views_with_error,
-                e.views
-            );
+            print_error(&format!("{name}: {what}"), model.patches.len(), &e);
         }
         // The cone test alone is exact: no pixel changes.
         assert_eq!(cones.differing_pixels, 0, "{name}");
@@ -213,16 +218,7 @@ fn error_and_savings_on_real_meshes() {
             },
         ] {
             let e = measure_error(&mesh, model, &set, tests, 100, 128, (1.5, 8.0), 11);
-            eprintln!(
-                "{name}: {tests:?}: {} patches, {:.1} % of triangles drawn, {} of {} pixels \
-                 differ ({} of {} views)",
-                model.patches.len(),
-                100.0 * e.triangles_drawn as f64 / e.triangles_full as f64,
-                e.differing_pixels,
-                e.covered_pixels,
-                e.views_with_error,
-                e.views
-            );
+            print_error(&format!("{name}: {tests:?}"), model.patches.len(), &e);
             assert!(e.triangles_drawn < e.triangles_full);
             if !tests.bitfields {
                 assert_eq!(e.differing_pixels, 0, "{name}");
