@@ -677,19 +677,7 @@ fn player_renders_like_the_cpu_rasterizer() {
 fn textured_gltf_scene_bakes_and_renders_alike_on_cpu_and_gpu() {
     use glam::Vec3;
     let dir = tempfile::tempdir().unwrap();
-    format::load::gltf_sample::write_textured_sample(dir.path()).unwrap();
-    let manifest = dir.path().join("textured.ron");
-    std::fs::write(
-        &manifest,
-        r#"(
-    name: "textured-sample",
-    ground: (min: (-12.0, -10.0), max: (12.0, 10.0)),
-    scene: Gltf("textured-sample.gltf"),
-    cells: (cell_size: 6.0, min_eye_height: 1.5, max_eye_height: 3.0),
-    bake: (image_res: 64),
-)"#,
-    )
-    .unwrap();
+    let manifest = format::load::gltf_sample::write_textured_sample_manifest(dir.path()).unwrap();
     let out = dir.path().join("bake");
     let o = run_manifest(manifest.to_str().unwrap(), &out, &[]);
     assert!(o.status.success(), "{}", stderr(&o));

@@ -144,18 +144,7 @@ fn exported_demo_cell_passes_the_khronos_gltf_validator() {
 #[test]
 fn exported_cell_of_a_textured_gltf_scene_carries_the_model_textures() {
     let dir = tempfile::tempdir().unwrap();
-    format::load::gltf_sample::write_textured_sample(dir.path()).unwrap();
-    let manifest = dir.path().join("textured.ron");
-    std::fs::write(
-        &manifest,
-        r#"(
-    ground: (min: (-12.0, -10.0), max: (12.0, 10.0)),
-    scene: Gltf("textured-sample.gltf"),
-    cells: (cell_size: 6.0, min_eye_height: 1.5, max_eye_height: 3.0),
-    bake: (image_res: 64),
-)"#,
-    )
-    .unwrap();
+    let manifest = format::load::gltf_sample::write_textured_sample_manifest(dir.path()).unwrap();
     let out = dir.path().join("bake");
     let out_s = out.to_str().unwrap();
     let o = pipeline(&["run", manifest.to_str().unwrap(), "--quiet", "--out", out_s]);

@@ -66,6 +66,24 @@ fn cube(lo: [f32; 3], hi: [f32; 3], uv_max: f32) -> (Vec<[f32; 3]>, Vec<[f32; 2]
     (pos, uv, idx)
 }
 
+/// Writes the sample scene and `textured.ron`, a manifest baking it (24 × 20 ground,
+/// 6-unit cells, 64-pixel captures), into `dir`; returns the manifest's path.
+pub fn write_textured_sample_manifest(dir: &Path) -> std::io::Result<PathBuf> {
+    write_textured_sample(dir)?;
+    let manifest = dir.join("textured.ron");
+    std::fs::write(
+        &manifest,
+        r#"(
+    name: "textured-sample",
+    ground: (min: (-12.0, -10.0), max: (12.0, 10.0)),
+    scene: Gltf("textured-sample.gltf"),
+    cells: (cell_size: 6.0, min_eye_height: 1.5, max_eye_height: 3.0),
+    bake: (image_res: 64),
+)"#,
+    )?;
+    Ok(manifest)
+}
+
 /// Writes the sample scene into `dir` (created if missing); returns the `.gltf` path.
 pub fn write_textured_sample(dir: &Path) -> std::io::Result<PathBuf> {
     std::fs::create_dir_all(dir)?;
