@@ -397,7 +397,13 @@ fn encode_bc1_punch_through(texels: &[[u8; 4]; 16]) -> [u8; 8] {
         lo = lo.min(t);
         hi = hi.max(t);
     }
-    let at = |t: f32| [mean[0] + axis[0] * t, mean[1] + axis[1] * t, mean[2] + axis[2] * t];
+    let at = |t: f32| {
+        [
+            mean[0] + axis[0] * t,
+            mean[1] + axis[1] * t,
+            mean[2] + axis[2] * t,
+        ]
+    };
     let mut best = bc1_three_colour_block(texels, at(lo), at(hi));
     // Least-squares refit: minimise Σ |c_i − (w_i·e0 + (1 − w_i)·e1)|² over the
     // covered texels, w ∈ {1, 0, ½} from their indices.
