@@ -345,6 +345,18 @@ pub fn small_index() -> Index {
     }
 }
 
+/// The 13 × 10 capture with coverage of [`small_cell_v2`] and [`small_cell_v4`]: its
+/// background (sky-coloured texels) not covered.
+fn covered_capture_rgba() -> Vec<u8> {
+    let mut covered = capture_like_rgba(13, 10, 11);
+    for t in covered.chunks_exact_mut(4) {
+        if t[..3] == [135, 180, 235] {
+            t[3] = 0;
+        }
+    }
+    covered
+}
+
 /// The content of `tests/data/cell-v2.pack`: [`small_cell`] in far-field group 3, with
 /// a BC3 and a BC1 texture (proxies 0 and 1, view 0).
 pub fn small_cell_v2() -> CellPack {
@@ -354,12 +366,7 @@ pub fn small_cell_v2() -> CellPack {
     };
     // Block-compressed textures (issue 15): a BC3 capture with coverage in alpha
     // (13 × 10 padded to 16 × 12) and an opaque BC1 one (6 × 9 padded to 8 × 12).
-    let mut covered = capture_like_rgba(13, 10, 11);
-    for t in covered.chunks_exact_mut(4) {
-        if t[..3] == [135, 180, 235] {
-            t[3] = 0; // background: not covered
-        }
-    }
+    let covered = covered_capture_rgba();
     cell.proxies[0].views[0].texture =
         Texture::from_rgba8_block(13, 10, &covered).expect("BC3 sample");
     let mut opaque = capture_like_rgba(6, 9, 12);
@@ -376,12 +383,7 @@ pub fn small_cell_v2() -> CellPack {
 /// ([`Texture::from_rgba8_bc1_coverage`]).
 pub fn small_cell_v4() -> CellPack {
     let mut cell = small_cell_v2();
-    let mut covered = capture_like_rgba(13, 10, 11);
-    for t in covered.chunks_exact_mut(4) {
-        if t[..3] == [135, 180, 235] {
-            t[3] = 0; // background: not covered
-        }
-    }
+    let covered = covered_capture_rgba();
     cell.proxies[0].views[0].texture =
         Texture::from_rgba8_bc1_coverage(13, 10, &covered).expect("BC1 coverage sample");
     cell

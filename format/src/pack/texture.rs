@@ -182,15 +182,7 @@ impl Texture {
     /// size is the padded size; texture coordinates must be scaled by
     /// `width / texture.width`, `height / texture.height` (module docs).
     pub fn from_rgba8_block(width: u32, height: u32, rgba: &[u8]) -> Result<Texture, String> {
-        let expected = encoded_len(width, height)?;
-        if rgba.len() != expected {
-            return Err(format!(
-                "{width}x{height} RGBA8 needs {expected} bytes, got {}",
-                rgba.len()
-            ));
-        }
-        let (pw, ph) = block_padded_size(width, height);
-        let padded = pad_edge(width, height, rgba, pw, ph);
+        let (pw, ph, padded) = padded_for_blocks(width, height, rgba)?;
         let opaque = padded.chunks_exact(4).all(|t| t[3] == 255);
         let encoding = if opaque {
             TextureEncoding::Bc1
@@ -214,15 +206,7 @@ impl Texture {
         height: u32,
         rgba: &[u8],
     ) -> Result<Texture, String> {
-        let expected = encoded_len(width, height)?;
-        if rgba.len() != expected {
-            return Err(format!(
-                "{width}x{height} RGBA8 needs {expected} bytes, got {}",
-                rgba.len()
-            ));
-        }
-        let (pw, ph) = block_padded_size(width, height);
-        let padded = pad_edge(width, height, rgba, pw, ph);
+        let (pw, ph, padded) = padded_for_blocks(width, height, rgba)?;
         let mut texture = Texture::from_rgba8(pw, ph, &padded, TextureEncoding::Bc1)?;
         let (w, bw) = (pw as usize, pw as usize / 4);
         for by in 0..ph as usize / 4 {
@@ -311,6 +295,20 @@ impl Texture {
 /// `(width, height)` rounded up to multiples of 4.
 pub fn block_padded_size(width: u32, height: u32) -> (u32, u32) {
     (width.div_ceil(4) * 4, height.div_ceil(4) * 4)
+}
+
+/// Checks that `rgba` holds `width × height` RGBA8 texels and pads it to
+/// [`block_padded_size`] ([`pad_edge`]): the input of both block writers.
+fn padded_for_blocks(width: u32, height: u32, rgba: &[u8]) -> Result<(u32, u32, Vec<u8>), String> {
+    let expected = encoded_len(width, height)?;
+    if rgba.len() != expected {
+        return Err(format!(
+            "{width}x{height} RGBA8 needs {expected} bytes, got {}",
+            rgba.len()
+        ));
+    }
+    let (pw, ph) = block_padded_size(width, height);
+    Ok((pw, ph, pad_edge(width, height, rgba, pw, ph)))
 }
 
 /// `rgba` (`width × height`) padded to `pw × ph` by replicating the last column and row.

@@ -3,7 +3,7 @@
 //! three pipelines, and the shared buffers, sampler and placeholder textures. One
 //! function per object or family, in the order `with_device` calls them.
 
-use super::{albedo_bind_group, shader_source, COLOR_FORMAT, DEPTH_FORMAT};
+use super::{albedo_bind_group, shader_source, texture_2d, COLOR_FORMAT, DEPTH_FORMAT};
 use crate::vertex::{Globals, InstanceRaw, ModelVertex, ProxyVertex, MAX_VIEWS};
 use wgpu::util::DeviceExt;
 
@@ -22,20 +22,7 @@ pub(super) struct Targets {
 /// [`super::Renderer::read_pixels`]) and a `Depth32Float` depth target.
 pub(super) fn targets(device: &wgpu::Device, width: u32, height: u32) -> Targets {
     let target = |label: &str, format, usage| {
-        device.create_texture(&wgpu::TextureDescriptor {
-            label: Some(label),
-            size: wgpu::Extent3d {
-                width,
-                height,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format,
-            usage,
-            view_formats: &[],
-        })
+        device.create_texture(&texture_2d(label, (width, height), format, usage))
     };
     let color = target(
         "color",
@@ -274,20 +261,12 @@ pub(super) fn shared(
     });
     let dummy = device.create_texture_with_data(
         queue,
-        &wgpu::TextureDescriptor {
-            label: Some("no view"),
-            size: wgpu::Extent3d {
-                width: 1,
-                height: 1,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: wgpu::TextureFormat::Rgba8UnormSrgb,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING,
-            view_formats: &[],
-        },
+        &texture_2d(
+            "no view",
+            (1, 1),
+            wgpu::TextureFormat::Rgba8UnormSrgb,
+            wgpu::TextureUsages::TEXTURE_BINDING,
+        ),
         wgpu::util::TextureDataOrder::LayerMajor,
         &[0, 0, 0, 0],
     );
