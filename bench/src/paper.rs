@@ -26,14 +26,36 @@ pub struct SceneName {
     pub paper: String,
 }
 
-/// The scene totals (§4.1, the scenes of Table 2).
-#[derive(Clone, Debug, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct ScenePolygons {
-    pub table: String,
-    pub title: String,
-    pub columns: Vec<String>,
-    pub total: PaperRow,
+/// A paper table whose rows are all numbers: its number, title and column names, then
+/// one [`PaperRow`] field a row, and `rows()`, every row in that order (what
+/// [`PaperTables::parse`] checks against the columns).
+macro_rules! paper_table {
+    (
+        $(#[$attr:meta])*
+        $name:ident { $($(#[$row_attr:meta])* $row:ident,)* }
+    ) => {
+        $(#[$attr])*
+        #[derive(Clone, Debug, PartialEq, Deserialize)]
+        #[serde(deny_unknown_fields)]
+        pub struct $name {
+            pub table: String,
+            pub title: String,
+            pub columns: Vec<String>,
+            $($(#[$row_attr])* pub $row: PaperRow,)*
+        }
+
+        impl $name {
+            /// Every row, in the order of the fields.
+            pub fn rows(&self) -> Vec<&PaperRow> {
+                vec![$(&self.$row),*]
+            }
+        }
+    };
+}
+
+paper_table! {
+    /// The scene totals (§4.1, the scenes of Table 2).
+    ScenePolygons { total, }
 }
 
 /// Tables 3, 4 and 5: one parameter swept on the 4M scene, a column per value.
@@ -76,54 +98,66 @@ impl SweepTable {
             .iter()
             .position(|p| (p - v).abs() < 1e-6)
     }
+
+    /// Every numeric row the table has (not `viewcells`).
+    pub fn rows(&self) -> Vec<&PaperRow> {
+        let optional = [
+            &self.sv_clustered_percent,
+            &self.sv_single_percent,
+            &self.mv_percent,
+        ];
+        let mut rows = vec![&self.parameter];
+        rows.extend(optional.into_iter().flatten());
+        rows.extend([
+            &self.polygons_inside_a_viewcell,
+            &self.polygons_sv_and_mv,
+            &self.polygons_for_a_viewcell,
+            &self.simplified_to_original,
+            &self.fps,
+            &self.psnr_db,
+            &self.polygons_in_frustum,
+        ]);
+        rows
+    }
 }
 
-/// Table 6: configurations A, B, C on the 8M scene.
-#[derive(Clone, Debug, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Table6 {
-    pub table: String,
-    pub title: String,
-    pub columns: Vec<String>,
-    pub polygons: PaperRow,
-    pub frame_time_ms: PaperRow,
-    pub fps: PaperRow,
-    pub speedup: PaperRow,
+paper_table! {
+    /// Table 6: configurations A, B, C on the 8M scene.
+    Table6 {
+        polygons,
+        frame_time_ms,
+        fps,
+        speedup,
+    }
 }
 
-/// Table 7: configuration C on the 2M, 4M and 8M scenes.
-#[derive(Clone, Debug, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Table7 {
-    pub table: String,
-    pub title: String,
-    pub columns: Vec<String>,
-    pub polygons_inside_a_viewcell: PaperRow,
-    pub polygons_sv_and_mv: PaperRow,
-    pub polygons_for_a_viewcell: PaperRow,
-    pub simplified_to_original: PaperRow,
-    pub fps: PaperRow,
-    pub psnr_db: PaperRow,
-    pub texture_kb_in_frustum: PaperRow,
-    pub polygons_in_frustum: PaperRow,
+paper_table! {
+    /// Table 7: configuration C on the 2M, 4M and 8M scenes.
+    Table7 {
+        polygons_inside_a_viewcell,
+        polygons_sv_and_mv,
+        polygons_for_a_viewcell,
+        simplified_to_original,
+        fps,
+        psnr_db,
+        texture_kb_in_frustum,
+        polygons_in_frustum,
+    }
 }
 
-/// Table 8: storage and cell load time on the 2M, 4M and 8M scenes.
-#[derive(Clone, Debug, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Table8 {
-    pub table: String,
-    pub title: String,
-    pub columns: Vec<String>,
-    pub sv_mv_mb: PaperRow,
-    pub textures_mb: PaperRow,
-    pub total_mb: PaperRow,
-    pub original_meshes_mb: PaperRow,
-    pub cell_polygons_kb: PaperRow,
-    pub cell_textures_kb: PaperRow,
-    pub cell_total_kb: PaperRow,
-    pub load_ms_55: PaperRow,
-    pub load_ms_35: PaperRow,
+paper_table! {
+    /// Table 8: storage and cell load time on the 2M, 4M and 8M scenes.
+    Table8 {
+        sv_mv_mb,
+        textures_mb,
+        total_mb,
+        original_meshes_mb,
+        cell_polygons_kb,
+        cell_textures_kb,
+        cell_total_kb,
+        load_ms_55,
+        load_ms_35,
+    }
 }
 
 /// Every number of the paper the tables use.
@@ -164,13 +198,15 @@ impl PaperTables {
         Ok(t)
     }
 
+    /// Every row has one value per column: per column of its own table for Tables
+    /// 3–6, per scene for the scene totals and Tables 7 and 8.
     fn check(&self) -> Result<(), PaperError> {
-        fn rows<T>(
+        fn rows<'a, T: 'a>(
             table: &str,
             columns: usize,
-            rows: &[Option<&PaperRow<T>>],
+            rows: impl IntoIterator<Item = &'a PaperRow<T>>,
         ) -> Result<(), PaperError> {
-            for r in rows.iter().flatten() {
+            for r in rows {
                 if r.values.len() != columns {
                     return Err(PaperError::Columns {
                         table: table.to_string(),
@@ -183,71 +219,19 @@ impl PaperTables {
             Ok(())
         }
         let scenes = self.scenes.len();
-        let p = &self.scene_polygons;
-        rows(&p.table, scenes, &[Some(&p.total)])?;
+        rows(
+            &self.scene_polygons.table,
+            scenes,
+            self.scene_polygons.rows(),
+        )?;
         for t in [&self.table3, &self.table4, &self.table5] {
-            let n = t.columns.len();
-            rows(
-                &t.table,
-                n,
-                &[
-                    Some(&t.parameter),
-                    t.sv_clustered_percent.as_ref(),
-                    t.sv_single_percent.as_ref(),
-                    t.mv_percent.as_ref(),
-                    Some(&t.polygons_inside_a_viewcell),
-                    Some(&t.polygons_sv_and_mv),
-                    Some(&t.polygons_for_a_viewcell),
-                    Some(&t.simplified_to_original),
-                    Some(&t.fps),
-                    Some(&t.psnr_db),
-                    Some(&t.polygons_in_frustum),
-                ],
-            )?;
-            rows(&t.table, n, &[t.viewcells.as_ref()])?;
+            rows(&t.table, t.columns.len(), t.rows())?;
+            rows(&t.table, t.columns.len(), &t.viewcells)?;
         }
         let t = &self.table6;
-        rows(
-            &t.table,
-            t.columns.len(),
-            &[
-                Some(&t.polygons),
-                Some(&t.frame_time_ms),
-                Some(&t.fps),
-                Some(&t.speedup),
-            ],
-        )?;
-        let t = &self.table7;
-        rows(
-            &t.table,
-            scenes,
-            &[
-                Some(&t.polygons_inside_a_viewcell),
-                Some(&t.polygons_sv_and_mv),
-                Some(&t.polygons_for_a_viewcell),
-                Some(&t.simplified_to_original),
-                Some(&t.fps),
-                Some(&t.psnr_db),
-                Some(&t.texture_kb_in_frustum),
-                Some(&t.polygons_in_frustum),
-            ],
-        )?;
-        let t = &self.table8;
-        rows(
-            &t.table,
-            scenes,
-            &[
-                Some(&t.sv_mv_mb),
-                Some(&t.textures_mb),
-                Some(&t.total_mb),
-                Some(&t.original_meshes_mb),
-                Some(&t.cell_polygons_kb),
-                Some(&t.cell_textures_kb),
-                Some(&t.cell_total_kb),
-                Some(&t.load_ms_55),
-                Some(&t.load_ms_35),
-            ],
-        )?;
+        rows(&t.table, t.columns.len(), t.rows())?;
+        rows(&self.table7.table, scenes, self.table7.rows())?;
+        rows(&self.table8.table, scenes, self.table8.rows())?;
         Ok(())
     }
 

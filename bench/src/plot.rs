@@ -5,7 +5,7 @@
 
 use crate::results::CompareReport;
 use pipeline::pixel_font::{draw_text, text_width};
-use tiny_skia::{Color, Paint, PathBuilder, Pixmap, Rect, Stroke, Transform};
+use tiny_skia::{Color, Paint, Path, PathBuilder, Pixmap, Rect, Stroke, Transform};
 
 const W: f32 = 1200.0;
 const PANEL_H: f32 = 230.0;
@@ -239,14 +239,7 @@ fn panel(
             }
         }
         if let Some(path) = pb.finish() {
-            let mut paint = Paint::default();
-            paint.set_color_rgba8(s.colour[0], s.colour[1], s.colour[2], 255);
-            paint.anti_alias = true;
-            let stroke = Stroke {
-                width: 1.5,
-                ..Stroke::default()
-            };
-            pm.stroke_path(&path, &paint, &stroke, Transform::identity(), None);
+            stroke(pm, &path, s.colour, 1.5);
         }
     }
 }
@@ -256,27 +249,25 @@ fn line(pm: &mut Pixmap, x0: f32, y0: f32, x1: f32, y1: f32, c: [u8; 3], width: 
     pb.move_to(x0, y0);
     pb.line_to(x1, y1);
     if let Some(path) = pb.finish() {
-        let mut paint = Paint::default();
-        paint.set_color_rgba8(c[0], c[1], c[2], 255);
-        let stroke = Stroke {
-            width,
-            ..Stroke::default()
-        };
-        pm.stroke_path(&path, &paint, &stroke, Transform::identity(), None);
+        stroke(pm, &path, c, width);
     }
 }
 
 fn stroke_rect(pm: &mut Pixmap, x: f32, y: f32, w: f32, h: f32, c: [u8; 3], width: f32) {
     if let Some(r) = Rect::from_xywh(x, y, w, h) {
-        let path = PathBuilder::from_rect(r);
-        let mut paint = Paint::default();
-        paint.set_color_rgba8(c[0], c[1], c[2], 255);
-        let stroke = Stroke {
-            width,
-            ..Stroke::default()
-        };
-        pm.stroke_path(&path, &paint, &stroke, Transform::identity(), None);
+        stroke(pm, &PathBuilder::from_rect(r), c, width);
     }
+}
+
+/// Strokes `path` in the opaque colour `c`, `width` pixels wide (anti-aliased).
+fn stroke(pm: &mut Pixmap, path: &Path, c: [u8; 3], width: f32) {
+    let mut paint = Paint::default();
+    paint.set_color_rgba8(c[0], c[1], c[2], 255);
+    let stroke = Stroke {
+        width,
+        ..Stroke::default()
+    };
+    pm.stroke_path(path, &paint, &stroke, Transform::identity(), None);
 }
 
 #[cfg(test)]
