@@ -19,8 +19,10 @@ use bytemuck::{Pod, Zeroable};
 use std::path::Path;
 
 /// Hex-grid parameters the player needs to find the current cell (DESIGN.md,
-/// "Conventions": flat-top hexagons, cell id = row · n_cols + col).
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// "Conventions": flat-top hexagons, cell id = row · n_cols + col); stored as they
+/// are, 36 bytes at offset 32 of `base-meta` ([`BaseMetaRecord`]).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct GridParams {
     pub ground_min: [f32; 2],
     pub ground_max: [f32; 2],
@@ -179,13 +181,7 @@ pub struct BasePack {
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 pub struct BaseMetaRecord {
     pub scene_fingerprint: [u8; 32],
-    pub ground_min: [f32; 2],
-    pub ground_max: [f32; 2],
-    pub cell_size: f32,
-    pub min_eye_height: f32,
-    pub max_eye_height: f32,
-    pub n_cols: u32,
-    pub n_rows: u32,
+    pub grid: GridParams,
     pub model_count: u32,
     pub instance_count: u32,
     pub reserved: u32,
@@ -315,16 +311,9 @@ impl BasePack {
         for (i, inst) in self.instances.iter().enumerate() {
             check_instance(i, &inst.transform, &inst.tint).map_err(refuse)?;
         }
-        let g = &self.grid;
         let meta = BaseMetaRecord {
             scene_fingerprint: self.scene_fingerprint,
-            ground_min: g.ground_min,
-            ground_max: g.ground_max,
-            cell_size: g.cell_size,
-            min_eye_height: g.min_eye_height,
-            max_eye_height: g.max_eye_height,
-            n_cols: g.n_cols,
-            n_rows: g.n_rows,
+            grid: self.grid,
             model_count,
             instance_count,
             reserved: 0,
@@ -404,16 +393,7 @@ impl BasePack {
         pack.expect_kind(FileKind::Base)?;
         let file = pack.path();
         // 1. Fixed-size metadata.
-        let meta_bytes = pack.section(SectionKind::BASE_META)?;
-        if meta_bytes.len() != std::mem::size_of::<BaseMetaRecord>() {
-            return Err(malformed(
-                file,
-                SectionKind::BASE_META,
-                0,
-                format!("{} bytes, expected 80", meta_bytes.len()),
-            ));
-        }
-        let meta: BaseMetaRecord = bytemuck::pod_read_unaligned(&meta_bytes);
+        let meta: BaseMetaRecord = pack.section_record(SectionKind::BASE_META)?;
         if meta.reserved != 0 {
             return Err(malformed(
                 file,
@@ -422,15 +402,7 @@ impl BasePack {
                 format!("reserved field is {}, expected 0", meta.reserved),
             ));
         }
-        let grid = GridParams {
-            ground_min: meta.ground_min,
-            ground_max: meta.ground_max,
-            cell_size: meta.cell_size,
-            min_eye_height: meta.min_eye_height,
-            max_eye_height: meta.max_eye_height,
-            n_cols: meta.n_cols,
-            n_rows: meta.n_rows,
-        };
+        let grid = meta.grid;
         grid.validate()
             .map_err(|(offset, what)| malformed(file, SectionKind::BASE_META, offset, what))?;
         let reject =

@@ -570,16 +570,7 @@ impl CellPack {
     fn decode_any(pack: &PackFile) -> Result<CellPack, PackError> {
         let file = pack.path();
         // 1. Metadata and record tables.
-        let meta_bytes = pack.section(SectionKind::CELL_META)?;
-        if meta_bytes.len() != std::mem::size_of::<CellMetaRecord>() {
-            return Err(malformed(
-                file,
-                SectionKind::CELL_META,
-                0,
-                format!("{} bytes, expected 64", meta_bytes.len()),
-            ));
-        }
-        let meta: CellMetaRecord = bytemuck::pod_read_unaligned(&meta_bytes);
+        let meta: CellMetaRecord = pack.section_record(SectionKind::CELL_META)?;
         if meta.reserved != [0; 2] || (pack.version() < 2 && meta.far_group != 0) {
             return Err(malformed(
                 file,

@@ -335,16 +335,7 @@ impl Index {
     pub fn decode(pack: &PackFile) -> Result<Index, PackError> {
         pack.expect_kind(FileKind::Index)?;
         let file = pack.path();
-        let meta_bytes = pack.section(SectionKind::INDEX_META)?;
-        if meta_bytes.len() != std::mem::size_of::<IndexMetaRecord>() {
-            return Err(malformed(
-                file,
-                SectionKind::INDEX_META,
-                0,
-                format!("{} bytes, expected 48", meta_bytes.len()),
-            ));
-        }
-        let meta: IndexMetaRecord = bytemuck::pod_read_unaligned(&meta_bytes);
+        let meta: IndexMetaRecord = pack.section_record(SectionKind::INDEX_META)?;
         let v2 = pack.version() >= 2;
         if meta.reserved != [0; 2] || (!v2 && meta.group_count != 0) {
             return Err(malformed(

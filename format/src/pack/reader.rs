@@ -519,6 +519,22 @@ impl PackFile {
             })
     }
 
+    /// A fixed-size section (a file's metadata record) as one `T`: exactly
+    /// `size_of::<T>()` bytes, else a Malformed error at offset 0.
+    pub fn section_record<T: Pod>(&self, kind: SectionKind) -> Result<T, PackError> {
+        let bytes = self.section(kind)?;
+        let size = std::mem::size_of::<T>();
+        if bytes.len() != size {
+            return Err(PackError::Malformed {
+                file: self.file.clone(),
+                section: kind,
+                offset: 0,
+                what: format!("{} bytes, expected {size}", bytes.len()),
+            });
+        }
+        Ok(bytemuck::pod_read_unaligned(&bytes))
+    }
+
     /// A section's content as a vector of `T` (copying; works for every codec).
     pub fn section_vec<T: Pod>(&self, kind: SectionKind) -> Result<Vec<T>, PackError> {
         let bytes = self.section(kind)?;
