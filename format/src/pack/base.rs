@@ -9,14 +9,13 @@ use super::error::PackError;
 use super::layout::{FileKind, SectionKind};
 use super::reader::{pod_vec, PackFile};
 use super::writer::{
-    assemble, write_atomic, SectionData, RAW_ONLY, TRY_TRIANGLES, TRY_ZSTD, TRY_ZSTD_PREFER_RAW,
+    assemble, SectionData, RAW_ONLY, TRY_TRIANGLES, TRY_ZSTD, TRY_ZSTD_PREFER_RAW,
 };
 use super::{invalid, malformed};
 use crate::manifest::{check_cells, check_ground, CellParams, MAX_COORDINATE, MAX_TINT};
 use crate::mesh::Mesh;
 use crate::scene::{Ground, Scene};
 use bytemuck::{Pod, Zeroable};
-use std::path::Path;
 
 /// Hex-grid parameters the player needs to find the current cell (DESIGN.md,
 /// "Conventions": flat-top hexagons, cell id = row · n_cols + col); stored as they
@@ -408,32 +407,18 @@ impl BasePack {
         let reject =
             |BadValue(section, offset, what): BadValue| malformed(file, section, offset, what);
         // 2. Tables, checked against the counts.
-        let records: Vec<ModelRecord> = pack.section_vec(SectionKind::MODEL_TABLE)?;
-        if records.len() != meta.model_count as usize {
-            return Err(malformed(
-                file,
-                SectionKind::MODEL_TABLE,
-                0,
-                format!(
-                    "{} models, base-meta says {}",
-                    records.len(),
-                    meta.model_count
-                ),
-            ));
-        }
-        let instances: Vec<InstanceRecord> = pack.section_vec(SectionKind::INSTANCES)?;
-        if instances.len() != meta.instance_count as usize {
-            return Err(malformed(
-                file,
-                SectionKind::INSTANCES,
-                0,
-                format!(
-                    "{} instances, base-meta says {}",
-                    instances.len(),
-                    meta.instance_count
-                ),
-            ));
-        }
+        let records: Vec<ModelRecord> = pack.section_table(
+            SectionKind::MODEL_TABLE,
+            meta.model_count,
+            "models",
+            "base-meta",
+        )?;
+        let instances: Vec<InstanceRecord> = pack.section_table(
+            SectionKind::INSTANCES,
+            meta.instance_count,
+            "instances",
+            "base-meta",
+        )?;
         let names = pack.section(SectionKind::MODEL_NAMES)?;
         let positions: Vec<[f32; 3]> = pack.section_vec(SectionKind::POSITIONS)?;
         let normals: Vec<[f32; 3]> = pack.section_vec(SectionKind::NORMALS)?;
@@ -563,22 +548,9 @@ impl BasePack {
             patches,
         })
     }
-
-    /// Validates and decodes pack bytes held in memory.
-    pub fn from_bytes(bytes: &[u8]) -> Result<BasePack, PackError> {
-        BasePack::decode(&PackFile::from_bytes(bytes)?)
-    }
-
-    /// Writes the pack atomically to `path`.
-    pub fn write(&self, path: &Path) -> Result<(), PackError> {
-        write_atomic(path, &self.encode()?)
-    }
-
-    /// Memory-maps, validates and decodes the pack at `path`.
-    pub fn read(path: &Path) -> Result<BasePack, PackError> {
-        BasePack::decode(&PackFile::open(path)?)
-    }
 }
+
+super::pack_file_methods!(BasePack);
 
 /// A u32 index section as triangles.
 pub(crate) fn pack_triangles(

@@ -14,7 +14,7 @@ use super::layout::{FileKind, SectionKind};
 use super::reader::PackFile;
 use super::texture::{Texture, TextureEncoding};
 use super::writer::{
-    assemble_reusing, write_atomic, SectionData, RAW_ONLY, TRY_INDICES, TRY_TRIANGLES, TRY_ZSTD,
+    assemble_reusing, SectionData, RAW_ONLY, TRY_INDICES, TRY_TRIANGLES, TRY_ZSTD,
 };
 use super::{invalid, malformed};
 use bytemuck::{Pod, Zeroable};
@@ -880,24 +880,9 @@ impl CellPack {
         Ok(())
     }
 
-    /// Validates and decodes pack bytes held in memory.
-    pub fn from_bytes(bytes: &[u8]) -> Result<CellPack, PackError> {
-        CellPack::decode(&PackFile::from_bytes(bytes)?)
-    }
-
     /// Validates and decodes group-pack bytes held in memory.
     pub fn group_from_bytes(bytes: &[u8]) -> Result<CellPack, PackError> {
         CellPack::decode_group(&PackFile::from_bytes(bytes)?)
-    }
-
-    /// Writes the pack atomically to `path`.
-    pub fn write(&self, path: &Path) -> Result<(), PackError> {
-        write_atomic(path, &self.encode()?)
-    }
-
-    /// Memory-maps, validates and decodes the pack at `path`.
-    pub fn read(path: &Path) -> Result<CellPack, PackError> {
-        CellPack::decode(&PackFile::open(path)?)
     }
 
     pub fn triangle_count(&self) -> u64 {
@@ -908,6 +893,8 @@ impl CellPack {
             .sum()
     }
 }
+
+super::pack_file_methods!(CellPack);
 
 /// The next impostor record and its layers from section `layered-impostors`
 /// (`bytes`, from offset `*next`), for proxy `p`.

@@ -7,7 +7,7 @@
 use super::error::{hex, PackError};
 use super::layout::{FileKind, SectionKind};
 use super::reader::PackFile;
-use super::writer::{assemble, write_atomic, SectionData, RAW_ONLY, TRY_INDICES, TRY_ZSTD};
+use super::writer::{assemble, SectionData, RAW_ONLY, TRY_INDICES, TRY_ZSTD};
 use super::{invalid, malformed};
 use bytemuck::{Pod, Zeroable};
 use std::path::Path;
@@ -69,6 +69,30 @@ pub struct CellRecord {
     pub name_len: u32,
 }
 const _: () = assert!(std::mem::size_of::<CellRecord>() == 88);
+
+/// An entry's file is a safe relative path and its size is within bounds (the
+/// writer's check; `what` is `cell` or `group`).
+fn check_file_and_size(what: &str, e: &IndexEntry) -> Result<(), PackError> {
+    check_relative_path(&e.file).map_err(|err| invalid(format!("{what} {}: {err}", e.cell_id)))?;
+    check_entry(e.cell_id, e.bytes).map_err(invalid)
+}
+
+/// The `index-cells` / `index-groups` record of an entry, its file name appended to
+/// `names` (a group entry has no neighbours: its count is 0).
+fn entry_record(e: &IndexEntry, names: &mut Vec<u8>) -> Result<CellRecord, PackError> {
+    let record = CellRecord {
+        cell_id: e.cell_id,
+        neighbour_count: u32::try_from(e.neighbours.len())
+            .map_err(|_| invalid("too many neighbours"))?,
+        bytes: e.bytes,
+        checksum: e.checksum,
+        fingerprint: e.fingerprint,
+        name_offset: u32::try_from(names.len()).map_err(|_| invalid("file names too long"))?,
+        name_len: u32::try_from(e.file.len()).map_err(|_| invalid("file name too long"))?,
+    };
+    names.extend_from_slice(e.file.as_bytes());
+    Ok(record)
+}
 
 /// Whether `file` is a safe relative path (`/`-separated, no empty, `.` or `..`
 /// component, no backslash or NUL).
@@ -252,40 +276,15 @@ impl Index {
                 }
             }
             cell_groups.push(c.group.unwrap_or(NO_GROUP));
-            check_relative_path(&c.file)
-                .map_err(|e| invalid(format!("cell {}: {e}", c.cell_id)))?;
-            check_entry(c.cell_id, c.bytes).map_err(invalid)?;
+            check_file_and_size("cell", c)?;
             check_neighbours(c.cell_id, &c.neighbours).map_err(|(_, e)| invalid(e))?;
-            records.push(CellRecord {
-                cell_id: c.cell_id,
-                neighbour_count: u32::try_from(c.neighbours.len())
-                    .map_err(|_| invalid("too many neighbours"))?,
-                bytes: c.bytes,
-                checksum: c.checksum,
-                fingerprint: c.fingerprint,
-                name_offset: u32::try_from(names.len())
-                    .map_err(|_| invalid("file names too long"))?,
-                name_len: u32::try_from(c.file.len()).map_err(|_| invalid("file name too long"))?,
-            });
-            names.extend_from_slice(c.file.as_bytes());
+            records.push(entry_record(c, &mut names)?);
             neighbours.extend_from_slice(&c.neighbours);
         }
         let mut group_records = Vec::with_capacity(self.groups.len());
         for g in &self.groups {
-            check_relative_path(&g.file)
-                .map_err(|e| invalid(format!("group {}: {e}", g.cell_id)))?;
-            check_entry(g.cell_id, g.bytes).map_err(invalid)?;
-            group_records.push(CellRecord {
-                cell_id: g.cell_id,
-                neighbour_count: 0,
-                bytes: g.bytes,
-                checksum: g.checksum,
-                fingerprint: g.fingerprint,
-                name_offset: u32::try_from(names.len())
-                    .map_err(|_| invalid("file names too long"))?,
-                name_len: u32::try_from(g.file.len()).map_err(|_| invalid("file name too long"))?,
-            });
-            names.extend_from_slice(g.file.as_bytes());
+            check_file_and_size("group", g)?;
+            group_records.push(entry_record(g, &mut names)?);
         }
         let meta = IndexMetaRecord {
             build_fingerprint: self.build_fingerprint,
@@ -348,19 +347,12 @@ impl Index {
                 ),
             ));
         }
-        let records: Vec<CellRecord> = pack.section_vec(SectionKind::INDEX_CELLS)?;
-        if records.len() != meta.cell_count as usize {
-            return Err(malformed(
-                file,
-                SectionKind::INDEX_CELLS,
-                0,
-                format!(
-                    "{} cells, index-meta says {}",
-                    records.len(),
-                    meta.cell_count
-                ),
-            ));
-        }
+        let records: Vec<CellRecord> = pack.section_table(
+            SectionKind::INDEX_CELLS,
+            meta.cell_count,
+            "cells",
+            "index-meta",
+        )?;
         let names = pack.section(SectionKind::INDEX_FILE_NAMES)?;
         let neighbours: Vec<u32> = pack.section_vec(SectionKind::INDEX_NEIGHBOURS)?;
         let mut next = 0usize;
@@ -460,19 +452,12 @@ impl Index {
         cells: &mut [IndexEntry],
     ) -> Result<Vec<IndexEntry>, PackError> {
         let file = pack.path();
-        let records: Vec<CellRecord> = pack.section_vec(SectionKind::INDEX_GROUPS)?;
-        if records.len() != meta.group_count as usize {
-            return Err(malformed(
-                file,
-                SectionKind::INDEX_GROUPS,
-                0,
-                format!(
-                    "{} groups, index-meta says {}",
-                    records.len(),
-                    meta.group_count
-                ),
-            ));
-        }
+        let records: Vec<CellRecord> = pack.section_table(
+            SectionKind::INDEX_GROUPS,
+            meta.group_count,
+            "groups",
+            "index-meta",
+        )?;
         let mut groups = Vec::with_capacity(records.len());
         for (i, r) in records.iter().enumerate() {
             let off = (i * std::mem::size_of::<CellRecord>()) as u64;
@@ -533,19 +518,6 @@ impl Index {
         }
         Ok(groups)
     }
-
-    /// Validates and decodes pack bytes held in memory.
-    pub fn from_bytes(bytes: &[u8]) -> Result<Index, PackError> {
-        Index::decode(&PackFile::from_bytes(bytes)?)
-    }
-
-    /// Writes the pack atomically to `path`.
-    pub fn write(&self, path: &Path) -> Result<(), PackError> {
-        write_atomic(path, &self.encode()?)
-    }
-
-    /// Memory-maps, validates and decodes the pack at `path`.
-    pub fn read(path: &Path) -> Result<Index, PackError> {
-        Index::decode(&PackFile::open(path)?)
-    }
 }
+
+super::pack_file_methods!(Index);

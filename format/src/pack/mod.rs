@@ -38,6 +38,31 @@ pub use writer::{
 
 use std::path::Path;
 
+/// The file methods every pack type has, from its `encode` and `decode`:
+/// `from_bytes` (validate and decode bytes in memory), `write` (atomically) and
+/// `read` (memory-map, validate, decode).
+macro_rules! pack_file_methods {
+    ($pack:ident) => {
+        impl $pack {
+            /// Validates and decodes pack bytes held in memory.
+            pub fn from_bytes(bytes: &[u8]) -> Result<$pack, $crate::pack::PackError> {
+                $pack::decode(&$crate::pack::PackFile::from_bytes(bytes)?)
+            }
+
+            /// Writes the pack atomically to `path`.
+            pub fn write(&self, path: &std::path::Path) -> Result<(), $crate::pack::PackError> {
+                $crate::pack::write_atomic(path, &self.encode()?)
+            }
+
+            /// Memory-maps, validates and decodes the pack at `path`.
+            pub fn read(path: &std::path::Path) -> Result<$pack, $crate::pack::PackError> {
+                $pack::decode(&$crate::pack::PackFile::open(path)?)
+            }
+        }
+    };
+}
+pub(crate) use pack_file_methods;
+
 pub(crate) fn invalid(what: impl Into<String>) -> PackError {
     PackError::Invalid { what: what.into() }
 }

@@ -535,6 +535,27 @@ impl PackFile {
         Ok(bytemuck::pod_read_unaligned(&bytes))
     }
 
+    /// A table section as a vector of `T` holding `count` records, as the metadata
+    /// section `meta` says, else a Malformed error "N `what`, `meta` says `count`".
+    pub fn section_table<T: Pod>(
+        &self,
+        kind: SectionKind,
+        count: u32,
+        what: &str,
+        meta: &str,
+    ) -> Result<Vec<T>, PackError> {
+        let records: Vec<T> = self.section_vec(kind)?;
+        if records.len() != count as usize {
+            return Err(PackError::Malformed {
+                file: self.file.clone(),
+                section: kind,
+                offset: 0,
+                what: format!("{} {what}, {meta} says {count}", records.len()),
+            });
+        }
+        Ok(records)
+    }
+
     /// A section's content as a vector of `T` (copying; works for every codec).
     pub fn section_vec<T: Pod>(&self, kind: SectionKind) -> Result<Vec<T>, PackError> {
         let bytes = self.section(kind)?;
