@@ -30,15 +30,7 @@ fn cells_bakes_only_their_jobs_then_a_full_run_completes_identically() {
     let tmp = tempfile::tempdir().unwrap();
     let part = tmp.path().join("part");
     // 1. Cell 4 only: its job (cells 3 and 4 of row 1) is baked, nothing else.
-    let o = pipeline(&[
-        "run",
-        TINY,
-        "--quiet",
-        "--out",
-        part.to_str().unwrap(),
-        "--cells",
-        "4",
-    ]);
+    let o = run_quiet(TINY, &part, &["--cells", "4"]);
     assert!(o.status.success(), "{}", text(&o));
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert!(
@@ -154,7 +146,6 @@ fn set_overrides_make_a_different_bake() {
 fn bad_cells_and_set_arguments_exit_2() {
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("o");
-    let out = out.to_str().unwrap();
     for (args, says) in [
         (vec!["--cells", "9"], "the grid has 9 cells"),
         (vec!["--cells", "path:nope.ron"], "nope.ron"),
@@ -174,9 +165,7 @@ fn bad_cells_and_set_arguments_exit_2() {
             "local executor only",
         ),
     ] {
-        let mut a = vec!["run", TINY, "--quiet", "--out", out];
-        a.extend_from_slice(&args);
-        let o = pipeline(&a);
+        let o = run_quiet(TINY, &out, &args);
         assert_eq!(o.status.code(), Some(2), "{args:?}: {}", text(&o));
         assert!(
             String::from_utf8_lossy(&o.stderr).contains(says),

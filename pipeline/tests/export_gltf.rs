@@ -56,6 +56,19 @@ fn cell_with_every_kind(out: &Path) -> Option<u32> {
     })
 }
 
+fn read_glb(glb: &Path) -> gltf::Gltf {
+    gltf::Gltf::from_slice(&std::fs::read(glb).unwrap()).expect("a GLB gltf reads")
+}
+
+/// The primitives of the exported originals (the nodes named `instance N`).
+fn original_primitives(doc: &gltf::Gltf) -> Vec<gltf::Primitive<'_>> {
+    doc.nodes()
+        .filter(|n| n.name().is_some_and(|s| s.starts_with("instance ")))
+        .filter_map(|n| n.mesh())
+        .flat_map(|m| m.primitives())
+        .collect()
+}
+
 #[test]
 fn exported_demo_cell_passes_the_khronos_gltf_validator() {
     let dir = tempfile::tempdir().unwrap();
@@ -67,13 +80,7 @@ fn exported_demo_cell_passes_the_khronos_gltf_validator() {
     let o = export(out_s, 0, &glb, &[]);
     assert_bad_input(&o, &["no such bake directory"]);
 
-    let o = pipeline(&[
-        "run",
-        "manifests/demo-clustered.ron",
-        "--quiet",
-        "--out",
-        out_s,
-    ]);
+    let o = run_quiet("manifests/demo-clustered.ron", &out, &[]);
     assert!(o.status.success(), "{}", text(&o));
 
     let o = export(out_s, 100000, &glb, &[]);
@@ -85,9 +92,7 @@ fn exported_demo_cell_passes_the_khronos_gltf_validator() {
     // The export of a cell with every kind of representation.
     let cell = cell_with_every_kind(&out)
         .expect("the demo bake has a cell with originals, SV, MV and cluster proxies");
-    let o = export(out_s, cell, &glb, &["--json"]);
-    assert!(o.status.success(), "{}", text(&o));
-    let summary: serde_json::Value = serde_json::from_slice(&o.stdout).expect("JSON summary");
+    let summary = succeeded_json(&export(out_s, cell, &glb, &["--json"]));
     eprintln!("export of cell {cell}: {summary}");
     let pack = CellPack::read(&out.join(format!("cells/{cell}.pack"))).unwrap();
     assert_eq!(summary["originals"], pack.originals.len());
@@ -113,7 +118,7 @@ fn exported_demo_cell_passes_the_khronos_gltf_validator() {
     assert!(uv_mean < 0.1, "mean UV error {uv_mean} texels");
 
     // The structure as a glTF reader sees it: nodes per original and proxy, textures.
-    let doc = gltf::Gltf::from_slice(&std::fs::read(&glb).unwrap()).expect("a GLB gltf reads");
+    let doc = read_glb(&glb);
     let names: Vec<String> = doc
         .nodes()
         .filter_map(|n| n.name().map(str::to_string))
@@ -147,7 +152,7 @@ fn exported_cell_of_a_textured_gltf_scene_carries_the_model_textures() {
     let manifest = format::load::gltf_sample::write_textured_sample_manifest(dir.path()).unwrap();
     let out = dir.path().join("bake");
     let out_s = out.to_str().unwrap();
-    let o = pipeline(&["run", manifest.to_str().unwrap(), "--quiet", "--out", out_s]);
+    let o = run_quiet(manifest.to_str().unwrap(), &out, &[]);
     assert!(o.status.success(), "{}", text(&o));
     // A cell whose originals include a textured model (model 0, the textured crate).
     let base = format::pack::BasePack::read(&out.join("base.pack")).unwrap();
@@ -168,12 +173,9 @@ fn exported_cell_of_a_textured_gltf_scene_carries_the_model_textures() {
     let glb = dir.path().join("cell.glb");
     let o = export(out_s, cell, &glb, &[]);
     assert!(o.status.success(), "{}", text(&o));
-    let doc = gltf::Gltf::from_slice(&std::fs::read(&glb).unwrap()).expect("a GLB gltf reads");
-    let textured_original = doc
-        .nodes()
-        .filter(|n| n.name().is_some_and(|s| s.starts_with("instance ")))
-        .filter_map(|n| n.mesh())
-        .flat_map(|m| m.primitives().collect::<Vec<_>>())
+    let doc = read_glb(&glb);
+    let textured_original = original_primitives(&doc)
+        .into_iter()
         .find(|p| p.get(&gltf::Semantic::TexCoords(0)).is_some())
         .expect("a textured original primitive");
     let info = textured_original
@@ -216,17 +218,11 @@ fn exported_cell_of_the_textured_plaza_passes_the_khronos_gltf_validator() {
     let out = dir.path().join("plaza");
     let out_s = out.to_str().unwrap();
     let cell = 5u32;
-    let o = pipeline(&[
-        "run",
+    let o = run_quiet(
         "manifests/textured-plaza.ron",
-        "--quiet",
-        "--out",
-        out_s,
-        "--cells",
-        &cell.to_string(),
-        "--set",
-        "bake.image_res=64",
-    ]);
+        &out,
+        &["--cells", &cell.to_string(), "--set", "bake.image_res=64"],
+    );
     assert!(o.status.success(), "{}", text(&o));
     let pack = CellPack::read(&out.join(format!("cells/{cell}.pack"))).unwrap();
     let base = format::pack::BasePack::read(&out.join("base.pack")).unwrap();
@@ -236,20 +232,15 @@ fn exported_cell_of_the_textured_plaza_passes_the_khronos_gltf_validator() {
             .is_some()
     }));
     let glb = dir.path().join("plaza-cell.glb");
-    let o = export(out_s, cell, &glb, &["--json"]);
-    assert!(o.status.success(), "{}", text(&o));
-    let summary: serde_json::Value = serde_json::from_slice(&o.stdout).expect("JSON summary");
+    let summary = succeeded_json(&export(out_s, cell, &glb, &["--json"]));
     eprintln!("export of textured plaza cell {cell}: {summary}");
     assert_eq!(summary["originals"], pack.originals.len());
     for kind in ["SvMesh", "MvMesh", "Cluster"] {
         assert!(summary["proxies"][kind].as_u64().unwrap_or(0) > 0, "{kind}");
     }
-    let doc = gltf::Gltf::from_slice(&std::fs::read(&glb).unwrap()).expect("a GLB gltf reads");
-    let textured_originals = doc
-        .nodes()
-        .filter(|n| n.name().is_some_and(|s| s.starts_with("instance ")))
-        .filter_map(|n| n.mesh())
-        .flat_map(|m| m.primitives().collect::<Vec<_>>())
+    let doc = read_glb(&glb);
+    let textured_originals = original_primitives(&doc)
+        .into_iter()
         .filter(|p| {
             p.get(&gltf::Semantic::TexCoords(0)).is_some()
                 && p.material()

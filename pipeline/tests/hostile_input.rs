@@ -52,15 +52,11 @@ fn scene_and_run_refuse_a_grid_too_large_with_its_position() {
 fn run_refuses_a_cell_size_override_too_small() {
     let dir = tempfile::tempdir().unwrap();
     let out_dir = dir.path().join("out");
-    let out = pipeline(&[
-        "run",
+    let out = run_quiet(
         "manifests/demo.ron",
-        "--set",
-        "cell_size=0.001",
-        "--out",
-        out_dir.to_str().unwrap(),
-        "--quiet",
-    ]);
+        &out_dir,
+        &["--set", "cell_size=0.001"],
+    );
     assert_bad_input(&out, &["--set cells.cell_size=0.001", "more than 1000000"]);
     assert!(!out_dir.exists());
 }
@@ -161,7 +157,7 @@ fn run_names_an_output_path_it_cannot_use() {
             format!("{below}: cannot write the bake there: {file_s} is a file"),
         ),
     ] {
-        let o = pipeline(&["run", "manifests/demo.ron", "--quiet", "--out", &out]);
+        let o = run_quiet("manifests/demo.ron", Path::new(&out), &[]);
         assert_bad_input(&o, &[&says]);
     }
     assert_eq!(

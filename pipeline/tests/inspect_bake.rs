@@ -9,30 +9,14 @@ use common::*;
 fn inspect_of_a_bake_directory_finds_a_pack_of_another_setting() {
     let tmp = tempfile::tempdir().unwrap();
     let (ours, other) = (tmp.path().join("ours"), tmp.path().join("other"));
-    let o = pipeline(&[
-        "run",
-        "tests/data/tiny.ron",
-        "--quiet",
-        "--out",
-        ours.to_str().unwrap(),
-    ]);
+    let o = run_quiet("tests/data/tiny.ron", &ours, &[]);
     assert!(o.status.success(), "{}", text(&o));
-    let o = pipeline(&["inspect", ours.to_str().unwrap(), "--json"]);
-    assert!(o.status.success(), "{}", text(&o));
-    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let v = succeeded_json(&pipeline(&["inspect", ours.to_str().unwrap(), "--json"]));
     assert_eq!(v["cells_indexed"], 9, "{v}");
     assert_eq!(v["cells_ok"], 9, "{v}");
 
     // The same cell baked with another T_l, copied over ours.
-    let o = pipeline(&[
-        "run",
-        "tests/data/tiny.ron",
-        "--quiet",
-        "--out",
-        other.to_str().unwrap(),
-        "--set",
-        "T_l=3.0",
-    ]);
+    let o = run_quiet("tests/data/tiny.ron", &other, &["--set", "T_l=3.0"]);
     assert!(o.status.success(), "{}", text(&o));
     std::fs::copy(other.join("cells/4.pack"), ours.join("cells/4.pack")).unwrap();
     let o = pipeline(&["inspect", ours.to_str().unwrap()]);

@@ -13,15 +13,11 @@ fn report_of_an_unfinished_bake_says_so_and_averages_only_baked_cells() {
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("out");
     let out_s = out.to_str().unwrap();
-    let o = pipeline(&[
-        "run",
+    let o = run_quiet(
         "tests/data/tiny.ron",
-        "--quiet",
-        "--set",
-        "bake.far_field=false",
-        "--out",
-        out_s,
-    ]);
+        &out,
+        &["--set", "bake.far_field=false"],
+    );
     assert!(o.status.success(), "{}", text(&o));
     let jobs = out.join("jobs");
     let plan: serde_json::Value =
@@ -55,9 +51,7 @@ fn report_of_an_unfinished_bake_says_so_and_averages_only_baked_cells() {
         stderr.contains("note: the bake is not finished"),
         "{stderr}"
     );
-    let o = pipeline(&["report", out_s, "--json"]);
-    assert!(o.status.success(), "{}", text(&o));
-    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let v = succeeded_json(&pipeline(&["report", out_s, "--json"]));
     assert_eq!(v["cells"], 0, "{v}");
     assert!(v["per_cell"].is_null(), "{v}");
     assert_eq!(v["jobs_done"], 0);
@@ -66,9 +60,7 @@ fn report_of_an_unfinished_bake_says_so_and_averages_only_baked_cells() {
 
     // 2. One job done: averages over its two cells, still marked unfinished.
     std::fs::write(jobs.join("0.json"), &record0).unwrap();
-    let o = pipeline(&["report", out_s, "--json"]);
-    assert!(o.status.success(), "{}", text(&o));
-    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let v = succeeded_json(&pipeline(&["report", out_s, "--json"]));
     assert_eq!(v["cells"], 2, "{v}");
     assert!(v["per_cell"].is_object(), "{v}");
     assert_eq!(v["jobs_done"], 1);

@@ -17,6 +17,19 @@ pub fn pipeline(args: &[&str]) -> Output {
         .expect("pipeline runs")
 }
 
+/// Bakes `manifest` into `out`: `pipeline run MANIFEST --quiet --out OUT EXTRA...`.
+pub fn run_quiet(manifest: &str, out: &Path, extra: &[&str]) -> Output {
+    let mut args = vec!["run", manifest, "--quiet", "--out", out.to_str().unwrap()];
+    args.extend_from_slice(extra);
+    pipeline(&args)
+}
+
+/// The JSON a command printed, once it is known to have succeeded.
+pub fn succeeded_json(o: &Output) -> serde_json::Value {
+    assert!(o.status.success(), "{}", text(o));
+    serde_json::from_slice(&o.stdout).expect("JSON on stdout")
+}
+
 pub fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
