@@ -136,15 +136,7 @@ pub fn params_fingerprint(bake: &BakeParams, cells: &CellParams) -> Fingerprint 
 
 /// The fingerprint of the job that bakes `cells` (ascending ids).
 pub fn job_fingerprint(scene: &Fingerprint, params: &Fingerprint, cells: &[u32]) -> Fingerprint {
-    let mut h = blake3::Hasher::new();
-    h.update(b"hexbake job v1\0");
-    h.update(scene);
-    h.update(params);
-    h.update(&(cells.len() as u64).to_le_bytes());
-    for c in cells {
-        h.update(&c.to_le_bytes());
-    }
-    *h.finalize().as_bytes()
+    ids_fingerprint(b"hexbake job v1\0", scene, params, cells)
 }
 
 /// The fingerprint of the far-field job that bakes `groups` (ascending ids; issue 13).
@@ -153,13 +145,24 @@ pub fn group_job_fingerprint(
     params: &Fingerprint,
     groups: &[u32],
 ) -> Fingerprint {
+    ids_fingerprint(b"hexbake far-field job v1\0", scene, params, groups)
+}
+
+/// A job's fingerprint: its kind's `tag`, the scene and parameter fingerprints, the
+/// count of `ids` and each id (u64 and u32, little-endian).
+fn ids_fingerprint(
+    tag: &[u8],
+    scene: &Fingerprint,
+    params: &Fingerprint,
+    ids: &[u32],
+) -> Fingerprint {
     let mut h = blake3::Hasher::new();
-    h.update(b"hexbake far-field job v1\0");
+    h.update(tag);
     h.update(scene);
     h.update(params);
-    h.update(&(groups.len() as u64).to_le_bytes());
-    for g in groups {
-        h.update(&g.to_le_bytes());
+    h.update(&(ids.len() as u64).to_le_bytes());
+    for id in ids {
+        h.update(&id.to_le_bytes());
     }
     *h.finalize().as_bytes()
 }

@@ -35,6 +35,32 @@ fn model(name: &str) -> Option<PathBuf> {
     }
 }
 
+/// A binary STL facet: its normal, then its three corners.
+type Facet = [[f32; 3]; 4];
+
+/// The facet (0,0,0), (1,0,0), (0,1,0) facing +z.
+const UNIT_FACET: Facet = [
+    [0.0, 0.0, 1.0],
+    [0.0, 0.0, 0.0],
+    [1.0, 0.0, 0.0],
+    [0.0, 1.0, 0.0],
+];
+
+/// A binary STL: `title` padded with `pad` to the 80-byte header, the facet count,
+/// then each facet with a zero attribute word.
+fn binary_stl(title: &[u8], pad: u8, facets: &[Facet]) -> Vec<u8> {
+    let mut bin = title.to_vec();
+    bin.resize(80, pad);
+    bin.extend_from_slice(&(facets.len() as u32).to_le_bytes());
+    for facet in facets {
+        for x in facet.as_flattened() {
+            bin.extend_from_slice(&x.to_le_bytes());
+        }
+        bin.extend_from_slice(&[0, 0]);
+    }
+    bin
+}
+
 fn load_ok(path: &Path) -> (Mesh, format::load::LoadStats) {
     let (mesh, stats) =
         load_model_with_stats(path).unwrap_or_else(|e| panic!("loading failed: {e}"));
@@ -381,19 +407,16 @@ fn absurd_coordinates_name_the_file_and_the_vertex() {
     );
 
     // A binary STL: the clean-up names the vertex after welding's input order.
-    let mut bin = vec![b' '; 80];
-    bin.extend_from_slice(&1u32.to_le_bytes());
-    for v in [
-        [0.0f32, 0.0, 1.0],
-        [0.0, 0.0, 0.0],
-        [1.0, 0.0, 0.0],
-        [0.0, 1e30, 0.0],
-    ] {
-        for x in v {
-            bin.extend_from_slice(&x.to_le_bytes());
-        }
-    }
-    bin.extend_from_slice(&[0, 0]);
+    let bin = binary_stl(
+        b"",
+        b' ',
+        &[[
+            [0.0, 0.0, 1.0],
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1e30, 0.0],
+        ]],
+    );
     let e = expect_error(&write(dir.path(), "far.stl", &bin));
     assert_eq!(e.location(), Location::Element("vertex 2".into()), "{e}");
     // 1e12 itself is allowed.
@@ -426,20 +449,7 @@ fn ascii_stl_and_binary_stl_with_solid_header() {
     let (mesh, _) = load_ok(&write(dir.path(), "a.stl", ascii.as_bytes()));
     assert_eq!(mesh.triangle_count(), 1);
     // A binary STL whose header starts with "solid " (as many exporters write).
-    let mut bin = b"solid but binary".to_vec();
-    bin.resize(80, b' ');
-    bin.extend_from_slice(&1u32.to_le_bytes());
-    for v in [
-        [0.0f32, 0.0, 1.0],
-        [0.0, 0.0, 0.0],
-        [1.0, 0.0, 0.0],
-        [0.0, 1.0, 0.0],
-    ] {
-        for x in v {
-            bin.extend_from_slice(&x.to_le_bytes());
-        }
-    }
-    bin.extend_from_slice(&[0, 0]);
+    let bin = binary_stl(b"solid but binary", b' ', &[UNIT_FACET]);
     let (mesh, _) = load_ok(&write(dir.path(), "b.stl", &bin));
     assert_eq!(
         mesh.positions,
@@ -615,17 +625,7 @@ mod hostile {
 
     /// Small valid files of every format, to mutate.
     pub(super) fn seeds() -> Vec<(&'static str, Vec<u8>)> {
-        let mut stl = b"binary".to_vec();
-        stl.resize(80, 0);
-        stl.extend_from_slice(&2u32.to_le_bytes());
-        for _ in 0..2 {
-            for x in [
-                0.0f32, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0,
-            ] {
-                stl.extend_from_slice(&x.to_le_bytes());
-            }
-            stl.extend_from_slice(&[0, 0]);
-        }
+        let stl = binary_stl(b"binary", 0, &[UNIT_FACET; 2]);
         let ply_ascii = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n\
                          property float z\nproperty uchar red\nproperty uchar green\nproperty uchar blue\n\
                          element face 2\nproperty list uchar int vertex_indices\nend_header\n\
