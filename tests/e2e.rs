@@ -496,12 +496,16 @@ fn slurm_available() -> bool {
 /// Slurm tests share one one-node cluster: run them one at a time.
 static SLURM: std::sync::Mutex<()> = std::sync::Mutex::new(());
 
+/// The one-at-a-time hold on the cluster, or `None` (the test skips) without Slurm.
+fn slurm_turn() -> Option<std::sync::MutexGuard<'static, ()>> {
+    slurm_available().then(|| SLURM.lock().unwrap_or_else(|e| e.into_inner()))
+}
+
 #[test]
 fn slurm_bake_equals_local_bake() {
-    if !slurm_available() {
+    let Some(_one) = slurm_turn() else {
         return;
-    }
-    let _one = SLURM.lock().unwrap_or_else(|e| e.into_inner());
+    };
     let dir = tempfile::tempdir().unwrap();
     let (local, slurm) = (dir.path().join("local"), dir.path().join("slurm"));
     let demo = "manifests/demo.ron";
@@ -517,10 +521,9 @@ fn slurm_bake_equals_local_bake() {
 
 #[test]
 fn slurm_resubmits_only_the_cancelled_task() {
-    if !slurm_available() {
+    let Some(_one) = slurm_turn() else {
         return;
-    }
-    let _one = SLURM.lock().unwrap_or_else(|e| e.into_inner());
+    };
     let dir = tempfile::tempdir().unwrap();
     let (local, out) = (dir.path().join("local"), dir.path().join("slurm"));
     assert!(run_tiny(&local, &[]).status.success());
