@@ -377,15 +377,15 @@ impl Fields {
     }
 }
 
-/// Files `<dir>/<prefix>*.txt`, sorted by name.
-fn listed(dir: &Path, prefix: &str) -> anyhow::Result<Vec<PathBuf>> {
+/// Files `<dir>/<prefix>*<suffix>`, sorted by name.
+fn listed(dir: &Path, prefix: &str, suffix: &str) -> anyhow::Result<Vec<PathBuf>> {
     let mut v: Vec<PathBuf> = std::fs::read_dir(dir)
         .with_context(|| format!("{}: cannot list", dir.display()))?
         .filter_map(|e| e.ok().map(|e| e.path()))
         .filter(|p| {
             p.file_name()
                 .and_then(|n| n.to_str())
-                .is_some_and(|n| n.starts_with(prefix) && n.ends_with(".txt"))
+                .is_some_and(|n| n.starts_with(prefix) && n.ends_with(suffix))
         })
         .collect();
     v.sort();
@@ -496,7 +496,7 @@ pub fn collect(work: &Path) -> anyhow::Result<BenchRun> {
         }
     }
     // Bakes and their reports.
-    for file in listed(work, "bake-")? {
+    for file in listed(work, "bake-", ".txt")? {
         let f = Fields(read_key_values(&file)?);
         let out = f.string("out");
         let report_path = Path::new(&out).join("report.json");
@@ -521,7 +521,7 @@ pub fn collect(work: &Path) -> anyhow::Result<BenchRun> {
         });
     }
     // Player comparisons.
-    for file in listed(work, "compare-")? {
+    for file in listed(work, "compare-", ".txt")? {
         let f = Fields(read_key_values(&file)?);
         let label = f.string("label");
         let json = work.join(format!("compare-{label}.json"));
@@ -550,7 +550,7 @@ pub fn collect(work: &Path) -> anyhow::Result<BenchRun> {
         });
     }
     // Player renders.
-    for file in listed(work, "render-")? {
+    for file in listed(work, "render-", ".txt")? {
         let f = Fields(read_key_values(&file)?);
         let label = f.string("label");
         let csv = work.join(format!("render-{label}")).join("frames.csv");
@@ -578,16 +578,7 @@ pub fn collect(work: &Path) -> anyhow::Result<BenchRun> {
         });
     }
     // Load times.
-    let mut loads: Vec<PathBuf> = std::fs::read_dir(work)?
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| {
-            p.file_name()
-                .and_then(|n| n.to_str())
-                .is_some_and(|n| n.starts_with("load-") && n.ends_with(".json"))
-        })
-        .collect();
-    loads.sort();
-    for file in loads {
+    for file in listed(work, "load-", ".json")? {
         let t: LoadTime = serde_json::from_slice(&std::fs::read(&file)?)
             .with_context(|| file.display().to_string())?;
         run.load_times.push(t);
