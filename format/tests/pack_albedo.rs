@@ -188,29 +188,30 @@ fn hostile_texture_sections_are_rejected_with_the_section_named() {
 
 #[test]
 fn the_writer_refuses_what_the_reader_would() {
-    let mut base = textured_base();
-    base.models[0].albedo_map.as_mut().unwrap().uvs.pop();
-    assert!(base
-        .encode()
-        .unwrap_err()
-        .to_string()
-        .contains("texture coordinates"));
-    let mut base = textured_base();
-    base.models[0].albedo_map.as_mut().unwrap().uvs[0] = [f32::INFINITY, 0.0];
-    assert!(base
-        .encode()
-        .unwrap_err()
-        .to_string()
-        .contains("not finite"));
-    let mut base = textured_base();
-    base.models[1]
-        .albedo_map
-        .as_mut()
-        .unwrap()
-        .texture
-        .rgba
-        .pop();
-    assert!(base.encode().unwrap_err().to_string().contains("RGBA8"));
+    let edits: [(fn(&mut BasePack), &str); 3] = [
+        (
+            |b| {
+                b.models[0].albedo_map.as_mut().unwrap().uvs.pop();
+            },
+            "texture coordinates",
+        ),
+        (
+            |b| b.models[0].albedo_map.as_mut().unwrap().uvs[0] = [f32::INFINITY, 0.0],
+            "not finite",
+        ),
+        (
+            |b| {
+                b.models[1].albedo_map.as_mut().unwrap().texture.rgba.pop();
+            },
+            "RGBA8",
+        ),
+    ];
+    for (edit, says) in edits {
+        let mut base = textured_base();
+        edit(&mut base);
+        let e = base.encode().unwrap_err().to_string();
+        assert!(e.contains(says), "expected {says:?} in: {e}");
+    }
 }
 
 #[test]

@@ -170,20 +170,19 @@ fn arbitrary_block_bytes_decode_without_panic() {
 
 #[test]
 fn bad_block_sizes_are_refused() {
-    let t = Texture {
-        width: 6,
-        height: 4,
-        encoding: TextureEncoding::Bc1,
-        data: vec![0; 12],
-    };
-    assert!(t.validate().unwrap_err().contains("multiples of 4"));
-    let t = Texture {
-        width: 8,
-        height: 4,
-        encoding: TextureEncoding::Bc3,
-        data: vec![0; 16],
-    };
-    assert!(t.validate().unwrap_err().contains("expected 32"));
+    for (width, encoding, bytes, says) in [
+        (6, TextureEncoding::Bc1, 12, "multiples of 4"),
+        (8, TextureEncoding::Bc3, 16, "expected 32"),
+    ] {
+        let t = Texture {
+            width,
+            height: 4,
+            encoding,
+            data: vec![0; bytes],
+        };
+        let e = t.validate().unwrap_err();
+        assert!(e.contains(says), "expected {says:?} in: {e}");
+    }
     assert!(Texture::from_rgba8(6, 4, &[0; 96], TextureEncoding::Bc1).is_err());
     assert!(Texture::from_rgba8_block(0, 4, &[]).is_err());
     assert!(Texture::from_rgba8_block(4, 4, &[0; 12]).is_err());
