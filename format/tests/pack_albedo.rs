@@ -188,7 +188,8 @@ fn hostile_texture_sections_are_rejected_with_the_section_named() {
 
 #[test]
 fn the_writer_refuses_what_the_reader_would() {
-    let edits: [(fn(&mut BasePack), &str); 3] = [
+    type Edit = fn(&mut BasePack);
+    let edits: [(Edit, &str); 3] = [
         (
             |b| {
                 b.models[0].albedo_map.as_mut().unwrap().uvs.pop();
