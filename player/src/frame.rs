@@ -113,21 +113,26 @@ pub fn hybrid_list<'a>(
 ) -> DrawList<'a> {
     match current {
         CurrentCell::Originals => originals_list(bake, camera, true),
-        CurrentCell::Pack(cell, far) => cell_list(bake, camera, cell, far, pending),
+        CurrentCell::Pack(cell, far, stand_ins) => {
+            cell_list(bake, camera, cell, far, stand_ins, pending)
+        }
     }
 }
 
 /// The cell's inside objects as originals, its ready proxies and those of its
 /// far-field group, and — while a proxy's textures are still in the upload queue —
-/// that proxy's member objects as originals (never a hole;
-/// [`ResidentCell::fallback_instances`]) or, with [`PendingDraw::Lit`], the proxy
-/// lit without textures. Without its group's pack ([`Far::Unavailable`]) every
-/// object the cell has neither as original nor as proxy is drawn as original.
+/// a stand-in for it (a ready proxy of the packs drawn before the crossing that
+/// shows only objects waiting so, [`stand_ins_for`]) or its member objects as
+/// originals (never a hole; [`ResidentCell::fallback_instances`]) or, with
+/// [`PendingDraw::Lit`], the proxy lit without textures. Without its group's pack
+/// ([`Far::Unavailable`]) every object the cell has neither as original nor as
+/// proxy is drawn as original.
 fn cell_list<'a>(
     bake: &Bake,
     camera: &Camera,
     cell: &'a ResidentCell,
     far: &Far<'a>,
+    stand_ins: &[&'a ResidentCell],
     pending: PendingDraw,
 ) -> DrawList<'a> {
     let f = camera.frustum();
@@ -136,10 +141,14 @@ fn cell_list<'a>(
         Far::None | Far::Unavailable => vec![cell],
     };
     let mut ids: std::collections::BTreeSet<u32> = cell.originals.iter().copied().collect();
-    if pending == PendingDraw::Originals {
-        for p in &packs {
-            ids.extend(p.fallback_instances());
+    let mut standing_in = Vec::new();
+    if pending != PendingDraw::Lit {
+        let mut waiting: std::collections::BTreeSet<u32> =
+            packs.iter().flat_map(|p| p.fallback_instances()).collect();
+        if pending == PendingDraw::StandIns && !matches!(far, Far::Unavailable) {
+            standing_in = stand_ins_for(stand_ins, &mut waiting);
         }
+        ids.extend(waiting);
     }
     if let Far::Unavailable = far {
         let proxied: std::collections::BTreeSet<u32> =
@@ -155,9 +164,17 @@ fn cell_list<'a>(
             .filter(|(_, b)| f.intersects(b))
             .map(|(p, _)| p)
     };
-    let proxies = in_view().filter(|p| p.is_ready()).collect();
+    let proxies = in_view()
+        .filter(|p| p.is_ready())
+        .chain(
+            standing_in
+                .into_iter()
+                .filter(|(_, b)| f.intersects(b))
+                .map(|(p, _)| p),
+        )
+        .collect();
     let lit_proxies = match pending {
-        PendingDraw::Originals => Vec::new(),
+        PendingDraw::StandIns | PendingDraw::Originals => Vec::new(),
         PendingDraw::Lit => in_view().filter(|p| !p.is_ready()).collect(),
     };
     let mut list = DrawList {
@@ -180,6 +197,32 @@ fn cell_list<'a>(
         );
     }
     list
+}
+
+/// The ready proxies of `stand_ins` (the packs drawn before the last crossing)
+/// whose members all wait in `waiting` (objects of proxies still waiting for their
+/// textures), first come first served, with their bounds; their members leave
+/// `waiting`. A proxy with a member that is drawn otherwise now (inside the cell,
+/// or by a ready proxy) is never a stand-in, so no object is drawn twice.
+fn stand_ins_for<'a>(
+    stand_ins: &[&'a ResidentCell],
+    waiting: &mut std::collections::BTreeSet<u32>,
+) -> Vec<(&'a crate::gpu::GpuProxy, &'a crate::camera::Aabb)> {
+    let mut chosen = Vec::new();
+    for pack in stand_ins {
+        for ((proxy, bounds), members) in pack.proxies.iter().zip(&pack.bounds).zip(&pack.members) {
+            if proxy.is_ready()
+                && !members.is_empty()
+                && members.iter().all(|m| waiting.contains(m))
+            {
+                for m in members {
+                    waiting.remove(m);
+                }
+                chosen.push((proxy, bounds));
+            }
+        }
+    }
+    chosen
 }
 
 /// Triangles and texture bytes a draw list submits.

@@ -42,9 +42,11 @@ struct StreamArgs {
     /// Resident cell data kept before LRU eviction, in MiB.
     #[arg(long, default_value_t = 512)]
     memory_budget_mib: u64,
-    /// How a proxy whose textures are still queued is drawn: `originals` (its
-    /// member objects) or `lit` (the proxy mesh with vertex colours).
-    #[arg(long, default_value = "originals")]
+    /// How a proxy whose textures are still queued is drawn: `stand-ins` (the
+    /// previous cell's ready proxy of the same objects, else `originals`),
+    /// `originals` (its member objects) or `lit` (the proxy mesh with vertex
+    /// colours).
+    #[arg(long, default_value = "stand-ins")]
     pending: PendingDraw,
     /// Override the path's resolution, e.g. 256x256.
     #[arg(long, value_parser = parse_size)]

@@ -228,6 +228,11 @@ impl Player {
         }
     }
 
+    /// The loading screen before a walk ([`Streamer::prime`]).
+    pub fn prime(&self, streamer: &mut Streamer, camera: &Camera) {
+        streamer.prime(&self.renderer, &self.bake, camera);
+    }
+
     /// Compiles the pipelines (shaders are compiled lazily on first use): one untimed
     /// frame of each kind at `camera`.
     pub fn warm_up(&mut self, camera: &Camera) {
@@ -291,6 +296,7 @@ pub fn render(
     let far = player.bake.extent;
     player.warm_up(&camera_for(&frames[0], path, size, far));
     let mut streamer = Streamer::new(&player.bake, opts.stream.clone());
+    player.prime(&mut streamer, &camera_for(&frames[0], path, size, far));
     let mut records = Vec::with_capacity(frames.len());
     let mut prev: Option<Option<u32>> = None;
     for (i, f) in frames.iter().enumerate() {
@@ -470,6 +476,7 @@ pub fn compare(
     };
     let (w, h) = (size.0 as usize, size.1 as usize);
     let mut streamer = Streamer::new(&player.bake, opts.stream.clone());
+    player.prime(&mut streamer, &camera_for(&frames[0], path, size, far));
     let mut per_frame = Vec::with_capacity(frames.len());
     let mut quality = Vec::with_capacity(frames.len());
     let mut hybrid_records = Vec::with_capacity(frames.len());
@@ -543,6 +550,7 @@ pub fn compare(
                 ..opts.stream.clone()
             },
         );
+        player.prime(&mut s, &camera_for(&frames[0], path, size, far));
         let mut recs = Vec::new();
         let mut prev: Option<Option<u32>> = None;
         for (i, f) in frames.iter().enumerate() {

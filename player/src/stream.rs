@@ -21,11 +21,16 @@
 //!   the new cell's textures were uploaded at once): when the viewer enters a cell
 //!   whose textures are still queued, they move to the front of the queue, keeping
 //!   their order, and go up under the same budget. Until all of a proxy's textures
-//!   are resident, the frame draws the proxy's member objects as original geometry
-//!   ([`ResidentCell::fallback_instances`]; or, with [`PendingDraw::Lit`], the proxy
-//!   mesh with lit vertex colours) — never a hole.
+//!   are resident, the frame draws a **stand-in** for it: the ready proxy of the
+//!   packs drawn before the crossing (the previous cell and its group) that shows
+//!   the same objects, if there is one — a proxy made for the region next door,
+//!   seen from just across its border, as a texture streamer shows a coarser mip
+//!   until the finer one arrives — else the member objects as original geometry
+//!   ([`ResidentCell::fallback_instances`]); with [`PendingDraw::Lit`], the proxy
+//!   mesh with lit vertex colours. Never a hole, never an object twice. (Not in
+//!   the paper, whose prefetching assumes the textures arrive before the crossing.)
 //! - Resident cells are evicted least-recently-used first above a memory budget (never
-//!   the current cell).
+//!   the current cell, its group or the stand-ins in use).
 //! - A cell whose pack is missing or corrupt is logged once and drawn as original
 //!   geometry.
 //! - **Far field** (format version 2, issue 13): a cell whose index entry names a
@@ -81,8 +86,11 @@ pub struct StreamConfig {
 /// How the hybrid draws a proxy whose textures are not resident yet (never a hole).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum PendingDraw {
-    /// Its member objects as original geometry (exact, more triangles).
+    /// A ready proxy of the packs drawn before the crossing that shows the same
+    /// objects (module docs), else its member objects as original geometry.
     #[default]
+    StandIns,
+    /// Its member objects as original geometry (exact, more triangles).
     Originals,
     /// The proxy mesh itself with lit vertex colours (DESIGN.md shading, no texture).
     Lit,
@@ -92,9 +100,12 @@ impl std::str::FromStr for PendingDraw {
     type Err = String;
     fn from_str(s: &str) -> Result<PendingDraw, String> {
         match s {
+            "stand-ins" => Ok(PendingDraw::StandIns),
             "originals" => Ok(PendingDraw::Originals),
             "lit" => Ok(PendingDraw::Lit),
-            _ => Err(format!("unknown pending draw {s:?} (originals, lit)")),
+            _ => Err(format!(
+                "unknown pending draw {s:?} (stand-ins, originals, lit)"
+            )),
         }
     }
 }
@@ -107,7 +118,7 @@ impl Default for StreamConfig {
             memory_budget_bytes: 512 << 20,
             step_distance: None,
             step_angle_deg: 15.0,
-            pending: PendingDraw::Originals,
+            pending: PendingDraw::StandIns,
             display_frames_per_step: 1,
         }
     }
@@ -243,8 +254,10 @@ impl ResidentCell {
 
 /// What the current frame draws for the hybrid configuration.
 pub enum CurrentCell<'a> {
-    /// The cell's pack is resident and uploaded, with its far field.
-    Pack(&'a ResidentCell, Far<'a>),
+    /// The cell's pack is resident, with its far field and the stand-ins: the
+    /// packs drawn before the last crossing, whose ready proxies stand in for the
+    /// new packs' proxies still waiting for textures ([`Streamer`] docs).
+    Pack(&'a ResidentCell, Far<'a>, Vec<&'a ResidentCell>),
     /// No usable pack (missing, corrupt, off the index): draw originals.
     Originals,
 }
@@ -293,6 +306,9 @@ pub struct Streamer {
     current: Option<u32>,
     /// Streaming key of the current cell's far-field group.
     current_group: Option<u32>,
+    /// Keys of the packs drawn before the last crossing (cell, group), kept as
+    /// stand-ins until the current packs are ready.
+    previous: Vec<u32>,
     stats: StreamStats,
 }
 
@@ -336,6 +352,7 @@ impl Streamer {
             last_step: None,
             current: None,
             current_group: None,
+            previous: Vec::new(),
             stats: StreamStats::default(),
         }
     }
@@ -377,8 +394,17 @@ impl Streamer {
         let cell = bake
             .grid
             .nearest_cell(Vec2::new(camera.eye.x, camera.eye.z));
+        let group = cell.and_then(|id| group_key_of(bake, id));
+        if cell != self.current {
+            // A crossing: the packs drawn so far become the stand-ins.
+            self.previous = [self.current, self.current_group]
+                .into_iter()
+                .flatten()
+                .filter(|k| Some(*k) != group && self.cells.contains_key(k))
+                .collect();
+        }
         self.current = cell;
-        self.current_group = cell.and_then(|id| group_key_of(bake, id));
+        self.current_group = group;
         self.step_timestamp(bake, camera, cell);
         // 3. Make the current cell and its far-field group resident (demand load on
         //    a miss).
@@ -416,13 +442,21 @@ impl Streamer {
                 self.stats.pending_proxies += c.pending_proxies();
             }
         }
+        if self.stats.pending_proxies == 0 {
+            self.previous.clear();
+        }
         let current = match cell.and_then(|id| self.cells.get(&id)) {
             Some(c) => {
                 let far = match self.current_group {
                     None => Far::None,
                     Some(k) => self.cells.get(&k).map_or(Far::Unavailable, Far::Pack),
                 };
-                CurrentCell::Pack(c, far)
+                let stand_ins = self
+                    .previous
+                    .iter()
+                    .filter_map(|k| self.cells.get(k))
+                    .collect();
+                CurrentCell::Pack(c, far, stand_ins)
             }
             None => {
                 self.stats.pending_proxies = 0;
@@ -430,6 +464,30 @@ impl Streamer {
             }
         };
         (current, self.stats)
+    }
+
+    /// The loading screen before a walk's first frame: the cell at `camera` and its
+    /// far-field group become resident and all their textures are uploaded, outside
+    /// any frame's budget, so the first frame shows the cell as baked instead of
+    /// every object as original geometry. Streaming goes on from there as usual.
+    /// The cache statistics do not count it.
+    pub fn prime(&mut self, renderer: &Renderer, bake: &Bake, camera: &Camera) {
+        let cell = bake
+            .grid
+            .nearest_cell(Vec2::new(camera.eye.x, camera.eye.z));
+        let group = cell.and_then(|id| group_key_of(bake, id));
+        for key in [cell, group].into_iter().flatten() {
+            if !self.cells.contains_key(&key) && !self.failed.contains(&key) {
+                let result = bake.load_cell(key).map_err(|e| e.to_string());
+                self.accept(renderer, key, result);
+            }
+            let (mine, rest): (VecDeque<_>, VecDeque<_>) =
+                self.uploads.drain(..).partition(|&(c, _, _)| c == key);
+            self.uploads = rest;
+            for (id, pi, vi) in mine {
+                self.upload_one(renderer, id, pi, vi);
+            }
+        }
     }
 
     /// The display frames after a drawn one ([`StreamConfig::display_frames_per_step`]):
@@ -618,7 +676,9 @@ impl Streamer {
                 .cells
                 .values()
                 .filter(|c| {
-                    Some(c.cell_id) != self.current && Some(c.cell_id) != self.current_group
+                    Some(c.cell_id) != self.current
+                        && Some(c.cell_id) != self.current_group
+                        && !self.previous.contains(&c.cell_id)
                 })
                 .min_by_key(|c| (c.last_used, c.cell_id))
                 .map(|c| c.cell_id);

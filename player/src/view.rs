@@ -96,7 +96,7 @@ impl ViewSession {
             0.5 * (g.ground_min[1] + g.ground_max[1]),
         ));
         player.renderer.set_representation_colours(opts.colours);
-        ViewSession {
+        let mut session = ViewSession {
             player,
             streamer,
             eye: Vec3::new(x, g.min_eye_height, z),
@@ -110,7 +110,10 @@ impl ViewSession {
             previous: None,
             interval_s: 0.0,
             frames: 0,
-        }
+        };
+        let camera = session.camera();
+        session.player.prime(&mut session.streamer, &camera);
+        session
     }
 
     /// A session on an offscreen renderer (no window).

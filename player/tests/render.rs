@@ -774,6 +774,119 @@ fn proxies_waiting_for_textures_are_drawn_as_originals() {
     assert!(psnr_y(&reference, &waiting) >= psnr_y(&reference, &ready));
 }
 
+/// After a crossing, a proxy of the new cell whose textures are still queued is
+/// drawn by its stand-in, the previous cell's ready proxy of the same objects
+/// (`--pending stand-ins`, the default), instead of its members as originals: the
+/// frame submits no more triangles, draws textured proxies where `originals` draws
+/// none, and has no more holes than the frame with every texture resident.
+#[test]
+fn after_a_crossing_the_previous_cells_proxies_stand_in() {
+    let Some((_dir, mut p, cam_a, cell_a)) = synthetic_at_instance_0() else {
+        return;
+    };
+    // A neighbour of the cell, entered at its centre, looking across the park
+    // (both cameras).
+    let grid = &p.bake.grid;
+    let g = *grid.params();
+    let middle = Vec3::new(
+        0.5 * (g.ground_min[0] + g.ground_max[0]),
+        cam_a.eye.y,
+        0.5 * (g.ground_min[1] + g.ground_max[1]),
+    );
+    let across = |eye: Vec3| Camera {
+        eye,
+        dir: (middle - eye).normalize_or(Vec3::X) - Vec3::new(0.0, 0.02, 0.0),
+        ..cam_a
+    };
+    let cam_a = across(cam_a.eye);
+    let (cam_b, cell_b) = grid
+        .neighbours(cell_a)
+        .into_iter()
+        .map(|n| {
+            let c = grid.centre(n);
+            (across(Vec3::new(c.x, cam_a.eye.y, c.y)), n)
+        })
+        .find(|(cam, n)| {
+            grid.nearest_cell(Vec2::new(cam.eye.x, cam.eye.z)) == Some(*n)
+                && p.bake.load_cell(*n).is_ok_and(|c| !c.proxies.is_empty())
+        })
+        .expect("a neighbour with proxies");
+    p.warm_up(&cam_a);
+    p.draw(&cam_b, Mode::Frustum, None);
+    let reference = p.renderer.read_pixels().unwrap();
+    let walk = |p: &mut Player, pending: PendingDraw| {
+        let mut s = Streamer::new(
+            &p.bake,
+            StreamConfig {
+                prefetch: false,
+                upload_budget_bytes: 1, // one texture per frame
+                pending,
+                ..Default::default()
+            },
+        );
+        // Stay in the first cell until its textures are all resident.
+        for _ in 0..200 {
+            let (_, _, _, st) = p.draw(&cam_a, Mode::Hybrid, Some(&mut s));
+            if st.pending_proxies == 0 {
+                break;
+            }
+        }
+        let (_, tris, tex, st) = p.draw(&cam_b, Mode::Hybrid, Some(&mut s));
+        assert_eq!(st.cell, Some(cell_b));
+        assert!(st.pending_proxies > 0, "the new cell waits for textures");
+        (tris, tex, p.renderer.read_pixels().unwrap())
+    };
+    let (tris_s, tex_s, stand_in) = walk(&mut p, PendingDraw::StandIns);
+    let (tris_o, tex_o, originals) = walk(&mut p, PendingDraw::Originals);
+    let mut ready_stream = Streamer::new(
+        &p.bake,
+        StreamConfig {
+            prefetch: false,
+            ..Default::default()
+        },
+    );
+    p.prime(&mut ready_stream, &cam_b);
+    p.draw(&cam_b, Mode::Hybrid, Some(&mut ready_stream));
+    let ready = p.renderer.read_pixels().unwrap();
+    println!(
+        "stand-ins {tris_s} triangles / {tex_s} texture bytes; originals {tris_o} / {tex_o}; \
+         holes {} / {} / ready {}",
+        holes(&reference, &stand_in),
+        holes(&reference, &originals),
+        holes(&reference, &ready)
+    );
+    assert!(tris_s <= tris_o, "{tris_s} > {tris_o}");
+    assert!(
+        tex_s > tex_o,
+        "stand-ins drawn: {tex_s} vs {tex_o} texture bytes"
+    );
+    assert!(holes(&reference, &stand_in) <= holes(&reference, &ready));
+}
+
+/// The loading screen ([`Streamer::prime`]): the first frame of a walk shows the
+/// start cell as baked (no proxy waiting for textures), and the cache statistics
+/// do not count it.
+#[test]
+fn a_primed_walk_starts_with_its_cell_ready() {
+    let Some((_dir, mut p, cam, cell)) = synthetic_at_instance_0() else {
+        return;
+    };
+    let mut s = Streamer::new(
+        &p.bake,
+        StreamConfig {
+            prefetch: false,
+            upload_budget_bytes: 1,
+            ..Default::default()
+        },
+    );
+    p.prime(&mut s, &cam);
+    let (_, _, tex, st) = p.draw(&cam, Mode::Hybrid, Some(&mut s));
+    assert_eq!(st.cell, Some(cell));
+    assert_eq!(st.pending_proxies, 0);
+    assert!(tex > 0);
+    assert_eq!((st.hits, st.misses), (1, 0));
+}
+
 /// The far field (format version 2, issue 13): a cell whose proxies live in its
 /// group's pack (`groups/<id>.pack`) draws the same frame as when they were its own;
 /// with the group's pack damaged, the cell draws those objects as originals (never a
