@@ -672,13 +672,7 @@ pub fn place(
     }
     let n = props.len();
     let max_count = props.iter().map(|e| e.count).max().unwrap_or(0);
-    let needed = props
-        .iter()
-        .enumerate()
-        .filter(|(_, e)| e.count > 0)
-        .map(|(p, e)| (e.count as usize - 1) * n + p + 1)
-        .max()
-        .unwrap_or(0);
+    let needed = crate::park::round_robin_slots(props.iter().map(|e| e.count));
     if needed > slots.len() {
         return Err(CityError::NotEnoughSlots {
             needed,

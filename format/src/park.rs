@@ -32,11 +32,7 @@ impl SplitMix64 {
     }
 
     pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
+        splitmix64(&mut self.0)
     }
 
     /// Uniform in [0, 1), 53 bits.
@@ -48,6 +44,27 @@ impl SplitMix64 {
     pub fn below(&mut self, bound: u64) -> u64 {
         ((u128::from(self.next_u64()) * u128::from(bound)) >> 64) as u64
     }
+}
+
+/// One step of splitmix64: advances `state` and returns the next output.
+pub fn splitmix64(state: &mut u64) -> u64 {
+    *state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    let mut z = *state;
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
+/// The slots a round-robin placement of these per-model counts needs: copy `k` of
+/// model `m` of `n` takes slot `k · n + m`, so the furthest last copy decides.
+pub(crate) fn round_robin_slots(counts: impl ExactSizeIterator<Item = u32>) -> usize {
+    let n = counts.len();
+    counts
+        .enumerate()
+        .filter(|&(_, count)| count > 0)
+        .map(|(m, count)| (count as usize - 1) * n + m + 1)
+        .max()
+        .unwrap_or(0)
 }
 
 /// What the generator needs of one park model: its count and its normalised x–z
@@ -180,13 +197,7 @@ pub fn place(
     // Step 1: slots.
     let grid = SlotGrid::new(entries, ground)?;
     let n = entries.len();
-    let needed = entries
-        .iter()
-        .enumerate()
-        .filter(|(_, e)| e.count > 0)
-        .map(|(m, e)| (e.count as usize - 1) * n + m + 1)
-        .max()
-        .unwrap_or(0);
+    let needed = round_robin_slots(entries.iter().map(|e| e.count));
     if needed > grid.slot_count() {
         return Err(ParkError::NotEnoughSlots {
             needed,

@@ -11,17 +11,14 @@ use super::index::{Index, IndexEntry};
 use super::texture::{Texture, TextureEncoding};
 use crate::mesh::Mesh;
 
-/// A small deterministic generator (SplitMix64), so samples need no `rand`.
+/// A small deterministic generator (the park's [`crate::park::splitmix64`], with
+/// its own `below` and `unit`), so samples need no `rand`.
 #[derive(Clone, Debug)]
 pub struct SplitMix(pub u64);
 
 impl SplitMix {
     pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
+        crate::park::splitmix64(&mut self.0)
     }
 
     /// Uniform in [0, n) (n > 0).
