@@ -64,16 +64,21 @@ pub(crate) fn parse(path: &Path, bytes: &[u8]) -> Result<Parsed, LoadError> {
     let positions_cap = vertex_count.min(bytes.len() / 6);
     let faces_cap = face_count.min(bytes.len() / 8);
 
+    // The file ends after `done` of `total` vertices or faces.
+    let ends_early = |done: usize, total: usize, what: &str| {
+        err(
+            format!("file ends after {done} of {total} {what}"),
+            text.lines().count(),
+        )
+    };
+
     // Vertices.
     let mut positions = Vec::with_capacity(positions_cap);
     let mut colors = has_colors.then(|| Vec::with_capacity(positions_cap));
     for v in 0..vertex_count {
-        let (line, l) = lines.next().ok_or_else(|| {
-            err(
-                format!("file ends after {v} of {vertex_count} vertices"),
-                text.lines().count(),
-            )
-        })?;
+        let (line, l) = lines
+            .next()
+            .ok_or_else(|| ends_early(v, vertex_count, "vertices"))?;
         let values: Vec<&str> = l.split_whitespace().collect();
         let number = |k: usize| -> Result<f32, LoadError> {
             let t = values.get(k).ok_or_else(|| {
@@ -122,12 +127,9 @@ pub(crate) fn parse(path: &Path, bytes: &[u8]) -> Result<Parsed, LoadError> {
     let mut triangles = Vec::with_capacity(faces_cap);
     let mut polygon: Vec<u32> = Vec::new();
     for f in 0..face_count {
-        let (line, l) = lines.next().ok_or_else(|| {
-            err(
-                format!("file ends after {f} of {face_count} faces"),
-                text.lines().count(),
-            )
-        })?;
+        let (line, l) = lines
+            .next()
+            .ok_or_else(|| ends_early(f, face_count, "faces"))?;
         let mut values = l.split_whitespace();
         let n: usize = values
             .next()

@@ -117,29 +117,18 @@ pub(crate) fn parse(path: &Path, bytes: &[u8]) -> Result<Parsed, LoadError> {
     let mut positions = Vec::with_capacity(vertices.len());
     let mut colors = Vec::new();
     for (i, v) in vertices.iter().enumerate() {
-        let at = || Location::Element(format!("vertex {i}"));
-        let coord = |k: &str| {
-            v.get(k).and_then(scalar).ok_or_else(|| {
-                parse_error(
-                    path,
-                    FORMAT,
-                    format!("vertex {i} has no numeric `{k}`"),
-                    at(),
-                )
-            })
+        let missing = |k: &str| {
+            parse_error(
+                path,
+                FORMAT,
+                format!("vertex {i} has no numeric `{k}`"),
+                Location::Element(format!("vertex {i}")),
+            )
         };
+        let coord = |k: &str| v.get(k).and_then(scalar).ok_or_else(|| missing(k));
         positions.push([coord("x")? as f32, coord("y")? as f32, coord("z")? as f32]);
         if has_colors {
-            let channel = |k: &str| {
-                v.get(k).and_then(color_channel).ok_or_else(|| {
-                    parse_error(
-                        path,
-                        FORMAT,
-                        format!("vertex {i} has no numeric `{k}`"),
-                        at(),
-                    )
-                })
-            };
+            let channel = |k: &str| v.get(k).and_then(color_channel).ok_or_else(|| missing(k));
             colors.push([channel("red")?, channel("green")?, channel("blue")?, 255]);
         }
     }
