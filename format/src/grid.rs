@@ -160,11 +160,30 @@ impl HexGrid {
     /// Centre (x, z) of a lattice position `(col, row)`, also outside the grid.
     pub fn lattice_centre(&self, col: i64, row: i64) -> Vec2 {
         let c = self.cell_size;
-        let odd = col.rem_euclid(2) == 1;
         Vec2::new(
             self.origin.x + col as f32 * 1.5 * c,
-            self.origin.y + row as f32 * SQRT3 * c + if odd { SQRT3 * c / 2.0 } else { 0.0 },
+            self.origin.y + row as f32 * SQRT3 * c + self.column_offset(col),
         )
+    }
+
+    /// How far up column `col`'s centres sit: odd columns half a cell height.
+    fn column_offset(&self, col: i64) -> f32 {
+        if col.rem_euclid(2) == 1 {
+            SQRT3 * self.cell_size / 2.0
+        } else {
+            0.0
+        }
+    }
+
+    /// The lattice column nearest `p` from the left; the nearest centre is in it,
+    /// the one before or the two after.
+    fn column_guess(&self, p: Vec2) -> i64 {
+        ((p.x - self.origin.x) / (1.5 * self.cell_size)).floor() as i64
+    }
+
+    /// The row of column `col` whose centre is nearest `p` along y.
+    fn row_guess(&self, p: Vec2, col: i64) -> i64 {
+        ((p.y - self.origin.y - self.column_offset(col)) / (SQRT3 * self.cell_size)).round() as i64
     }
 
     /// Centre (x, z) of a cell.
@@ -176,17 +195,11 @@ impl HexGrid {
     /// Lattice position `(col, row)` (possibly outside the grid) whose centre is
     /// nearest to `p`; exact ties go to the lower (row, col).
     fn nearest_lattice(&self, p: Vec2) -> (i64, i64) {
-        let c = self.cell_size;
-        let col_guess = ((p.x - self.origin.x) / (1.5 * c)).floor() as i64;
+        let col_guess = self.column_guess(p);
         let mut best = (i64::MAX, i64::MAX);
         let mut best_d = f32::INFINITY;
         for col in col_guess - 1..=col_guess + 2 {
-            let off = if col.rem_euclid(2) == 1 {
-                SQRT3 * c / 2.0
-            } else {
-                0.0
-            };
-            let row_guess = ((p.y - self.origin.y - off) / (SQRT3 * c)).round() as i64;
+            let row_guess = self.row_guess(p, col);
             for row in row_guess - 1..=row_guess + 1 {
                 let d = self.lattice_centre(col, row).distance_squared(p);
                 if d < best_d || (d == best_d && (row, col) < (best.1, best.0)) {
@@ -200,19 +213,13 @@ impl HexGrid {
 
     /// Nearest grid cell to `p` among the grid's own cells (for border notches).
     fn nearest_in_grid(&self, p: Vec2) -> u32 {
-        let c = self.cell_size;
-        let col_guess = ((p.x - self.origin.x) / (1.5 * c)).floor() as i64;
+        let col_guess = self.column_guess(p);
         let mut best = u32::MAX;
         let mut best_d = f32::INFINITY;
         let lo = (col_guess - 1).clamp(0, self.n_cols as i64 - 1);
         let hi = (col_guess + 2).clamp(0, self.n_cols as i64 - 1);
         for col in lo..=hi {
-            let off = if col.rem_euclid(2) == 1 {
-                SQRT3 * c / 2.0
-            } else {
-                0.0
-            };
-            let row_guess = ((p.y - self.origin.y - off) / (SQRT3 * c)).round() as i64;
+            let row_guess = self.row_guess(p, col);
             let rlo = (row_guess - 1).clamp(0, self.n_rows as i64 - 1);
             let rhi = (row_guess + 1).clamp(0, self.n_rows as i64 - 1);
             for row in rlo..=rhi {
