@@ -107,13 +107,7 @@ impl Texture {
         rgba: &[u8],
         encoding: TextureEncoding,
     ) -> Result<Texture, String> {
-        let expected = encoded_len(width, height)?;
-        if rgba.len() != expected {
-            return Err(format!(
-                "{width}x{height} RGBA8 needs {expected} bytes, got {}",
-                rgba.len()
-            ));
-        }
+        check_rgba8(width, height, rgba)?;
         let data = match encoding {
             TextureEncoding::Bc1 | TextureEncoding::Bc3 => {
                 if !width.is_multiple_of(4) || !height.is_multiple_of(4) {
@@ -300,13 +294,7 @@ pub fn block_padded_size(width: u32, height: u32) -> (u32, u32) {
 /// Checks that `rgba` holds `width × height` RGBA8 texels and pads it to
 /// [`block_padded_size`] ([`pad_edge`]): the input of both block writers.
 fn padded_for_blocks(width: u32, height: u32, rgba: &[u8]) -> Result<(u32, u32, Vec<u8>), String> {
-    let expected = encoded_len(width, height)?;
-    if rgba.len() != expected {
-        return Err(format!(
-            "{width}x{height} RGBA8 needs {expected} bytes, got {}",
-            rgba.len()
-        ));
-    }
+    check_rgba8(width, height, rgba)?;
     let (pw, ph) = block_padded_size(width, height);
     Ok((pw, ph, pad_edge(width, height, rgba, pw, ph)))
 }
@@ -326,6 +314,18 @@ fn pad_edge(width: u32, height: u32, rgba: &[u8], pw: u32, ph: u32) -> Vec<u8> {
         }
     }
     out
+}
+
+/// Checks that `rgba` holds exactly `width × height` RGBA8 texels of an allowed size.
+fn check_rgba8(width: u32, height: u32, rgba: &[u8]) -> Result<(), String> {
+    let expected = encoded_len(width, height)?;
+    if rgba.len() != expected {
+        return Err(format!(
+            "{width}x{height} RGBA8 needs {expected} bytes, got {}",
+            rgba.len()
+        ));
+    }
+    Ok(())
 }
 
 fn encoded_len(width: u32, height: u32) -> Result<usize, String> {
