@@ -158,8 +158,9 @@ pub struct BakeParams {
     /// every sample viewpoint of its region; the cheapest candidate that does is
     /// kept. Opt-in: absent = `None` (every outside object a mesh proxy, as in the
     /// paper); `quality: ()` selects with [`QualityFloor::default`]. Not on by default
-    /// because it does not pay yet: on park-2m cells it costs +50 % bake CPU for 0.6 %
-    /// of objects drawn as layered impostors (BENCHMARKS.md, issue 16).
+    /// because it does not pay yet: with impostors and meshes under 2× and 4× the
+    /// deviation bound as candidates, two park-4m cells lose 4 % of their proxy
+    /// triangles for about 3× the bake CPU (BENCHMARKS.md, issue 16).
     pub quality: Option<QualityFloor>,
 }
 

@@ -710,7 +710,8 @@ fn derive_region(
     let eyes = &region.eyes;
     let cell = region.id;
     let params_fp = format::fingerprint::params_fingerprint(params, cells);
-    let built: Vec<Result<(BakedProxy, StageTimes), BakeError>> = jobs
+    type Built = (BakedProxy, Vec<BakedProxy>, StageTimes);
+    let built: Vec<Result<Built, BakeError>> = jobs
         .par_iter()
         .map(|(_, job)| {
             let wrap = |source| BakeError::Proxy { cell, source };
@@ -727,96 +728,139 @@ fn derive_region(
                 Job::Mv(i) => proxy_key(scene, &params_fp, ProxyKind::MvMesh, &[*i], &prism, eyes),
             };
             if let Some(packed) = reuse.get(&key) {
-                return Ok((BakedProxy::reused(packed, key), StageTimes::default()));
+                return Ok((
+                    BakedProxy::reused(packed, key),
+                    Vec::new(),
+                    StageTimes::default(),
+                ));
             }
-            match job {
-                Job::Sv(group) => {
-                    let sv =
-                        derive_svmesh(scene, chains, group, centre, &settings).map_err(wrap)?;
-                    let kind = if group.len() > 1 {
-                        ProxyKind::Cluster
-                    } else {
-                        ProxyKind::SvMesh
+            let (proxy, mut times) =
+                derive_job(scene, chains, job, eyes, &prism, &settings, key).map_err(wrap)?;
+            // Coarser mesh candidates for the objective selection (issue 16, paper
+            // 004: the polygonal representation at more than one resolution): the
+            // same derivation with the deviation bound multiplied.
+            let mut coarser = Vec::new();
+            if params.quality.is_some() {
+                for factor in select::COARSER_BOUND_FACTORS {
+                    let Some(bound) = settings.deviation else {
+                        break;
                     };
-                    let members = sv
-                        .members
-                        .into_iter()
-                        .map(|m| BakedMember {
-                            instance: m.instance,
-                            input_triangles: m.input_triangles,
-                            triangles: cache_order(m.simplified.triangles, Vec::new()).0,
-                            view_masks: Vec::new(),
-                            vertex_view_sets: Vec::new(),
-                        })
-                        .collect();
-                    Ok((
-                        BakedProxy {
-                            kind,
-                            members,
-                            views: vec![sv.view],
-                            key,
-                            packed: None,
-                            impostor: None,
-                            quality: None,
-                        },
-                        sv.times,
-                    ))
-                }
-                Job::Mv(i) => {
-                    let mv =
-                        derive_mvmesh(scene, chains, *i, eyes, &prism, &settings).map_err(wrap)?;
-                    let (triangles, view_masks) = cache_order(
-                        mv.member.simplified.triangles,
-                        mv.member.simplified.view_masks,
-                    );
-                    Ok((
-                        BakedProxy {
-                            kind: ProxyKind::MvMesh,
-                            members: vec![BakedMember {
-                                instance: *i,
-                                input_triangles: mv.member.input_triangles,
-                                triangles,
-                                view_masks,
-                                vertex_view_sets: mv.vertex_view_sets,
-                            }],
-                            views: mv.views,
-                            key,
-                            packed: None,
-                            impostor: None,
-                            quality: None,
-                        },
-                        mv.times,
-                    ))
+                    let looser = ProxySettings {
+                        deviation: Some(crate::simplify::DeviationBound {
+                            max_px: bound.max_px * factor,
+                            ..bound
+                        }),
+                        ..settings.clone()
+                    };
+                    let (c, t) =
+                        derive_job(scene, chains, job, eyes, &prism, &looser, key).map_err(wrap)?;
+                    times.add(&t);
+                    coarser.push(c);
                 }
             }
+            Ok((proxy, coarser, times))
         })
         .collect();
     let mut proxies = Vec::with_capacity(built.len());
+    let mut coarser = Vec::with_capacity(built.len());
     let mut stage = StageTimes::default();
     for result in built {
-        let (proxy, t) = result?;
+        let (proxy, c, t) = result?;
         stage.add(&t);
         proxies.push(proxy);
+        coarser.push(c);
     }
     // Step 6 (issue 16): objective selection (paper 004, `select.rs`).
     if let Some(floor) = &params.quality {
         let t = Instant::now();
-        proxies = select_region(scene, region, proxies, params, floor)?;
+        proxies = select_region(scene, region, proxies, coarser, params, floor)?;
         times.select_ms += ms_since(t);
     }
     Ok((proxies, stage))
 }
 
+/// Step 5 for one job: its SVMesh / cluster or MVMesh proxy under `settings`.
+fn derive_job(
+    scene: &Scene,
+    chains: &LodChains,
+    job: &Job,
+    eyes: &[Vec3],
+    prism: &Prism,
+    settings: &ProxySettings,
+    key: ProxyKey,
+) -> Result<(BakedProxy, StageTimes), crate::svmesh::ProxyError> {
+    match job {
+        Job::Sv(group) => {
+            let sv = derive_svmesh(scene, chains, group, eyes[0], settings)?;
+            let kind = if group.len() > 1 {
+                ProxyKind::Cluster
+            } else {
+                ProxyKind::SvMesh
+            };
+            let members = sv
+                .members
+                .into_iter()
+                .map(|m| BakedMember {
+                    instance: m.instance,
+                    input_triangles: m.input_triangles,
+                    triangles: cache_order(m.simplified.triangles, Vec::new()).0,
+                    view_masks: Vec::new(),
+                    vertex_view_sets: Vec::new(),
+                })
+                .collect();
+            Ok((
+                BakedProxy {
+                    kind,
+                    members,
+                    views: vec![sv.view],
+                    key,
+                    packed: None,
+                    impostor: None,
+                    quality: None,
+                },
+                sv.times,
+            ))
+        }
+        Job::Mv(i) => {
+            let mv = derive_mvmesh(scene, chains, *i, eyes, prism, settings)?;
+            let (triangles, view_masks) = cache_order(
+                mv.member.simplified.triangles,
+                mv.member.simplified.view_masks,
+            );
+            Ok((
+                BakedProxy {
+                    kind: ProxyKind::MvMesh,
+                    members: vec![BakedMember {
+                        instance: *i,
+                        input_triangles: mv.member.input_triangles,
+                        triangles,
+                        view_masks,
+                        vertex_view_sets: mv.vertex_view_sets,
+                    }],
+                    views: mv.views,
+                    key,
+                    packed: None,
+                    impostor: None,
+                    quality: None,
+                },
+                mv.times,
+            ))
+        }
+    }
+}
+
 /// Step 6 (issue 16, [`crate::select`]): per derived proxy, the cheapest of Culled
 /// (below a pixel from the whole region), a layered impostor at half or full
-/// capture resolution, and the mesh proxy itself that meets `floor` from the
-/// region's sample viewpoints. Culled proxies are dropped (their members stay
-/// [`Assignment::Culled`]); reused proxies are kept as they are. Parallel over
-/// proxies, collected in order.
+/// capture resolution, the coarser mesh proxies (`coarser`, one list per proxy:
+/// the same derivation under a looser deviation bound) and the mesh proxy itself
+/// that meets `floor` from the region's sample viewpoints. Culled proxies are
+/// dropped (their members stay [`Assignment::Culled`]); reused proxies are kept as
+/// they are. Parallel over proxies, collected in order.
 fn select_region(
     scene: &Scene,
     region: &Region,
     proxies: Vec<BakedProxy>,
+    coarser: Vec<Vec<BakedProxy>>,
     params: &BakeParams,
     floor: &QualityFloor,
 ) -> Result<Vec<BakedProxy>, BakeError> {
@@ -830,7 +874,8 @@ fn select_region(
         .fold(0.0f32, f32::max);
     let chosen: Vec<Result<Option<BakedProxy>, BakeError>> = proxies
         .into_par_iter()
-        .map(|proxy| {
+        .zip(coarser)
+        .map(|(proxy, mut coarser)| {
             if proxy.packed.is_some() {
                 return Ok(Some(proxy));
             }
@@ -848,49 +893,16 @@ fn select_region(
             }
             // The paper's mesh proxy as the measuring code draws it: its figures set
             // the thresholds of the cheaper candidates (select.rs, "Acceptance").
-            let meshes: Vec<format::Mesh> = proxy
-                .members
-                .iter()
-                .map(|m| {
-                    let inst = &scene.instances[m.instance as usize];
-                    let model = &scene.models[inst.model as usize].mesh;
-                    format::Mesh {
-                        positions: model.positions.clone(),
-                        normals: model.normals.clone(),
-                        albedo: model.albedo.clone(),
-                        triangles: m.triangles.clone(),
-                    }
-                })
-                .collect();
-            let items: Vec<DrawItem> = meshes
-                .iter()
-                .zip(&originals)
-                .enumerate()
-                .map(|(k, (mesh, o))| DrawItem {
-                    mesh,
-                    object_id: k as u32,
-                    albedo_map: None,
-                    ..*o
-                })
-                .collect();
-            let textures = crate::raster::ProjectiveTextures {
-                viewer: centre,
-                by_object: proxy
-                    .members
-                    .iter()
-                    .map(|m| {
-                        Some(crate::raster::ProjectiveSurface {
-                            views: proxy.views.clone(),
-                            triangle_masks: (!m.view_masks.is_empty())
-                                .then(|| m.view_masks.clone()),
-                        })
-                    })
-                    .collect(),
-            };
-            // Candidates cheaper than the mesh proxy, cheapest first.
-            let texels: u64 = proxy.views.iter().map(|v| v.rgba.len() as u64 / 4).sum();
-            let mesh_cost = select::cost(proxy.triangle_count(), texels, 1);
-            let mut candidates = Vec::new();
+            let mesh = MeshDraw::of(scene, &proxy, centre);
+            let mesh_items = mesh.items(&originals);
+            let mesh_cost = mesh.cost(&proxy);
+            // Candidates cheaper than the mesh proxy, cheapest first (ties: the
+            // order built, coarser meshes after impostors).
+            enum Cheaper {
+                Impostor(LayeredImpostor),
+                Coarser(usize),
+            }
+            let mut candidates: Vec<(u64, Cheaper)> = Vec::new();
             for res in [params.image_res / 2, params.image_res] {
                 let built = build_layered_impostor(
                     centre,
@@ -907,20 +919,38 @@ fn select_region(
                 if let Some(imp) = built {
                     let c = select::cost(imp.triangle_count(), imp.texels(), 1);
                     if c < mesh_cost {
-                        candidates.push((c, imp));
+                        candidates.push((c, Cheaper::Impostor(imp)));
                     }
+                }
+            }
+            let coarse: Vec<MeshDraw> = coarser
+                .iter()
+                .map(|c| MeshDraw::of(scene, c, centre))
+                .collect();
+            let coarse_items: Vec<Vec<DrawItem>> =
+                coarse.iter().map(|m| m.items(&originals)).collect();
+            for (k, (c, draw)) in coarser.iter().zip(&coarse).enumerate() {
+                let cost = draw.cost(c);
+                if cost < mesh_cost {
+                    candidates.push((cost, Cheaper::Coarser(k)));
                 }
             }
             candidates.sort_by_key(|c| c.0);
             let drawn: Vec<Candidate> = candidates
                 .iter()
-                .map(|(_, imp)| Candidate::Impostor(imp))
+                .map(|(_, c)| match c {
+                    Cheaper::Impostor(imp) => Candidate::Impostor(imp),
+                    Cheaper::Coarser(k) => Candidate::Mesh {
+                        items: &coarse_items[*k],
+                        textures: &coarse[*k].textures,
+                    },
+                })
                 .collect();
             let (mesh_quality, winner) = select::select_among(
                 &originals,
                 &Candidate::Mesh {
-                    items: &items,
-                    textures: &textures,
+                    items: &mesh_items,
+                    textures: &mesh.textures,
                 },
                 &drawn,
                 &eyes,
@@ -929,9 +959,8 @@ fn select_region(
                 floor,
             );
             drop(drawn);
-            if let Some((i, m)) = winner {
-                let imp = candidates.swap_remove(i).1;
-                return Ok(Some(BakedProxy {
+            match winner.map(|(i, m)| (candidates.swap_remove(i).1, m)) {
+                Some((Cheaper::Impostor(imp), m)) => Ok(Some(BakedProxy {
                     kind: ProxyKind::LayeredImpostor,
                     members: members
                         .iter()
@@ -948,11 +977,18 @@ fn select_region(
                     packed: None,
                     impostor: Some(imp),
                     quality: Some(m),
-                }));
+                })),
+                Some((Cheaper::Coarser(k), m)) => {
+                    let mut chosen = coarser.swap_remove(k);
+                    chosen.quality = Some(m);
+                    Ok(Some(chosen))
+                }
+                None => {
+                    let mut proxy = proxy;
+                    proxy.quality = (mesh_quality.views > 0).then_some(mesh_quality);
+                    Ok(Some(proxy))
+                }
             }
-            let mut proxy = proxy;
-            proxy.quality = (mesh_quality.views > 0).then_some(mesh_quality);
-            Ok(Some(proxy))
         })
         .collect();
     let mut out = Vec::new();
@@ -960,6 +996,68 @@ fn select_region(
         out.extend(c?);
     }
     Ok(out)
+}
+
+/// A derived mesh proxy as the selection draws it (select.rs): its members' meshes
+/// (the models with the simplified triangles, untextured) and its projective
+/// textures from the viewer's side.
+struct MeshDraw {
+    meshes: Vec<format::Mesh>,
+    textures: crate::raster::ProjectiveTextures,
+}
+
+impl MeshDraw {
+    fn of(scene: &Scene, proxy: &BakedProxy, centre: Vec3) -> MeshDraw {
+        let meshes = proxy
+            .members
+            .iter()
+            .map(|m| {
+                let inst = &scene.instances[m.instance as usize];
+                let model = &scene.models[inst.model as usize].mesh;
+                format::Mesh {
+                    positions: model.positions.clone(),
+                    normals: model.normals.clone(),
+                    albedo: model.albedo.clone(),
+                    triangles: m.triangles.clone(),
+                }
+            })
+            .collect();
+        let textures = crate::raster::ProjectiveTextures {
+            viewer: centre,
+            by_object: proxy
+                .members
+                .iter()
+                .map(|m| {
+                    Some(crate::raster::ProjectiveSurface {
+                        views: proxy.views.clone(),
+                        triangle_masks: (!m.view_masks.is_empty()).then(|| m.view_masks.clone()),
+                    })
+                })
+                .collect(),
+        };
+        MeshDraw { meshes, textures }
+    }
+
+    /// Draw items over `originals` (object ids index the textures).
+    fn items<'a>(&'a self, originals: &[DrawItem<'a>]) -> Vec<DrawItem<'a>> {
+        self.meshes
+            .iter()
+            .zip(originals)
+            .enumerate()
+            .map(|(k, (mesh, o))| DrawItem {
+                mesh,
+                object_id: k as u32,
+                albedo_map: None,
+                ..*o
+            })
+            .collect()
+    }
+
+    /// [`select::cost`] of `proxy` (the one this was made of).
+    fn cost(&self, proxy: &BakedProxy) -> u64 {
+        let texels: u64 = proxy.views.iter().map(|v| v.rgba.len() as u64 / 4).sum();
+        select::cost(proxy.triangle_count(), texels, 1)
+    }
 }
 
 /// Statistics and the result of a cell's (or group's) bake.

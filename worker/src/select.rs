@@ -10,7 +10,9 @@
 //!   representation at the lowest resolution that meets the target); the mesh proxy
 //!   the paper's algorithm derives (SvMesh / Cluster / MvMesh, 000 §3.1), which is
 //!   kept when nothing cheaper passes (004 §3.3: "polygonal rendering is used for
-//!   that object").
+//!   that object"), and the same proxy derived again under a looser deviation bound
+//!   ([`COARSER_BOUND_FACTORS`] × `bake.max_deviation_px`: 004's polygonal
+//!   representation at more than one resolution; none without a bound).
 //! - **Cost** ([`cost`]): what a proxy adds to a frame and to a pack, in triangle
 //!   equivalents: `triangles + texels / TEXELS_PER_TRIANGLE + DRAW_CALL_COST` per
 //!   draw call. A triangle of a textured proxy costs a vertex fetch and transform
@@ -58,6 +60,10 @@ use crate::raster::{
 use format::manifest::QualityFloor;
 use format::metrics::{capped_psnr_of_mse, luminance, masked_ssim_y};
 use glam::Vec3;
+
+/// The coarser mesh candidates: the proxy derived again with the deviation bound
+/// (`bake.max_deviation_px`) multiplied by these (module docs, "Candidates").
+pub const COARSER_BOUND_FACTORS: [f32; 2] = [2.0, 4.0];
 
 /// Texels counted as one triangle in [`cost`] (module docs).
 pub const TEXELS_PER_TRIANGLE: u64 = 64;

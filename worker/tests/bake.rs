@@ -733,3 +733,52 @@ fn demo_far_field_is_shared_conservative_and_close() {
     eprintln!("demo cell {cell}: {n_far} far objects; far field {with:.2} dB, own proxies {without:.2} dB");
     assert!(with > without - 1.0, "{with} vs {without}");
 }
+
+/// Objective selection (issue 16) with the coarser mesh candidates: with a low
+/// floor (20 dB, SSIM not checked) the impostors still fail but meshes derived
+/// under a looser deviation bound pass, so some mesh proxy comes out with fewer
+/// triangles than the paper's proxy of the same objects, none with more, and each
+/// still validates (measured: 11 of the demo cell's 14; with the default floor,
+/// 30 dB and SSIM 0.9, none on the demo).
+#[test]
+fn selection_keeps_a_coarser_mesh_where_it_is_cheapest_and_good_enough() {
+    use format::manifest::QualityFloor;
+    use format::pack::ProxyKind;
+    let (scene, grid, cells, params) = demo();
+    let cell = busy_cell(&scene, &grid);
+    let off = BakeParams {
+        quality: None,
+        ..params.clone()
+    };
+    let low = BakeParams {
+        quality: Some(QualityFloor {
+            min_psnr_db: 20.0,
+            min_ssim: 0.0,
+        }),
+        ..params
+    };
+    let paper = bake_cell(&scene, &grid, cell, &cells, &off).unwrap();
+    let selected = bake_cell(&scene, &grid, cell, &cells, &low).unwrap();
+    validate_bake(&scene, &selected);
+    let members = |p: &worker::bake::BakedProxy| -> Vec<u32> {
+        p.members.iter().map(|m| m.instance).collect()
+    };
+    let (mut fewer, mut meshes) = (0, 0);
+    for p in selected
+        .proxies
+        .iter()
+        .filter(|p| p.kind != ProxyKind::LayeredImpostor)
+    {
+        let q = paper
+            .proxies
+            .iter()
+            .find(|q| members(q) == members(p))
+            .expect("the same objects in the paper's bake");
+        assert_eq!(p.kind, q.kind);
+        assert!(p.triangle_count() <= q.triangle_count());
+        fewer += usize::from(p.triangle_count() < q.triangle_count());
+        meshes += 1;
+    }
+    eprintln!("{fewer} of {meshes} mesh proxies coarser than the paper's");
+    assert!(fewer > 0, "no coarser mesh was kept");
+}
