@@ -24,40 +24,21 @@ use std::path::Path;
 /// and one spare; view masks are one byte per triangle.
 pub const MAX_MV_VIEWS: usize = 8;
 
-/// How a proxy is drawn.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub enum ProxyKind {
-    /// Simplified mesh, one capture from the cell centre, projective texturing.
-    SvMesh = 1,
-    /// Several SV objects merged into one proxy with one capture.
-    Cluster = 2,
-    /// Simplified mesh with captures from the centre and up to 6 neighbours; each
-    /// triangle carries a mask of the views that see it; the player blends two views.
-    MvMesh = 3,
-    /// Layered impostor (paper 001): one RGB + depth-code view sliced into quads;
-    /// its layers live in the `layered-impostors` section ([`ImpostorLayers`]). Its
-    /// members list the instances it stands for, with no triangles.
-    LayeredImpostor = 4,
-}
-
-impl ProxyKind {
-    pub fn from_u32(v: u32) -> Option<ProxyKind> {
-        match v {
-            1 => Some(ProxyKind::SvMesh),
-            2 => Some(ProxyKind::Cluster),
-            3 => Some(ProxyKind::MvMesh),
-            4 => Some(ProxyKind::LayeredImpostor),
-            _ => None,
-        }
-    }
-
-    pub fn name(self) -> &'static str {
-        match self {
-            ProxyKind::SvMesh => "SvMesh",
-            ProxyKind::Cluster => "Cluster",
-            ProxyKind::MvMesh => "MvMesh",
-            ProxyKind::LayeredImpostor => "LayeredImpostor",
-        }
+super::code_enum! {
+    /// How a proxy is drawn.
+    #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+    pub enum ProxyKind {
+        /// Simplified mesh, one capture from the cell centre, projective texturing.
+        SvMesh = 1 => "SvMesh",
+        /// Several SV objects merged into one proxy with one capture.
+        Cluster = 2 => "Cluster",
+        /// Simplified mesh with captures from the centre and up to 6 neighbours; each
+        /// triangle carries a mask of the views that see it; the player blends two views.
+        MvMesh = 3 => "MvMesh",
+        /// Layered impostor (paper 001): one RGB + depth-code view sliced into quads;
+        /// its layers live in the `layered-impostors` section ([`ImpostorLayers`]). Its
+        /// members list the instances it stands for, with no triangles.
+        LayeredImpostor = 4 => "LayeredImpostor",
     }
 }
 

@@ -73,79 +73,41 @@ pub struct SectionEntry {
 }
 const _: () = assert!(std::mem::size_of::<SectionEntry>() == ENTRY_SIZE);
 
-/// Which of the three files a pack is.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub enum FileKind {
-    /// `base.pack`: models, instances, grid parameters.
-    Base = 1,
-    /// `cells/<id>.pack`: one cell's originals and proxies.
-    Cell = 2,
-    /// `index.pack`: cell → file, size, checksum, neighbours (and, from version 2,
-    /// the far-field groups).
-    Index = 3,
-    /// `groups/<id>.pack` (version 2): the far field shared by a group of cells —
-    /// the same sections as a cell pack, no originals.
-    Group = 4,
-}
-
-impl FileKind {
-    pub fn from_u32(v: u32) -> Option<FileKind> {
-        match v {
-            1 => Some(FileKind::Base),
-            2 => Some(FileKind::Cell),
-            3 => Some(FileKind::Index),
-            4 => Some(FileKind::Group),
-            _ => None,
-        }
-    }
-
-    pub fn name(self) -> &'static str {
-        match self {
-            FileKind::Base => "base",
-            FileKind::Cell => "cell",
-            FileKind::Index => "index",
-            FileKind::Group => "group",
-        }
+super::code_enum! {
+    /// Which of the three files a pack is.
+    #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+    pub enum FileKind {
+        /// `base.pack`: models, instances, grid parameters.
+        Base = 1 => "base",
+        /// `cells/<id>.pack`: one cell's originals and proxies.
+        Cell = 2 => "cell",
+        /// `index.pack`: cell → file, size, checksum, neighbours (and, from version 2,
+        /// the far-field groups).
+        Index = 3 => "index",
+        /// `groups/<id>.pack` (version 2): the far field shared by a group of cells —
+        /// the same sections as a cell pack, no originals.
+        Group = 4 => "group",
     }
 }
 
-/// How a section's stored bytes decode into its content.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum Codec {
-    /// Stored bytes are the content (`stored_len == raw_len`); usable zero-copy.
-    Raw = 0,
-    /// One zstd frame.
-    Zstd = 1,
-    /// Content is a stream of little-endian u32 (index buffers). Stored as one zstd
-    /// frame of the *pre-coded* stream: successive differences, zig-zag mapped, with
-    /// the four bytes of each value split into four planes (see README "Codecs").
-    ZstdDeltaU32 = 2,
-    /// Content is a stream of little-endian u32 indices (triangle lists). Stored as one
-    /// zstd frame of a move-to-front pre-coding: per index one code byte (its position
-    /// in a 16-entry list of recent indices, or 16 for a new one) and, for new ones,
-    /// a zig-zag LEB128 delta from the previous new index (README "Codecs"; format
-    /// version 3, issue 15 item 4).
-    ZstdIndexMtf = 3,
-}
-
-impl Codec {
-    pub fn from_u32(v: u32) -> Option<Codec> {
-        match v {
-            0 => Some(Codec::Raw),
-            1 => Some(Codec::Zstd),
-            2 => Some(Codec::ZstdDeltaU32),
-            3 => Some(Codec::ZstdIndexMtf),
-            _ => None,
-        }
-    }
-
-    pub fn name(self) -> &'static str {
-        match self {
-            Codec::Raw => "raw",
-            Codec::Zstd => "zstd",
-            Codec::ZstdDeltaU32 => "zstd+delta-u32",
-            Codec::ZstdIndexMtf => "zstd+index-mtf",
-        }
+super::code_enum! {
+    /// How a section's stored bytes decode into its content.
+    #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+    pub enum Codec {
+        /// Stored bytes are the content (`stored_len == raw_len`); usable zero-copy.
+        Raw = 0 => "raw",
+        /// One zstd frame.
+        Zstd = 1 => "zstd",
+        /// Content is a stream of little-endian u32 (index buffers). Stored as one zstd
+        /// frame of the *pre-coded* stream: successive differences, zig-zag mapped, with
+        /// the four bytes of each value split into four planes (see README "Codecs").
+        ZstdDeltaU32 = 2 => "zstd+delta-u32",
+        /// Content is a stream of little-endian u32 indices (triangle lists). Stored as one
+        /// zstd frame of a move-to-front pre-coding: per index one code byte (its position
+        /// in a 16-entry list of recent indices, or 16 for a new one) and, for new ones,
+        /// a zig-zag LEB128 delta from the previous new index (README "Codecs"; format
+        /// version 3, issue 15 item 4).
+        ZstdIndexMtf = 3 => "zstd+index-mtf",
     }
 }
 

@@ -63,6 +63,41 @@ macro_rules! pack_file_methods {
 }
 pub(crate) use pack_file_methods;
 
+/// An enum stored as a `u32` code, with its name in messages and tools: one row per
+/// variant, `Variant = code => "name"`, gives the enum, `from_u32` (the variant of a
+/// code; `None` for one this version does not know) and `name`.
+macro_rules! code_enum {
+    (
+        $(#[$attr:meta])*
+        pub enum $enum:ident {
+            $($(#[$variant_attr:meta])* $variant:ident = $code:literal => $name:literal,)*
+        }
+    ) => {
+        $(#[$attr])*
+        pub enum $enum {
+            $($(#[$variant_attr])* $variant = $code,)*
+        }
+
+        impl $enum {
+            /// The variant stored as `v`; `None` for a code this version does not know.
+            pub fn from_u32(v: u32) -> Option<$enum> {
+                match v {
+                    $($code => Some($enum::$variant),)*
+                    _ => None,
+                }
+            }
+
+            /// The name messages and tools use.
+            pub fn name(self) -> &'static str {
+                match self {
+                    $($enum::$variant => $name,)*
+                }
+            }
+        }
+    };
+}
+pub(crate) use code_enum;
+
 pub(crate) fn invalid(what: impl Into<String>) -> PackError {
     PackError::Invalid { what: what.into() }
 }

@@ -23,42 +23,34 @@ use block_compression::CompressionVariant;
 /// Largest texture side accepted by readers and writers.
 pub const MAX_TEXTURE_SIDE: u32 = 16384;
 
-/// How a texture's bytes encode its RGBA8 texels.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum TextureEncoding {
-    /// Row-major RGBA8 sRGB, `width · height · 4` bytes; uploadable as is.
-    Rgba8 = 0,
-    /// RGBA8 with a per-channel left predictor: byte i of a row stores
-    /// `texel[i] - texel[i - 4]` (wrapping; the first texel of a row is stored as is).
-    /// Same size, lossless, decoded with one add per byte; zstd compresses it better.
-    Rgba8Left = 1,
-    /// BC1 (DXT1) blocks, 8 bytes per 4×4 texels, row-major blocks; both sides are
-    /// multiples of 4. Format version 2. In versions 2–3 every texel decodes with
-    /// alpha 255 (writers used it only for images whose alpha is all 255). From
-    /// version 4 it is also the coverage encoding: blocks in three-colour mode carry
-    /// punch-through alpha, an uncovered texel decodes as (0, 0, 0, 0), and colours are
-    /// premultiplied by coverage ([`Texture::from_rgba8_bc1_coverage`]).
-    Bc1 = 2,
-    /// BC3 (DXT5) blocks, 16 bytes per 4×4 texels (8 alpha + 8 BC1 colour), row-major
-    /// blocks; both sides are multiples of 4. For images with coverage in alpha.
-    /// Format version 2; version-3 writers zeroed the blocks farther than one texel
-    /// from coverage; version-4 writers no longer use it (BC1 with punch-through alpha
-    /// takes half the bytes), readers still accept it. (BC7 was measured and rejected: its CPU encoder runs at
-    /// 0.1–0.3 Mtexel/s against BC3's 39, README "Textures".)
-    Bc3 = 3,
+super::code_enum! {
+    /// How a texture's bytes encode its RGBA8 texels.
+    #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+    pub enum TextureEncoding {
+        /// Row-major RGBA8 sRGB, `width · height · 4` bytes; uploadable as is.
+        Rgba8 = 0 => "rgba8",
+        /// RGBA8 with a per-channel left predictor: byte i of a row stores
+        /// `texel[i] - texel[i - 4]` (wrapping; the first texel of a row is stored as is).
+        /// Same size, lossless, decoded with one add per byte; zstd compresses it better.
+        Rgba8Left = 1 => "rgba8-left",
+        /// BC1 (DXT1) blocks, 8 bytes per 4×4 texels, row-major blocks; both sides are
+        /// multiples of 4. Format version 2. In versions 2–3 every texel decodes with
+        /// alpha 255 (writers used it only for images whose alpha is all 255). From
+        /// version 4 it is also the coverage encoding: blocks in three-colour mode carry
+        /// punch-through alpha, an uncovered texel decodes as (0, 0, 0, 0), and colours are
+        /// premultiplied by coverage ([`Texture::from_rgba8_bc1_coverage`]).
+        Bc1 = 2 => "bc1",
+        /// BC3 (DXT5) blocks, 16 bytes per 4×4 texels (8 alpha + 8 BC1 colour), row-major
+        /// blocks; both sides are multiples of 4. For images with coverage in alpha.
+        /// Format version 2; version-3 writers zeroed the blocks farther than one texel
+        /// from coverage; version-4 writers no longer use it (BC1 with punch-through alpha
+        /// takes half the bytes), readers still accept it. (BC7 was measured and rejected: its CPU encoder runs at
+        /// 0.1–0.3 Mtexel/s against BC3's 39, README "Textures".)
+        Bc3 = 3 => "bc3",
+    }
 }
 
 impl TextureEncoding {
-    pub fn from_u32(v: u32) -> Option<TextureEncoding> {
-        match v {
-            0 => Some(TextureEncoding::Rgba8),
-            1 => Some(TextureEncoding::Rgba8Left),
-            2 => Some(TextureEncoding::Bc1),
-            3 => Some(TextureEncoding::Bc3),
-            _ => None,
-        }
-    }
-
     /// The encodings a pack of format `version` may hold (the block encodings came
     /// with version 2).
     pub fn from_u32_in_version(v: u32, version: u32) -> Option<TextureEncoding> {
@@ -77,15 +69,6 @@ impl TextureEncoding {
             TextureEncoding::Rgba8 | TextureEncoding::Rgba8Left => texels * 4,
             TextureEncoding::Bc1 => texels / 2,
             TextureEncoding::Bc3 => texels,
-        }
-    }
-
-    pub fn name(self) -> &'static str {
-        match self {
-            TextureEncoding::Rgba8 => "rgba8",
-            TextureEncoding::Rgba8Left => "rgba8-left",
-            TextureEncoding::Bc1 => "bc1",
-            TextureEncoding::Bc3 => "bc3",
         }
     }
 }
