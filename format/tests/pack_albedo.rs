@@ -59,11 +59,7 @@ fn textured_packs_round_trip_and_untextured_packs_have_no_texture_sections() {
         .sections()
         .iter()
         .filter(|s| s.kind != SectionKind::ALBEDO_TEXTURES && s.kind != SectionKind::TEXCOORDS)
-        .map(|s| SectionData {
-            kind: s.kind,
-            raw: pack.section(s.kind).unwrap().into_owned(),
-            codecs: &[],
-        })
+        .map(|s| SectionData::new(s.kind, pack.section(s.kind).unwrap().into_owned(), &[]))
         .collect();
     let stripped = assemble(FileKind::Base, &kept).unwrap();
     assert_eq!(
@@ -174,11 +170,7 @@ fn hostile_texture_sections_are_rejected_with_the_section_named() {
         .sections()
         .iter()
         .filter(|s| s.kind != c)
-        .map(|s| SectionData {
-            kind: s.kind,
-            raw: pack.section(s.kind).unwrap().into_owned(),
-            codecs: &[],
-        })
+        .map(|s| SectionData::new(s.kind, pack.section(s.kind).unwrap().into_owned(), &[]))
         .collect();
     let e = BasePack::from_bytes(&assemble(FileKind::Base, &without_uvs).unwrap())
         .unwrap_err()

@@ -177,10 +177,12 @@ fn sections_of(bytes: &[u8]) -> Vec<SectionData> {
     let pack = PackFile::from_bytes(bytes).unwrap();
     pack.sections()
         .iter()
-        .map(|s| SectionData {
-            kind: s.kind,
-            raw: pack.section(s.kind).unwrap().into_owned(),
-            codecs: TRY_INDICES,
+        .map(|s| {
+            SectionData::new(
+                s.kind,
+                pack.section(s.kind).unwrap().into_owned(),
+                TRY_INDICES,
+            )
         })
         .collect()
 }
@@ -192,17 +194,9 @@ fn unknown_section_kinds_are_skipped() {
     let mut sections = sections_of(&bytes);
     sections.insert(
         2,
-        SectionData {
-            kind: SectionKind(0x02ff),
-            raw: vec![7; 300],
-            codecs: TRY_ZSTD,
-        },
+        SectionData::new(SectionKind(0x02ff), vec![7; 300], TRY_ZSTD),
     );
-    sections.push(SectionData {
-        kind: SectionKind(0x02fe),
-        raw: vec![1, 2, 3],
-        codecs: &[],
-    });
+    sections.push(SectionData::new(SectionKind(0x02fe), vec![1, 2, 3], &[]));
     let extended = assemble(FileKind::Cell, &sections).unwrap();
     assert_eq!(CellPack::from_bytes(&extended).unwrap(), cell);
 }

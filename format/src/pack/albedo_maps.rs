@@ -111,16 +111,8 @@ pub(crate) fn sections(
     texcoords.extend_from_slice(bytemuck::cast_slice(&uv_records));
     texcoords.extend_from_slice(&uvs);
     Ok(vec![
-        SectionData {
-            kind: SectionKind::ALBEDO_TEXTURES,
-            raw: textures,
-            codecs: TRY_ZSTD,
-        },
-        SectionData {
-            kind: SectionKind::TEXCOORDS,
-            raw: texcoords,
-            codecs: TRY_ZSTD,
-        },
+        SectionData::new(SectionKind::ALBEDO_TEXTURES, textures, TRY_ZSTD),
+        SectionData::new(SectionKind::TEXCOORDS, texcoords, TRY_ZSTD),
     ])
 }
 

@@ -334,46 +334,26 @@ impl BasePack {
 
         // 2. Sections; positions and normals stay raw unless zstd pays (zero-copy).
         let mut sections = vec![
-            SectionData {
-                kind: SectionKind::BASE_META,
-                raw: bytemuck::bytes_of(&meta).to_vec(),
-                codecs: RAW_ONLY,
-            },
-            SectionData {
-                kind: SectionKind::MODEL_TABLE,
-                raw: bytemuck::cast_slice(&records).to_vec(),
-                codecs: TRY_ZSTD,
-            },
-            SectionData {
-                kind: SectionKind::MODEL_NAMES,
-                raw: names,
-                codecs: TRY_ZSTD,
-            },
-            SectionData {
-                kind: SectionKind::POSITIONS,
-                raw: positions,
-                codecs: TRY_ZSTD_PREFER_RAW,
-            },
-            SectionData {
-                kind: SectionKind::NORMALS,
-                raw: normals,
-                codecs: TRY_ZSTD_PREFER_RAW,
-            },
-            SectionData {
-                kind: SectionKind::VERTEX_COLOURS,
-                raw: colours,
-                codecs: TRY_ZSTD,
-            },
-            SectionData {
-                kind: SectionKind::TRIANGLES,
-                raw: triangles,
-                codecs: TRY_TRIANGLES,
-            },
-            SectionData {
-                kind: SectionKind::INSTANCES,
-                raw: bytemuck::cast_slice(&instances).to_vec(),
-                codecs: TRY_ZSTD,
-            },
+            SectionData::new(
+                SectionKind::BASE_META,
+                bytemuck::bytes_of(&meta).to_vec(),
+                RAW_ONLY,
+            ),
+            SectionData::new(
+                SectionKind::MODEL_TABLE,
+                bytemuck::cast_slice(&records).to_vec(),
+                TRY_ZSTD,
+            ),
+            SectionData::new(SectionKind::MODEL_NAMES, names, TRY_ZSTD),
+            SectionData::new(SectionKind::POSITIONS, positions, TRY_ZSTD_PREFER_RAW),
+            SectionData::new(SectionKind::NORMALS, normals, TRY_ZSTD_PREFER_RAW),
+            SectionData::new(SectionKind::VERTEX_COLOURS, colours, TRY_ZSTD),
+            SectionData::new(SectionKind::TRIANGLES, triangles, TRY_TRIANGLES),
+            SectionData::new(
+                SectionKind::INSTANCES,
+                bytemuck::cast_slice(&instances).to_vec(),
+                TRY_ZSTD,
+            ),
         ];
         // Optional albedo textures and UVs (issue 18), absent for untextured scenes.
         let maps: Vec<_> = self.models.iter().map(|m| m.albedo_map.as_ref()).collect();

@@ -473,55 +473,43 @@ impl CellPack {
             reserved: [0; 2],
         };
         let mut sections = vec![
-            SectionData {
-                kind: SectionKind::CELL_META,
-                raw: bytemuck::bytes_of(&meta).to_vec(),
-                codecs: RAW_ONLY,
-            },
-            SectionData {
-                kind: SectionKind::ORIGINALS,
-                raw: bytemuck::cast_slice(&self.originals).to_vec(),
-                codecs: TRY_INDICES,
-            },
-            SectionData {
-                kind: SectionKind::PROXIES,
-                raw: bytemuck::cast_slice(&proxies).to_vec(),
-                codecs: TRY_ZSTD,
-            },
-            SectionData {
-                kind: SectionKind::MEMBERS,
-                raw: bytemuck::cast_slice(&members).to_vec(),
-                codecs: TRY_ZSTD,
-            },
-            SectionData {
-                kind: SectionKind::MEMBER_TRIANGLES,
-                raw: triangles,
-                codecs: TRY_TRIANGLES,
-            },
-            SectionData {
-                kind: SectionKind::VIEW_MASKS,
-                raw: masks,
-                codecs: TRY_ZSTD,
-            },
-            SectionData {
-                kind: SectionKind::VIEWS,
-                raw: bytemuck::cast_slice(&views).to_vec(),
-                codecs: TRY_ZSTD,
-            },
-            SectionData {
-                kind: SectionKind::TEXTURES,
-                raw: textures,
-                codecs: TRY_ZSTD,
-            },
+            SectionData::new(
+                SectionKind::CELL_META,
+                bytemuck::bytes_of(&meta).to_vec(),
+                RAW_ONLY,
+            ),
+            SectionData::new(
+                SectionKind::ORIGINALS,
+                bytemuck::cast_slice(&self.originals).to_vec(),
+                TRY_INDICES,
+            ),
+            SectionData::new(
+                SectionKind::PROXIES,
+                bytemuck::cast_slice(&proxies).to_vec(),
+                TRY_ZSTD,
+            ),
+            SectionData::new(
+                SectionKind::MEMBERS,
+                bytemuck::cast_slice(&members).to_vec(),
+                TRY_ZSTD,
+            ),
+            SectionData::new(SectionKind::MEMBER_TRIANGLES, triangles, TRY_TRIANGLES),
+            SectionData::new(SectionKind::VIEW_MASKS, masks, TRY_ZSTD),
+            SectionData::new(
+                SectionKind::VIEWS,
+                bytemuck::cast_slice(&views).to_vec(),
+                TRY_ZSTD,
+            ),
+            SectionData::new(SectionKind::TEXTURES, textures, TRY_ZSTD),
         ];
         // Only packs with layered impostors carry the section, so packs without
         // them stay byte-identical to those of writers that never knew it.
         if !impostors.is_empty() {
-            sections.push(SectionData {
-                kind: SectionKind::LAYERED_IMPOSTORS,
-                raw: impostors,
-                codecs: TRY_ZSTD,
-            });
+            sections.push(SectionData::new(
+                SectionKind::LAYERED_IMPOSTORS,
+                impostors,
+                TRY_ZSTD,
+            ));
         }
         assemble_reusing(file_kind, &sections, previous)
     }

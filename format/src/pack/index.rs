@@ -296,36 +296,32 @@ impl Index {
         assemble(
             FileKind::Index,
             &[
-                SectionData {
-                    kind: SectionKind::INDEX_META,
-                    raw: bytemuck::bytes_of(&meta).to_vec(),
-                    codecs: RAW_ONLY,
-                },
-                SectionData {
-                    kind: SectionKind::INDEX_CELLS,
-                    raw: bytemuck::cast_slice(&records).to_vec(),
-                    codecs: TRY_ZSTD,
-                },
-                SectionData {
-                    kind: SectionKind::INDEX_FILE_NAMES,
-                    raw: names,
-                    codecs: TRY_ZSTD,
-                },
-                SectionData {
-                    kind: SectionKind::INDEX_NEIGHBOURS,
-                    raw: bytemuck::cast_slice(&neighbours).to_vec(),
-                    codecs: TRY_INDICES,
-                },
-                SectionData {
-                    kind: SectionKind::INDEX_GROUPS,
-                    raw: bytemuck::cast_slice(&group_records).to_vec(),
-                    codecs: TRY_ZSTD,
-                },
-                SectionData {
-                    kind: SectionKind::INDEX_CELL_GROUPS,
-                    raw: bytemuck::cast_slice(&cell_groups).to_vec(),
-                    codecs: TRY_INDICES,
-                },
+                SectionData::new(
+                    SectionKind::INDEX_META,
+                    bytemuck::bytes_of(&meta).to_vec(),
+                    RAW_ONLY,
+                ),
+                SectionData::new(
+                    SectionKind::INDEX_CELLS,
+                    bytemuck::cast_slice(&records).to_vec(),
+                    TRY_ZSTD,
+                ),
+                SectionData::new(SectionKind::INDEX_FILE_NAMES, names, TRY_ZSTD),
+                SectionData::new(
+                    SectionKind::INDEX_NEIGHBOURS,
+                    bytemuck::cast_slice(&neighbours).to_vec(),
+                    TRY_INDICES,
+                ),
+                SectionData::new(
+                    SectionKind::INDEX_GROUPS,
+                    bytemuck::cast_slice(&group_records).to_vec(),
+                    TRY_ZSTD,
+                ),
+                SectionData::new(
+                    SectionKind::INDEX_CELL_GROUPS,
+                    bytemuck::cast_slice(&cell_groups).to_vec(),
+                    TRY_INDICES,
+                ),
             ],
         )
     }

@@ -272,21 +272,9 @@ pub(super) fn sections(set: &PatchSet) -> Vec<SectionData> {
         order.extend_from_slice(bytemuck::cast_slice::<u32, u8>(&m.triangle_order));
     }
     vec![
-        SectionData {
-            kind: SectionKind::PATCH_TABLE,
-            raw: table,
-            codecs: TRY_ZSTD,
-        },
-        SectionData {
-            kind: SectionKind::PATCH_TRIANGLES,
-            raw: order,
-            codecs: TRY_INDICES,
-        },
-        SectionData {
-            kind: SectionKind::PATCH_SAMPLES,
-            raw: samples,
-            codecs: TRY_ZSTD,
-        },
+        SectionData::new(SectionKind::PATCH_TABLE, table, TRY_ZSTD),
+        SectionData::new(SectionKind::PATCH_TRIANGLES, order, TRY_INDICES),
+        SectionData::new(SectionKind::PATCH_SAMPLES, samples, TRY_ZSTD),
     ]
 }
 

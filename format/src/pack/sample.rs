@@ -681,11 +681,11 @@ pub fn mutate_decoded(bytes: &[u8], pick: u64) -> Option<Vec<u8>> {
         .sections()
         .iter()
         .map(|s| {
-            Some(SectionData {
-                kind: s.kind,
-                raw: pack.section(s.kind).ok()?.into_owned(),
-                codecs: TRY_INDICES,
-            })
+            Some(SectionData::new(
+                s.kind,
+                pack.section(s.kind).ok()?.into_owned(),
+                TRY_INDICES,
+            ))
         })
         .collect::<Option<_>>()?;
     let candidates: Vec<usize> = (0..sections.len())

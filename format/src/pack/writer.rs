@@ -24,6 +24,13 @@ pub struct SectionData {
     pub codecs: &'static [Codec],
 }
 
+impl SectionData {
+    /// Section `kind` with content `raw`, stored with the best of `codecs`.
+    pub fn new(kind: SectionKind, raw: Vec<u8>, codecs: &'static [Codec]) -> SectionData {
+        SectionData { kind, raw, codecs }
+    }
+}
+
 /// Codec candidates for general data.
 pub const TRY_ZSTD: &[Codec] = &[Codec::Zstd];
 /// Codec candidates for vertex arrays: zstd only where it saves a quarter (else they
