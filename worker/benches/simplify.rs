@@ -69,7 +69,7 @@ fn bench_simplify(c: &mut Criterion) {
         .copied()
         .collect();
     let sv_params = SimplifyParams {
-        edge_length_tolerance: 4.5,
+        edge_length_tolerance_px: 4.5,
         length: ProjectedLength::FromPoint {
             eye: centre,
             pixels_per_radian: ppr,
@@ -132,7 +132,7 @@ fn bench_simplify(c: &mut Criterion) {
         .copied()
         .collect();
     let mv_params = SimplifyParams {
-        edge_length_tolerance: 4.5,
+        edge_length_tolerance_px: 4.5,
         length: ProjectedLength::MaxOverPoints {
             eyes: corners,
             pixels_per_radian: ppr,

@@ -176,7 +176,7 @@ pub fn derive_mvmesh(
             view_sets: Some(&view_sets),
         },
         &SimplifyParams {
-            edge_length_tolerance: settings.edge_length_tolerance,
+            edge_length_tolerance_px: settings.edge_length_tolerance_px,
             length: ProjectedLength::MaxOverPrism {
                 prism: *prism,
                 pixels_per_radian: pixels_per_radian(settings.image_res),

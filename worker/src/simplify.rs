@@ -239,7 +239,7 @@ pub struct SimplifyInput<'a> {
 #[derive(Clone, Debug, PartialEq)]
 pub struct SimplifyParams {
     /// T_l: edges collapse while their cost is below this (pixels).
-    pub edge_length_tolerance: f32,
+    pub edge_length_tolerance_px: f32,
     /// How l is measured (SV: from the cell centre; MV: max over the corners).
     pub length: ProjectedLength,
     /// Optional bound on the geometric deviation (our addition, module docs);
@@ -395,7 +395,7 @@ pub fn simplify_seeded(
     if params.length.eyes().is_empty() {
         return Err(SimplifyError::NoEyes);
     }
-    check_input(input, params.edge_length_tolerance)?;
+    check_input(input, params.edge_length_tolerance_px)?;
     let tolerances = match &params.deviation {
         None => None,
         Some(bound) if !(bound.max_px.is_finite() && bound.max_px > 0.0) => {
@@ -450,7 +450,7 @@ pub fn simplify_seeded(
         dev.seed(carried);
         dev
     });
-    Ok(collapse_welded(input, deviation, params.edge_length_tolerance, length).simplified)
+    Ok(collapse_welded(input, deviation, params.edge_length_tolerance_px, length).simplified)
 }
 
 /// Checks the carried lists of [`simplify_seeded`] / [`collapse_within`].
@@ -525,11 +525,11 @@ pub fn collapse_within(
 /// in pixels for the edge between vertex ids `a` and `b` (symmetric).
 pub fn simplify_with(
     input: &SimplifyInput,
-    edge_length_tolerance: f32,
+    edge_length_tolerance_px: f32,
     length_px: impl Fn(u32, u32) -> f32,
 ) -> Result<Simplified, SimplifyError> {
-    check_input(input, edge_length_tolerance)?;
-    Ok(collapse_welded(input, None, edge_length_tolerance, length_px).simplified)
+    check_input(input, edge_length_tolerance_px)?;
+    Ok(collapse_welded(input, None, edge_length_tolerance_px, length_px).simplified)
 }
 
 /// `triangles` with every vertex renamed to the lowest id at its bit-equal

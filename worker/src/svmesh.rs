@@ -48,7 +48,7 @@ pub struct ProxySettings {
     /// Pixels per 60° of the captures (DESIGN.md).
     pub image_res: u32,
     /// T_l (pixels).
-    pub edge_length_tolerance: f32,
+    pub edge_length_tolerance_px: f32,
     pub t_c0: f32,
     pub t_c1: f32,
     /// Cell size c (the window-depth range of the class thresholds).
@@ -68,7 +68,7 @@ impl ProxySettings {
     pub fn new(params: &BakeParams, cell_size: f32) -> ProxySettings {
         ProxySettings {
             image_res: params.image_res,
-            edge_length_tolerance: params.edge_length_tolerance_px,
+            edge_length_tolerance_px: params.edge_length_tolerance_px,
             t_c0: params.t_c0,
             t_c1: params.t_c1,
             cell_size,
@@ -356,7 +356,7 @@ pub fn derive_svmesh(
                 view_sets: None,
             },
             &SimplifyParams {
-                edge_length_tolerance: settings.edge_length_tolerance,
+                edge_length_tolerance_px: settings.edge_length_tolerance_px,
                 length: length.clone(),
                 deviation: settings.deviation,
             },

@@ -107,7 +107,7 @@ fn input_of<'a>(mesh: &'a TestMesh, w: &'a [f32]) -> SimplifyInput<'a> {
 
 fn sv_params(eye: Vec3, tolerance: f32) -> SimplifyParams {
     SimplifyParams {
-        edge_length_tolerance: tolerance,
+        edge_length_tolerance_px: tolerance,
         length: ProjectedLength::FromPoint {
             eye,
             pixels_per_radian: pixels_per_radian(1024),
@@ -303,7 +303,7 @@ proptest! {
             view_sets: Some(&s),
         };
         let params = SimplifyParams {
-            edge_length_tolerance: tolerance,
+            edge_length_tolerance_px: tolerance,
             length: ProjectedLength::MaxOverPoints { eyes, pixels_per_radian: pixels_per_radian(1024) },
             deviation: None,
         };
@@ -385,7 +385,7 @@ proptest! {
         let ppr = pixels_per_radian(1024);
         let bound = DeviationBound { max_px, region: prism };
         let params = SimplifyParams {
-            edge_length_tolerance: 1e6,
+            edge_length_tolerance_px: 1e6,
             length: ProjectedLength::MaxOverPrism { prism, pixels_per_radian: ppr },
             deviation: Some(bound),
         };
@@ -437,7 +437,7 @@ fn deviation_bound_rejects_bad_values_and_only_adds_triangles_on_a_sphere() {
     };
     let ppr = pixels_per_radian(1024);
     let with = |max_px: Option<f32>| SimplifyParams {
-        edge_length_tolerance: 4.5,
+        edge_length_tolerance_px: 4.5,
         length: ProjectedLength::MaxOverPrism {
             prism,
             pixels_per_radian: ppr,
@@ -753,7 +753,7 @@ fn bad_input_is_an_error_not_a_panic() {
         Err(SimplifyError::BadTolerance(_))
     ));
     let no_eyes = SimplifyParams {
-        edge_length_tolerance: 4.5,
+        edge_length_tolerance_px: 4.5,
         length: ProjectedLength::MaxOverPoints {
             eyes: Vec::new(),
             pixels_per_radian: 100.0,
@@ -1049,7 +1049,7 @@ fn bunny_mv(mesh: &TestMesh, k: u32, variant: Variant) -> BunnyRun {
         view_sets: Some(&sets),
     };
     let params = SimplifyParams {
-        edge_length_tolerance: 4.5,
+        edge_length_tolerance_px: 4.5,
         length: ProjectedLength::MaxOverPoints {
             eyes: corners.clone(),
             pixels_per_radian: pixels_per_radian(1024),
@@ -1214,7 +1214,7 @@ proptest! {
         let w = vec![0.25f32; mesh.positions.len()];
         let input = SimplifyInput { triangles: &start.mesh.triangles, ..input_of(&mesh, &w) };
         let params = SimplifyParams {
-            edge_length_tolerance: 1e6,
+            edge_length_tolerance_px: 1e6,
             length: ProjectedLength::MaxOverPrism { prism, pixels_per_radian: ppr },
             deviation: Some(bound),
         };
@@ -1364,7 +1364,7 @@ fn bounded_params(prism: Prism) -> (SimplifyParams, DeviationBound) {
         region: prism,
     };
     let params = SimplifyParams {
-        edge_length_tolerance: 1e9,
+        edge_length_tolerance_px: 1e9,
         length: ProjectedLength::MaxOverPrism {
             prism,
             pixels_per_radian: pixels_per_radian(256),
