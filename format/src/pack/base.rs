@@ -339,21 +339,13 @@ impl BasePack {
                 bytemuck::bytes_of(&meta).to_vec(),
                 RAW_ONLY,
             ),
-            SectionData::new(
-                SectionKind::MODEL_TABLE,
-                bytemuck::cast_slice(&records).to_vec(),
-                TRY_ZSTD,
-            ),
+            SectionData::of_records(SectionKind::MODEL_TABLE, &records, TRY_ZSTD),
             SectionData::new(SectionKind::MODEL_NAMES, names, TRY_ZSTD),
             SectionData::new(SectionKind::POSITIONS, positions, TRY_ZSTD_PREFER_RAW),
             SectionData::new(SectionKind::NORMALS, normals, TRY_ZSTD_PREFER_RAW),
             SectionData::new(SectionKind::VERTEX_COLOURS, colours, TRY_ZSTD),
             SectionData::new(SectionKind::TRIANGLES, triangles, TRY_TRIANGLES),
-            SectionData::new(
-                SectionKind::INSTANCES,
-                bytemuck::cast_slice(&instances).to_vec(),
-                TRY_ZSTD,
-            ),
+            SectionData::of_records(SectionKind::INSTANCES, &instances, TRY_ZSTD),
         ];
         // Optional albedo textures and UVs (issue 18), absent for untextured scenes.
         let maps: Vec<_> = self.models.iter().map(|m| m.albedo_map.as_ref()).collect();

@@ -478,28 +478,12 @@ impl CellPack {
                 bytemuck::bytes_of(&meta).to_vec(),
                 RAW_ONLY,
             ),
-            SectionData::new(
-                SectionKind::ORIGINALS,
-                bytemuck::cast_slice(&self.originals).to_vec(),
-                TRY_INDICES,
-            ),
-            SectionData::new(
-                SectionKind::PROXIES,
-                bytemuck::cast_slice(&proxies).to_vec(),
-                TRY_ZSTD,
-            ),
-            SectionData::new(
-                SectionKind::MEMBERS,
-                bytemuck::cast_slice(&members).to_vec(),
-                TRY_ZSTD,
-            ),
+            SectionData::of_records(SectionKind::ORIGINALS, &self.originals, TRY_INDICES),
+            SectionData::of_records(SectionKind::PROXIES, &proxies, TRY_ZSTD),
+            SectionData::of_records(SectionKind::MEMBERS, &members, TRY_ZSTD),
             SectionData::new(SectionKind::MEMBER_TRIANGLES, triangles, TRY_TRIANGLES),
             SectionData::new(SectionKind::VIEW_MASKS, masks, TRY_ZSTD),
-            SectionData::new(
-                SectionKind::VIEWS,
-                bytemuck::cast_slice(&views).to_vec(),
-                TRY_ZSTD,
-            ),
+            SectionData::of_records(SectionKind::VIEWS, &views, TRY_ZSTD),
             SectionData::new(SectionKind::TEXTURES, textures, TRY_ZSTD),
         ];
         // Only packs with layered impostors carry the section, so packs without

@@ -301,27 +301,11 @@ impl Index {
                     bytemuck::bytes_of(&meta).to_vec(),
                     RAW_ONLY,
                 ),
-                SectionData::new(
-                    SectionKind::INDEX_CELLS,
-                    bytemuck::cast_slice(&records).to_vec(),
-                    TRY_ZSTD,
-                ),
+                SectionData::of_records(SectionKind::INDEX_CELLS, &records, TRY_ZSTD),
                 SectionData::new(SectionKind::INDEX_FILE_NAMES, names, TRY_ZSTD),
-                SectionData::new(
-                    SectionKind::INDEX_NEIGHBOURS,
-                    bytemuck::cast_slice(&neighbours).to_vec(),
-                    TRY_INDICES,
-                ),
-                SectionData::new(
-                    SectionKind::INDEX_GROUPS,
-                    bytemuck::cast_slice(&group_records).to_vec(),
-                    TRY_ZSTD,
-                ),
-                SectionData::new(
-                    SectionKind::INDEX_CELL_GROUPS,
-                    bytemuck::cast_slice(&cell_groups).to_vec(),
-                    TRY_INDICES,
-                ),
+                SectionData::of_records(SectionKind::INDEX_NEIGHBOURS, &neighbours, TRY_INDICES),
+                SectionData::of_records(SectionKind::INDEX_GROUPS, &group_records, TRY_ZSTD),
+                SectionData::of_records(SectionKind::INDEX_CELL_GROUPS, &cell_groups, TRY_INDICES),
             ],
         )
     }

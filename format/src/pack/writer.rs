@@ -29,6 +29,16 @@ impl SectionData {
     pub fn new(kind: SectionKind, raw: Vec<u8>, codecs: &'static [Codec]) -> SectionData {
         SectionData { kind, raw, codecs }
     }
+
+    /// Section `kind` holding `records` as they lie in memory (little-endian `Pod`
+    /// records, as the format's record types are laid out).
+    pub fn of_records<T: bytemuck::Pod>(
+        kind: SectionKind,
+        records: &[T],
+        codecs: &'static [Codec],
+    ) -> SectionData {
+        SectionData::new(kind, bytemuck::cast_slice(records).to_vec(), codecs)
+    }
 }
 
 /// Codec candidates for general data.
