@@ -115,12 +115,7 @@ fn index_buffer_precoding() {
         }
         let (_, tris) = load(&path);
         // The whole mesh, and a proxy-like subset (runs of 7 triangles kept, 7 dropped).
-        let subset: Vec<[u32; 3]> = tris
-            .iter()
-            .enumerate()
-            .filter(|(i, _)| (i / 7) % 2 == 0)
-            .map(|(_, t)| *t)
-            .collect();
+        let subset = format::pack::sample::proxy_like_subset(&tris);
         for (label, t) in [
             (name.to_string(), &tris),
             (format!("{name} (proxy subset)"), &subset),

@@ -504,10 +504,20 @@ pub fn synthetic_base(model_count: u32, tris_per_model: u32) -> BasePack {
     base
 }
 
+/// A proxy-like subset of `triangles`: runs of 7 kept, 7 dropped, as a
+/// half-edge-collapse simplifier keeping original vertices leaves them.
+pub fn proxy_like_subset(triangles: &[[u32; 3]]) -> Vec<[u32; 3]> {
+    triangles
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| (i / 7) % 2 == 0)
+        .map(|(_, t)| *t)
+        .collect()
+}
+
 /// A cell of realistic size for benchmarks: `proxy_count` proxies over the models of
 /// [`synthetic_base`] with about `total_triangles` triangles in all (each proxy a
-/// simplified subset of its model's triangles: runs of 7 kept, 7 dropped, as a
-/// half-edge-collapse simplifier keeping original vertices leaves them), every
+/// [`proxy_like_subset`] of its model's triangles), every
 /// `mv_every`-th proxy an MvMesh with three views, the others SvMesh with one, and
 /// captures of `texture_side`² to `2 · texture_side`² texels (capture-like images).
 pub fn synthetic_cell(
@@ -521,12 +531,7 @@ pub fn synthetic_cell(
     let mut proxies = Vec::new();
     for p in 0..proxy_count {
         let tris = &base.models[p as usize].mesh.triangles;
-        let kept: Vec<[u32; 3]> = tris
-            .iter()
-            .enumerate()
-            .filter(|(i, _)| (i / 7) % 2 == 0)
-            .map(|(_, t)| *t)
-            .collect();
+        let kept = proxy_like_subset(tris);
         let mv = mv_every > 0 && p % mv_every == mv_every - 1;
         let (kind, n_views) = if mv {
             (ProxyKind::MvMesh, 3usize)
