@@ -122,6 +122,12 @@ pub struct GpuProxy {
     pub vertex_bytes: u64,
     /// Its triangles' normal clusters (issue 17, [`crate::patches::ProxyCluster`]).
     pub clusters: Vec<crate::patches::ProxyCluster>,
+    /// It has layered-impostor triangles (kind 4), drawn with the pipeline whose
+    /// fragment shader may discard; every other proxy is drawn with the
+    /// discard-free one (issue 17: early depth testing on llvmpipe).
+    pub layered: bool,
+    /// World bounds of its vertices (the draw order: nearest first).
+    pub bounds: crate::camera::Aabb,
 }
 
 impl GpuProxy {
@@ -230,7 +236,10 @@ pub struct Renderer {
     /// The ground: the lit pipeline's layout and vertices, alpha 0 under
     /// [`Renderer::set_coverage_alpha`] (ground pixels are background to the metrics).
     ground_pipeline: wgpu::RenderPipeline,
+    /// Proxies with impostor layers (`fs_proxy`, which may discard).
     proxy_pipeline: wgpu::RenderPipeline,
+    /// Mesh proxies (`fs_proxy_mesh`, never discards: early depth test possible).
+    proxy_mesh_pipeline: wgpu::RenderPipeline,
     /// Layout of the lit pipeline's group 2 (albedo texture + sampler).
     albedo_bgl: wgpu::BindGroupLayout,
     /// Group 2 of untextured models and the ground: a white texel.
@@ -343,6 +352,7 @@ impl Renderer {
             lit_pipeline: pipelines.lit,
             ground_pipeline: pipelines.ground,
             proxy_pipeline: pipelines.proxy,
+            proxy_mesh_pipeline: pipelines.proxy_mesh,
             albedo_bgl,
             white_albedo: shared.white_albedo,
             globals: shared.globals,
@@ -606,6 +616,15 @@ impl Renderer {
             texture_bytes: 0,
             vertex_bytes: std::mem::size_of_val(vertices) as u64,
             clusters,
+            layered: vertices
+                .iter()
+                .any(|v| v.kind == format::pack::ProxyKind::LayeredImpostor as u32),
+            bounds: vertices
+                .iter()
+                .fold(crate::camera::Aabb::EMPTY, |mut b, v| {
+                    b.add(Vec3::from_array(v.pos));
+                    b
+                }),
         };
         self.try_bind(&mut p);
         p
@@ -906,9 +925,24 @@ impl Renderer {
                 }
                 first += 1;
             }
-            pass.set_pipeline(&self.proxy_pipeline);
-            for p in &list.proxies {
+            // Mesh proxies with the discard-free pipeline, impostor layers with the
+            // other (a pipeline switch only where the kind changes); nearest first,
+            // so that the depth test rejects more hidden proxy fragments before
+            // they are shaded.
+            let mut layered = None;
+            let mut pipeline_for = |pass: &mut wgpu::RenderPass<'_>, p: &GpuProxy| {
+                if layered != Some(p.layered) {
+                    layered = Some(p.layered);
+                    pass.set_pipeline(if p.layered {
+                        &self.proxy_pipeline
+                    } else {
+                        &self.proxy_mesh_pipeline
+                    });
+                }
+            };
+            for p in near_to_far(&list.proxies, camera.eye) {
                 if let (Some(bg), true) = (&p.bind_group, p.vertex_count > 0) {
+                    pipeline_for(&mut pass, p);
                     pass.set_bind_group(1, Some(bg), &[]);
                     pass.set_vertex_buffer(0, p.vertices.slice(..));
                     for (a, b) in p.ranges(list.cull_eye) {
@@ -916,7 +950,11 @@ impl Renderer {
                     }
                 }
             }
-            for p in list.lit_proxies.iter().filter(|p| p.vertex_count > 0) {
+            for p in near_to_far(&list.lit_proxies, camera.eye)
+                .into_iter()
+                .filter(|p| p.vertex_count > 0)
+            {
+                pipeline_for(&mut pass, p);
                 pass.set_bind_group(1, Some(&p.lit_bind_group), &[]);
                 pass.set_vertex_buffer(0, p.vertices.slice(..));
                 for (a, b) in p.ranges(list.cull_eye) {
@@ -987,6 +1025,17 @@ impl Renderer {
         self.readback.unmap();
         Ok(out)
     }
+}
+
+/// `proxies` ordered by the distance from `eye` to their bounds, nearest first (ties
+/// keep their order).
+fn near_to_far<'a>(proxies: &[&'a GpuProxy], eye: Vec3) -> Vec<&'a GpuProxy> {
+    let mut keyed: Vec<(f32, &GpuProxy)> = proxies
+        .iter()
+        .map(|p| (crate::lod::distance_to_box(eye, &p.bounds), *p))
+        .collect();
+    keyed.sort_by(|a, b| a.0.total_cmp(&b.0));
+    keyed.into_iter().map(|(_, p)| p).collect()
 }
 
 /// Bind group 2 of the lit pipeline: an `Rgba8UnormSrgb` texture (sampled in

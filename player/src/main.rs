@@ -243,6 +243,12 @@ enum Command {
         #[arg(long, default_value_t = player::run::DEFAULT_REFERENCE_SS,
               value_parser = clap::value_parser!(u32).range(1..=player::run::MAX_REFERENCE_SS as i64))]
         reference_ss: u32,
+        /// Draw each configuration's frame this many times and time it by the
+        /// fastest draw (robust to a busy machine; above 1 the hybrid's time leaves
+        /// out the texture uploads its first draw submits).
+        #[arg(long, default_value_t = 1,
+              value_parser = clap::value_parser!(u32).range(1..=100))]
+        repeat: u32,
         #[command(flatten)]
         stream: StreamArgs,
     },
@@ -347,6 +353,7 @@ fn main() -> ExitCode {
             worst_count,
             no_crossings,
             reference_ss,
+            repeat,
             stream,
         } => format::path::CameraPath::load(&path)
             .map_err(player::run::RunError::from)
@@ -363,6 +370,7 @@ fn main() -> ExitCode {
                         mode,
                         lod_pixel_error: stream.lod_pixel_error,
                         reference_ss,
+                        repeat,
                     },
                 )
             })

@@ -144,6 +144,24 @@ pub struct Player {
     pub lod: Option<LodSet>,
     /// `--lod-pixel-error`: the projected error a level may have, in pixels.
     pub lod_pixel_error: f32,
+    /// `compare --repeat`: times each configuration's frame is drawn; its frame time
+    /// is the fastest (1: the one draw, with the uploads the frame submits).
+    pub timing_repeats: u32,
+}
+
+/// Draws `list` `repeats` times (at least once) and returns the fastest draw's
+/// milliseconds. The first draw also carries the texture uploads queued since the
+/// last submit (a cell's proxies on arrival), the others draw the frame only.
+fn fastest(
+    renderer: &mut Renderer,
+    camera: &Camera,
+    models: &GpuModels,
+    list: &crate::gpu::DrawList<'_>,
+    repeats: u32,
+) -> f64 {
+    (0..repeats.max(1))
+        .map(|_| renderer.render(camera, models, list))
+        .fold(f64::INFINITY, f64::min)
 }
 
 impl Player {
@@ -161,6 +179,7 @@ impl Player {
             models,
             lod: None,
             lod_pixel_error: crate::lod::DEFAULT_PIXEL_ERROR,
+            timing_repeats: 1,
         }
     }
 
@@ -196,7 +215,13 @@ impl Player {
                 let (current, stats) = s.begin_frame(&self.renderer, &self.bake, camera);
                 let list = hybrid_list(&self.bake, camera, &current, pending);
                 let (tris, tex) = list_stats(&list, &self.models);
-                let ms = self.renderer.render(camera, &self.models, &list);
+                let ms = fastest(
+                    &mut self.renderer,
+                    camera,
+                    &self.models,
+                    &list,
+                    self.timing_repeats,
+                );
                 s.undrawn_frames(&self.renderer, &self.bake, camera);
                 (ms, tris, tex, stats)
             }
@@ -205,13 +230,25 @@ impl Player {
                 let set = self.lod.as_ref().expect("prepared");
                 let list = lod_list(&self.bake, set, camera, self.lod_pixel_error);
                 let (tris, tex) = list_stats(&list, &self.models);
-                let ms = self.renderer.render(camera, &self.models, &list);
+                let ms = fastest(
+                    &mut self.renderer,
+                    camera,
+                    &self.models,
+                    &list,
+                    self.timing_repeats,
+                );
                 (ms, tris, tex, self.cell_stats(camera))
             }
             (m, _) => {
                 let list = originals_list(&self.bake, camera, m != Mode::Full);
                 let (tris, tex) = list_stats(&list, &self.models);
-                let ms = self.renderer.render(camera, &self.models, &list);
+                let ms = fastest(
+                    &mut self.renderer,
+                    camera,
+                    &self.models,
+                    &list,
+                    self.timing_repeats,
+                );
                 (ms, tris, tex, self.cell_stats(camera))
             }
         }
@@ -414,6 +451,9 @@ pub struct CompareOptions {
     /// `--reference-ss`: supersampling per axis of the anti-aliased reference;
     /// 1 (or 0) renders none.
     pub reference_ss: u32,
+    /// `--repeat`: each configuration's frame is drawn this many times and timed by
+    /// its fastest draw ([`Player::timing_repeats`]); 1 (default) draws once.
+    pub repeat: u32,
 }
 
 impl Default for CompareOptions {
@@ -427,6 +467,7 @@ impl Default for CompareOptions {
             mode: Mode::Hybrid,
             lod_pixel_error: crate::lod::DEFAULT_PIXEL_ERROR,
             reference_ss: DEFAULT_REFERENCE_SS,
+            repeat: 1,
         }
     }
 }
@@ -462,6 +503,7 @@ pub fn compare(
     let mut player = Player::open(out, size)?;
     eprintln!("player: adapter {}", player.renderer.adapter());
     player.lod_pixel_error = opts.lod_pixel_error;
+    player.timing_repeats = opts.repeat;
     let lod_build_ms = (opts.mode == Mode::Lod).then(|| player.prepare_lod().build_ms);
     let far = player.bake.extent;
     player.warm_up(&camera_for(&frames[0], path, size, far));

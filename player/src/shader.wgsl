@@ -282,11 +282,27 @@ fn impostor_layer(i: ProxyOut) -> vec4<f32> {
     return vec4<f32>(textureSampleLevel(t0, samp, uv, 0.0).rgb, 1.0);
 }
 
+// Two fragment entry points (issue 17): fs_proxy_mesh for SV/MV meshes and clusters
+// never discards, so the rasterizer may test depth before shading (llvmpipe turns
+// early depth testing off for any shader that can discard, and then shades every
+// proxy fragment, hidden or not); fs_proxy also draws layered impostors, whose
+// alpha test needs discard. The renderer picks fs_proxy only for proxies with
+// impostor layers (GpuProxy::layered); both shade a mesh fragment alike.
 @fragment
 fn fs_proxy(i: ProxyOut) -> @location(0) vec4<f32> {
     if i.kind == 4u {
         return impostor_layer(i);
     }
+    return mesh_colour(i);
+}
+
+@fragment
+fn fs_proxy_mesh(i: ProxyOut) -> @location(0) vec4<f32> {
+    return mesh_colour(i);
+}
+
+// A mesh proxy's fragment: the two chosen views blended, else lit.
+fn mesh_colour(i: ProxyOut) -> vec4<f32> {
     let lit = shade(i.albedo, i.normal);
     if g.debug.x != 0u {
         return vec4<f32>(lit, 1.0);

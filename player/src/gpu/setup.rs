@@ -1,6 +1,6 @@
 //! The renderer's fixed GPU objects, built once by [`Renderer::with_device`]
 //! (`super::Renderer`): the offscreen targets, the three bind group layouts, the
-//! three pipelines, and the shared buffers, sampler and placeholder textures. One
+//! four pipelines, and the shared buffers, sampler and placeholder textures. One
 //! function per object or family, in the order `with_device` calls them.
 
 use super::{albedo_bind_group, shader_source, texture_2d, COLOR_FORMAT, DEPTH_FORMAT};
@@ -130,11 +130,15 @@ pub(super) struct Pipelines {
     pub lit: wgpu::RenderPipeline,
     /// The ground: the lit pipeline's layout and vertices, `fs_ground`.
     pub ground: wgpu::RenderPipeline,
-    /// Proxies: `vs_proxy` / `fs_proxy` over [`ProxyVertex`].
+    /// Proxies with impostor layers: `vs_proxy` / `fs_proxy` over [`ProxyVertex`]
+    /// (the layers' alpha test discards).
     pub proxy: wgpu::RenderPipeline,
+    /// Mesh proxies (SV/MV meshes, clusters): `vs_proxy` / `fs_proxy_mesh`, which
+    /// never discards, so hidden fragments can be rejected before shading.
+    pub proxy_mesh: wgpu::RenderPipeline,
 }
 
-/// Step 3: the shader module and the three pipelines. All draw counter-clockwise
+/// Step 3: the shader module and the four pipelines. All draw counter-clockwise
 /// triangle lists with back faces culled, depth-tested (less) and written, into the
 /// colour target without blending; they differ in layout, entry points and vertex
 /// buffers. Group 1 is the proxies' (one shader module); the lit pipelines use
@@ -209,6 +213,12 @@ pub(super) fn pipelines(
             "proxy",
             &proxy_layout,
             ("vs_proxy", "fs_proxy"),
+            &[Some(ProxyVertex::layout())],
+        ),
+        proxy_mesh: pipeline(
+            "proxy mesh",
+            &proxy_layout,
+            ("vs_proxy", "fs_proxy_mesh"),
             &[Some(ProxyVertex::layout())],
         ),
     }
