@@ -252,7 +252,8 @@ pub struct CellTimes {
     /// Classes, weights, view sets, triangle selection.
     pub weights_ms: f64,
     pub simplify_ms: f64,
-    /// Objective selection (issue 16): building and measuring candidates.
+    /// Objective selection (issue 16): building and measuring candidates; without
+    /// it, the quality check of every bake (`select.rs`).
     pub select_ms: f64,
     /// Wall time of the whole `bake_cell`.
     pub total_ms: f64,
@@ -770,13 +771,52 @@ fn derive_region(
         proxies.push(proxy);
         coarser.push(c);
     }
-    // Step 6 (issue 16): objective selection (paper 004, `select.rs`).
+    // Step 6 (issue 16): objective selection (paper 004, `select.rs`), or the
+    // quality check of every bake.
+    let t = Instant::now();
     if let Some(floor) = &params.quality {
-        let t = Instant::now();
         proxies = select_region(scene, region, proxies, coarser, params, floor)?;
-        times.select_ms += ms_since(t);
+    } else {
+        let eyes = select::check_viewpoints(&region.prism, centre);
+        proxies.par_iter_mut().for_each(|proxy| {
+            if proxy.packed.is_none() && proxy.impostor.is_none() {
+                proxy.quality = check_mesh(scene, proxy, &eyes, centre, params.image_res);
+            }
+        });
     }
+    times.select_ms += ms_since(t);
     Ok((proxies, stage))
+}
+
+/// The quality check of a mesh proxy (`select.rs`, "The check of every bake"): its
+/// measurement against its originals from `eyes`, `None` when no view could frame
+/// it.
+fn check_mesh(
+    scene: &Scene,
+    proxy: &BakedProxy,
+    eyes: &[Vec3],
+    centre: Vec3,
+    image_res: u32,
+) -> Option<Measured> {
+    let originals: Vec<DrawItem> = proxy
+        .members
+        .iter()
+        .map(|m| DrawItem::instance(scene, m.instance))
+        .collect();
+    let mesh = MeshDraw::of(scene, proxy, centre);
+    let items = mesh.items(&originals);
+    let m = select::measure(
+        &originals,
+        &Candidate::Mesh {
+            items: &items,
+            textures: &mesh.textures,
+        },
+        eyes,
+        centre,
+        image_res,
+        &QualityFloor::default(),
+    );
+    (m.views > 0).then_some(m)
 }
 
 /// Step 5 for one job: its SVMesh / cluster or MVMesh proxy under `settings`.
@@ -985,7 +1025,13 @@ fn select_region(
                 }
                 None => {
                     let mut proxy = proxy;
-                    proxy.quality = (mesh_quality.views > 0).then_some(mesh_quality);
+                    proxy.quality = if mesh_quality.views > 0 {
+                        Some(mesh_quality)
+                    } else {
+                        // No cheaper candidate: measured as in every bake.
+                        let eyes = select::check_viewpoints(&prism, centre);
+                        check_mesh(scene, &proxy, &eyes, centre, params.image_res)
+                    };
                     Ok(Some(proxy))
                 }
             }

@@ -37,6 +37,11 @@
 //!   candidate passes when its PSNR of the squared errors pooled over all K views
 //!   and its mean SSIM reach the thresholds; the worst view's figures are
 //!   reported.
+//! - **The check of every bake** (issue 16 item 3, [`check_viewpoints`]): without
+//!   `bake.quality`, and for a mesh proxy the selection kept without measuring it
+//!   (no cheaper candidate), the mesh is measured the same way from the
+//!   [`CHECK_VIEWS`] sample viewpoints farthest from its capture eye, for the
+//!   report's per-cell worst view and error histogram; nothing is chosen.
 //! - **Acceptance.** The paper's mesh proxy is measured first, in every view. Its
 //!   own figures on this metric are often below an absolute floor (on the demo,
 //!   object-pixel PSNR of 15–33 dB: the paper allows T_s = 5 px of
@@ -91,6 +96,22 @@ pub fn sample_viewpoints(prism: &Prism) -> Vec<Vec3> {
     eyes.push(Vec3::new(c.x, prism.min_y, c.z));
     eyes.push(Vec3::new(c.x, prism.max_y, c.z));
     eyes
+}
+
+/// Sample viewpoints of the quality check every bake runs (issue 16 item 3;
+/// [`check_viewpoints`]).
+pub const CHECK_VIEWS: usize = 1;
+
+/// The [`CHECK_VIEWS`] sample viewpoints of `prism` farthest from `capture_eye`:
+/// where a proxy departs most from its capture, so the check's worst view is the
+/// selection's (farthest-first order, ties by index).
+pub fn check_viewpoints(prism: &Prism, capture_eye: Vec3) -> Vec<Vec3> {
+    let eyes = sample_viewpoints(prism);
+    farthest_first(&eyes, capture_eye)
+        .into_iter()
+        .take(CHECK_VIEWS)
+        .map(|k| eyes[k])
+        .collect()
 }
 
 /// Whether the box `[lo, hi]` subtends less than one pixel (of `image_res` per 60°)

@@ -782,3 +782,33 @@ fn selection_keeps_a_coarser_mesh_where_it_is_cheapest_and_good_enough() {
     eprintln!("{fewer} of {meshes} mesh proxies coarser than the paper's");
     assert!(fewer > 0, "no coarser mesh was kept");
 }
+
+/// The quality check of every bake (issue 16 item 3): without `bake.quality` every
+/// derived mesh proxy is still measured against its originals (from the sample
+/// viewpoint farthest from its capture), so the cell's report has a worst view
+/// below the cap and an error histogram over real pixels; and the measurement does
+/// not change the pack.
+#[test]
+fn a_bake_without_selection_still_checks_its_proxies() {
+    let (scene, grid, cells, params) = demo();
+    let cell = busy_cell(&scene, &grid);
+    let off = BakeParams {
+        quality: None,
+        ..params
+    };
+    let bake = bake_cell(&scene, &grid, cell, &cells, &off).unwrap();
+    let q = &bake.stats.quality;
+    assert_eq!(q.measured as usize, bake.proxies.len());
+    assert!(bake.proxies.iter().all(|p| p.quality.is_some()));
+    assert!(q.worst_psnr_db < format::metrics::PSNR_CAP, "{q:?}");
+    assert!(q.error_histogram.iter().sum::<u64>() > 1000, "{q:?}");
+    let mut unchecked = bake.clone();
+    for p in &mut unchecked.proxies {
+        p.quality = None;
+    }
+    let fp = [3u8; 32];
+    assert_eq!(
+        bake.to_pack(fp).unwrap().encode().unwrap(),
+        unchecked.to_pack(fp).unwrap().encode().unwrap()
+    );
+}
