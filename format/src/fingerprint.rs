@@ -35,8 +35,10 @@ pub type Fingerprint = [u8; 32];
 /// 10 — the collapse and the speck tidying run on position-welded vertices, so
 /// UV-seamed models simplify as closed meshes (issue 18, `worker::simplify`);
 /// 11 — captures stored as BC1 with punch-through alpha (format version 4, issue 15,
-/// `Texture::from_rgba8_bc1_coverage`).
-pub const BAKE_REVISION: u32 = 11;
+/// `Texture::from_rgba8_bc1_coverage`);
+/// 12 — coarser mesh candidates in the objective selection, and the quality check of
+/// every bake in the job records (issue 16, worker `select.rs`).
+pub const BAKE_REVISION: u32 = 12;
 
 /// Hex form for file names, logs and reports.
 pub fn to_hex(f: &Fingerprint) -> String {
