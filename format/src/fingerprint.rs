@@ -101,6 +101,9 @@ pub fn params_fingerprint(bake: &BakeParams, cells: &CellParams) -> Fingerprint 
         max_deviation_px,
         far_field,
         quality,
+        // The check changes no pack: switching it does not rebake (a job's record
+        // has the figures of the bake that made it).
+        quality_check: _,
     } = bake;
     h.update(&image_res.to_le_bytes());
     f32s(

@@ -162,6 +162,14 @@ pub struct BakeParams {
     /// deviation bound as candidates, two park-4m cells lose 4 % of their proxy
     /// triangles for about 3× the bake CPU (BENCHMARKS.md, issue 16).
     pub quality: Option<QualityFloor>,
+    /// The quality check of every bake (issue 16 item 3; worker `select.rs`): without
+    /// `quality`, each derived mesh proxy is measured against its originals from the
+    /// sample viewpoint farthest from its capture, for the report's per-cell worst
+    /// view, error histogram and heat map. Default on; it adds about a quarter to
+    /// the proxy derivation's time (BENCHMARKS.md, issue 16), which `false` saves.
+    /// Changes no pack byte and is not in the fingerprints: switching it rebakes
+    /// nothing (a job keeps the figures of the bake that made it).
+    pub quality_check: bool,
 }
 
 impl BakeParams {
@@ -228,6 +236,7 @@ impl Default for BakeParams {
             max_deviation_px: DEFAULT_MAX_DEVIATION_PX,
             far_field: true,
             quality: None,
+            quality_check: true,
         }
     }
 }
@@ -773,6 +782,7 @@ struct RawBake {
     max_deviation_px: f32,
     far_field: bool,
     quality: Option<RawQuality>,
+    quality_check: bool,
 }
 
 #[derive(Deserialize)]
@@ -806,6 +816,7 @@ impl Default for RawBake {
             max_deviation_px: d.max_deviation_px,
             far_field: d.far_field,
             quality: None,
+            quality_check: d.quality_check,
         }
     }
 }
@@ -1332,6 +1343,7 @@ impl Validator<'_> {
             max_deviation_px: self.non_negative("bake.max_deviation_px", b.max_deviation_px)?,
             far_field: b.far_field,
             quality: b.quality.map(|q| self.quality(q)).transpose()?,
+            quality_check: b.quality_check,
         };
 
         let cells_per_job = raw.cells_per_job.unwrap_or(DEFAULT_CELLS_PER_JOB);

@@ -776,7 +776,7 @@ fn derive_region(
     let t = Instant::now();
     if let Some(floor) = &params.quality {
         proxies = select_region(scene, region, proxies, coarser, params, floor)?;
-    } else {
+    } else if params.quality_check {
         let eyes = select::check_viewpoints(&region.prism, centre);
         proxies.par_iter_mut().for_each(|proxy| {
             if proxy.packed.is_none() && proxy.impostor.is_none() {
@@ -1027,6 +1027,8 @@ fn select_region(
                     let mut proxy = proxy;
                     proxy.quality = if mesh_quality.views > 0 {
                         Some(mesh_quality)
+                    } else if !params.quality_check {
+                        None
                     } else {
                         // No cheaper candidate: measured as in every bake.
                         let eyes = select::check_viewpoints(&prism, centre);

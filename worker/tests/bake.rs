@@ -787,7 +787,7 @@ fn selection_keeps_a_coarser_mesh_where_it_is_cheapest_and_good_enough() {
 /// derived mesh proxy is still measured against its originals (from the sample
 /// viewpoint farthest from its capture), so the cell's report has a worst view
 /// below the cap and an error histogram over real pixels; and the measurement does
-/// not change the pack.
+/// not change the pack. `bake.quality_check: false` turns it off.
 #[test]
 fn a_bake_without_selection_still_checks_its_proxies() {
     let (scene, grid, cells, params) = demo();
@@ -811,4 +811,12 @@ fn a_bake_without_selection_still_checks_its_proxies() {
         bake.to_pack(fp).unwrap().encode().unwrap(),
         unchecked.to_pack(fp).unwrap().encode().unwrap()
     );
+    // `bake.quality_check: false` skips it.
+    let quiet = BakeParams {
+        quality_check: false,
+        ..off
+    };
+    let b = bake_cell(&scene, &grid, cell, &cells, &quiet).unwrap();
+    assert_eq!(b.stats.quality.measured, 0);
+    assert!(b.proxies.iter().all(|p| p.quality.is_none()));
 }

@@ -51,6 +51,7 @@ pub const KEYS: &[(&str, &[&str])] = &[
     ("bake.quality", &[]),
     ("bake.quality.min_psnr_db", &["min_psnr_db"]),
     ("bake.quality.min_ssim", &["min_ssim"]),
+    ("bake.quality_check", &[]),
     ("bake.max_deviation_px", &["deviation"]),
     ("cells.cell_size", &["cell_size"]),
     ("cells.min_eye_height", &[]),
@@ -163,6 +164,7 @@ pub(super) fn apply(raw: &mut RawManifest, o: &Override) -> Result<(), String> {
                 .min_ssim = o.number_f64()?
         }
         "bake.max_deviation_px" => bake.max_deviation_px = o.number()?,
+        "bake.quality_check" => bake.quality_check = o.boolean()?,
         "cells.cell_size" => raw.cells.cell_size = o.number()?,
         "cells.min_eye_height" => raw.cells.min_eye_height = o.number()?,
         "cells.max_eye_height" => raw.cells.max_eye_height = o.number()?,
