@@ -126,6 +126,10 @@ pub struct GpuProxy {
     /// fragment shader may discard; every other proxy is drawn with the
     /// discard-free one (issue 17: early depth testing on llvmpipe).
     pub layered: bool,
+    /// The entry of `setup::MESH_VIEW_SLOTS` it is drawn with: the fewest texture
+    /// slots holding its views (issue 17: llvmpipe samples every slot the fragment
+    /// shader may read).
+    pub view_slots: usize,
     /// World bounds of its vertices (the draw order: nearest first).
     pub bounds: crate::camera::Aabb,
 }
@@ -238,8 +242,9 @@ pub struct Renderer {
     ground_pipeline: wgpu::RenderPipeline,
     /// Proxies with impostor layers (`fs_proxy`, which may discard).
     proxy_pipeline: wgpu::RenderPipeline,
-    /// Mesh proxies (`fs_proxy_mesh`, never discards: early depth test possible).
-    proxy_mesh_pipeline: wgpu::RenderPipeline,
+    /// Mesh proxies (`fs_proxy_mesh`, never discards: early depth test possible),
+    /// one per `setup::MESH_VIEW_SLOTS` entry (`GpuProxy::view_slots`).
+    proxy_mesh_pipelines: [wgpu::RenderPipeline; setup::MESH_VIEW_SLOTS.len()],
     /// Layout of the lit pipeline's group 2 (albedo texture + sampler).
     albedo_bgl: wgpu::BindGroupLayout,
     /// Group 2 of untextured models and the ground: a white texel.
@@ -352,7 +357,7 @@ impl Renderer {
             lit_pipeline: pipelines.lit,
             ground_pipeline: pipelines.ground,
             proxy_pipeline: pipelines.proxy,
-            proxy_mesh_pipeline: pipelines.proxy_mesh,
+            proxy_mesh_pipelines: pipelines.proxy_mesh,
             albedo_bgl,
             white_albedo: shared.white_albedo,
             globals: shared.globals,
@@ -616,6 +621,10 @@ impl Renderer {
             texture_bytes: 0,
             vertex_bytes: std::mem::size_of_val(vertices) as u64,
             clusters,
+            view_slots: setup::MESH_VIEW_SLOTS
+                .iter()
+                .position(|&n| n as usize >= views.len().min(MAX_VIEWS))
+                .unwrap_or(setup::MESH_VIEW_SLOTS.len() - 1),
             layered: vertices
                 .iter()
                 .any(|v| v.kind == format::pack::ProxyKind::LayeredImpostor as u32),
@@ -925,18 +934,20 @@ impl Renderer {
                 }
                 first += 1;
             }
-            // Mesh proxies with the discard-free pipeline, impostor layers with the
-            // other (a pipeline switch only where the kind changes); nearest first,
+            // Mesh proxies with a discard-free pipeline (the one for their number of
+            // views), impostor layers with the other (a pipeline switch only where
+            // that changes); nearest first,
             // so that the depth test rejects more hidden proxy fragments before
             // they are shaded.
-            let mut layered = None;
+            let mut bound = None;
             let mut pipeline_for = |pass: &mut wgpu::RenderPass<'_>, p: &GpuProxy| {
-                if layered != Some(p.layered) {
-                    layered = Some(p.layered);
+                let key = (p.layered, p.view_slots);
+                if bound != Some(key) {
+                    bound = Some(key);
                     pass.set_pipeline(if p.layered {
                         &self.proxy_pipeline
                     } else {
-                        &self.proxy_mesh_pipeline
+                        &self.proxy_mesh_pipelines[p.view_slots]
                     });
                 }
             };

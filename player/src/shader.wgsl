@@ -218,30 +218,21 @@ fn vs_proxy(v: ProxyIn) -> ProxyOut {
     return o;
 }
 
-fn sample_view(i: u32, uv: vec2<f32>) -> vec4<f32> {
-    switch i {
-        case 0u: { return textureSampleLevel(t0, samp, uv, 0.0); }
-        case 1u: { return textureSampleLevel(t1, samp, uv, 0.0); }
-        case 2u: { return textureSampleLevel(t2, samp, uv, 0.0); }
-        case 3u: { return textureSampleLevel(t3, samp, uv, 0.0); }
-        case 4u: { return textureSampleLevel(t4, samp, uv, 0.0); }
-        case 5u: { return textureSampleLevel(t5, samp, uv, 0.0); }
-        case 6u: { return textureSampleLevel(t6, samp, uv, 0.0); }
-        default: { return textureSampleLevel(t7, samp, uv, 0.0); }
-    }
-}
-
-// Projective lookup of view i at texture coordinates tc (before the divide by w);
-// alpha 0 = no data there.
-fn project_view(i: u32, tc: vec4<f32>) -> vec4<f32> {
+// The texture coordinates of projective coordinates tc (.xy) and whether they lie
+// on the capture (.z = 1: in front of it and inside [0,1]²).
+fn view_uv(tc: vec4<f32>) -> vec3<f32> {
     if tc.w <= 0.0 {
-        return vec4<f32>(0.0);
+        return vec3<f32>(0.0);
     }
     let uv = tc.xy / tc.w;
     if any(uv < vec2<f32>(0.0)) || any(uv > vec2<f32>(1.0)) {
-        return vec4<f32>(0.0);
+        return vec3<f32>(0.0);
     }
-    let c = sample_view(i, uv);
+    return vec3<f32>(uv, 1.0);
+}
+
+// A texel c of view i as the blend takes it; alpha 0 = no data there.
+fn captured(i: u32, c: vec4<f32>) -> vec4<f32> {
     if c.a < 0.5 {
         return vec4<f32>(0.0);
     }
@@ -252,6 +243,34 @@ fn project_view(i: u32, tc: vec4<f32>) -> vec4<f32> {
         return vec4<f32>(c.rgb / c.a, 1.0);
     }
     return vec4<f32>(c.rgb, 1.0);
+}
+
+// Texture slots a mesh-proxy pipeline reads (pipeline-overridable: 1, 2, 4 or 8,
+// at least the proxy's views; GpuProxy::view_slots). A CPU rasterizer such as
+// llvmpipe runs every branch of a fragment shader under lane masks, so a lookup
+// "texture of view i" costs a sample of every slot it could be; with fewer slots
+// the others fold away when the pipeline is compiled.
+override VIEW_SLOTS: u32 = MAX_VIEWS;
+
+// Slot k's texture sampled once, at view best0's coordinates when k is best0, else
+// at best1's; handed to whichever of the two views k is.
+fn take_slot(
+    k: u32,
+    t: texture_2d<f32>,
+    best0: u32,
+    best1: u32,
+    uv0: vec2<f32>,
+    uv1: vec2<f32>,
+    s0: ptr<function, vec4<f32>>,
+    s1: ptr<function, vec4<f32>>,
+) {
+    let c = textureSampleLevel(t, samp, select(uv1, uv0, k == best0), 0.0);
+    if k == best0 {
+        *s0 = c;
+    }
+    if k == best1 {
+        *s1 = c;
+    }
 }
 
 // Layered impostor (paper 001 §4; kind 4): a layer quad shows view 0's texels whose
@@ -312,10 +331,32 @@ fn mesh_colour(i: ProxyOut) -> vec4<f32> {
     if best0 == MAX_VIEWS {
         return vec4<f32>(lit, 1.0);
     }
-    let c0 = project_view(best0, i.tc0);
+    // The two views' texels: one sample per slot (not one per slot and view).
+    let uv0 = view_uv(i.tc0);
+    let uv1 = view_uv(i.tc1);
+    var s0 = vec4<f32>(0.0);
+    var s1 = vec4<f32>(0.0);
+    take_slot(0u, t0, best0, best1, uv0.xy, uv1.xy, &s0, &s1);
+    if VIEW_SLOTS > 1u {
+        take_slot(1u, t1, best0, best1, uv0.xy, uv1.xy, &s0, &s1);
+    }
+    if VIEW_SLOTS > 2u {
+        take_slot(2u, t2, best0, best1, uv0.xy, uv1.xy, &s0, &s1);
+        take_slot(3u, t3, best0, best1, uv0.xy, uv1.xy, &s0, &s1);
+    }
+    if VIEW_SLOTS > 4u {
+        take_slot(4u, t4, best0, best1, uv0.xy, uv1.xy, &s0, &s1);
+        take_slot(5u, t5, best0, best1, uv0.xy, uv1.xy, &s0, &s1);
+        take_slot(6u, t6, best0, best1, uv0.xy, uv1.xy, &s0, &s1);
+        take_slot(7u, t7, best0, best1, uv0.xy, uv1.xy, &s0, &s1);
+    }
+    var c0 = vec4<f32>(0.0);
+    if uv0.z != 0.0 {
+        c0 = captured(best0, s0);
+    }
     var c1 = vec4<f32>(0.0);
-    if best1 != MAX_VIEWS {
-        c1 = project_view(best1, i.tc1);
+    if best1 != MAX_VIEWS && uv1.z != 0.0 {
+        c1 = captured(best1, s1);
     }
     var w0 = c0.a;
     var w1 = c1.a;

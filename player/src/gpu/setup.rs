@@ -1,6 +1,6 @@
 //! The renderer's fixed GPU objects, built once by [`Renderer::with_device`]
 //! (`super::Renderer`): the offscreen targets, the three bind group layouts, the
-//! four pipelines, and the shared buffers, sampler and placeholder textures. One
+//! pipelines, and the shared buffers, sampler and placeholder textures. One
 //! function per object or family, in the order `with_device` calls them.
 
 use super::{albedo_bind_group, shader_source, texture_2d, COLOR_FORMAT, DEPTH_FORMAT};
@@ -124,6 +124,10 @@ pub(super) fn albedo_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
     })
 }
 
+/// The texture slots of the mesh-proxy pipelines: a proxy with n views is drawn by
+/// the first with at least n (`GpuProxy::view_slots`).
+pub(super) const MESH_VIEW_SLOTS: [u32; 4] = [1, 2, 4, MAX_VIEWS as u32];
+
 /// The renderer's pipelines.
 pub(super) struct Pipelines {
     /// Originals: `vs_lit` / `fs_lit` over [`ModelVertex`] × [`InstanceRaw`].
@@ -134,11 +138,13 @@ pub(super) struct Pipelines {
     /// (the layers' alpha test discards).
     pub proxy: wgpu::RenderPipeline,
     /// Mesh proxies (SV/MV meshes, clusters): `vs_proxy` / `fs_proxy_mesh`, which
-    /// never discards, so hidden fragments can be rejected before shading.
-    pub proxy_mesh: wgpu::RenderPipeline,
+    /// never discards, so hidden fragments can be rejected before shading; one per
+    /// entry of [`MESH_VIEW_SLOTS`], the texture slots its fragment shader reads
+    /// (shader.wgsl `VIEW_SLOTS`).
+    pub proxy_mesh: [wgpu::RenderPipeline; MESH_VIEW_SLOTS.len()],
 }
 
-/// Step 3: the shader module and the four pipelines. All draw counter-clockwise
+/// Step 3: the shader module and the pipelines. All draw counter-clockwise
 /// triangle lists with back faces culled, depth-tested (less) and written, into the
 /// colour target without blending; they differ in layout, entry points and vertex
 /// buffers. Group 1 is the proxies' (one shader module); the lit pipelines use
@@ -168,10 +174,11 @@ pub(super) fn pipelines(
         blend: None,
         write_mask: wgpu::ColorWrites::ALL,
     })];
-    let pipeline = |label: &str,
-                    layout: &wgpu::PipelineLayout,
-                    (vs, fs): (&str, &str),
-                    buffers: &[Option<wgpu::VertexBufferLayout>]| {
+    let pipeline_with = |label: &str,
+                         layout: &wgpu::PipelineLayout,
+                         (vs, fs): (&str, &str),
+                         buffers: &[Option<wgpu::VertexBufferLayout>],
+                         constants: &[(&str, f64)]| {
         device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some(label),
             layout: Some(layout),
@@ -198,12 +205,21 @@ pub(super) fn pipelines(
             fragment: Some(wgpu::FragmentState {
                 module: &shader,
                 entry_point: Some(fs),
-                compilation_options: Default::default(),
+                compilation_options: wgpu::PipelineCompilationOptions {
+                    constants,
+                    ..Default::default()
+                },
                 targets: &targets,
             }),
             multiview_mask: None,
             cache: None,
         })
+    };
+    let pipeline = |label: &str,
+                    layout: &wgpu::PipelineLayout,
+                    stages: (&str, &str),
+                    buffers: &[Option<wgpu::VertexBufferLayout>]| {
+        pipeline_with(label, layout, stages, buffers, &[])
     };
     let lit_buffers = [Some(ModelVertex::layout()), Some(InstanceRaw::layout())];
     Pipelines {
@@ -215,12 +231,15 @@ pub(super) fn pipelines(
             ("vs_proxy", "fs_proxy"),
             &[Some(ProxyVertex::layout())],
         ),
-        proxy_mesh: pipeline(
-            "proxy mesh",
-            &proxy_layout,
-            ("vs_proxy", "fs_proxy_mesh"),
-            &[Some(ProxyVertex::layout())],
-        ),
+        proxy_mesh: MESH_VIEW_SLOTS.map(|slots| {
+            pipeline_with(
+                "proxy mesh",
+                &proxy_layout,
+                ("vs_proxy", "fs_proxy_mesh"),
+                &[Some(ProxyVertex::layout())],
+                &[("VIEW_SLOTS", slots as f64)],
+            )
+        }),
     }
 }
 
