@@ -245,8 +245,8 @@ fn captured(i: u32, c: vec4<f32>) -> vec4<f32> {
     return vec4<f32>(c.rgb, 1.0);
 }
 
-// Texture slots a mesh-proxy pipeline reads (pipeline-overridable: 1, 2, 4 or 8,
-// at least the proxy's views; GpuProxy::view_slots). A CPU rasterizer such as
+// Texture slots a mesh-proxy pipeline reads (pipeline-overridable, 1 to MAX_VIEWS:
+// the proxy's views; GpuProxy::view_slots). A CPU rasterizer such as
 // llvmpipe runs every branch of a fragment shader under lane masks, so a lookup
 // "texture of view i" costs a sample of every slot it could be; with fewer slots
 // the others fold away when the pipeline is compiled.
@@ -342,12 +342,20 @@ fn mesh_colour(i: ProxyOut) -> vec4<f32> {
     }
     if VIEW_SLOTS > 2u {
         take_slot(2u, t2, best0, best1, uv0.xy, uv1.xy, &s0, &s1);
+    }
+    if VIEW_SLOTS > 3u {
         take_slot(3u, t3, best0, best1, uv0.xy, uv1.xy, &s0, &s1);
     }
     if VIEW_SLOTS > 4u {
         take_slot(4u, t4, best0, best1, uv0.xy, uv1.xy, &s0, &s1);
+    }
+    if VIEW_SLOTS > 5u {
         take_slot(5u, t5, best0, best1, uv0.xy, uv1.xy, &s0, &s1);
+    }
+    if VIEW_SLOTS > 6u {
         take_slot(6u, t6, best0, best1, uv0.xy, uv1.xy, &s0, &s1);
+    }
+    if VIEW_SLOTS > 7u {
         take_slot(7u, t7, best0, best1, uv0.xy, uv1.xy, &s0, &s1);
     }
     var c0 = vec4<f32>(0.0);

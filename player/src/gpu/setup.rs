@@ -125,8 +125,17 @@ pub(super) fn albedo_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
 }
 
 /// The texture slots of the mesh-proxy pipelines: a proxy with n views is drawn by
-/// the first with at least n (`GpuProxy::view_slots`).
-pub(super) const MESH_VIEW_SLOTS: [u32; 4] = [1, 2, 4, MAX_VIEWS as u32];
+/// the first with at least n (`GpuProxy::view_slots`; one without views by the
+/// first).
+pub(super) const MESH_VIEW_SLOTS: [u32; MAX_VIEWS] = {
+    let mut slots = [0; MAX_VIEWS];
+    let mut i = 0;
+    while i < MAX_VIEWS {
+        slots[i] = i as u32 + 1;
+        i += 1;
+    }
+    slots
+};
 
 /// The renderer's pipelines.
 pub(super) struct Pipelines {
