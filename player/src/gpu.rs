@@ -791,6 +791,22 @@ impl Renderer {
         })
     }
 
+    /// [`Renderer::render`] `repeats` times (at least once); the fastest draw's
+    /// milliseconds (`compare --repeat`). The first draw also carries the texture
+    /// uploads queued since the last submit (a cell's proxies on arrival), the others
+    /// draw the frame only.
+    pub fn render_fastest(
+        &mut self,
+        repeats: u32,
+        camera: &Camera,
+        models: &GpuModels,
+        list: &DrawList<'_>,
+    ) -> f64 {
+        (0..repeats.max(1))
+            .map(|_| self.render(camera, models, list))
+            .fold(f64::INFINITY, f64::min)
+    }
+
     /// Draws one frame and waits for the GPU; returns the submit → done wall time in
     /// milliseconds. Proxies of `list.proxies` that are not ready (textures missing)
     /// are skipped; `list.lit_proxies` are drawn without their textures.

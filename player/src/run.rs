@@ -149,21 +149,6 @@ pub struct Player {
     pub timing_repeats: u32,
 }
 
-/// Draws `list` `repeats` times (at least once) and returns the fastest draw's
-/// milliseconds. The first draw also carries the texture uploads queued since the
-/// last submit (a cell's proxies on arrival), the others draw the frame only.
-fn fastest(
-    renderer: &mut Renderer,
-    camera: &Camera,
-    models: &GpuModels,
-    list: &crate::gpu::DrawList<'_>,
-    repeats: u32,
-) -> f64 {
-    (0..repeats.max(1))
-        .map(|_| renderer.render(camera, models, list))
-        .fold(f64::INFINITY, f64::min)
-}
-
 impl Player {
     pub fn open(dir: &Path, size: (u32, u32)) -> Result<Player, RunError> {
         let bake = Bake::open(dir)?;
@@ -215,13 +200,9 @@ impl Player {
                 let (current, stats) = s.begin_frame(&self.renderer, &self.bake, camera);
                 let list = hybrid_list(&self.bake, camera, &current, pending);
                 let (tris, tex) = list_stats(&list, &self.models);
-                let ms = fastest(
-                    &mut self.renderer,
-                    camera,
-                    &self.models,
-                    &list,
-                    self.timing_repeats,
-                );
+                let ms =
+                    self.renderer
+                        .render_fastest(self.timing_repeats, camera, &self.models, &list);
                 s.undrawn_frames(&self.renderer, &self.bake, camera);
                 (ms, tris, tex, stats)
             }
@@ -230,25 +211,17 @@ impl Player {
                 let set = self.lod.as_ref().expect("prepared");
                 let list = lod_list(&self.bake, set, camera, self.lod_pixel_error);
                 let (tris, tex) = list_stats(&list, &self.models);
-                let ms = fastest(
-                    &mut self.renderer,
-                    camera,
-                    &self.models,
-                    &list,
-                    self.timing_repeats,
-                );
+                let ms =
+                    self.renderer
+                        .render_fastest(self.timing_repeats, camera, &self.models, &list);
                 (ms, tris, tex, self.cell_stats(camera))
             }
             (m, _) => {
                 let list = originals_list(&self.bake, camera, m != Mode::Full);
                 let (tris, tex) = list_stats(&list, &self.models);
-                let ms = fastest(
-                    &mut self.renderer,
-                    camera,
-                    &self.models,
-                    &list,
-                    self.timing_repeats,
-                );
+                let ms =
+                    self.renderer
+                        .render_fastest(self.timing_repeats, camera, &self.models, &list);
                 (ms, tris, tex, self.cell_stats(camera))
             }
         }

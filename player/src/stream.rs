@@ -312,6 +312,14 @@ pub struct Streamer {
     stats: StreamStats,
 }
 
+/// The cell under `camera` and the streaming key of its far-field group.
+fn cell_and_group(bake: &Bake, camera: &Camera) -> (Option<u32>, Option<u32>) {
+    let cell = bake
+        .grid
+        .nearest_cell(Vec2::new(camera.eye.x, camera.eye.z));
+    (cell, cell.and_then(|id| group_key_of(bake, id)))
+}
+
 /// The streaming key of `cell`'s far-field group, if it has one.
 fn group_key_of(bake: &Bake, cell: u32) -> Option<u32> {
     let g = bake.index.as_ref()?.cell(cell)?.group?;
@@ -391,10 +399,7 @@ impl Streamer {
             self.accept(renderer, id, result);
         }
         // 2. The current cell; timestamp and prefetch requests.
-        let cell = bake
-            .grid
-            .nearest_cell(Vec2::new(camera.eye.x, camera.eye.z));
-        let group = cell.and_then(|id| group_key_of(bake, id));
+        let (cell, group) = cell_and_group(bake, camera);
         if cell != self.current {
             // A crossing: the packs drawn so far become the stand-ins.
             self.previous = [self.current, self.current_group]
@@ -409,10 +414,7 @@ impl Streamer {
         // 3. Make the current cell and its far-field group resident (demand load on
         //    a miss).
         if let Some(k) = self.current_group {
-            if !self.cells.contains_key(&k) && !self.failed.contains(&k) {
-                let result = bake.load_cell(k).map_err(|e| e.to_string());
-                self.accept(renderer, k, result);
-            }
+            self.load_now(renderer, bake, k);
             self.prioritise(k);
         }
         if let Some(id) = cell {
@@ -420,9 +422,8 @@ impl Streamer {
                 self.stats.hits += 1;
             } else if !self.failed.contains(&id) {
                 self.stats.misses += 1;
-                let result = bake.load_cell(id).map_err(|e| e.to_string());
-                self.accept(renderer, id, result);
             }
+            self.load_now(renderer, bake, id);
             // The current cell's queued textures go first (then its group's), under
             // the same budget.
             self.prioritise(id);
@@ -472,21 +473,23 @@ impl Streamer {
     /// every object as original geometry. Streaming goes on from there as usual.
     /// The cache statistics do not count it.
     pub fn prime(&mut self, renderer: &Renderer, bake: &Bake, camera: &Camera) {
-        let cell = bake
-            .grid
-            .nearest_cell(Vec2::new(camera.eye.x, camera.eye.z));
-        let group = cell.and_then(|id| group_key_of(bake, id));
+        let (cell, group) = cell_and_group(bake, camera);
         for key in [cell, group].into_iter().flatten() {
-            if !self.cells.contains_key(&key) && !self.failed.contains(&key) {
-                let result = bake.load_cell(key).map_err(|e| e.to_string());
-                self.accept(renderer, key, result);
-            }
-            let (mine, rest): (VecDeque<_>, VecDeque<_>) =
-                self.uploads.drain(..).partition(|&(c, _, _)| c == key);
-            self.uploads = rest;
-            for (id, pi, vi) in mine {
+            self.load_now(renderer, bake, key);
+            self.prioritise(key);
+            while let Some(&(id, pi, vi)) = self.uploads.front().filter(|e| e.0 == key) {
+                self.uploads.pop_front();
                 self.upload_one(renderer, id, pi, vi);
             }
+        }
+    }
+
+    /// Loads `key`'s pack on the render thread (a demand load) unless it is
+    /// resident or known to fail.
+    fn load_now(&mut self, renderer: &Renderer, bake: &Bake, key: u32) {
+        if !self.cells.contains_key(&key) && !self.failed.contains(&key) {
+            let result = bake.load_cell(key).map_err(|e| e.to_string());
+            self.accept(renderer, key, result);
         }
     }
 

@@ -907,6 +907,7 @@ fn select_region(
     let prism = region.prism;
     let centre = region.eyes[0];
     let eyes = sample_viewpoints(&prism);
+    let check_eyes = select::check_viewpoints(&prism, centre);
     let max_offset = prism
         .corners()
         .iter()
@@ -1031,8 +1032,7 @@ fn select_region(
                         None
                     } else {
                         // No cheaper candidate: measured as in every bake.
-                        let eyes = select::check_viewpoints(&prism, centre);
-                        check_mesh(scene, &proxy, &eyes, centre, params.image_res)
+                        check_mesh(scene, &proxy, &check_eyes, centre, params.image_res)
                     };
                     Ok(Some(proxy))
                 }
