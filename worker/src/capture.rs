@@ -253,15 +253,9 @@ pub const FIT_MIN_SHRINK: f32 = 0.9;
 /// the neighbouring cells' centres (§3.1.4), which can stand closer to the object than
 /// any point of the cell, shrink.
 pub fn fitted_scale(eye: Vec3, lo: Vec3, hi: Vec3, region_lo: Vec3, region_hi: Vec3) -> f32 {
-    let far = (0..8)
-        .map(|i| {
-            let c = Vec3::new(
-                if i & 1 == 0 { lo.x } else { hi.x },
-                if i & 2 == 0 { lo.y } else { hi.y },
-                if i & 4 == 0 { lo.z } else { hi.z },
-            );
-            c.distance(eye)
-        })
+    let far = crate::view::box_corners(lo, hi)
+        .iter()
+        .map(|c| c.distance(eye))
         .fold(0.0f32, f32::max);
     let gap = (region_lo - hi)
         .max(lo - region_hi)

@@ -102,12 +102,7 @@ fn projected_rect(view: &View, lo: Vec3, hi: Vec3) -> Option<(f32, f32, f32, f32
         f32::NEG_INFINITY,
     );
     let mut any = false;
-    for k in 0..8 {
-        let p = Vec3::new(
-            if k & 1 == 0 { lo.x } else { hi.x },
-            if k & 2 == 0 { lo.y } else { hi.y },
-            if k & 4 == 0 { lo.z } else { hi.z },
-        );
+    for p in crate::view::box_corners(lo, hi) {
         if let Some((px, _)) = view.project(p) {
             r = (r.0.min(px.x), r.1.min(px.y), r.2.max(px.x), r.3.max(px.y));
             any = true;

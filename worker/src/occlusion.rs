@@ -649,13 +649,7 @@ fn window_of(points: &[DVec3], p: DVec3, face: &Face) -> Option<(Window, f64)> {
 }
 
 fn box_corners(lo: Vec3, hi: Vec3) -> [DVec3; 8] {
-    std::array::from_fn(|k| {
-        DVec3::new(
-            f64::from(if k & 1 == 0 { lo.x } else { hi.x }),
-            f64::from(if k & 2 == 0 { lo.y } else { hi.y }),
-            f64::from(if k & 4 == 0 { lo.z } else { hi.z }),
-        )
-    })
+    crate::view::box_corners(lo, hi).map(|c| c.as_dvec3())
 }
 
 /// Whether the box with `corners` is hidden from `p` by the shrunk boxes `boxes`

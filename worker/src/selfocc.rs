@@ -95,12 +95,7 @@ pub fn choose_representation(self_occluding_error_px: f32, t_s: f32) -> Represen
 pub fn transformed_aabb(min: Vec3, max: Vec3, transform: Mat4) -> (Vec3, Vec3) {
     let mut lo = Vec3::splat(f32::INFINITY);
     let mut hi = Vec3::splat(f32::NEG_INFINITY);
-    for corner in 0..8 {
-        let p = Vec3::new(
-            if corner & 1 == 0 { min.x } else { max.x },
-            if corner & 2 == 0 { min.y } else { max.y },
-            if corner & 4 == 0 { min.z } else { max.z },
-        );
+    for p in crate::view::box_corners(min, max) {
         let q = transform.transform_point3(p);
         lo = lo.min(q);
         hi = hi.max(q);

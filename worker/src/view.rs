@@ -59,6 +59,18 @@ fn check_common(width: u32, height: u32, near: f32, far: f32) -> Result<(), View
     Ok(())
 }
 
+/// The 8 corners of the box `[lo, hi]`, corner `k` taking `hi` on x where bit 0 of
+/// `k` is set, on y for bit 1, on z for bit 2.
+pub fn box_corners(lo: Vec3, hi: Vec3) -> [Vec3; 8] {
+    std::array::from_fn(|k| {
+        Vec3::new(
+            if k & 1 == 0 { lo.x } else { hi.x },
+            if k & 2 == 0 { lo.y } else { hi.y },
+            if k & 4 == 0 { lo.z } else { hi.z },
+        )
+    })
+}
+
 /// An orthonormal eye basis looking along `forward`, with `up_hint` as up where it
 /// is not parallel to `forward`.
 fn eye_basis(eye: Vec3, forward: Vec3, up_hint: Vec3) -> Mat4 {
@@ -215,12 +227,7 @@ impl View {
         let mut hi = glam::Vec2::splat(f32::NEG_INFINITY);
         let mut dmin = f32::INFINITY;
         let mut dmax = f32::NEG_INFINITY;
-        for k in 0..8 {
-            let p = Vec3::new(
-                if k & 1 == 0 { aabb_min.x } else { aabb_max.x },
-                if k & 2 == 0 { aabb_min.y } else { aabb_max.y },
-                if k & 4 == 0 { aabb_min.z } else { aabb_max.z },
-            );
+        for p in box_corners(aabb_min, aabb_max) {
             let e = view.transform_point3(p);
             let d = -e.z;
             dmin = dmin.min(d);

@@ -12,6 +12,7 @@
 //!   from random points of the prism by ray casting against the walls.
 
 use format::manifest::{parse_manifest_str, BakeParams, CellParams};
+use format::park::SplitMix64;
 use format::{Ground, Instance, Model, Scene};
 use glam::{Mat4, Vec2, Vec3};
 use proptest::prelude::*;
@@ -41,15 +42,15 @@ const CITY: &str = r#"(
     cells: (cell_size: 16.0, min_eye_height: 1.5, max_eye_height: 2.5),
 )"#;
 
-/// A small deterministic generator (splitmix64).
-struct Rng(u64);
+/// A small deterministic generator (splitmix64): uniform f32 in [0, 1), 24 bits.
+struct Rng(SplitMix64);
 impl Rng {
+    fn new(seed: u64) -> Rng {
+        Rng(SplitMix64::new(seed))
+    }
+
     fn next(&mut self) -> f32 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        ((z ^ (z >> 31)) >> 40) as f32 / (1u64 << 24) as f32
+        (self.0.next_u64() >> 40) as f32 / (1u64 << 24) as f32
     }
 }
 
@@ -81,7 +82,7 @@ fn no_culled_object_covers_a_pixel_from_1000_views_in_a_city() {
         .collect();
 
     let near = 0.05;
-    let mut rng = Rng(17);
+    let mut rng = Rng::new(17);
     let (mut views, mut misses, mut culled_total, mut outside_total) = (0usize, 0usize, 0, 0);
     for &cell in &cells {
         let prism = grid.prism(cell, plan.cells.min_eye_height, plan.cells.max_eye_height);
@@ -136,14 +137,9 @@ fn no_culled_object_covers_a_pixel_from_1000_views_in_a_city() {
                 .filter(|(i, _)| {
                     // Whole instances behind the eye draw nothing.
                     let (lo, hi) = bounds[*i];
-                    (0..8).any(|k| {
-                        let c = Vec3::new(
-                            if k & 1 == 0 { lo.x } else { hi.x },
-                            if k & 2 == 0 { lo.y } else { hi.y },
-                            if k & 4 == 0 { lo.z } else { hi.z },
-                        );
-                        (c - eye).dot(dir) > 0.0
-                    })
+                    worker::view::box_corners(lo, hi)
+                        .iter()
+                        .any(|&c| (c - eye).dot(dir) > 0.0)
                 })
                 .map(|(i, _)| DrawItem::instance(&scene, i as u32))
                 .collect();
@@ -276,7 +272,7 @@ proptest! {
         let hidden = occluded_instances(&scene, &prism, &[target_id], &OcclusionSettings::for_prism(&prism));
         if hidden[0] {
             let (lo, hi) = scene.instance_bounds(target_id as usize);
-            let mut rng = Rng(seed);
+            let mut rng = Rng::new(seed);
             for _ in 0..400 {
                 let p = prism.sample(rng.next(), rng.next(), rng.next());
                 let q = lo + (hi - lo) * Vec3::new(rng.next(), rng.next(), rng.next());

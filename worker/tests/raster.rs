@@ -116,13 +116,7 @@ fn box_mesh(lo: Vec3, hi: Vec3) -> Mesh {
     let mut positions = Vec::new();
     let mut normals = Vec::new();
     let mut triangles = Vec::new();
-    let c = |i: usize| {
-        Vec3::new(
-            if i & 1 == 0 { lo.x } else { hi.x },
-            if i & 2 == 0 { lo.y } else { hi.y },
-            if i & 4 == 0 { lo.z } else { hi.z },
-        )
-    };
+    let corners = worker::view::box_corners(lo, hi);
     // Each face: 4 corner indices counter-clockwise seen from outside, and its normal.
     let faces: [([usize; 4], Vec3); 6] = [
         ([0, 4, 6, 2], -Vec3::X),
@@ -135,7 +129,7 @@ fn box_mesh(lo: Vec3, hi: Vec3) -> Mesh {
     for (quad, n) in faces {
         let base = positions.len() as u32;
         for i in quad {
-            positions.push(c(i).to_array());
+            positions.push(corners[i].to_array());
             normals.push(n.to_array());
         }
         triangles.push([base, base + 1, base + 2]);
@@ -565,12 +559,7 @@ fn tight_view_has_the_capture_resolution_and_holds_the_box() {
     assert!((280..=300).contains(&view.width), "{}", view.width);
     let mut lo_px = Vec2::splat(f32::INFINITY);
     let mut hi_px = Vec2::splat(f32::NEG_INFINITY);
-    for k in 0..8 {
-        let p = Vec3::new(
-            if k & 1 == 0 { lo.x } else { hi.x },
-            if k & 2 == 0 { lo.y } else { hi.y },
-            if k & 4 == 0 { lo.z } else { hi.z },
-        );
+    for p in worker::view::box_corners(lo, hi) {
         let (s, depth) = view.project(p).unwrap();
         assert!(depth >= view.near && depth <= view.far);
         lo_px = lo_px.min(s);
