@@ -4,7 +4,7 @@
 //! see the tables. The assertions keep the README honest: if a choice stops paying,
 //! these fail.
 
-use format::pack::codec::{encode_best, precode_delta_u32, ZSTD_LEVEL};
+use format::pack::codec::{encode_best, precode_delta_u32, push_leb128, zigzag, ZSTD_LEVEL};
 use format::pack::layout::Codec;
 use format::pack::{Texture, TextureEncoding};
 use std::path::PathBuf;
@@ -76,7 +76,7 @@ fn delta_no_planes(bytes: &[u8]) -> Vec<u8> {
         let v = u32::from_le_bytes([c[0], c[1], c[2], c[3]]);
         let d = v.wrapping_sub(prev) as i32;
         prev = v;
-        out.extend_from_slice(&(((d << 1) ^ (d >> 31)) as u32).to_le_bytes());
+        out.extend_from_slice(&zigzag(d).to_le_bytes());
     }
     out
 }
@@ -86,16 +86,7 @@ fn delta_varint(bytes: &[u8]) -> Vec<u8> {
     let d = delta_no_planes(bytes);
     let mut out = Vec::new();
     for c in d.chunks_exact(4) {
-        let mut z = u32::from_le_bytes([c[0], c[1], c[2], c[3]]);
-        loop {
-            let b = (z & 0x7f) as u8;
-            z >>= 7;
-            if z == 0 {
-                out.push(b);
-                break;
-            }
-            out.push(b | 0x80);
-        }
+        push_leb128(&mut out, u32::from_le_bytes([c[0], c[1], c[2], c[3]]));
     }
     out
 }

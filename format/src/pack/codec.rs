@@ -28,6 +28,30 @@ fn zstd_compress(bytes: &[u8]) -> Vec<u8> {
     zstd::bulk::compress(bytes, ZSTD_LEVEL).expect("zstd compression of an in-memory buffer")
 }
 
+/// Zig-zag map of a delta: 0, −1, 1, −2, 2 … → 0, 1, 2, 3, 4 …
+pub fn zigzag(d: i32) -> u32 {
+    ((d << 1) ^ (d >> 31)) as u32
+}
+
+/// Inverse of [`zigzag`].
+pub fn unzigzag(z: u32) -> i32 {
+    (z >> 1) as i32 ^ -((z & 1) as i32)
+}
+
+/// Appends `z` as an LEB128 varint: 7 bits a byte, lowest first, the high bit set on
+/// every byte but the last.
+pub fn push_leb128(out: &mut Vec<u8>, mut z: u32) {
+    loop {
+        let b = (z & 0x7f) as u8;
+        z >>= 7;
+        if z == 0 {
+            out.push(b);
+            break;
+        }
+        out.push(b | 0x80);
+    }
+}
+
 /// Delta + zig-zag + byte planes of a little-endian u32 stream (`bytes.len() % 4 == 0`).
 pub fn precode_delta_u32(bytes: &[u8]) -> Vec<u8> {
     let n = bytes.len() / 4;
@@ -37,8 +61,7 @@ pub fn precode_delta_u32(bytes: &[u8]) -> Vec<u8> {
         let v = u32::from_le_bytes([c[0], c[1], c[2], c[3]]);
         let d = v.wrapping_sub(prev) as i32;
         prev = v;
-        let z = ((d << 1) ^ (d >> 31)) as u32;
-        let zb = z.to_le_bytes();
+        let zb = zigzag(d).to_le_bytes();
         for (k, b) in zb.iter().enumerate() {
             out[k * n + i] = *b;
         }
@@ -61,8 +84,7 @@ pub fn postdecode_delta_u32(planes: &[u8]) -> Option<Vec<u8>> {
             planes[2 * n + i],
             planes[3 * n + i],
         ]);
-        let d = (z >> 1) as i32 ^ -((z & 1) as i32);
-        let v = prev.wrapping_add(d as u32);
+        let v = prev.wrapping_add(unzigzag(z) as u32);
         prev = v;
         out.extend_from_slice(&v.to_le_bytes());
     }
@@ -93,16 +115,7 @@ pub fn precode_index_mtf(bytes: &[u8]) -> Vec<u8> {
             None => {
                 let d = v.wrapping_sub(last_new) as i32;
                 last_new = v;
-                let mut z = ((d << 1) ^ (d >> 31)) as u32;
-                loop {
-                    let b = (z & 0x7f) as u8;
-                    z >>= 7;
-                    if z == 0 {
-                        deltas.push(b);
-                        break;
-                    }
-                    deltas.push(b | 0x80);
-                }
+                push_leb128(&mut deltas, zigzag(d));
                 MTF_LEN - 1
             }
         };
@@ -145,8 +158,7 @@ pub fn postdecode_index_mtf(pre: &[u8], n: usize) -> Result<Vec<u8>, String> {
                     }
                     shift += 7;
                 }
-                let d = (z >> 1) as i32 ^ -((z & 1) as i32);
-                last_new = last_new.wrapping_add(d as u32);
+                last_new = last_new.wrapping_add(unzigzag(z) as u32);
                 (MTF_LEN - 1, last_new)
             }
             c => return Err(format!("index-mtf: index {i}: code {c} above {MTF_LEN}")),
