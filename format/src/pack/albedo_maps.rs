@@ -24,25 +24,21 @@ use crate::albedo::{AlbedoMap, AlbedoTexture, Wrap, MAX_TEXTURE_SIDE};
 use bytemuck::{Pod, Zeroable};
 use std::collections::BTreeMap;
 
-/// One texture of `albedo-textures` (16 bytes).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-pub struct TextureRecord {
-    pub width: u32,
-    pub height: u32,
-    /// [`Wrap::code`] along u and v.
-    pub wrap: [u32; 2],
-}
-const _: () = assert!(std::mem::size_of::<TextureRecord>() == 16);
+super::pod_records! {
+    /// One texture of `albedo-textures` (16 bytes).
+    pub struct TextureRecord[16] {
+        pub width: u32,
+        pub height: u32,
+        /// [`Wrap::code`] along u and v.
+        pub wrap: [u32; 2],
+    }
 
-/// One textured model of `texcoords` (8 bytes).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-pub struct TexcoordRecord {
-    pub model: u32,
-    pub texture: u32,
+    /// One textured model of `texcoords` (8 bytes).
+    pub struct TexcoordRecord[8] {
+        pub model: u32,
+        pub texture: u32,
+    }
 }
-const _: () = assert!(std::mem::size_of::<TexcoordRecord>() == 8);
 
 /// The two sections for `maps` (one entry per model; vertex counts already checked
 /// by the caller); empty when no model is textured.

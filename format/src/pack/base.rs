@@ -17,20 +17,21 @@ use crate::mesh::Mesh;
 use crate::scene::{Ground, Scene};
 use bytemuck::{Pod, Zeroable};
 
-/// Hex-grid parameters the player needs to find the current cell (DESIGN.md,
-/// "Conventions": flat-top hexagons, cell id = row · n_cols + col); stored as they
-/// are, 36 bytes at offset 32 of `base-meta` ([`BaseMetaRecord`]).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
-pub struct GridParams {
-    pub ground_min: [f32; 2],
-    pub ground_max: [f32; 2],
-    /// Centre-to-corner distance of a cell (the paper's |VV'|).
-    pub cell_size: f32,
-    pub min_eye_height: f32,
-    pub max_eye_height: f32,
-    pub n_cols: u32,
-    pub n_rows: u32,
+super::pod_records! {
+    /// Hex-grid parameters the player needs to find the current cell (DESIGN.md,
+    /// "Conventions": flat-top hexagons, cell id = row · n_cols + col); stored as they
+    /// are, 36 bytes at offset 32 of `base-meta` ([`BaseMetaRecord`]).
+    #[derive(PartialEq)]
+    pub struct GridParams[36] {
+        pub ground_min: [f32; 2],
+        pub ground_max: [f32; 2],
+        /// Centre-to-corner distance of a cell (the paper's |VV'|).
+        pub cell_size: f32,
+        pub min_eye_height: f32,
+        pub max_eye_height: f32,
+        pub n_cols: u32,
+        pub n_rows: u32,
+    }
 }
 
 impl GridParams {
@@ -175,42 +176,35 @@ pub struct BasePack {
     pub patches: Option<super::patches::PatchSet>,
 }
 
-/// Section `base-meta` (80 bytes).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-pub struct BaseMetaRecord {
-    pub scene_fingerprint: [u8; 32],
-    pub grid: GridParams,
-    pub model_count: u32,
-    pub instance_count: u32,
-    pub reserved: u32,
-}
-const _: () = assert!(std::mem::size_of::<BaseMetaRecord>() == 80);
+super::pod_records! {
+    /// Section `base-meta` (80 bytes).
+    pub struct BaseMetaRecord[80] {
+        pub scene_fingerprint: [u8; 32],
+        pub grid: GridParams,
+        pub model_count: u32,
+        pub instance_count: u32,
+        pub reserved: u32,
+    }
 
-/// One entry of section `model-table` (48 bytes). A model's vertices and triangles
-/// follow those of the models before it in `positions`/`normals`/`vertex-colours` and
-/// `triangles`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-pub struct ModelRecord {
-    pub vertex_count: u32,
-    pub triangle_count: u32,
-    /// Byte range of the name in `model-names` (UTF-8).
-    pub name_offset: u32,
-    pub name_len: u32,
-    pub content_hash: [u8; 32],
-}
-const _: () = assert!(std::mem::size_of::<ModelRecord>() == 48);
+    /// One entry of section `model-table` (48 bytes). A model's vertices and triangles
+    /// follow those of the models before it in `positions`/`normals`/`vertex-colours` and
+    /// `triangles`.
+    pub struct ModelRecord[48] {
+        pub vertex_count: u32,
+        pub triangle_count: u32,
+        /// Byte range of the name in `model-names` (UTF-8).
+        pub name_offset: u32,
+        pub name_len: u32,
+        pub content_hash: [u8; 32],
+    }
 
-/// One entry of section `instances` (80 bytes).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-pub struct InstanceRecord {
-    pub transform: [f32; 16],
-    pub tint: [f32; 3],
-    pub model: u32,
+    /// One entry of section `instances` (80 bytes).
+    pub struct InstanceRecord[80] {
+        pub transform: [f32; 16],
+        pub tint: [f32; 3],
+        pub model: u32,
+    }
 }
-const _: () = assert!(std::mem::size_of::<InstanceRecord>() == 80);
 
 impl BasePack {
     /// The base pack of a scene.
@@ -334,11 +328,7 @@ impl BasePack {
 
         // 2. Sections; positions and normals stay raw unless zstd pays (zero-copy).
         let mut sections = vec![
-            SectionData::new(
-                SectionKind::BASE_META,
-                bytemuck::bytes_of(&meta).to_vec(),
-                RAW_ONLY,
-            ),
+            SectionData::of_records(SectionKind::BASE_META, &[meta], RAW_ONLY),
             SectionData::of_records(SectionKind::MODEL_TABLE, &records, TRY_ZSTD),
             SectionData::new(SectionKind::MODEL_NAMES, names, TRY_ZSTD),
             SectionData::new(SectionKind::POSITIONS, positions, TRY_ZSTD_PREFER_RAW),

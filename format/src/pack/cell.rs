@@ -173,30 +173,26 @@ pub fn code_of_depth(near: f32, far: f32, depth: f32) -> u8 {
     1 + (t * 254.0).round() as u8
 }
 
-/// One record of section `layered-impostors` (64 bytes), followed by its
-/// `layer_count` [`ImpostorLayerRecord`]s; one per LayeredImpostor proxy, in proxy
-/// order.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-pub struct ImpostorRecord {
-    pub corner_rays: [[f32; 3]; 4],
-    pub near: f32,
-    pub far: f32,
-    pub layer_count: u32,
-    pub reserved: u32,
-}
-const _: () = assert!(std::mem::size_of::<ImpostorRecord>() == 64);
+super::pod_records! {
+    /// One record of section `layered-impostors` (64 bytes), followed by its
+    /// `layer_count` [`ImpostorLayerRecord`]s; one per LayeredImpostor proxy, in proxy
+    /// order.
+    pub struct ImpostorRecord[64] {
+        pub corner_rays: [[f32; 3]; 4],
+        pub near: f32,
+        pub far: f32,
+        pub layer_count: u32,
+        pub reserved: u32,
+    }
 
-/// One layer in section `layered-impostors` (16 bytes).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-pub struct ImpostorLayerRecord {
-    pub depth: f32,
-    pub code_lo: u32,
-    pub code_hi: u32,
-    pub reserved: u32,
+    /// One layer in section `layered-impostors` (16 bytes).
+    pub struct ImpostorLayerRecord[16] {
+        pub depth: f32,
+        pub code_lo: u32,
+        pub code_hi: u32,
+        pub reserved: u32,
+    }
 }
-const _: () = assert!(std::mem::size_of::<ImpostorLayerRecord>() == 16);
 
 /// A proxy's layers agree with its kind and views (a LayeredImpostor has layers and
 /// one lossless view; no other kind has layers).
@@ -243,61 +239,51 @@ pub struct CellPack {
 /// which also reads as none).
 pub const NO_FAR_GROUP: u32 = u32::MAX;
 
-/// Section `cell-meta` (64 bytes).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-pub struct CellMetaRecord {
-    pub fingerprint: [u8; 32],
-    pub cell_id: u32,
-    pub original_count: u32,
-    pub proxy_count: u32,
-    pub member_count: u32,
-    pub view_count: u32,
-    /// Version 2: the cell's far-field group or [`NO_FAR_GROUP`]; reserved (0) in
-    /// version 1.
-    pub far_group: u32,
-    pub reserved: [u32; 2],
-}
-const _: () = assert!(std::mem::size_of::<CellMetaRecord>() == 64);
+super::pod_records! {
+    /// Section `cell-meta` (64 bytes).
+    pub struct CellMetaRecord[64] {
+        pub fingerprint: [u8; 32],
+        pub cell_id: u32,
+        pub original_count: u32,
+        pub proxy_count: u32,
+        pub member_count: u32,
+        pub view_count: u32,
+        /// Version 2: the cell's far-field group or [`NO_FAR_GROUP`]; reserved (0) in
+        /// version 1.
+        pub far_group: u32,
+        pub reserved: [u32; 2],
+    }
 
-/// One entry of section `proxies` (16 bytes). A proxy's members and views follow
-/// those of the proxies before it.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-pub struct ProxyRecord {
-    pub kind: u32,
-    pub member_count: u32,
-    pub view_count: u32,
-    pub reserved: u32,
-}
-const _: () = assert!(std::mem::size_of::<ProxyRecord>() == 16);
+    /// One entry of section `proxies` (16 bytes). A proxy's members and views follow
+    /// those of the proxies before it.
+    pub struct ProxyRecord[16] {
+        pub kind: u32,
+        pub member_count: u32,
+        pub view_count: u32,
+        pub reserved: u32,
+    }
 
-/// One entry of section `members` (16 bytes). A member's triangles (in
-/// `member-triangles`) and masks (in `view-masks`) follow those before it.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-pub struct MemberRecord {
-    pub instance: u32,
-    pub triangle_count: u32,
-    /// `triangle_count` for MvMesh members, 0 otherwise.
-    pub mask_count: u32,
-    pub reserved: u32,
-}
-const _: () = assert!(std::mem::size_of::<MemberRecord>() == 16);
+    /// One entry of section `members` (16 bytes). A member's triangles (in
+    /// `member-triangles`) and masks (in `view-masks`) follow those before it.
+    pub struct MemberRecord[16] {
+        pub instance: u32,
+        pub triangle_count: u32,
+        /// `triangle_count` for MvMesh members, 0 otherwise.
+        pub mask_count: u32,
+        pub reserved: u32,
+    }
 
-/// One entry of section `views` (96 bytes). A view's texture data (in `textures`)
-/// follows that of the views before it.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-pub struct ViewRecord {
-    pub matrix: [f32; 16],
-    pub eye: [f32; 3],
-    pub width: u32,
-    pub height: u32,
-    pub encoding: u32,
-    pub data_len: u64,
+    /// One entry of section `views` (96 bytes). A view's texture data (in `textures`)
+    /// follows that of the views before it.
+    pub struct ViewRecord[96] {
+        pub matrix: [f32; 16],
+        pub eye: [f32; 3],
+        pub width: u32,
+        pub height: u32,
+        pub encoding: u32,
+        pub data_len: u64,
+    }
 }
-const _: () = assert!(std::mem::size_of::<ViewRecord>() == 96);
 
 /// A view's eye and matrix are finite (the player divides by them).
 fn check_view(eye: &[f32; 3], matrix: &[f32; 16]) -> Result<(), String> {
@@ -473,11 +459,7 @@ impl CellPack {
             reserved: [0; 2],
         };
         let mut sections = vec![
-            SectionData::new(
-                SectionKind::CELL_META,
-                bytemuck::bytes_of(&meta).to_vec(),
-                RAW_ONLY,
-            ),
+            SectionData::of_records(SectionKind::CELL_META, &[meta], RAW_ONLY),
             SectionData::of_records(SectionKind::ORIGINALS, &self.originals, TRY_INDICES),
             SectionData::of_records(SectionKind::PROXIES, &proxies, TRY_ZSTD),
             SectionData::of_records(SectionKind::MEMBERS, &members, TRY_ZSTD),

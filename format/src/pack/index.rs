@@ -42,33 +42,29 @@ pub struct Index {
     pub groups: Vec<IndexEntry>,
 }
 
-/// Section `index-meta` (48 bytes).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-pub struct IndexMetaRecord {
-    pub build_fingerprint: [u8; 32],
-    pub cell_count: u32,
-    /// Version 2: entries of `index-groups`; reserved (0) in version 1.
-    pub group_count: u32,
-    pub reserved: [u32; 2],
-}
-const _: () = assert!(std::mem::size_of::<IndexMetaRecord>() == 48);
+super::pod_records! {
+    /// Section `index-meta` (48 bytes).
+    pub struct IndexMetaRecord[48] {
+        pub build_fingerprint: [u8; 32],
+        pub cell_count: u32,
+        /// Version 2: entries of `index-groups`; reserved (0) in version 1.
+        pub group_count: u32,
+        pub reserved: [u32; 2],
+    }
 
-/// One entry of section `index-cells` (88 bytes). A cell's neighbours (in
-/// `index-neighbours`) follow those of the cells before it.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-pub struct CellRecord {
-    pub cell_id: u32,
-    pub neighbour_count: u32,
-    pub bytes: u64,
-    pub checksum: [u8; 32],
-    pub fingerprint: [u8; 32],
-    /// Byte range of the file name in `index-file-names` (UTF-8).
-    pub name_offset: u32,
-    pub name_len: u32,
+    /// One entry of section `index-cells` (88 bytes). A cell's neighbours (in
+    /// `index-neighbours`) follow those of the cells before it.
+    pub struct CellRecord[88] {
+        pub cell_id: u32,
+        pub neighbour_count: u32,
+        pub bytes: u64,
+        pub checksum: [u8; 32],
+        pub fingerprint: [u8; 32],
+        /// Byte range of the file name in `index-file-names` (UTF-8).
+        pub name_offset: u32,
+        pub name_len: u32,
+    }
 }
-const _: () = assert!(std::mem::size_of::<CellRecord>() == 88);
 
 /// An entry's file is a safe relative path and its size is within bounds (the
 /// writer's check; `what` is `cell` or `group`).
@@ -296,11 +292,7 @@ impl Index {
         assemble(
             FileKind::Index,
             &[
-                SectionData::new(
-                    SectionKind::INDEX_META,
-                    bytemuck::bytes_of(&meta).to_vec(),
-                    RAW_ONLY,
-                ),
+                SectionData::of_records(SectionKind::INDEX_META, &[meta], RAW_ONLY),
                 SectionData::of_records(SectionKind::INDEX_CELLS, &records, TRY_ZSTD),
                 SectionData::new(SectionKind::INDEX_FILE_NAMES, names, TRY_ZSTD),
                 SectionData::of_records(SectionKind::INDEX_NEIGHBOURS, &neighbours, TRY_INDICES),

@@ -29,49 +29,47 @@ pub const MAX_RAW_LEN: u64 = u32::MAX as u64;
 /// Bytes of the header covered by `header_checksum` (together with the table).
 pub const HEADER_CHECKED_LEN: usize = 48;
 
-/// The fixed file header at offset 0.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Pod, Zeroable)]
-pub struct Header {
-    /// [`MAGIC`].
-    pub magic: [u8; 8],
-    /// [`FileKind`] as u32.
-    pub file_kind: u32,
-    /// Format version, [`FORMAT_VERSION`] for files this crate writes.
-    pub version: u32,
-    /// Reserved flag bits; zero in v1 (a v1 reader rejects any set bit).
-    pub flags: u32,
-    /// Number of [`SectionEntry`] records in the table.
-    pub section_count: u32,
-    /// Offset of the section table; [`HEADER_SIZE`] in v1.
-    pub table_offset: u64,
-    /// Total length of the file in bytes.
-    pub file_len: u64,
-    /// Zero in v1.
-    pub reserved: u64,
-    /// blake3 of header bytes 0..48 followed by the whole section table, first 16 bytes.
-    pub header_checksum: [u8; 16],
-}
-const _: () = assert!(std::mem::size_of::<Header>() == HEADER_SIZE);
+super::pod_records! {
+    /// The fixed file header at offset 0.
+    #[derive(PartialEq, Eq)]
+    pub struct Header[HEADER_SIZE] {
+        /// [`MAGIC`].
+        pub magic: [u8; 8],
+        /// [`FileKind`] as u32.
+        pub file_kind: u32,
+        /// Format version, [`FORMAT_VERSION`] for files this crate writes.
+        pub version: u32,
+        /// Reserved flag bits; zero in v1 (a v1 reader rejects any set bit).
+        pub flags: u32,
+        /// Number of [`SectionEntry`] records in the table.
+        pub section_count: u32,
+        /// Offset of the section table; [`HEADER_SIZE`] in v1.
+        pub table_offset: u64,
+        /// Total length of the file in bytes.
+        pub file_len: u64,
+        /// Zero in v1.
+        pub reserved: u64,
+        /// blake3 of header bytes 0..48 followed by the whole section table, first 16 bytes.
+        pub header_checksum: [u8; 16],
+    }
 
-/// One entry of the section table.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Pod, Zeroable)]
-pub struct SectionEntry {
-    /// [`SectionKind`] as u32 (never 0).
-    pub kind: u32,
-    /// [`Codec`] as u32.
-    pub codec: u32,
-    /// Offset of the stored bytes from the file start; a multiple of [`SECTION_ALIGN`].
-    pub offset: u64,
-    /// Length of the stored (possibly compressed) bytes.
-    pub stored_len: u64,
-    /// Length of the section's content after decoding.
-    pub raw_len: u64,
-    /// Full blake3 of the stored bytes.
-    pub checksum: [u8; 32],
+    /// One entry of the section table.
+    #[derive(PartialEq, Eq)]
+    pub struct SectionEntry[ENTRY_SIZE] {
+        /// [`SectionKind`] as u32 (never 0).
+        pub kind: u32,
+        /// [`Codec`] as u32.
+        pub codec: u32,
+        /// Offset of the stored bytes from the file start; a multiple of [`SECTION_ALIGN`].
+        pub offset: u64,
+        /// Length of the stored (possibly compressed) bytes.
+        pub stored_len: u64,
+        /// Length of the section's content after decoding.
+        pub raw_len: u64,
+        /// Full blake3 of the stored bytes.
+        pub checksum: [u8; 32],
+    }
 }
-const _: () = assert!(std::mem::size_of::<SectionEntry>() == ENTRY_SIZE);
 
 super::code_enum! {
     /// Which of the three files a pack is.

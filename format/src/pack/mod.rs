@@ -98,6 +98,29 @@ macro_rules! code_enum {
 }
 pub(crate) use code_enum;
 
+/// On-disk records, read and written as their bytes: each `pub struct Name[SIZE] {
+/// fields }` gives the struct, `#[repr(C)]` with `Clone`, `Copy`, `Debug` and
+/// `bytemuck`'s `Pod` and `Zeroable` (further derives as attributes), and a
+/// compile-time assertion that it is `SIZE` bytes (obvhs style; format/README.md gives
+/// each record byte by byte).
+macro_rules! pod_records {
+    ($(
+        $(#[$attr:meta])*
+        pub struct $name:ident[$size:expr] {
+            $($(#[$field_attr:meta])* pub $field:ident: $ty:ty,)*
+        }
+    )*) => {$(
+        $(#[$attr])*
+        #[repr(C)]
+        #[derive(Clone, Copy, Debug, Pod, Zeroable)]
+        pub struct $name {
+            $($(#[$field_attr])* pub $field: $ty,)*
+        }
+        const _: () = assert!(std::mem::size_of::<$name>() == $size);
+    )*};
+}
+pub(crate) use pod_records;
+
 pub(crate) fn invalid(what: impl Into<String>) -> PackError {
     PackError::Invalid { what: what.into() }
 }

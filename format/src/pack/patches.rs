@@ -58,41 +58,34 @@ pub struct ModelPatch {
     pub samples: Vec<u32>,
 }
 
-/// Head of section `patch-table` (32 bytes).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-pub struct PatchHeaderRecord {
-    pub sample_level: u32,
-    pub shell_count: u32,
-    pub shell_radius: [f32; 4],
-    pub model_count: u32,
-    pub patch_count: u32,
-}
-const _: () = assert!(std::mem::size_of::<PatchHeaderRecord>() == 32);
+super::pod_records! {
+    /// Head of section `patch-table` (32 bytes).
+    pub struct PatchHeaderRecord[32] {
+        pub sample_level: u32,
+        pub shell_count: u32,
+        pub shell_radius: [f32; 4],
+        pub model_count: u32,
+        pub patch_count: u32,
+    }
 
-/// Per model, after the head of `patch-table` (32 bytes).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-pub struct PatchModelRecord {
-    pub centre: [f32; 3],
-    pub radius: f32,
-    pub patch_count: u32,
-    pub reserved: [u32; 3],
-}
-const _: () = assert!(std::mem::size_of::<PatchModelRecord>() == 32);
+    /// Per model, after the head of `patch-table` (32 bytes).
+    pub struct PatchModelRecord[32] {
+        pub centre: [f32; 3],
+        pub radius: f32,
+        pub patch_count: u32,
+        pub reserved: [u32; 3],
+    }
 
-/// Per patch, after the model records of `patch-table` (48 bytes).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-pub struct PatchRecord {
-    pub triangle_count: u32,
-    pub cone_axis: [f32; 3],
-    pub cone_cos: f32,
-    pub centre: [f32; 3],
-    pub offset: f32,
-    pub reserved: [u32; 3],
+    /// Per patch, after the model records of `patch-table` (48 bytes).
+    pub struct PatchRecord[48] {
+        pub triangle_count: u32,
+        pub cone_axis: [f32; 3],
+        pub cone_cos: f32,
+        pub centre: [f32; 3],
+        pub offset: f32,
+        pub reserved: [u32; 3],
+    }
 }
-const _: () = assert!(std::mem::size_of::<PatchRecord>() == 48);
 
 fn finite(v: &[f32]) -> bool {
     v.iter()
