@@ -35,6 +35,14 @@ fn model(name: &str) -> Option<PathBuf> {
     }
 }
 
+/// A real model file loaded with [`load_ok`]: its path, mesh and statistics, or
+/// `None` (with a note) when it was not fetched.
+fn load_fetched(name: &str) -> Option<(PathBuf, Mesh, format::load::LoadStats)> {
+    let path = model(name)?;
+    let (mesh, stats) = load_ok(&path);
+    Some((path, mesh, stats))
+}
+
 /// A binary STL facet: its normal, then its three corners.
 type Facet = [[f32; 3]; 4];
 
@@ -77,10 +85,9 @@ fn load_ok(path: &Path) -> (Mesh, format::load::LoadStats) {
 
 #[test]
 fn bunny_obj() {
-    let Some(path) = model("bunny.obj") else {
+    let Some((path, mesh, stats)) = load_fetched("bunny.obj") else {
         return;
     };
-    let (mesh, stats) = load_ok(&path);
     assert_eq!(stats.cleanup.input_triangles, 69_666);
     // The bunny is already welded and clean: nothing to merge or drop.
     assert_eq!(mesh.triangle_count(), 69_666);
@@ -110,10 +117,9 @@ fn bunny_obj() {
 
 #[test]
 fn elephant_off() {
-    let Some(path) = model("refined_elephant.off") else {
+    let Some((_, mesh, _)) = load_fetched("refined_elephant.off") else {
         return;
     };
-    let (mesh, _) = load_ok(&path);
     assert_eq!(mesh.triangle_count(), 88_928);
     assert_eq!(mesh.vertex_count(), 44_460);
     assert!(mesh.edge_topology().is_closed_manifold());
@@ -122,18 +128,16 @@ fn elephant_off() {
 
 #[test]
 fn wuson_ascii_ply() {
-    let Some(path) = model("wuson.ply") else {
+    let Some((_, mesh, stats)) = load_fetched("wuson.ply") else {
         return;
     };
-    let (mesh, stats) = load_ok(&path);
     assert_eq!(stats.cleanup.input_vertices, 11_184);
     assert_eq!(stats.cleanup.input_triangles, 3_732);
     assert_eq!(mesh.triangle_count(), 3_732);
     // The file repeats vertices per face (normals/UVs): welding merges them.
     assert_eq!(mesh.vertex_count(), 2_117);
     // The same model as STL welds to the same vertex count.
-    if let Some(stl) = model("wuson.stl") {
-        let (from_stl, _) = load_ok(&stl);
+    if let Some((_, from_stl, _)) = load_fetched("wuson.stl") {
         assert_eq!(from_stl.vertex_count(), mesh.vertex_count());
         assert_eq!(from_stl.triangle_count(), mesh.triangle_count());
         assert_eq!(from_stl.bounds(), mesh.bounds());
@@ -142,10 +146,9 @@ fn wuson_ascii_ply() {
 
 #[test]
 fn cube_binary_ply() {
-    let Some(path) = model("cube_binary.ply") else {
+    let Some((_, mesh, _)) = load_fetched("cube_binary.ply") else {
         return;
     };
-    let (mesh, _) = load_ok(&path);
     assert_eq!(mesh.vertex_count(), 8);
     assert_eq!(mesh.triangle_count(), 12);
     assert_eq!(mesh.bounds(), Some(([0.0; 3], [1.0; 3])));
@@ -154,10 +157,9 @@ fn cube_binary_ply() {
 
 #[test]
 fn float_color_ply_keeps_file_colours() {
-    let Some(path) = model("float-color.ply") else {
+    let Some((_, mesh, stats)) = load_fetched("float-color.ply") else {
         return;
     };
-    let (mesh, stats) = load_ok(&path);
     assert!(stats.file_colors);
     assert_eq!(mesh.triangle_count(), 1);
     // red 0, green 0, blue 1 (floats) → pure blue sRGB8.
@@ -187,10 +189,9 @@ fn pig_binary_stl() {
 
 #[test]
 fn engine_glb_applies_node_transforms() {
-    let Some(path) = model("2CylinderEngine.glb") else {
+    let Some((path, mesh, stats)) = load_fetched("2CylinderEngine.glb") else {
         return;
     };
-    let (mesh, stats) = load_ok(&path);
     assert!(stats.nodes > 1, "several nodes contribute: {}", stats.nodes);
     assert!(stats.file_colors, "material base colours");
     // Without node transforms the parts would sit within their accessors' bounds;
@@ -213,10 +214,9 @@ fn engine_glb_applies_node_transforms() {
 
 #[test]
 fn milk_truck_glb() {
-    let Some(path) = model("CesiumMilkTruck.glb") else {
+    let Some((_, mesh, stats)) = load_fetched("CesiumMilkTruck.glb") else {
         return;
     };
-    let (mesh, stats) = load_ok(&path);
     assert!(stats.nodes > 1, "truck body and wheels: {}", stats.nodes);
     assert!(mesh.triangle_count() > 1000);
     assert_eq!(stats.parts, 5, "body (3 primitives) + the wheel mesh twice");
