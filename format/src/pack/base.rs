@@ -424,17 +424,15 @@ impl BasePack {
         let (mut v0, mut t0) = (0usize, 0usize);
         for (i, r) in records.iter().enumerate() {
             let rec_off = (i * std::mem::size_of::<ModelRecord>()) as u64;
-            let name_end = (r.name_offset as usize).checked_add(r.name_len as usize);
-            let name_bytes = name_end
-                .and_then(|e| names.get(r.name_offset as usize..e))
+            let name_bytes = super::range_of(&names, r.name_offset as usize, r.name_len as usize)
                 .ok_or_else(|| {
-                    malformed(
-                        file,
-                        SectionKind::MODEL_TABLE,
-                        rec_off,
-                        format!("model {i}: name range outside model-names"),
-                    )
-                })?;
+                malformed(
+                    file,
+                    SectionKind::MODEL_TABLE,
+                    rec_off,
+                    format!("model {i}: name range outside model-names"),
+                )
+            })?;
             let name = std::str::from_utf8(name_bytes)
                 .map_err(|e| {
                     malformed(

@@ -909,8 +909,7 @@ fn read_layers(
 
 /// The next `n` items of `items` from `*next`, advancing it; `None` if fewer remain.
 fn take<'a, T>(items: &'a [T], next: &mut usize, n: usize) -> Option<&'a [T]> {
-    let end = next.checked_add(n)?;
-    let s = items.get(*next..end)?;
-    *next = end;
+    let s = super::range_of(items, *next, n)?;
+    *next += n;
     Some(s)
 }

@@ -339,9 +339,7 @@ impl Index {
                     format!("cell ids not increasing at entry {i}"),
                 ));
             }
-            let end = (r.name_offset as usize).checked_add(r.name_len as usize);
-            let name = end
-                .and_then(|e| names.get(r.name_offset as usize..e))
+            let name = super::range_of(&names, r.name_offset as usize, r.name_len as usize)
                 .ok_or_else(|| {
                     malformed(
                         file,
@@ -361,17 +359,16 @@ impl Index {
             check_relative_path(name).map_err(|e| {
                 malformed(file, SectionKind::INDEX_FILE_NAMES, r.name_offset as u64, e)
             })?;
-            let nb_end = next.checked_add(r.neighbour_count as usize);
-            let nb = nb_end
-                .and_then(|e| neighbours.get(next..e))
-                .ok_or_else(|| {
+            let nb = super::range_of(&neighbours, next, r.neighbour_count as usize).ok_or_else(
+                || {
                     malformed(
                         file,
                         SectionKind::INDEX_CELLS,
                         off + 4,
                         format!("cell {}: neighbour count past index-neighbours", r.cell_id),
                     )
-                })?;
+                },
+            )?;
             check_entry(r.cell_id, r.bytes)
                 .map_err(|e| malformed(file, SectionKind::INDEX_CELLS, off, e))?;
             check_neighbours(r.cell_id, nb).map_err(|(k, e)| {
@@ -443,9 +440,7 @@ impl Index {
                     r.cell_id
                 )));
             }
-            let end = (r.name_offset as usize).checked_add(r.name_len as usize);
-            let name = end
-                .and_then(|e| names.get(r.name_offset as usize..e))
+            let name = super::range_of(names, r.name_offset as usize, r.name_len as usize)
                 .and_then(|n| std::str::from_utf8(n).ok())
                 .ok_or_else(|| {
                     bad(format!(

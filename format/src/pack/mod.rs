@@ -121,6 +121,11 @@ macro_rules! pod_records {
 }
 pub(crate) use pod_records;
 
+/// The `len` items of `items` from `start`; `None` where they reach past the end.
+pub(crate) fn range_of<T>(items: &[T], start: usize, len: usize) -> Option<&[T]> {
+    items.get(start..start.checked_add(len)?)
+}
+
 pub(crate) fn invalid(what: impl Into<String>) -> PackError {
     PackError::Invalid { what: what.into() }
 }
