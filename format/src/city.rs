@@ -72,6 +72,25 @@ pub struct CityParams {
     pub tint_max: [f32; 3],
 }
 
+impl CityParams {
+    /// A small city for tests and examples: seed 3, 40-unit blocks, 16-unit streets,
+    /// two buildings a block, 10 to 50 units tall with 3.5-unit floors, 12 variants.
+    pub fn example() -> CityParams {
+        CityParams {
+            seed: 3,
+            block_size: 40.0,
+            street_width: 16.0,
+            buildings_per_block: 2,
+            min_height: 10.0,
+            max_height: 50.0,
+            floor_height: 3.5,
+            variants: 12,
+            tint_min: [0.8; 3],
+            tint_max: [1.0; 3],
+        }
+    }
+}
+
 /// A prop model: its count and normalised x–z footprint (width, depth).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PropEntry {
@@ -713,24 +732,9 @@ fn mix(a: u64, b: u64) -> u64 {
 mod tests {
     use super::*;
 
-    fn params() -> CityParams {
-        CityParams {
-            seed: 3,
-            block_size: 40.0,
-            street_width: 16.0,
-            buildings_per_block: 2,
-            min_height: 10.0,
-            max_height: 50.0,
-            floor_height: 3.5,
-            variants: 12,
-            tint_min: [0.8; 3],
-            tint_max: [1.0; 3],
-        }
-    }
-
     #[test]
     fn every_building_variant_is_closed_and_valid() {
-        let p = params();
+        let p = CityParams::example();
         for v in 0..p.variants {
             let style = BuildingStyle::draw(&p, v);
             let mesh = building_mesh(&style);
@@ -750,13 +754,18 @@ mod tests {
         }
     }
 
+    /// The ground from the origin to (`x`, `z`).
+    fn ground_to(x: f32, z: f32) -> Ground {
+        Ground {
+            min: [0.0, 0.0],
+            max: [x, z],
+        }
+    }
+
     #[test]
     fn placement_is_deterministic_and_props_stay_off_the_walking_lane() {
-        let p = params();
-        let ground = Ground {
-            min: [0.0, 0.0],
-            max: [300.0, 250.0],
-        };
+        let p = CityParams::example();
+        let ground = ground_to(300.0, 250.0);
         let props = [
             PropEntry {
                 count: 6,
@@ -799,19 +808,13 @@ mod tests {
 
     #[test]
     fn too_small_a_ground_and_too_wide_a_prop_are_refused() {
-        let p = params();
-        let small = Ground {
-            min: [0.0, 0.0],
-            max: [50.0, 50.0],
-        };
+        let p = CityParams::example();
+        let small = ground_to(50.0, 50.0);
         assert!(matches!(
             place(&p, &[], &small),
             Err(CityError::NoBlock { .. })
         ));
-        let ground = Ground {
-            min: [0.0, 0.0],
-            max: [300.0, 300.0],
-        };
+        let ground = ground_to(300.0, 300.0);
         let wide = [PropEntry {
             count: 1,
             footprint: [10.0, 10.0],

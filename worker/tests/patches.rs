@@ -14,19 +14,7 @@ use worker::patches::{
 };
 
 fn building(variant: u32) -> Mesh {
-    let p = CityParams {
-        seed: 3,
-        block_size: 40.0,
-        street_width: 16.0,
-        buildings_per_block: 2,
-        min_height: 10.0,
-        max_height: 50.0,
-        floor_height: 3.5,
-        variants: 12,
-        tint_min: [0.8; 3],
-        tint_max: [1.0; 3],
-    };
-    building_mesh(&BuildingStyle::draw(&p, variant))
+    building_mesh(&BuildingStyle::draw(&CityParams::example(), variant))
 }
 
 /// Prints a measurement of `patches` patches as `label: … of triangles drawn, … pixels differ`.
