@@ -10,7 +10,8 @@
 //! to get the bunny's class maps as PNGs.
 
 mod common;
-use common::models_dir;
+use common::{apothem, bunny, bunny_capture, bunny_view, look_at, CELL_SIZE, PIXELS_PER_RADIAN};
+use format::park::SplitMix64;
 use glam::{DVec3, Mat4, Vec3};
 use proptest::prelude::*;
 use std::path::PathBuf;
@@ -32,36 +33,8 @@ use worker::visibility::{
 use worker::weights::{vertex_states, vertex_weights, VertexState, INVISIBLE_WEIGHT};
 
 // ---------------------------------------------------------------------------------
-// Helpers: views, analytic captures, meshes.
+// Helpers: views, analytic captures, meshes (the bunny and `look_at`: common).
 // ---------------------------------------------------------------------------------
-
-/// The paper's cell size (000 §4.1.2) and its apothem, the distance of the capture
-/// window (the near plane whose window depth the thresholds apply to).
-const CELL_SIZE: f32 = 50.0;
-fn apothem() -> f32 {
-    0.5 * 3f32.sqrt() * CELL_SIZE
-}
-
-/// DESIGN.md capture resolution: 1024 pixels per 60°.
-const PIXELS_PER_RADIAN: f32 = 1024.0 / (std::f32::consts::PI / 3.0);
-
-fn look_at(eye: Vec3, target: Vec3, fov_y: f32, width: u32, height: u32, near: f32) -> View {
-    let far = 5000.0;
-    View {
-        eye,
-        view: glam::camera::rh::view::look_at_mat4(eye, target, Vec3::Y),
-        proj: glam::camera::rh::proj::opengl::perspective(
-            fov_y,
-            width as f32 / height as f32,
-            near,
-            far,
-        ),
-        near,
-        far,
-        width,
-        height,
-    }
-}
 
 /// A square view at DESIGN.md's angular resolution, `size` pixels wide.
 fn design_view(eye: Vec3, target: Vec3, size: u32) -> View {
@@ -262,60 +235,6 @@ fn sphere_mesh(centre: Vec3, radius: f32, rings: u32, segments: u32) -> format::
     mesh_from(positions, triangles)
 }
 
-/// The model as the bake sees it (format's loader: welded, smooth normals, albedo).
-fn load_obj(path: &std::path::Path) -> Option<format::Mesh> {
-    format::load::load_model(path).ok()
-}
-
-/// The bunny placed like the paper's (000 Table 2: 43.2 units tall), base on y = 0,
-/// centred in x–z; `None` (with a note) when the model is not fetched.
-fn bunny() -> Option<(format::Mesh, Mat4)> {
-    let path = models_dir().join("bunny.obj");
-    let Some(mesh) = load_obj(&path) else {
-        eprintln!(
-            "SKIP: {} not found (run scripts/fetch-models.sh or set HEXBAKE_MODELS)",
-            path.display()
-        );
-        return None;
-    };
-    let (lo, hi) = mesh.bounds().unwrap();
-    let (lo, hi) = (Vec3::from(lo), Vec3::from(hi));
-    let scale = 43.2 / (hi.y - lo.y);
-    let offset = Vec3::new(-(lo.x + hi.x) * 0.5, -lo.y, -(lo.z + hi.z) * 0.5);
-    let transform = Mat4::from_scale(Vec3::splat(scale)) * Mat4::from_translation(offset);
-    Some((mesh, transform))
-}
-
-/// Eye on the ground plane direction (1, 0, 0.6) at horizontal distance `distance` from
-/// the bunny, 1.7 units above ground (a cell centre), looking at the bunny's middle.
-fn bunny_eye(distance: f32) -> (Vec3, Vec3) {
-    let target = Vec3::new(0.0, 21.6, 0.0);
-    let dir = Vec3::new(1.0, 0.0, 0.6).normalize();
-    (Vec3::new(0.0, 1.7, 0.0) + dir * distance, target)
-}
-
-/// A tight square view around the bunny's bounding sphere: `pixels` wide, or at the
-/// DESIGN.md angular resolution when `pixels` is `None`.
-fn bunny_view(distance: f32, pixels: Option<u32>) -> View {
-    let (eye, target) = bunny_eye(distance);
-    let radius = 0.5 * Vec3::new(43.6, 43.2, 33.8).length();
-    let fov = 2.0 * (radius / eye.distance(target)).min(0.99).asin() * 1.05;
-    let size = pixels.unwrap_or((fov * PIXELS_PER_RADIAN).ceil() as u32);
-    look_at(eye, target, fov, size, size, apothem())
-}
-
-fn bunny_capture(mesh: &format::Mesh, transform: Mat4, view: &View) -> Capture {
-    let item = DrawItem {
-        mesh,
-        transform,
-        tint: Vec3::ONE,
-        object_id: 7,
-        triangles: None,
-        albedo_map: None,
-    };
-    ray_cast_capture(&[item], view, CullMode::None)
-}
-
 fn write_class_png(name: &str, classes: &[PixelClass], width: u32, height: u32) {
     let Some(dir) = std::env::var_os("HEXBAKE_PICTURES") else {
         return;
@@ -329,16 +248,7 @@ fn write_class_png(name: &str, classes: &[PixelClass], width: u32, height: u32) 
     };
     let data: Vec<u8> = classes.iter().flat_map(|&c| palette(c)).collect();
     let path = PathBuf::from(dir).join(format!("{name}.png"));
-    let file = std::fs::File::create(&path).unwrap();
-    let mut encoder = png::Encoder::new(std::io::BufWriter::new(file), width, height);
-    encoder.set_color(png::ColorType::Rgb);
-    encoder.set_depth(png::BitDepth::Eight);
-    encoder
-        .write_header()
-        .unwrap()
-        .write_image_data(&data)
-        .unwrap();
-    eprintln!("wrote {}", path.display());
+    common::write_rgb_png(&path, width, height, &data);
 }
 
 // ---------------------------------------------------------------------------------
@@ -692,17 +602,7 @@ fn cube_vertex_weights() {
     let mesh = box_mesh(Vec3::splat(-10.0), Vec3::splat(10.0));
     let eye = Vec3::new(1.0, 0.9, 0.8).normalize() * 300.0;
     let view = design_view(eye, Vec3::ZERO, 128);
-    let item = DrawItem::whole(&mesh, 4);
-    let capture = ray_cast_capture(&[item], &view, CullMode::None);
-    let classes = classify(&capture, 4, DEFAULT_T_C0, DEFAULT_T_C1);
-    let states = vertex_states(
-        &mesh,
-        Mat4::IDENTITY,
-        &capture,
-        &classes,
-        4,
-        DepthTolerance::default(),
-    );
+    let (_, states, weights) = analyse_whole_mesh(&mesh, &view, 4);
     // Vertex index = x | y<<1 | z<<2 (box_mesh).
     let front = front_facing_vertices(&mesh, Mat4::IDENTITY, eye);
     assert_eq!(front, [false, true, true, true, true, true, true, true]);
@@ -715,15 +615,32 @@ fn cube_vertex_weights() {
             "vertex {v}"
         );
     }
-    let weights = vertex_weights(
-        &mesh,
+    assert_eq!(weights, vec![0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.25]);
+}
+
+/// `mesh` (untransformed) drawn alone as `object_id` and ray-cast from `view`: the
+/// capture and, at the default thresholds and tolerance, the vertex states and
+/// weights.
+fn analyse_whole_mesh(
+    mesh: &format::Mesh,
+    view: &View,
+    object_id: u32,
+) -> (Capture, Vec<VertexState>, Vec<f32>) {
+    let item = DrawItem::whole(mesh, object_id);
+    let capture = ray_cast_capture(&[item], view, CullMode::None);
+    let classes = classify(&capture, object_id, DEFAULT_T_C0, DEFAULT_T_C1);
+    let tolerance = DepthTolerance::default();
+    let states = vertex_states(
+        mesh,
         Mat4::IDENTITY,
         &capture,
         &classes,
-        4,
-        DepthTolerance::default(),
+        object_id,
+        tolerance,
     );
-    assert_eq!(weights, vec![0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.25]);
+    // As `vertex_weights`.
+    let weights = states.iter().map(|s| s.weight()).collect();
+    (capture, states, weights)
 }
 
 /// A 3×3 vertex grid in the plane z = 0 (spacing 20, centred, facing +z), then the
@@ -735,14 +652,7 @@ fn grid_and_box(lo: Vec3, hi: Vec3) -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
             positions.push([-20.0 + 20.0 * i as f32, -20.0 + 20.0 * j as f32, 0.0]);
         }
     }
-    let mut triangles = Vec::new();
-    for j in 0..2u32 {
-        for i in 0..2u32 {
-            let a = j * 3 + i;
-            triangles.push([a, a + 1, a + 4]);
-            triangles.push([a, a + 4, a + 3]);
-        }
-    }
+    let mut triangles = common::quad_grid_triangles(2);
     let occluder = box_mesh(lo, hi);
     let base = positions.len() as u32;
     positions.extend(occluder.positions.iter().copied());
@@ -765,17 +675,7 @@ fn hidden_and_outside_front_facing_vertices_weigh_0_05() {
     let mesh = mesh_from(positions, triangles);
 
     let view = design_view(Vec3::new(0.0, 0.0, 300.0), Vec3::ZERO, 256);
-    let item = DrawItem::whole(&mesh, 9);
-    let capture = ray_cast_capture(&[item], &view, CullMode::None);
-    let classes = classify(&capture, 9, DEFAULT_T_C0, DEFAULT_T_C1);
-    let weights = vertex_weights(
-        &mesh,
-        Mat4::IDENTITY,
-        &capture,
-        &classes,
-        9,
-        DepthTolerance::default(),
-    );
+    let (capture, _, weights) = analyse_whole_mesh(&mesh, &view, 9);
     assert_eq!(weights[4], INVISIBLE_WEIGHT, "grid centre behind the box");
     assert_eq!(
         weights[off as usize], INVISIBLE_WEIGHT,
@@ -998,22 +898,9 @@ fn prism_corners(cx: f32, cz: f32, c: f32, h0: f32, h1: f32) -> [Vec3; 12] {
     corners
 }
 
-/// splitmix64: a tiny deterministic generator for the 10,000 sample points.
-struct SplitMix(u64);
-impl SplitMix {
-    fn next_f64(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^= z >> 31;
-        (z >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
-
 /// A uniform point of the prism: one of the hexagon's 6 equal triangles (centre,
 /// corner k, corner k+1), a uniform point in it, a uniform height.
-fn sample_prism(corners: &[Vec3; 12], rng: &mut SplitMix) -> DVec3 {
+fn sample_prism(corners: &[Vec3; 12], rng: &mut SplitMix64) -> DVec3 {
     let bottom: Vec<DVec3> = corners[..6].iter().map(|c| c.as_dvec3()).collect();
     let centre = bottom.iter().sum::<DVec3>() / 6.0;
     let k = ((rng.next_f64() * 6.0) as usize).min(5);
@@ -1052,7 +939,8 @@ proptest! {
         prop_assert_eq!(culled.len(), mesh.triangles.len());
         // The split step's short-circuit agrees with the per-triangle cull.
         prop_assert_eq!(all_culled(&mesh, transform, &corners), culled.iter().all(|&c| c));
-        let mut rng = SplitMix(seed);
+        // splitmix64: a tiny deterministic generator for the 10,000 sample points.
+        let mut rng = SplitMix64::new(seed);
         let points: Vec<DVec3> = (0..10_000).map(|_| sample_prism(&corners, &mut rng)).collect();
         for (t, tri) in mesh.triangles.iter().enumerate() {
             let [a, b, cc] = tri.map(|i| transform.transform_point3(Vec3::from(mesh.positions[i as usize])).as_dvec3());

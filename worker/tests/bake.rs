@@ -2,7 +2,7 @@
 //! issue 4). Every proxy mesh goes through `simplify::validate`.
 
 mod common;
-use common::{in_pool, models_dir, repo};
+use common::{fetched_model, in_pool, repo};
 use format::manifest::{parse_manifest, BakeParams, CellParams};
 use format::{Ground, Instance, Model, Scene};
 use glam::{Mat4, Vec3};
@@ -47,6 +47,29 @@ fn demo() -> (Scene, HexGrid, CellParams, BakeParams) {
     (scene, grid, plan.cells, plan.bake)
 }
 
+/// [`demo`] and its [`busy_cell`].
+fn demo_at_busy_cell() -> (Scene, HexGrid, CellParams, BakeParams, u32) {
+    let (scene, grid, cells, params) = demo();
+    let cell = busy_cell(&scene, &grid);
+    (scene, grid, cells, params, cell)
+}
+
+/// The pooled PSNR(Y) of each of `bakes` of `cell` by `check_cell` (6 views, 256²).
+fn pooled_psnrs<const N: usize>(
+    scene: &Scene,
+    grid: &HexGrid,
+    cell: u32,
+    cells: &CellParams,
+    params: &BakeParams,
+    bakes: [&CellBake; N],
+) -> [f64; N] {
+    bakes.map(|b| {
+        check_cell(scene, grid, cell, cells, params, b, 6, 256)
+            .unwrap()
+            .pooled_psnr_y
+    })
+}
+
 /// The demo cell holding the most instance centres (it has Originals and proxies).
 fn busy_cell(scene: &Scene, grid: &HexGrid) -> u32 {
     let mut counts = vec![0u32; grid.cell_count() as usize];
@@ -64,8 +87,7 @@ fn busy_cell(scene: &Scene, grid: &HexGrid) -> u32 {
 
 #[test]
 fn demo_bake_accounts_for_every_instance_once_and_validates() {
-    let (scene, grid, cells, params) = demo();
-    let cell = busy_cell(&scene, &grid);
+    let (scene, grid, cells, params, cell) = demo_at_busy_cell();
     let bake = bake_cell(&scene, &grid, cell, &cells, &params).unwrap();
     assert_eq!(bake.assignment.len(), scene.instances.len());
     let mut seen = vec![0u32; scene.instances.len()];
@@ -104,8 +126,7 @@ fn demo_bake_accounts_for_every_instance_once_and_validates() {
 
 #[test]
 fn demo_bake_is_identical_for_one_and_two_threads() {
-    let (scene, grid, cells, params) = demo();
-    let cell = busy_cell(&scene, &grid);
+    let (scene, grid, cells, params, cell) = demo_at_busy_cell();
     let fp = [7u8; 32];
     let one = in_pool(1, || {
         let b = bake_cell(&scene, &grid, cell, &cells, &params).unwrap();
@@ -128,8 +149,7 @@ fn demo_bake_is_identical_for_one_and_two_threads() {
 /// PSNR within 1 dB of the full-mesh bake.
 #[test]
 fn demo_bake_from_lod_chains_is_valid_deterministic_and_close() {
-    let (scene, grid, cells, params) = demo();
-    let cell = busy_cell(&scene, &grid);
+    let (scene, grid, cells, params, cell) = demo_at_busy_cell();
     let cache = tempfile::tempdir().unwrap();
     let (built, stats) = LodChains::prepare(&scene, Some(cache.path())).unwrap();
     assert_eq!(stats.built as usize, scene.models.len());
@@ -162,20 +182,14 @@ fn demo_bake_from_lod_chains_is_valid_deterministic_and_close() {
         inputs(&chained),
         inputs(&full)
     );
-    let psnr = |b: &CellBake| {
-        check_cell(&scene, &grid, cell, &cells, &params, b, 6, 256)
-            .unwrap()
-            .pooled_psnr_y
-    };
-    let (with, without) = (psnr(&chained), psnr(&full));
+    let [with, without] = pooled_psnrs(&scene, &grid, cell, &cells, &params, [&chained, &full]);
     eprintln!("demo cell {cell}: chains {with:.2} dB, full meshes {without:.2} dB");
     assert!(with > without - 1.0, "{with} vs {without}");
 }
 
 #[test]
 fn demo_check_cell_gives_a_good_psnr() {
-    let (scene, grid, cells, params) = demo();
-    let cell = busy_cell(&scene, &grid);
+    let (scene, grid, cells, params, cell) = demo_at_busy_cell();
     let bake = bake_cell(&scene, &grid, cell, &cells, &params).unwrap();
     let report = check_cell(&scene, &grid, cell, &cells, &params, &bake, 6, 256).unwrap();
     eprintln!(
@@ -209,11 +223,7 @@ const PAPER_SV: [usize; 3] = [259, 254, 239];
 /// The bunny scaled to 43 units on the ground at the centre of cell (col 0, row 0);
 /// cells k rows away along +z are k·√3·c away.
 fn bunny_scene() -> Option<(Scene, HexGrid, CellParams)> {
-    let path = models_dir().join("bunny.obj");
-    if !path.is_file() {
-        eprintln!("SKIP: {} not found (set HEXBAKE_MODELS)", path.display());
-        return None;
-    }
+    let path = fetched_model("bunny.obj")?;
     let mut mesh = format::load::load_model(&path).unwrap();
     format::scene_build::normalise(&mut mesh, [0.0; 3], 43.0).unwrap();
     let ground = Ground {
@@ -578,14 +588,7 @@ fn greedy_clustering_follows_the_paper_conditions() {
 fn tidy_selection_fills_small_holes_and_drops_small_specks() {
     use worker::svmesh::tidy_selection;
     // A 10 × 10 grid of quads (200 triangles), vertex (x, y) = y·11 + x.
-    let mut triangles = Vec::new();
-    for y in 0..10u32 {
-        for x in 0..10u32 {
-            let v = y * 11 + x;
-            triangles.push([v, v + 1, v + 12]);
-            triangles.push([v, v + 12, v + 11]);
-        }
-    }
+    let triangles = common::quad_grid_triangles(10);
     let quad = |x: usize, y: usize| [2 * (y * 10 + x), 2 * (y * 10 + x) + 1];
     // Selected: the left half (x < 5) except one quad (a 2-triangle hole) at (2, 5);
     // plus one isolated quad at (8, 8) (a 2-triangle speck).
@@ -724,12 +727,7 @@ fn demo_far_field_is_shared_conservative_and_close() {
     let mut paper = params.clone();
     paper.far_field = false;
     let alone = bake_cell(&scene, &grid, cell, &cells, &paper).unwrap();
-    let psnr = |b: &CellBake| {
-        check_cell(&scene, &grid, cell, &cells, &params, b, 6, 256)
-            .unwrap()
-            .pooled_psnr_y
-    };
-    let (with, without) = (psnr(&hybrid), psnr(&alone));
+    let [with, without] = pooled_psnrs(&scene, &grid, cell, &cells, &params, [&hybrid, &alone]);
     eprintln!("demo cell {cell}: {n_far} far objects; far field {with:.2} dB, own proxies {without:.2} dB");
     assert!(with > without - 1.0, "{with} vs {without}");
 }
@@ -744,8 +742,7 @@ fn demo_far_field_is_shared_conservative_and_close() {
 fn selection_keeps_a_coarser_mesh_where_it_is_cheapest_and_good_enough() {
     use format::manifest::QualityFloor;
     use format::pack::ProxyKind;
-    let (scene, grid, cells, params) = demo();
-    let cell = busy_cell(&scene, &grid);
+    let (scene, grid, cells, params, cell) = demo_at_busy_cell();
     let off = BakeParams {
         quality: None,
         ..params.clone()
@@ -790,8 +787,7 @@ fn selection_keeps_a_coarser_mesh_where_it_is_cheapest_and_good_enough() {
 /// not change the pack. `bake.quality_check: false` turns it off.
 #[test]
 fn a_bake_without_selection_still_checks_its_proxies() {
-    let (scene, grid, cells, params) = demo();
-    let cell = busy_cell(&scene, &grid);
+    let (scene, grid, cells, params, cell) = demo_at_busy_cell();
     let off = BakeParams {
         quality: None,
         ..params

@@ -175,6 +175,15 @@ fn model(mesh: format::Mesh) -> Model {
     Model::new("m".into(), "test".into(), mesh, None)
 }
 
+/// An untinted instance of `model` translated to `at`.
+fn placed(model: u32, at: Vec3) -> Instance {
+    Instance {
+        model,
+        transform: Mat4::from_translation(at),
+        tint: Vec3::ONE,
+    }
+}
+
 #[test]
 fn bake_cell_culls_what_a_wall_hides_only_when_asked() {
     let statue = format::procedural::build("sphere").unwrap();
@@ -186,16 +195,8 @@ fn bake_cell_culls_what_a_wall_hides_only_when_asked() {
             model(statue),
         ],
         instances: vec![
-            Instance {
-                model: 0,
-                transform: Mat4::from_translation(Vec3::new(50.0, 0.0, 80.0)),
-                tint: Vec3::ONE,
-            },
-            Instance {
-                model: 1,
-                transform: Mat4::from_translation(Vec3::new(50.0, 0.0, 100.0)),
-                tint: Vec3::ONE,
-            },
+            placed(0, Vec3::new(50.0, 0.0, 80.0)),
+            placed(1, Vec3::new(50.0, 0.0, 100.0)),
         ],
         ground: Ground {
             min: [0.0, 0.0],
@@ -254,11 +255,7 @@ proptest! {
         let (tx, tz, ts, th) = target;
         models.push(model(box_mesh([-ts / 2.0, 0.0, -ts / 2.0], [ts / 2.0, th, ts / 2.0])));
         let target_id = instances.len() as u32;
-        instances.push(Instance {
-            model: models.len() as u32 - 1,
-            transform: Mat4::from_translation(Vec3::new(tx, 0.0, tz)),
-            tint: Vec3::ONE,
-        });
+        instances.push(placed(models.len() as u32 - 1, Vec3::new(tx, 0.0, tz)));
         let scene = Scene {
             models,
             instances,

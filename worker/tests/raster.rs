@@ -111,6 +111,16 @@ fn finish(positions: Vec<[f32; 3]>, normals: Vec<[f32; 3]>, triangles: Vec<[u32;
     }
 }
 
+/// The triangle (−h, −h, z), (h, −h, z), (0, h, z): counter-clockwise seen from +z,
+/// normals +z.
+fn upright_triangle(h: f32, z: f32) -> Mesh {
+    finish(
+        vec![[-h, -h, z], [h, -h, z], [0.0, h, z]],
+        vec![[0.0, 0.0, 1.0]; 3],
+        vec![[0, 1, 2]],
+    )
+}
+
 /// Axis-aligned box with flat normals (24 vertices), counter-clockwise from outside.
 fn box_mesh(lo: Vec3, hi: Vec3) -> Mesh {
     let mut positions = Vec::new();
@@ -377,11 +387,7 @@ fn triangle_through_the_eye_plane_is_clipped_not_dropped() {
 fn back_faces_are_culled_only_when_asked() {
     let view = exact_view(32);
     // Counter-clockwise seen from the eye (front) and its mirror (back).
-    let front = finish(
-        vec![[-8.0, -8.0, -16.0], [8.0, -8.0, -16.0], [0.0, 8.0, -16.0]],
-        vec![[0.0, 0.0, 1.0]; 3],
-        vec![[0, 1, 2]],
-    );
+    let front = upright_triangle(8.0, -16.0);
     let mut back = front.clone();
     back.triangles = vec![[0, 2, 1]];
     assert!(render(&view, &[item(&front, 0)], CullMode::Back).covered_pixels() > 50);
@@ -495,11 +501,7 @@ fn perspective_correct_albedo_on_a_grazing_quad() {
 fn lit_colour_follows_the_design_formula() {
     // One big triangle facing +z with uniform albedo: colour = albedo·(0.3 + 0.7·n·L).
     let view = exact_view(16);
-    let mut mesh = finish(
-        vec![[-6.0, -6.0, -8.0], [6.0, -6.0, -8.0], [0.0, 6.0, -8.0]],
-        vec![[0.0, 0.0, 1.0]; 3],
-        vec![[0, 1, 2]],
-    );
+    let mut mesh = upright_triangle(6.0, -8.0);
     mesh.albedo = vec![[188, 188, 188, 255]; 3];
     let tint = Vec3::new(1.0, 0.5, 0.25);
     let c = render(
@@ -767,11 +769,8 @@ fn real_bunny_renders_deterministically() {
 #[test]
 fn bad_indices_are_skipped_not_a_panic() {
     let view = exact_view(16);
-    let mut mesh = finish(
-        vec![[-8.0, -8.0, -8.0], [8.0, -8.0, -8.0], [0.0, 8.0, -8.0]],
-        vec![[0.0, 0.0, 1.0]; 3],
-        vec![[0, 1, 2], [0, 1, 99]],
-    );
+    let mut mesh = upright_triangle(8.0, -8.0);
+    mesh.triangles.push([0, 1, 99]);
     mesh.albedo.clear(); // missing albedo: white
     let subset = [1u32, 0, 1234];
     let c = render(

@@ -12,49 +12,18 @@
 //! the vertices the depth test calls visible and the rays hidden in red, the others in
 //! blue.
 
-use glam::{Mat4, Vec3, Vec3A};
+mod common;
+use common::{bunny, bunny_capture, bunny_view};
+use glam::{Vec3, Vec3A};
 use obvhs::{bvh2::builder::build_bvh2_from_tris, ray::Ray, triangle::Triangle, BvhBuildParams};
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::PathBuf;
 use worker::classify::{classify, DEFAULT_T_C0, DEFAULT_T_C1};
-use worker::raster::{CullMode, DrawItem, View, BACKGROUND_ID};
+use worker::raster::BACKGROUND_ID;
 use worker::visibility::{
-    depth_visibility, pixel_footprint, project_to_pixel, ray_cast_capture, visible_by_rays,
-    DepthTolerance, DepthVisibility,
+    depth_visibility, pixel_footprint, project_to_pixel, visible_by_rays, DepthTolerance,
+    DepthVisibility,
 };
-
-fn bunny() -> Option<(format::Mesh, Mat4)> {
-    let dir = std::env::var_os("HEXBAKE_MODELS")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../models"));
-    let mesh = format::load::load_model(&dir.join("bunny.obj")).ok()?;
-    let (lo, hi) = mesh.bounds()?;
-    let (lo, hi) = (Vec3::from(lo), Vec3::from(hi));
-    let scale = 43.2 / (hi.y - lo.y);
-    let offset = Vec3::new(-(lo.x + hi.x) * 0.5, -lo.y, -(lo.z + hi.z) * 0.5);
-    Some((
-        mesh,
-        Mat4::from_scale(Vec3::splat(scale)) * Mat4::from_translation(offset),
-    ))
-}
-
-/// tests/analysis.rs's bunny view: a cell-centre eye at `distance`, 1024² tight.
-fn bunny_view(distance: f32) -> View {
-    let target = Vec3::new(0.0, 21.6, 0.0);
-    let eye = Vec3::new(0.0, 1.7, 0.0) + Vec3::new(1.0, 0.0, 0.6).normalize() * distance;
-    let radius = 0.5 * Vec3::new(43.6, 43.2, 33.8).length();
-    let fov = 2.0 * (radius / eye.distance(target)).min(0.99).asin() * 1.05;
-    let near = 0.5 * 3f32.sqrt() * 50.0;
-    View {
-        eye,
-        view: glam::camera::rh::view::look_at_mat4(eye, target, Vec3::Y),
-        proj: glam::camera::rh::proj::opengl::perspective(fov, 1.0, near, 5000.0),
-        near,
-        far: 5000.0,
-        width: 1024,
-        height: 1024,
-    }
-}
 
 /// Graph distance (≤ 6, else 99) from `v` to the nearest corner of each triangle.
 fn ring_of(tri: [u32; 3], rings: &BTreeMap<u32, u32>) -> u32 {
@@ -92,7 +61,6 @@ fn plane_distance(a: Vec3, b: Vec3, c: Vec3, p: Vec3, eye: Vec3) -> f32 {
 #[ignore]
 fn diagnose_bunny_disagreements() {
     let Some((mesh, transform)) = bunny() else {
-        eprintln!("SKIP: bunny.obj not found (set HEXBAKE_MODELS)");
         return;
     };
     let world: Vec<Vec3> = mesh
@@ -122,17 +90,10 @@ fn diagnose_bunny_disagreements() {
     }
     let tolerance = DepthTolerance::default();
     for distance in [100.0f32, 250.0, 600.0] {
-        let view = bunny_view(distance);
+        // tests/analysis.rs's bunny view: a cell-centre eye at `distance`, 1024² tight.
+        let view = bunny_view(distance, Some(1024));
         let eye = view.eye;
-        let item = DrawItem {
-            mesh: &mesh,
-            transform,
-            tint: Vec3::ONE,
-            object_id: 7,
-            triangles: None,
-            albedo_map: None,
-        };
-        let capture = ray_cast_capture(&[item], &view, CullMode::None);
+        let capture = bunny_capture(&mesh, transform, &view);
         let classes = classify(&capture, 7, DEFAULT_T_C0, DEFAULT_T_C1);
         let by_depth = depth_visibility(&mesh, transform, &capture, 7, tolerance);
         let by_rays = visible_by_rays(&mesh, transform, &view, tolerance.footprint_px);
@@ -266,16 +227,7 @@ fn diagnose_bunny_disagreements() {
                 image[q * 3..q * 3 + 3].copy_from_slice(&colour);
             }
             let path = PathBuf::from(dir).join(format!("disagree_{distance}.png"));
-            let file = std::fs::File::create(&path).unwrap();
-            let mut encoder = png::Encoder::new(std::io::BufWriter::new(file), 1024, 1024);
-            encoder.set_color(png::ColorType::Rgb);
-            encoder.set_depth(png::BitDepth::Eight);
-            encoder
-                .write_header()
-                .unwrap()
-                .write_image_data(&image)
-                .unwrap();
-            eprintln!("wrote {}", path.display());
+            common::write_rgb_png(&path, 1024, 1024, &image);
         }
     }
 }
