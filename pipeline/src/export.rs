@@ -88,11 +88,7 @@ impl ExportSummary {
             .iter()
             .map(|(k, n)| format!("{n} {k}"))
             .collect();
-        let kinds = if kinds.is_empty() {
-            String::new()
-        } else {
-            format!(" ({})", kinds.join(", "))
-        };
+        let kinds = crate::list_or_nothing(" (", &kinds, ")");
         format!(
             "{}: cell {}, {} originals of {} models ({} triangles), {} proxies{kinds} ({} \
              triangles), {} textures ({:.2} MB PNG), {:.2} MB; per-vertex UVs vs projective \

@@ -199,11 +199,7 @@ fn summarize(file: &PackFile) -> Result<String, format::pack::PackError> {
                 .iter()
                 .map(|(name, (n, bytes))| format!("{n} {name} ({bytes} bytes)"))
                 .collect();
-            let encodings = if encodings.is_empty() {
-                String::new()
-            } else {
-                format!("; textures: {}", encodings.join(", "))
-            };
+            let encodings = crate::list_or_nothing("; textures: ", &encodings, "");
             format!(
                 "{} {}{far}, {} originals, {} proxies (SvMesh {}, Cluster {}, MvMesh {}, LayeredImpostor {}), {} proxy triangles, {views} views ({texels} texels{encodings}), fingerprint {}",
                 if group { "far-field group" } else { "cell" },

@@ -12,3 +12,13 @@ pub mod scene_cmd;
 pub mod slurm;
 pub mod status;
 pub mod subset;
+
+/// `items` joined by ", " between `before` and `after`; empty when there are none
+/// (an optional list inside a summary line).
+pub(crate) fn list_or_nothing(before: &str, items: &[String], after: &str) -> String {
+    if items.is_empty() {
+        String::new()
+    } else {
+        format!("{before}{}{after}", items.join(", "))
+    }
+}
