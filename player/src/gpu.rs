@@ -428,6 +428,16 @@ impl Renderer {
         (self.width, self.height)
     }
 
+    /// A buffer holding `contents`, named `label` in GPU debugging tools.
+    fn buffer_init(&self, label: &str, contents: &[u8], usage: wgpu::BufferUsages) -> wgpu::Buffer {
+        self.device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents,
+                usage,
+            })
+    }
+
     /// Uploads every model of the base pack once.
     pub fn upload_models(&self, base: &BasePack) -> GpuModels {
         let models = base
@@ -499,20 +509,16 @@ impl Renderer {
                     idx = vec![0; 3];
                 }
                 GpuModel {
-                    vertices: self
-                        .device
-                        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                            label: Some(&m.name),
-                            contents: bytemuck::cast_slice(&verts),
-                            usage: wgpu::BufferUsages::VERTEX,
-                        }),
-                    indices: self
-                        .device
-                        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                            label: Some(&m.name),
-                            contents: bytemuck::cast_slice(&idx),
-                            usage: wgpu::BufferUsages::INDEX,
-                        }),
+                    vertices: self.buffer_init(
+                        &m.name,
+                        bytemuck::cast_slice(&verts),
+                        wgpu::BufferUsages::VERTEX,
+                    ),
+                    indices: self.buffer_init(
+                        &m.name,
+                        bytemuck::cast_slice(&idx),
+                        wgpu::BufferUsages::INDEX,
+                    ),
                     index_count,
                     triangle_count: mesh.triangles.len() as u64,
                     lods: Vec::new(),
@@ -539,13 +545,11 @@ impl Renderer {
                 uv: [0.0; 2],
             })
             .collect();
-        let ground = self
-            .device
-            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("ground"),
-                contents: bytemuck::cast_slice(&ground_verts),
-                usage: wgpu::BufferUsages::VERTEX,
-            });
+        let ground = self.buffer_init(
+            "ground",
+            bytemuck::cast_slice(&ground_verts),
+            wgpu::BufferUsages::VERTEX,
+        );
         GpuModels { models, ground }
     }
 
@@ -558,13 +562,11 @@ impl Renderer {
                 .iter()
                 .skip(1)
                 .map(|level| GpuLod {
-                    indices: self
-                        .device
-                        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                            label: Some("lod indices"),
-                            contents: bytemuck::cast_slice(&level.indices),
-                            usage: wgpu::BufferUsages::INDEX,
-                        }),
+                    indices: self.buffer_init(
+                        "lod indices",
+                        bytemuck::cast_slice(&level.indices),
+                        wgpu::BufferUsages::INDEX,
+                    ),
                     index_count: level.indices.len() as u32,
                     triangle_count: level.triangle_count(),
                 })
@@ -596,20 +598,12 @@ impl Renderer {
         } else {
             bytemuck::cast_slice(vertices)
         };
-        let vbuf = self
-            .device
-            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("proxy vertices"),
-                contents,
-                usage: wgpu::BufferUsages::VERTEX,
-            });
-        let uniform = self
-            .device
-            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("proxy views"),
-                contents: bytemuck::bytes_of(&u),
-                usage: wgpu::BufferUsages::UNIFORM,
-            });
+        let vbuf = self.buffer_init("proxy vertices", contents, wgpu::BufferUsages::VERTEX);
+        let uniform = self.buffer_init(
+            "proxy views",
+            bytemuck::bytes_of(&u),
+            wgpu::BufferUsages::UNIFORM,
+        );
         let lit_bind_group = self.bind_views(&uniform, &[]);
         let mut p = GpuProxy {
             vertices: vbuf,
