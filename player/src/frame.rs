@@ -41,12 +41,23 @@ impl Mode {
 impl std::str::FromStr for Mode {
     type Err = String;
     fn from_str(s: &str) -> Result<Mode, String> {
-        match s {
-            "full" => Ok(Mode::Full),
-            "frustum" => Ok(Mode::Frustum),
-            "hybrid" => Ok(Mode::Hybrid),
-            "lod" => Ok(Mode::Lod),
-            _ => Err(format!("unknown mode {s:?} (full, frustum, hybrid, lod)")),
+        let modes = [Mode::Full, Mode::Frustum, Mode::Hybrid, Mode::Lod];
+        parse_named("mode", s, modes.map(|m| (m.name(), m)))
+    }
+}
+
+/// The value named `s` in `names`; else an error naming `what` and listing the names,
+/// e.g. `unknown mode "x" (full, frustum, hybrid, lod)`.
+pub(crate) fn parse_named<T: Copy, const N: usize>(
+    what: &str,
+    s: &str,
+    names: [(&str, T); N],
+) -> Result<T, String> {
+    match names.iter().find(|(name, _)| *name == s) {
+        Some(&(_, value)) => Ok(value),
+        None => {
+            let list: Vec<&str> = names.iter().map(|(name, _)| *name).collect();
+            Err(format!("unknown {what} {s:?} ({})", list.join(", ")))
         }
     }
 }

@@ -99,14 +99,15 @@ pub enum PendingDraw {
 impl std::str::FromStr for PendingDraw {
     type Err = String;
     fn from_str(s: &str) -> Result<PendingDraw, String> {
-        match s {
-            "stand-ins" => Ok(PendingDraw::StandIns),
-            "originals" => Ok(PendingDraw::Originals),
-            "lit" => Ok(PendingDraw::Lit),
-            _ => Err(format!(
-                "unknown pending draw {s:?} (stand-ins, originals, lit)"
-            )),
-        }
+        crate::frame::parse_named(
+            "pending draw",
+            s,
+            [
+                ("stand-ins", PendingDraw::StandIns),
+                ("originals", PendingDraw::Originals),
+                ("lit", PendingDraw::Lit),
+            ],
+        )
     }
 }
 
