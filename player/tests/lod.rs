@@ -3,7 +3,8 @@
 //! adds triangles when the pixel threshold grows; a headless LOD walk of the demo
 //! scene stays close to full geometry.
 
-use format::path::CameraPath;
+mod common;
+use common::{assert_has_keys, demo_walk, repo, COMPARE_KEYS};
 use player::bake::Bake;
 use player::frame::Mode;
 use player::gpu::{GpuError, Renderer};
@@ -12,12 +13,17 @@ use player::run::{camera_for, compare, CompareOptions};
 use player::testdata::write_synthetic_bake;
 use std::path::PathBuf;
 
-fn repo() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..")
-}
-
-fn demo_walk() -> CameraPath {
-    CameraPath::load(&repo().join("manifests/paths/demo-walk.ron")).unwrap()
+/// A chain's figures level by level: `triangles [..], errors [..]`.
+fn levels_line(chain: &LodChain) -> String {
+    format!(
+        "triangles {:?}, errors {:?}",
+        chain
+            .levels
+            .iter()
+            .map(|l| l.triangle_count())
+            .collect::<Vec<_>>(),
+        chain.levels.iter().map(|l| l.error).collect::<Vec<_>>()
+    )
 }
 
 /// The demo scene's base pack (the synthetic bake writes `manifests/demo.ron`'s park:
@@ -70,15 +76,10 @@ fn demo_chains_are_monotone_deterministic_and_index_the_original_vertices() {
     assert_eq!(set.instance_scale.len(), bake.base.instances.len());
     for (m, chain) in bake.base.models.iter().zip(&set.chains) {
         println!(
-            "{}: {} levels, triangles {:?}, errors {:?}",
+            "{}: {} levels, {}",
             m.name,
             chain.levels.len(),
-            chain
-                .levels
-                .iter()
-                .map(|l| l.triangle_count())
-                .collect::<Vec<_>>(),
-            chain.levels.iter().map(|l| l.error).collect::<Vec<_>>()
+            levels_line(chain)
         );
         check_chain(
             &m.name,
@@ -113,15 +114,7 @@ fn bunny_chain_is_monotone() {
     }
     let mesh = format::load::load_model(&path).unwrap();
     let chain = build_chain(&mesh);
-    println!(
-        "bunny: triangles {:?}, errors {:?}",
-        chain
-            .levels
-            .iter()
-            .map(|l| l.triangle_count())
-            .collect::<Vec<_>>(),
-        chain.levels.iter().map(|l| l.error).collect::<Vec<_>>()
-    );
+    println!("bunny: {}", levels_line(&chain));
     check_chain("bunny", &chain, mesh.positions.len(), mesh.triangles.len());
     assert_eq!(chain.levels.len(), player::lod::MAX_LEVELS + 1);
     // Level 1 lands near its target of half the triangles.
@@ -214,18 +207,7 @@ fn lod_walk_of_the_demo_scene_stays_close_to_full_geometry() {
     assert!(r.mean_ssim >= 0.93, "SSIM {}", r.mean_ssim);
     assert!(r.mean_triangles < 0.05 * r.reference_triangles);
     assert!(r.crossing_no_prefetch.is_none(), "no streaming in lod mode");
-    let json = serde_json::to_value(&r).unwrap();
-    for key in [
-        "frames",
-        "mean_psnr_y",
-        "min_psnr_y",
-        "mean_ssim",
-        "mean_triangles",
-        "reference_triangles",
-        "frame_time_ratio",
-    ] {
-        assert!(json.get(key).is_some(), "missing {key}");
-    }
+    assert_has_keys(&serde_json::to_value(&r).unwrap(), COMPARE_KEYS);
     // Issue 14: over object pixels the LOD levels' error is not diluted by sky.
     let aa = r.aa_reference.as_ref().expect("on by default");
     println!(

@@ -1,6 +1,8 @@
 //! Headless rendering tests on whatever adapter the environment gives (lavapipe in CI);
 //! every GPU test prints the adapter and skips with a note when there is none.
 
+mod common;
+use common::{assert_has_keys, demo_walk, COMPARE_KEYS};
 use format::pack::{Texture, TextureEncoding};
 use glam::{Vec2, Vec3};
 use player::camera::Camera;
@@ -233,6 +235,26 @@ fn write_path(dir: &std::path::Path, res: u32) -> std::path::PathBuf {
     p
 }
 
+/// `render` of the bake in `dir` along `path` in hybrid mode, frames (and `frames.csv`)
+/// into `dir/frames`.
+fn render_hybrid(
+    dir: &std::path::Path,
+    path: &format::path::CameraPath,
+    png: bool,
+    stream: StreamConfig,
+    size: Option<(u32, u32)>,
+) -> Vec<player::run::FrameRecord> {
+    let opts = RenderOptions {
+        mode: Mode::Hybrid,
+        frames_dir: dir.join("frames"),
+        png,
+        stream,
+        size,
+        lod_pixel_error: 1.0,
+    };
+    render(dir, path, &opts).unwrap().0
+}
+
 #[test]
 fn render_writes_csv_and_compare_reports_quality() {
     let dir = tempfile::tempdir().unwrap();
@@ -244,19 +266,7 @@ fn render_writes_csv_and_compare_reports_quality() {
         return;
     }
     let frames_dir = dir.path().join("frames");
-    let (records, _) = render(
-        dir.path(),
-        &path,
-        &RenderOptions {
-            mode: Mode::Hybrid,
-            frames_dir: frames_dir.clone(),
-            png: true,
-            stream: StreamConfig::default(),
-            size: None,
-            lod_pixel_error: 1.0,
-        },
-    )
-    .unwrap();
+    let records = render_hybrid(dir.path(), &path, true, StreamConfig::default(), None);
     assert_eq!(records.len(), path.frames().len());
     let crossings = records.iter().filter(|r| r.crossing).count();
     assert!(crossings >= 2, "{crossings} crossings");
@@ -298,23 +308,17 @@ fn render_writes_csv_and_compare_reports_quality() {
     assert!(report.mean_ssim > 0.0 && report.mean_ssim <= 1.0);
     assert!(report.mean_triangles <= report.reference_triangles);
     let json = serde_json::to_value(&report).unwrap();
-    for key in [
-        "frames",
-        "mean_psnr_y",
-        "min_psnr_y",
-        "mean_ssim",
-        "mean_triangles",
-        "reference_triangles",
-        "frame_time_ratio",
-        "object_psnr_y_db",
-        "min_object_psnr_y_db",
-        "worst_object_frame",
-        "mean_object_ssim",
-        "object_pixel_fraction",
-        "aa_reference",
-    ] {
-        assert!(json.get(key).is_some(), "missing {key}");
-    }
+    assert_has_keys(
+        &json,
+        COMPARE_KEYS.into_iter().chain([
+            "object_psnr_y_db",
+            "min_object_psnr_y_db",
+            "worst_object_frame",
+            "mean_object_ssim",
+            "object_pixel_fraction",
+            "aa_reference",
+        ]),
+    );
     assert_object_figures_are_sane(&report);
     // Issue 14: the anti-aliased reference, 4 × 4 by default.
     let aa = report.aa_reference.as_ref().expect("on by default");
@@ -614,28 +618,14 @@ fn texture_uploads_stay_under_the_budget_at_every_frame() {
         eprintln!("SKIP: no graphics adapter");
         return;
     }
-    let path = format::path::CameraPath::load(
-        &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../manifests/paths/demo-walk.ron"),
-    )
-    .unwrap();
+    let path = demo_walk();
     let budget = 3 * 32 * 32 * 4; // three of the synthetic bake's 32² captures
     let frames_dir = dir.path().join("frames");
-    let (records, _) = render(
-        dir.path(),
-        &path,
-        &RenderOptions {
-            mode: Mode::Hybrid,
-            frames_dir: frames_dir.clone(),
-            png: false,
-            stream: StreamConfig {
-                upload_budget_bytes: budget,
-                ..Default::default()
-            },
-            size: Some((48, 48)),
-            lod_pixel_error: 1.0,
-        },
-    )
-    .unwrap();
+    let stream = StreamConfig {
+        upload_budget_bytes: budget,
+        ..Default::default()
+    };
+    let records = render_hybrid(dir.path(), &path, false, stream, Some((48, 48)));
     let csv = std::fs::read_to_string(frames_dir.join("frames.csv")).unwrap();
     let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
     let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
