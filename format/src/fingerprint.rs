@@ -37,8 +37,10 @@ pub type Fingerprint = [u8; 32];
 /// 11 — captures stored as BC1 with punch-through alpha (format version 4, issue 15,
 /// `Texture::from_rgba8_bc1_coverage`);
 /// 12 — coarser mesh candidates in the objective selection, and the quality check of
-/// every bake in the job records (issue 16, worker `select.rs`).
-pub const BAKE_REVISION: u32 = 12;
+/// every bake in the job records (issue 16, worker `select.rs`);
+/// 13 — with objective selection, objects under a pixel from the whole prism are
+/// culled before clustering (issue 16, worker `bake.rs` step 2b).
+pub const BAKE_REVISION: u32 = 13;
 
 /// Hex form for file names, logs and reports.
 pub fn to_hex(f: &Fingerprint) -> String {

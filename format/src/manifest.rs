@@ -25,6 +25,11 @@
 //!         ],
 //!         tint_min: (0.7, 0.7, 0.7),                   // optional, default (1, 1, 1)
 //!         tint_max: (1.0, 1.0, 1.0),                   // optional, default (1, 1, 1)
+//!         // optional: hand-placed objects added after the generated ones, each
+//!         // written as an `Instances` entry below; they must not overlap a generated
+//!         // one (the scene build names the pair), but may touch each other
+//!         placed: [(model: Procedural("sphere"), target_height: 6.0,
+//!                   translation: (240.0, 0.0, 40.0), rotation_y_deg: 0.0)],
 //!     )),
 //!     // or: scene: City((seed: 17, block_size: 64.0, street_width: 20.0,
 //!     //        min_height: 12.0, max_height: 60.0,
@@ -332,6 +337,11 @@ pub struct ParkSpec {
     pub models: Vec<ParkModel>,
     pub tint_min: [f32; 3],
     pub tint_max: [f32; 3],
+    /// Hand-placed objects, listed after the generated ones (`scene_build`): a
+    /// park's hero pieces, or the demo's showcase of every representation. Never
+    /// part of the slot placement, so adding one moves no generated instance.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub placed: Vec<InstanceSpec>,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -734,6 +744,8 @@ struct RawPark {
     tint_min: [f32; 3],
     #[serde(default = "unit_tint")]
     tint_max: [f32; 3],
+    #[serde(default)]
+    placed: Vec<RawInstance>,
 }
 
 #[derive(Deserialize)]
@@ -1051,6 +1063,33 @@ impl Validator<'_> {
         }
     }
 
+    /// One `Instances` entry (or a park's `placed` one) at `at` (`scene[3]`).
+    fn instance(&self, at: &str, inst: RawInstance) -> Result<InstanceSpec, ManifestError> {
+        let f = |name: &str| format!("{at}.{name}");
+        let spec = InstanceSpec {
+            model: self.model(&f("model"), inst.model)?,
+            pre_rotation_deg: self.finite3(&f("pre_rotation_deg"), inst.pre_rotation_deg)?,
+            target_height: self.height(&f("target_height"), inst.target_height)?,
+            translation: self.coordinates3(&f("translation"), inst.translation)?,
+            rotation_y_deg: self.finite(&f("rotation_y_deg"), inst.rotation_y_deg)?,
+            scale: self.positive(&f("scale"), inst.scale)?,
+            tint: self.tint(&f("tint"), inst.tint)?,
+        };
+        // The placed object's height, in f64 so the product cannot overflow.
+        let height = f64::from(spec.target_height) * f64::from(spec.scale);
+        if !(f64::from(MIN_LENGTH)..=f64::from(MAX_COORDINATE)).contains(&height) {
+            return Err(self.error(
+                &f("scale"),
+                format!(
+                    "makes the object {height} units tall (target_height {} × \
+                     scale {}), outside {MIN_LENGTH}..={MAX_COORDINATE}",
+                    spec.target_height, spec.scale
+                ),
+            ));
+        }
+        Ok(spec)
+    }
+
     fn model(&self, field: &str, raw: RawModelSource) -> Result<ModelSource, ManifestError> {
         match raw {
             RawModelSource::File(file) => {
@@ -1267,11 +1306,16 @@ impl Validator<'_> {
                         format!("must be >= `tint_min` per channel, found min {tint_min:?} max {tint_max:?}"),
                     ));
                 }
+                let mut placed = Vec::with_capacity(park.placed.len());
+                for (i, inst) in park.placed.into_iter().enumerate() {
+                    placed.push(self.instance(&format!("scene.placed[{i}]"), inst)?);
+                }
                 SceneSpec::Park(ParkSpec {
                     seed: park.seed,
                     models,
                     tint_min,
                     tint_max,
+                    placed,
                 })
             }
             RawScene::City(city) => self.city(city)?,
@@ -1283,30 +1327,7 @@ impl Validator<'_> {
                 }
                 let mut instances = Vec::with_capacity(list.len());
                 for (i, inst) in list.into_iter().enumerate() {
-                    let f = |name: &str| format!("scene[{i}].{name}");
-                    let spec = InstanceSpec {
-                        model: self.model(&f("model"), inst.model)?,
-                        pre_rotation_deg: self
-                            .finite3(&f("pre_rotation_deg"), inst.pre_rotation_deg)?,
-                        target_height: self.height(&f("target_height"), inst.target_height)?,
-                        translation: self.coordinates3(&f("translation"), inst.translation)?,
-                        rotation_y_deg: self.finite(&f("rotation_y_deg"), inst.rotation_y_deg)?,
-                        scale: self.positive(&f("scale"), inst.scale)?,
-                        tint: self.tint(&f("tint"), inst.tint)?,
-                    };
-                    // The placed object's height, in f64 so the product cannot overflow.
-                    let height = f64::from(spec.target_height) * f64::from(spec.scale);
-                    if !(f64::from(MIN_LENGTH)..=f64::from(MAX_COORDINATE)).contains(&height) {
-                        return Err(self.error(
-                            &f("scale"),
-                            format!(
-                                "makes the object {height} units tall (target_height {} × \
-                                 scale {}), outside {MIN_LENGTH}..={MAX_COORDINATE}",
-                                spec.target_height, spec.scale
-                            ),
-                        ));
-                    }
-                    instances.push(spec);
+                    instances.push(self.instance(&format!("scene[{i}]"), inst)?);
                 }
                 SceneSpec::Instances(instances)
             }

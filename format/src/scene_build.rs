@@ -11,7 +11,7 @@
 //!    its props).
 
 use crate::load::{load_model, LoadError};
-use crate::manifest::{ModelSource, Plan, SceneSpec};
+use crate::manifest::{InstanceSpec, ModelSource, Plan, SceneSpec};
 use crate::mesh::Mesh;
 use crate::park::{self, ParkEntry, ParkError};
 use crate::scene::{Instance, Model, Scene};
@@ -48,6 +48,21 @@ pub enum SceneError {
         manifest.display()
     )]
     CityAsInstances { manifest: PathBuf },
+    /// A park's hand-placed object standing on a generated one.
+    #[error(
+        "{}: scene.placed[{placed}] ({model} at {at:?}) overlaps the park's generated \
+         instance {other} ({other_model} at {other_at:?}); move it to free ground",
+        manifest.display()
+    )]
+    PlacedOverlaps {
+        manifest: PathBuf,
+        placed: usize,
+        model: String,
+        at: [f32; 3],
+        other: usize,
+        other_model: String,
+        other_at: [f32; 3],
+    },
     /// A glTF scene whose coordinates exceed the manifest's limits.
     #[error("{}: {what}", file.display())]
     GltfScene { file: PathBuf, what: String },
@@ -169,6 +184,18 @@ pub fn instances_manifest(plan: &Plan) -> Result<String, SceneError> {
         ),
         ModelSource::Procedural(n) => format!("Procedural({n:?})"),
     };
+    let listed = |i: &InstanceSpec| {
+        format!(
+            "(model: {}, target_height: {:?}, pre_rotation_deg: {}, translation: {}, rotation_y_deg: {:?}, scale: {:?}, tint: {})",
+            source(&i.model),
+            i.target_height,
+            v3(i.pre_rotation_deg),
+            v3(i.translation),
+            i.rotation_y_deg,
+            i.scale,
+            v3(i.tint)
+        )
+    };
     let mut lines = Vec::new();
     match (&plan.scene, placements) {
         (SceneSpec::Park(spec), Some(placements)) => {
@@ -184,21 +211,9 @@ pub fn instances_manifest(plan: &Plan) -> Result<String, SceneError> {
                     v3(p.tint)
                 ));
             }
+            lines.extend(spec.placed.iter().map(listed));
         }
-        (SceneSpec::Instances(list), _) => {
-            for i in list {
-                lines.push(format!(
-                    "(model: {}, target_height: {:?}, pre_rotation_deg: {}, translation: {}, rotation_y_deg: {:?}, scale: {:?}, tint: {})",
-                    source(&i.model),
-                    i.target_height,
-                    v3(i.pre_rotation_deg),
-                    v3(i.translation),
-                    i.rotation_y_deg,
-                    i.scale,
-                    v3(i.tint)
-                ));
-            }
-        }
+        (SceneSpec::Instances(list), _) => lines.extend(list.iter().map(listed)),
         (SceneSpec::Park(_), None) => unreachable!("a park scene has placements"),
         (SceneSpec::City(_), _) | (SceneSpec::Gltf(_), _) => {
             return Err(SceneError::CityAsInstances {
@@ -253,6 +268,11 @@ fn build_with_placements(plan: &Plan) -> Result<(Scene, Option<Vec<park::Placeme
             .models
             .iter()
             .map(|m| (m.model.clone(), m.pre_rotation_deg, m.target_height))
+            .chain(
+                p.placed
+                    .iter()
+                    .map(|i| (i.model.clone(), i.pre_rotation_deg, i.target_height)),
+            )
             .collect(),
         SceneSpec::Instances(list) => list
             .iter()
@@ -349,13 +369,7 @@ fn build_with_placements(plan: &Plan) -> Result<(Scene, Option<Vec<park::Placeme
             SceneSpec::Instances(list) => list
                 .iter()
                 .zip(&entry_model)
-                .map(|(spec, &model)| Instance {
-                    model,
-                    transform: Mat4::from_translation(Vec3::from(spec.translation))
-                        * Mat4::from_rotation_y(spec.rotation_y_deg.to_radians())
-                        * Mat4::from_scale(Vec3::splat(spec.scale)),
-                    tint: Vec3::from(spec.tint),
-                })
+                .map(|(spec, &model)| listed_instance(spec, model))
                 .collect(),
             SceneSpec::Park(spec) => {
                 let entries: Vec<ParkEntry> = spec
@@ -378,15 +392,39 @@ fn build_with_placements(plan: &Plan) -> Result<(Scene, Option<Vec<park::Placeme
                     manifest: plan.manifest_path.clone(),
                     source,
                 })?;
-                placed = Some(placements.clone());
-                placements
+                let mut instances: Vec<Instance> = placements
                     .iter()
                     .map(|p| Instance {
                         model: entry_model[p.model_entry],
                         transform: park_transform(p),
                         tint: Vec3::from(p.tint),
                     })
-                    .collect()
+                    .collect();
+                let generated = instances.len();
+                for (j, (inst, &model)) in spec
+                    .placed
+                    .iter()
+                    .zip(&entry_model[spec.models.len()..])
+                    .enumerate()
+                {
+                    let new = listed_instance(inst, model);
+                    if let Some(k) =
+                        (0..generated).find(|&k| footprints_overlap(&models, &instances[k], &new))
+                    {
+                        return Err(SceneError::PlacedOverlaps {
+                            manifest: plan.manifest_path.clone(),
+                            placed: j,
+                            model: inst.model.describe(),
+                            at: inst.translation,
+                            other: k,
+                            other_model: spec.models[placements[k].model_entry].model.describe(),
+                            other_at: placements[k].translation,
+                        });
+                    }
+                    instances.push(new);
+                }
+                placed = Some(placements.clone());
+                instances
             }
             SceneSpec::Gltf(_) => unreachable!("built above"),
             SceneSpec::City(spec) => {
@@ -513,6 +551,31 @@ pub fn park_transform(p: &park::Placement) -> Mat4 {
 }
 
 /// x–z extent (width, depth) of a normalised mesh.
+/// An instance listed in the manifest (`Instances`, a park's `placed`).
+fn listed_instance(spec: &InstanceSpec, model: u32) -> Instance {
+    Instance {
+        model,
+        transform: Mat4::from_translation(Vec3::from(spec.translation))
+            * Mat4::from_rotation_y(spec.rotation_y_deg.to_radians())
+            * Mat4::from_scale(Vec3::splat(spec.scale)),
+        tint: Vec3::from(spec.tint),
+    }
+}
+
+/// Whether the x–z circles around two instances' footprints meet: each circle is
+/// centred on the instance's base and has half the footprint's diagonal (times its
+/// scale) as radius, so it holds the footprint at any yaw. Conservative: two
+/// objects whose circles meet may still stand clear of each other.
+fn footprints_overlap(models: &[Model], a: &Instance, b: &Instance) -> bool {
+    let radius = |i: &Instance| {
+        let [w, d] = footprint(&models[i.model as usize].mesh);
+        let scale = i.transform.x_axis.truncate().length();
+        0.5 * w.hypot(d) * scale
+    };
+    let (pa, pb) = (a.transform.w_axis, b.transform.w_axis);
+    (pa.x - pb.x).hypot(pa.z - pb.z) < radius(a) + radius(b)
+}
+
 pub fn footprint(mesh: &Mesh) -> [f32; 2] {
     mesh.bounds()
         .map_or([0.0; 2], |(lo, hi)| [hi[0] - lo[0], hi[2] - lo[2]])

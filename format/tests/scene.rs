@@ -45,13 +45,29 @@ fn assert_normalised(scene: &Scene, target_heights: &[f32]) {
 #[test]
 fn demo_manifest_loads_and_normalises() {
     let scene = demo_scene();
-    assert_eq!(scene.models.len(), 6);
-    assert_eq!(scene.instances.len(), 18);
-    assert_normalised(&scene, &[20.0, 30.0, 14.0, 10.0, 6.0, 8.0]);
+    // 18 generated statues of 6 models, then 12 placed objects of 4 more (the
+    // cluster group's spheres, the block, the vase behind it, the pebbles).
+    assert_eq!(scene.models.len(), 10);
+    assert_eq!(scene.instances.len(), 30);
+    assert_normalised(
+        &scene,
+        &[20.0, 30.0, 14.0, 10.0, 6.0, 8.0, 6.0, 40.0, 5.0, 0.3],
+    );
     let names: Vec<&str> = scene.models.iter().map(|m| m.name.as_str()).collect();
     assert_eq!(
         names,
-        ["torus_knot", "column", "vase", "sphere", "torus", "box"]
+        [
+            "torus_knot",
+            "column",
+            "vase",
+            "sphere",
+            "torus",
+            "box",
+            "sphere#2",
+            "box#2",
+            "vase#2",
+            "sphere#3"
+        ]
     );
     // Every instance stands on the ground, inside the ground rectangle.
     for i in 0..scene.instances.len() {
@@ -163,12 +179,21 @@ fn explicit_instances_and_shared_models() {
     assert_normalised(&scene, &[2.0, 3.0]);
 }
 
-/// The demo manifest with its counts replaced.
+/// The demo manifest with its counts replaced and without its placed objects (a
+/// larger park would grow into them).
 fn demo_with_counts(counts: [u32; 6]) -> String {
     let text = std::fs::read_to_string(repo_root().join("manifests/demo.ron")).unwrap();
     let mut out = String::new();
     let mut k = 0;
+    let mut in_placed = false;
     for line in text.lines() {
+        if line.trim_start().starts_with("placed: [") {
+            in_placed = true;
+        }
+        if in_placed {
+            in_placed = line.trim() != "],";
+            continue;
+        }
         if let Some(at) = line.find("count: ") {
             let end = at + 7 + line[at + 7..].find(',').unwrap();
             out.push_str(&format!(
@@ -361,4 +386,76 @@ fn instance_list_keeps_every_bake_parameter() {
     assert_eq!(listed.bake, plan.bake);
     assert_eq!(listed.cells, plan.cells);
     assert_eq!(listed.cells_per_job, plan.cells_per_job);
+}
+
+/// A park with `placed` objects (issue 16, the demo's showcase): they come after the
+/// generated instances, which stay exactly where the park alone puts them, and
+/// `--as-instances` lists them with the rest.
+#[test]
+fn placed_objects_follow_the_park_and_move_nothing() {
+    let path = repo_root().join("manifests/demo.ron");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let with = parse_manifest_str(&text, &path).unwrap();
+    let format::manifest::SceneSpec::Park(park) = &with.scene else {
+        panic!("the demo is a park")
+    };
+    assert_eq!(park.placed.len(), 12);
+    let mut alone = with.clone();
+    if let format::manifest::SceneSpec::Park(p) = &mut alone.scene {
+        p.placed.clear();
+    }
+    let (a, w) = (alone.load_scene().unwrap(), with.load_scene().unwrap());
+    assert_eq!(w.instances[..a.instances.len()], a.instances[..]);
+    let placed = &w.instances[a.instances.len()..];
+    assert_eq!(placed.len(), 12);
+    let first = placed[0].transform.w_axis;
+    assert_eq!([first.x, first.y, first.z], park.placed[0].translation);
+
+    let listed = format::scene_build::instances_manifest(&with).unwrap();
+    let relisted = parse_manifest_str(&listed, Path::new("demo-instances.ron"))
+        .unwrap()
+        .load_scene()
+        .unwrap();
+    assert_eq!(relisted.instances.len(), w.instances.len());
+    for (x, y) in relisted.instances.iter().zip(&w.instances) {
+        assert!(x.transform.abs_diff_eq(y.transform, 1e-4), "{x:?} vs {y:?}");
+    }
+}
+
+/// A placed object on a generated statue is refused with both named; a bad field
+/// of a placed object names its path, line and column.
+#[test]
+fn placed_objects_are_validated() {
+    let path = repo_root().join("manifests/demo.ron");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let scene = demo_scene();
+    // The first generated statue's position.
+    let p = scene.instances[0].transform.w_axis;
+    let on_statue = text.replacen(
+        "translation: (240.0, 0.0, 40.0)",
+        &format!("translation: ({:?}, 0.0, {:?})", p.x, p.z),
+        1,
+    );
+    let err = parse_manifest_str(&on_statue, &path)
+        .unwrap()
+        .load_scene()
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("scene.placed[0]")
+            && err.contains("overlaps the park's generated instance 0")
+            && err.contains("procedural:torus_knot"),
+        "{err}"
+    );
+    let negative = text.replacen("target_height: 0.3,", "target_height: -0.3,", 1);
+    let err = parse_manifest_str(&negative, &path)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("scene.placed[8].target_height"), "{err}");
+    let line = text
+        .lines()
+        .position(|l| l.contains("target_height: 0.3,"))
+        .unwrap()
+        + 1;
+    assert!(err.contains(&format!("demo.ron:{line}:")), "{err}");
 }

@@ -22,7 +22,7 @@ pub enum Representation {
     SvMesh = 1,
     Cluster = 2,
     MvMesh = 3,
-    /// Layered impostor (paper 001): no bake writes one yet; legend only.
+    /// Layered impostor (paper 001; written by bakes with objective selection).
     LayeredImpostor = 4,
     /// Back-facing or occluded from the whole cell: not drawn; legend only.
     Culled = 5,
@@ -52,6 +52,41 @@ impl Representation {
             Representation::Culled => [60, 60, 60],
             Representation::LodLevel => [30, 200, 60],
         }
+    }
+
+    /// The representation whose debug colour a lit pixel (sRGB8) has: the Lambert
+    /// term scales linear RGB, so the pixel's linear RGB over its largest channel is
+    /// compared with each colour's; `None` when no colour is within 0.08 (sky, text,
+    /// edges). For tests and tools that read frames drawn with colouring on.
+    pub fn of_pixel(px: &[u8]) -> Option<Representation> {
+        use crate::metrics::srgb_to_linear;
+        let norm = |c: [f64; 3]| {
+            let m = c.iter().cloned().fold(1e-9, f64::max);
+            c.map(|x| x / m)
+        };
+        let p = norm([0, 1, 2].map(|k| srgb_to_linear(px[k])));
+        Representation::ALL
+            .into_iter()
+            .map(|r| {
+                let c = norm(r.colour().map(srgb_to_linear));
+                let d = (0..3).map(|k| (c[k] - p[k]).abs()).fold(0.0, f64::max);
+                (r, d)
+            })
+            .filter(|&(_, d)| d < 0.08)
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .map(|(r, _)| r)
+    }
+
+    /// Pixels of an RGBA8 frame per representation ([`Representation::of_pixel`]),
+    /// indexed by discriminant.
+    pub fn count_pixels(rgba: &[u8]) -> [usize; 7] {
+        let mut n = [0; 7];
+        for p in rgba.chunks_exact(4) {
+            if let Some(r) = Representation::of_pixel(p) {
+                n[r as usize] += 1;
+            }
+        }
+        n
     }
 
     pub fn label(self) -> &'static str {

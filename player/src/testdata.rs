@@ -206,7 +206,13 @@ pub fn write_synthetic_bake_with(
     all_originals: bool,
 ) -> Result<SyntheticBake, TestDataError> {
     let manifest = repo_root().join("manifests/demo.ron");
-    let plan = parse_manifest(&manifest).map_err(|e| TestDataError::Manifest(e.to_string()))?;
+    let mut plan = parse_manifest(&manifest).map_err(|e| TestDataError::Manifest(e.to_string()))?;
+    // The demo's generated park only: its hand-placed showcase objects (the cluster
+    // group, the block, the pebbles) are for the real bake, and the synthetic bake's
+    // figures in the player's tests are those of the park.
+    if let format::manifest::SceneSpec::Park(park) = &mut plan.scene {
+        park.placed.clear();
+    }
     let scene = plan
         .load_scene()
         .map_err(|e| TestDataError::Manifest(e.to_string()))?;

@@ -5,7 +5,6 @@
 use glam::Vec3;
 use player::frame::Mode;
 use player::gpu::GpuError;
-use player::metrics::srgb_to_linear;
 use player::overlay::{Representation, TEXT};
 use player::run::{Player, RunError};
 use player::testdata::write_synthetic_bake;
@@ -26,37 +25,6 @@ fn open(dir: &std::path::Path, opts: &ViewOptions) -> Option<ViewSession> {
         }
         Err(e) => panic!("{e}"),
     }
-}
-
-/// The representation whose debug colour a lit pixel has: the Lambert term scales
-/// linear RGB, so the pixel's linear RGB over its largest channel is compared with
-/// each colour's; `None` when no colour is within 0.08 (sky, text, edges).
-fn representation_of(px: &[u8]) -> Option<Representation> {
-    let norm = |c: [f64; 3]| {
-        let m = c.iter().cloned().fold(1e-9, f64::max);
-        c.map(|x| x / m)
-    };
-    let p = norm([0, 1, 2].map(|k| srgb_to_linear(px[k])));
-    Representation::ALL
-        .into_iter()
-        .map(|r| {
-            let c = norm(r.colour().map(srgb_to_linear));
-            let d = (0..3).map(|k| (c[k] - p[k]).abs()).fold(0.0, f64::max);
-            (r, d)
-        })
-        .filter(|&(_, d)| d < 0.08)
-        .min_by(|a, b| a.1.total_cmp(&b.1))
-        .map(|(r, _)| r)
-}
-
-fn counts(px: &[u8]) -> [usize; 7] {
-    let mut n = [0; 7];
-    for p in px.chunks_exact(4) {
-        if let Some(r) = representation_of(p) {
-            n[r as usize] += 1;
-        }
-    }
-    n
 }
 
 #[test]
@@ -89,7 +57,7 @@ fn view_frame_shows_the_overlay_and_every_drawn_representation_in_its_colour() {
         for _ in 0..4 {
             frame = s.frame().unwrap().0;
         }
-        for (k, n) in counts(&frame).into_iter().enumerate() {
+        for (k, n) in Representation::count_pixels(&frame).into_iter().enumerate() {
             seen[k] += n;
         }
     }
@@ -115,7 +83,7 @@ fn view_frame_shows_the_overlay_and_every_drawn_representation_in_its_colour() {
     s.cycle_mode();
     assert_eq!(s.mode, Mode::Full);
     let full = s.frame().unwrap().0;
-    let c = counts(&full);
+    let c = Representation::count_pixels(&full);
     assert!(c[Representation::Original as usize] > 50, "{c:?}");
     for r in [
         Representation::SvMesh,

@@ -8,6 +8,11 @@
 //! 2. **Regional back-face culling** (§3.1.5): an outside instance all of whose
 //!    triangles face away from the whole prism is Culled (an instance without
 //!    triangles too).
+//!
+//!    2b. **Culled by size** (004; issue 16): with objective selection
+//!    (`bake.quality`), an outside instance that subtends less than a pixel from
+//!    every point of the prism ([`select::subpixel_from_region`]) is Culled before
+//!    clustering, so it neither gets a proxy nor joins a cluster.
 //! 3. **Self-occluding error** (§3.1.2) of the instance's world box from the cell
 //!    centre: below T_s → SV candidate, else MvMesh.
 //! 4. **Clustering** (§3.1.6, when `params.clustering`) of the SV candidates; a
@@ -293,7 +298,8 @@ pub struct CellStats {
     pub impostor_members: u32,
     pub impostor_polygons: u64,
     /// Outside objects the objective selection culled (below a pixel from the whole
-    /// region); they are also counted in `culled`.
+    /// region: single objects at step 2b, whole proxies at step 6); they are also
+    /// counted in `culled`.
     pub selection_culled: u32,
     /// The objective selection's measurements of the proxies it kept (issue 16).
     pub quality: CellQuality,
@@ -409,25 +415,33 @@ pub fn bake_cell_with(
     // Steps 1–3: split, cull, self-occluding error (parallel, collected in order).
     let t = Instant::now();
     let is_far = |i: usize| far.is_some_and(|f| f.instances.get(i) == Some(&true));
-    let kinds: Vec<(Option<Representation>, Assignment)> = (0..scene.instances.len())
+    let split: Vec<(Option<Representation>, Assignment, bool)> = (0..scene.instances.len())
         .into_par_iter()
         .map(|i| {
+            let culled = (None, Assignment::Culled, false);
             let inst = &scene.instances[i];
             let Some(model) = scene.models.get(inst.model as usize) else {
-                return (None, Assignment::Culled);
+                return culled;
             };
             if model.mesh.triangles.is_empty() {
-                return (None, Assignment::Culled);
+                return culled;
             }
             if is_far(i) {
-                return (None, Assignment::Far);
+                return (None, Assignment::Far, false);
             }
             let (lo, hi) = scene.instance_bounds(i);
             if prism.intersects_aabb(lo, hi) {
-                return (None, Assignment::Original);
+                return (None, Assignment::Original, false);
+            }
+            // Culled by size (004, issue 16): with objective selection, an object
+            // under a pixel from every point of the prism is dropped here, before
+            // clustering, so it neither gets a proxy nor joins a cluster (where the
+            // selection could no longer drop it alone).
+            if params.quality.is_some() && subpixel_from_region(lo, hi, &prism, params.image_res) {
+                return (None, Assignment::Culled, true);
             }
             if all_culled(&model.mesh, inst.transform, &corners) {
-                return (None, Assignment::Culled);
+                return culled;
             }
             let error =
                 object_self_occluding_error(grid.cell_size(), params.image_res, centre, lo, hi);
@@ -437,9 +451,13 @@ pub fn bake_cell_with(
                     params.self_occluding_tolerance_px,
                 )),
                 Assignment::Culled,
+                false,
             )
         })
         .collect();
+    let size_culled = split.iter().filter(|k| k.2).count() as u32;
+    let kinds: Vec<(Option<Representation>, Assignment)> =
+        split.into_iter().map(|(r, a, _)| (r, a)).collect();
     times.split_ms = ms_since(t);
     // Regional occlusion culling (000 §3.1.7; `occlusion.rs`, issue 17): with
     // `bake.occlusion_culling`, an outside object hidden from every point of the
@@ -487,7 +505,7 @@ pub fn bake_cell_with(
     let (proxies, stage) = derive_region(
         scene, chains, reuse, &region, &sv, &mv, cells, params, &mut times,
     )?;
-    let selection_culled = selection_culled(sv.len() + mv.len(), &proxies);
+    let selection_culled = size_culled + selection_culled(sv.len() + mv.len(), &proxies);
     for (k, p) in proxies.iter().enumerate() {
         for m in &p.members {
             assignment[m.instance as usize] = Assignment::Proxy(k as u32);
@@ -534,7 +552,13 @@ pub fn bake_group(
     let prism = groups.prism(grid, group, cells);
     let far = far_instances(scene, &prism, params);
     times.split_ms = ms_since(t);
-    let sv: Vec<u32> = (0..far.len() as u32).filter(|&i| far[i as usize]).collect();
+    // Step 2b on the group's prism: far objects under a pixel from all of it.
+    let (sv, small): (Vec<u32>, Vec<u32>) = (0..far.len() as u32)
+        .filter(|&i| far[i as usize])
+        .partition(|&i| {
+            let (lo, hi) = scene.instance_bounds(i as usize);
+            params.quality.is_none() || !subpixel_from_region(lo, hi, &prism, params.image_res)
+        });
     let region = Region {
         id: group,
         prism,
@@ -552,7 +576,7 @@ pub fn bake_group(
         params,
         &mut times,
     )?;
-    let culled = selection_culled(sv.len(), &proxies);
+    let culled = small.len() as u32 + selection_culled(sv.len(), &proxies);
     let mut assignment = vec![Assignment::Culled; scene.instances.len()];
     for (k, p) in proxies.iter().enumerate() {
         for m in &p.members {
@@ -607,8 +631,17 @@ pub fn bake_cell_hybrid(
     let group = bake_group(scene, chains, &none, grid, groups, far.group, cells, params)?;
     let offset = bake.proxies.len() as u32;
     for (i, a) in group.assignment.iter().enumerate() {
-        if let (Assignment::Proxy(k), Assignment::Far) = (*a, bake.assignment[i]) {
-            bake.assignment[i] = Assignment::Proxy(offset + k);
+        match (*a, bake.assignment[i]) {
+            (Assignment::Proxy(k), Assignment::Far) => {
+                bake.assignment[i] = Assignment::Proxy(offset + k)
+            }
+            // Culled by the group's objective selection (under a pixel from all of
+            // the group's prism): culled from the cell too.
+            (_, Assignment::Far) => {
+                bake.assignment[i] = Assignment::Culled;
+                bake.stats.culled += 1;
+            }
+            _ => {}
         }
     }
     let (s, g) = (&mut bake.stats, &group.stats);

@@ -308,7 +308,7 @@ pub fn derive_svmesh(
         let mut front = front_facing_from(mesh, item.transform, centre);
         // On welded vertices: a UV-seamed model's faces are not specks (issue 18).
         let welded = crate::simplify::welded_triangles(&mesh.positions, &mesh.triangles);
-        tidy_selection(&welded, &mut front, settings.speck_triangles);
+        tidy_selection_weighted(&welded, &mut front, settings.speck_triangles, start.carried);
         let seen = (items.len() > 1).then(|| {
             let seen = seen_triangles(&capture.capture, item);
             if start.carried.is_none() {
@@ -417,6 +417,26 @@ pub fn tidy_selection(
     selected: &mut [bool],
     max_triangles: usize,
 ) -> usize {
+    tidy_selection_weighted(triangles, selected, max_triangles, None)
+}
+
+/// [`tidy_selection`] on a level of a model's LOD chain ([`crate::lod_chain`]): a
+/// piece's size is counted in the original triangles it stands for, each level
+/// triangle `1 + 2 × its carried original vertices` (removing a vertex of a closed
+/// mesh removes two triangles). A cube's face is two triangles of a coarse level
+/// but hundreds of the model's: without the weights, a cell seeing two faces of a
+/// large block took them for a speck and its proxy lost every triangle.
+pub(crate) fn tidy_selection_weighted(
+    triangles: &[[u32; 3]],
+    selected: &mut [bool],
+    max_triangles: usize,
+    carried: Option<&[Vec<u32>]>,
+) -> usize {
+    let weight = |t: usize| {
+        carried
+            .and_then(|c| c.get(t))
+            .map_or(1, |c| 1 + 2 * c.len())
+    };
     let n = triangles.len().min(selected.len());
     // Edge adjacency by sorting (a, b, triangle).
     let mut edges: Vec<(u32, u32, u32)> = Vec::with_capacity(n * 3);
@@ -464,7 +484,7 @@ pub fn tidy_selection(
         for t in 0..n as u32 {
             if selected[t as usize] == pass {
                 let r = find(&mut parent, t);
-                size[r as usize] += 1;
+                size[r as usize] += weight(t as usize);
             }
         }
         for t in 0..n as u32 {
