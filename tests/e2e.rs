@@ -654,8 +654,10 @@ fn player_renders_like_the_cpu_rasterizer() {
     let Some(mut p) = open_player(dir.path(), (256, 256)) else {
         return;
     };
-    let plan = format::manifest::parse_manifest(&repo().join("manifests/demo.ron")).unwrap();
-    let scene = plan.load_scene().unwrap();
+    let scene = player::testdata::demo_park_plan()
+        .unwrap()
+        .load_scene()
+        .unwrap();
     let views = [
         (Vec3::new(150.0, 8.0, 130.0), Vec3::new(40.0, 8.0, 60.0)),
         (Vec3::new(30.0, 6.0, 40.0), Vec3::new(150.0, 6.0, 120.0)),

@@ -199,20 +199,26 @@ pub fn write_synthetic_bake(dir: &Path) -> Result<SyntheticBake, TestDataError> 
     write_synthetic_bake_with(dir, false)
 }
 
+/// `manifests/demo.ron`'s plan with its generated park only: the hand-placed
+/// showcase objects (the cluster group, the block, the pebbles) are for the real
+/// bake, and the synthetic bake's figures in the player's tests are the park's.
+/// The scene of every synthetic bake.
+pub fn demo_park_plan() -> Result<format::manifest::Plan, TestDataError> {
+    let manifest = repo_root().join("manifests/demo.ron");
+    let mut plan = parse_manifest(&manifest).map_err(|e| TestDataError::Manifest(e.to_string()))?;
+    if let format::manifest::SceneSpec::Park(park) = &mut plan.scene {
+        park.placed.clear();
+    }
+    Ok(plan)
+}
+
 /// [`write_synthetic_bake`]; with `all_originals` every cell lists every instance as
 /// an original (no proxies), so the hybrid must equal the full-geometry frame.
 pub fn write_synthetic_bake_with(
     dir: &Path,
     all_originals: bool,
 ) -> Result<SyntheticBake, TestDataError> {
-    let manifest = repo_root().join("manifests/demo.ron");
-    let mut plan = parse_manifest(&manifest).map_err(|e| TestDataError::Manifest(e.to_string()))?;
-    // The demo's generated park only: its hand-placed showcase objects (the cluster
-    // group, the block, the pebbles) are for the real bake, and the synthetic bake's
-    // figures in the player's tests are those of the park.
-    if let format::manifest::SceneSpec::Park(park) = &mut plan.scene {
-        park.placed.clear();
-    }
+    let plan = demo_park_plan()?;
     let scene = plan
         .load_scene()
         .map_err(|e| TestDataError::Manifest(e.to_string()))?;
