@@ -37,8 +37,8 @@ use crate::simplify::{
     pixels_per_radian, simplify_seeded, ProjectedLength, SimplifyInput, SimplifyParams, CELL_VIEWS,
 };
 use crate::svmesh::{
-    draw_item, ms_since, tidy_selection_weighted, world_vertices, MemberMesh, ProxyError,
-    ProxySettings, StageTimes, StartMesh,
+    draw_item, ms_since, projected_areas_px, tidy_selection_sized, world_vertices, MemberMesh,
+    ProxyError, ProxySettings, StageTimes, StartMesh,
 };
 use crate::weights::{vertex_states, VertexState, BACK_FACING_WEIGHT};
 use format::Scene;
@@ -93,7 +93,8 @@ pub fn derive_mvmesh(
         .collect();
     // On welded vertices: a UV-seamed model's faces are not specks (issue 18).
     let welded = crate::simplify::welded_triangles(&mesh.positions, &mesh.triangles);
-    tidy_selection_weighted(&welded, &mut kept, settings.speck_triangles, start.carried);
+    let areas = projected_areas_px(mesh, item.transform, eyes, settings.image_res);
+    tidy_selection_sized(&welded, &mut kept, settings.speck_triangles, Some(&areas));
     let (input_triangles, carried) = start.select(&kept);
     times.weights_ms += ms_since(t);
 

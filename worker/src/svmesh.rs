@@ -207,6 +207,39 @@ pub struct SvMesh {
 }
 
 /// World positions and unit normals of an instance's vertices.
+/// Per triangle of `mesh` placed by `transform`, the largest area in pixels (at
+/// `image_res` per 60°) it covers seen from one of `eyes`: its area vector's
+/// component along the line of sight over the distance cubed (a solid angle),
+/// times the pixels per steradian.
+pub(crate) fn projected_areas_px(
+    mesh: &format::Mesh,
+    transform: Mat4,
+    eyes: &[Vec3],
+    image_res: u32,
+) -> Vec<f32> {
+    let ppr = pixels_per_radian(image_res);
+    let p: Vec<Vec3> = mesh
+        .positions
+        .iter()
+        .map(|&v| transform.transform_point3(Vec3::from_array(v)))
+        .collect();
+    mesh.triangles
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| p[i as usize]);
+            let area = 0.5 * (b - a).cross(c - a);
+            let centroid = (a + b + c) / 3.0;
+            eyes.iter()
+                .map(|&e| {
+                    let v = e - centroid;
+                    let d2 = v.length_squared().max(1e-12);
+                    area.dot(v).abs() / (d2 * d2.sqrt()) * ppr * ppr
+                })
+                .fold(0.0, f32::max)
+        })
+        .collect()
+}
+
 pub(crate) fn world_vertices(mesh: &format::Mesh, transform: Mat4) -> (Vec<Vec3>, Vec<Vec3>) {
     let positions: Vec<Vec3> = mesh
         .positions
@@ -308,7 +341,8 @@ pub fn derive_svmesh(
         let mut front = front_facing_from(mesh, item.transform, centre);
         // On welded vertices: a UV-seamed model's faces are not specks (issue 18).
         let welded = crate::simplify::welded_triangles(&mesh.positions, &mesh.triangles);
-        tidy_selection_weighted(&welded, &mut front, settings.speck_triangles, start.carried);
+        let areas = projected_areas_px(mesh, item.transform, &[centre], settings.image_res);
+        tidy_selection_sized(&welded, &mut front, settings.speck_triangles, Some(&areas));
         let seen = (items.len() > 1).then(|| {
             let seen = seen_triangles(&capture.capture, item);
             if start.carried.is_none() {
@@ -417,26 +451,25 @@ pub fn tidy_selection(
     selected: &mut [bool],
     max_triangles: usize,
 ) -> usize {
-    tidy_selection_weighted(triangles, selected, max_triangles, None)
+    tidy_selection_sized(triangles, selected, max_triangles, None)
 }
 
-/// [`tidy_selection`] on a level of a model's LOD chain ([`crate::lod_chain`]): a
-/// piece's size is counted in the original triangles it stands for, each level
-/// triangle `1 + 2 × its carried original vertices` (removing a vertex of a closed
-/// mesh removes two triangles). A cube's face is two triangles of a coarse level
-/// but hundreds of the model's: without the weights, a cell seeing two faces of a
-/// large block took them for a speck and its proxy lost every triangle.
-pub(crate) fn tidy_selection_weighted(
+/// The area in pixels (at `image_res` per 60°) from which a connected piece of a
+/// selection is never a speck ([`tidy_selection_sized`]): 4 × 4 pixels.
+pub const SPECK_AREA_PX: f32 = 16.0;
+
+/// [`tidy_selection`] that spares a selected piece covering [`SPECK_AREA_PX`] or
+/// more on screen (`areas_px`, per triangle, [`projected_areas_px`]): a speck is
+/// small in triangles *and* on screen. A collapse that starts from a coarse level
+/// of a model's LOD chain ([`crate::lod_chain`]) sees a large flat face as two
+/// triangles; counted in triangles alone, a cell seeing two faces of a 40-unit
+/// block took them for a speck and its proxy lost every triangle.
+pub(crate) fn tidy_selection_sized(
     triangles: &[[u32; 3]],
     selected: &mut [bool],
     max_triangles: usize,
-    carried: Option<&[Vec<u32>]>,
+    areas_px: Option<&[f32]>,
 ) -> usize {
-    let weight = |t: usize| {
-        carried
-            .and_then(|c| c.get(t))
-            .map_or(1, |c| 1 + 2 * c.len())
-    };
     let n = triangles.len().min(selected.len());
     // Edge adjacency by sorting (a, b, triangle).
     let mut edges: Vec<(u32, u32, u32)> = Vec::with_capacity(n * 3);
@@ -481,16 +514,23 @@ pub(crate) fn tidy_selection_weighted(
             i = j;
         }
         let mut size = vec![0usize; n];
+        let mut area = vec![0f32; n];
         for t in 0..n as u32 {
             if selected[t as usize] == pass {
                 let r = find(&mut parent, t);
-                size[r as usize] += weight(t as usize);
+                size[r as usize] += 1;
+                area[r as usize] += areas_px
+                    .and_then(|a| a.get(t as usize))
+                    .copied()
+                    .unwrap_or(0.0);
             }
         }
         for t in 0..n as u32 {
             if selected[t as usize] == pass {
                 let r = find(&mut parent, t);
-                if size[r as usize] <= max_triangles {
+                // Unselected pieces (holes) are filled by count alone, as before.
+                let small_on_screen = !pass || area[r as usize] < SPECK_AREA_PX;
+                if size[r as usize] <= max_triangles && small_on_screen {
                     selected[t as usize] = !pass;
                     changed += 1;
                 }
