@@ -5,7 +5,8 @@
 //!
 //! 1. The polygons *not* regionally back-facing for the cell's prism (§3.1.5,
 //!    [`regional_backface_cull`]): "front-facing with respect to the cell", tidied
-//!    like the SVMesh's selection ([`crate::svmesh::tidy_selection`]).
+//!    like the SVMesh's selection ([`crate::svmesh::tidy_selection_sized`], the
+//!    on-screen areas taken from the capture eyes).
 //! 2. Capture the object alone from the cell centre (view 0) and from the centres of
 //!    the up to 6 neighbouring cells (views 1..), all at mid eye height. A neighbour
 //!    whose centre lies inside the object's box (the object stands in that cell)

@@ -3,11 +3,13 @@
 //! Steps, for one object (or the members of a cluster, treated as one object):
 //!
 //! 1. The polygons front-facing to the cell's centre ([`front_facing_from`]), tidied
-//!    ([`tidy_selection`]): on a scanned mesh the front-facing set is ragged near the
-//!    rim, with specks of a few front-facing triangles beyond it (each would survive
-//!    the collapse as its own piece) and back-facing specks inside it (holes whose
-//!    boundaries block collapses). Pieces of at most [`SPECK_TRIANGLES`] triangles
-//!    are flipped; both are near edge-on and sub-pixel at proxy distances.
+//!    ([`tidy_selection_sized`]): on a scanned mesh the front-facing set is ragged
+//!    near the rim, with specks of a few front-facing triangles beyond it (each would
+//!    survive the collapse as its own piece) and back-facing specks inside it (holes
+//!    whose boundaries block collapses). Pieces of at most [`SPECK_TRIANGLES`]
+//!    triangles are flipped; both are near edge-on and sub-pixel at proxy distances.
+//!    A front-facing piece covering [`SPECK_AREA_PX`] or more on screen is kept
+//!    whatever its triangle count (a large flat face of a coarse chain level).
 //! 2. Capture the object(s) alone from the centre ([`crate::capture`]).
 //! 3. Classify the capture's pixels (§3.1.3.1, [`classify_objects`], thresholds on
 //!    the paper's window depth with the near plane at the side face,
@@ -211,7 +213,7 @@ pub struct SvMesh {
 /// `image_res` per 60°) it covers seen from one of `eyes`: its area vector's
 /// component along the line of sight over the distance cubed (a solid angle),
 /// times the pixels per steradian.
-pub(crate) fn projected_areas_px(
+pub fn projected_areas_px(
     mesh: &format::Mesh,
     transform: Mat4,
     eyes: &[Vec3],
@@ -464,7 +466,7 @@ pub const SPECK_AREA_PX: f32 = 16.0;
 /// of a model's LOD chain ([`crate::lod_chain`]) sees a large flat face as two
 /// triangles; counted in triangles alone, a cell seeing two faces of a 40-unit
 /// block took them for a speck and its proxy lost every triangle.
-pub(crate) fn tidy_selection_sized(
+pub fn tidy_selection_sized(
     triangles: &[[u32; 3]],
     selected: &mut [bool],
     max_triangles: usize,
