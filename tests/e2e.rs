@@ -501,13 +501,27 @@ fn slurm_turn() -> Option<std::sync::MutexGuard<'static, ()>> {
     slurm_available().then(|| SLURM.lock().unwrap_or_else(|e| e.into_inner()))
 }
 
-#[test]
-fn slurm_bake_equals_local_bake() {
-    let Some(_one) = slurm_turn() else {
-        return;
-    };
+/// A Slurm test's turn on the cluster and its two outputs, `<tmp>/local` and
+/// `<tmp>/slurm`; `None` (the test skips) without Slurm.
+type SlurmSetup = (
+    std::sync::MutexGuard<'static, ()>,
+    tempfile::TempDir,
+    PathBuf,
+    PathBuf,
+);
+
+fn slurm_setup() -> Option<SlurmSetup> {
+    let turn = slurm_turn()?;
     let dir = tempfile::tempdir().unwrap();
     let (local, slurm) = (dir.path().join("local"), dir.path().join("slurm"));
+    Some((turn, dir, local, slurm))
+}
+
+#[test]
+fn slurm_bake_equals_local_bake() {
+    let Some((_one, _dir, local, slurm)) = slurm_setup() else {
+        return;
+    };
     let demo = "manifests/demo.ron";
     assert!(run_manifest(demo, &local, &[]).status.success());
     let o = run_manifest(
@@ -521,11 +535,9 @@ fn slurm_bake_equals_local_bake() {
 
 #[test]
 fn slurm_resubmits_only_the_cancelled_task() {
-    let Some(_one) = slurm_turn() else {
+    let Some((_one, _dir, local, out)) = slurm_setup() else {
         return;
     };
-    let dir = tempfile::tempdir().unwrap();
-    let (local, out) = (dir.path().join("local"), dir.path().join("slurm"));
     assert!(run_tiny(&local, &[]).status.success());
     // Submit held, cancel task 2, release the rest.
     let o = run_tiny(&out, &["--executor", "slurm", "--hold"]);
@@ -726,6 +738,14 @@ fn rgba_pixels(rgba: &[u8]) -> Vec<[u8; 4]> {
         .collect()
 }
 
+/// `pipeline run manifests/demo.ron` into `<dir>/demo` (asserts success).
+fn bake_demo(dir: &Path) -> PathBuf {
+    let out = dir.join("demo");
+    let o = run_manifest("manifests/demo.ron", &out, &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    out
+}
+
 /// Issue 16: the demo bake (README's first command) holds every representation —
 /// originals, SV mesh, MV mesh, cluster, layered impostor and culled objects — and
 /// the player draws each where the packs say: from a cell holding a kind, facing one
@@ -737,9 +757,14 @@ fn demo_bake_holds_every_representation_and_the_player_draws_each() {
     use format::pack::{CellPack, PackFile, ProxyKind};
     use player::overlay::Representation;
     let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("demo");
-    let o = run_manifest("manifests/demo.ron", &out, &[]);
-    assert!(o.status.success(), "{}", stderr(&o));
+    let out = bake_demo(dir.path());
+    let drawn_kinds = [
+        Representation::Original,
+        Representation::SvMesh,
+        Representation::Cluster,
+        Representation::MvMesh,
+        Representation::LayeredImpostor,
+    ];
     let read = |path: PathBuf, group: bool| {
         let file = PackFile::open(&path).unwrap();
         if group {
@@ -792,13 +817,7 @@ fn demo_bake_holds_every_representation_and_the_player_draws_each() {
                 .map(|i| (c as u32, i)),
         );
     }
-    for r in [
-        Representation::Original,
-        Representation::SvMesh,
-        Representation::Cluster,
-        Representation::MvMesh,
-        Representation::LayeredImpostor,
-    ] {
+    for r in drawn_kinds {
         assert!(
             first_cell[r as usize].is_some(),
             "no {r:?} in the demo bake"
@@ -860,13 +879,7 @@ fn demo_bake_holds_every_representation_and_the_player_draws_each() {
             .max()
             .unwrap()
     };
-    for r in [
-        Representation::Original,
-        Representation::SvMesh,
-        Representation::Cluster,
-        Representation::MvMesh,
-        Representation::LayeredImpostor,
-    ] {
+    for r in drawn_kinds {
         let (cell, instance) = first_cell[r as usize].unwrap();
         let pixels = drawn(&mut s, cell, instance, r);
         eprintln!("{r:?}: cell {cell}, instance {instance}: {pixels} pixels");
@@ -906,9 +919,7 @@ fn demo_bake_holds_every_representation_and_the_player_draws_each() {
 #[test]
 fn player_compare_on_the_demo_bake() {
     let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("demo");
-    let o = run_manifest("manifests/demo.ron", &out, &[]);
-    assert!(o.status.success(), "{}", stderr(&o));
+    let out = bake_demo(dir.path());
     if open_player(&out, (64, 64)).is_none() {
         return;
     }
@@ -928,15 +939,7 @@ fn player_compare_on_the_demo_bake() {
     );
     assert!(o.status.success(), "{}", stderr(&o));
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
-    for key in [
-        "frames",
-        "mean_psnr_y",
-        "min_psnr_y",
-        "mean_ssim",
-        "mean_triangles",
-        "reference_triangles",
-        "frame_time_ratio",
-    ] {
+    for key in format::schema::compare::REQUIRED_KEYS {
         assert!(v.get(key).is_some(), "missing {key}: {v}");
     }
     let mean = v["mean_psnr_y"].as_f64().unwrap();

@@ -12,6 +12,18 @@
 
 use serde::{Deserialize, Deserializer, Serialize};
 
+/// The top-level keys every `player compare --json` report has, whatever its mode
+/// (for readers and tests that check the contract).
+pub const REQUIRED_KEYS: [&str; 7] = [
+    "frames",
+    "mean_psnr_y",
+    "min_psnr_y",
+    "mean_ssim",
+    "mean_triangles",
+    "reference_triangles",
+    "frame_time_ratio",
+];
+
 /// Frame-time behaviour at cell crossings (paper Fig. 14): per crossing, the maximum
 /// total frame time (GPU + streaming) in the crossing frame and the 9 after it,
 /// relative to the median of the other (in-cell) frames.
