@@ -84,7 +84,7 @@ impl ProxySettings {
     /// [`ProxySettings::new`] plus the bake's deviation bound over the cell's prism
     /// (`bake.max_deviation_px`, read by [`BakeParams::deviation_bound_px`]: exactly
     /// 0 = none; a negative or non-finite value, which only a hand-built
-    /// `BakeParams` can hold, is passed on, and [`simplify`] refuses it with
+    /// `BakeParams` can hold, is passed on, and [`crate::simplify`] refuses it with
     /// [`SimplifyError::BadDeviation`]).
     pub fn for_cell(params: &BakeParams, cell_size: f32, prism: Prism) -> ProxySettings {
         ProxySettings {
