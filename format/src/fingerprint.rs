@@ -39,8 +39,11 @@ pub type Fingerprint = [u8; 32];
 /// 12 — coarser mesh candidates in the objective selection, and the quality check of
 /// every bake in the job records (issue 16, worker `select.rs`);
 /// 13 — with objective selection, objects under a pixel from the whole prism are
-/// culled before clustering (issue 16, worker `bake.rs` step 2b).
-pub const BAKE_REVISION: u32 = 13;
+/// culled before clustering (issue 16, worker `bake.rs` step 2b);
+/// 14 — the vertex depth test of a collapse started from an LOD-chain level looks up
+/// the captured (full) mesh's triangle under the pixel, and a vertex on the tight
+/// capture's border is in the image (worker `visibility.rs`).
+pub const BAKE_REVISION: u32 = 14;
 
 /// Hex form for file names, logs and reports.
 pub fn to_hex(f: &Fingerprint) -> String {

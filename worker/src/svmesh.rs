@@ -13,7 +13,7 @@
 //! 2. Capture the object(s) alone from the centre ([`crate::capture`]).
 //! 3. Classify the capture's pixels (§3.1.3.1, [`classify_objects`], thresholds on
 //!    the paper's window depth with the near plane at the side face,
-//!    [`WindowDepth::paper`]) and weight the vertices (§3.1.3.2, [`vertex_states`]).
+//!    [`WindowDepth::paper`]) and weight the vertices (§3.1.3.2, [`vertex_states_captured`]).
 //! 4. Cluster only: drop a member's triangle that no pixel of the cluster capture
 //!    shows (triangle-ID buffer) and none of whose vertices is visible — surfaces
 //!    "occluded by others in the cluster" (§3.1.6). The paper lets the low weights of
@@ -37,7 +37,7 @@ use crate::simplify::{
     SimplifyInput, SimplifyParams,
 };
 use crate::visibility::DepthTolerance;
-use crate::weights::{vertex_states, VertexState};
+use crate::weights::{vertex_states_captured, VertexState};
 use format::manifest::BakeParams;
 use format::Scene;
 use glam::{Mat3, Mat4, Vec3};
@@ -330,8 +330,9 @@ pub fn derive_svmesh(
         let t = Instant::now();
         let start = StartMesh::of(scene, chains, item, settings);
         let mesh = start.mesh;
-        let states = vertex_states(
+        let states = vertex_states_captured(
             mesh,
+            &item.mesh.triangles,
             item.transform,
             &capture.capture,
             &classes,

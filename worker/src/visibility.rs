@@ -251,14 +251,25 @@ pub fn depth_visibility(
     // Step 1: vertices with some front-facing incident triangle (the others face away
     // from the eye on every side and are hidden by the object itself).
     let front_facing = front_facing_vertices_of(&world, &mesh.triangles, capture.view.eye);
-    depth_visibility_of(mesh, &world, &front_facing, capture, object_id, tol)
+    depth_visibility_of(
+        &world,
+        &front_facing,
+        &mesh.triangles,
+        capture,
+        object_id,
+        tol,
+    )
 }
 
-/// [`depth_visibility`] with the world positions and front-facing flags at hand.
+/// [`depth_visibility`] with the world positions and front-facing flags at hand;
+/// `captured_triangles` are the triangles of the mesh drawn into `capture` (its
+/// triangle-ID buffer indexes them): a collapse that starts from a level of the
+/// model's LOD chain tests the level's vertices (the model's own) against the
+/// capture of the full model.
 pub(crate) fn depth_visibility_of(
-    mesh: &Mesh,
     world: &[Vec3],
     front_facing: &[bool],
+    captured_triangles: &[[u32; 3]],
     capture: &Capture,
     object_id: u32,
     tol: DepthTolerance,
@@ -306,7 +317,18 @@ pub(crate) fn depth_visibility_of(
             if point.depth < view.near || point.depth > view.far {
                 return DepthVisibility::Outside;
             }
-            let Some(own_pixel) = pixel_index(view, point) else {
+            // A vertex on the tight capture's border (a box's corner defines it)
+            // projects onto the image's edge and may round just outside it: within
+            // a pixel of the edge, the border pixel is its own.
+            let Some(own_pixel) = pixel_index(view, point).or_else(|| {
+                let (w, h) = (width as f32, height as f32);
+                let near_edge = |v: f32, n: f32| v > -1.0 && v < n + 1.0;
+                (near_edge(point.x, w) && near_edge(point.y, h)).then(|| {
+                    let x = point.x.floor().clamp(0.0, w - 1.0) as i64;
+                    let y = point.y.floor().clamp(0.0, h - 1.0) as i64;
+                    (y * width + x) as usize
+                })
+            }) else {
                 return DepthVisibility::Outside;
             };
             if !front_facing[v] {
@@ -317,7 +339,7 @@ pub(crate) fn depth_visibility_of(
             if covered(own_pixel) {
                 let depth_behind = (point.depth - capture.depth[own_pixel]) as f64;
                 let behind = if capture.object_id[own_pixel] == object_id {
-                    mesh.triangles
+                    captured_triangles
                         .get(capture.triangle_id[own_pixel] as usize)
                         .and_then(|&tri| UnitPlane::of(world, tri))
                         .map_or(depth_behind, |plane| plane.behind(p.as_dvec3(), eye))

@@ -72,15 +72,40 @@ pub fn vertex_states(
     object_id: u32,
     depth_tolerance: DepthTolerance,
 ) -> Vec<VertexState> {
+    vertex_states_captured(
+        mesh,
+        &mesh.triangles,
+        transform,
+        capture,
+        classes,
+        object_id,
+        depth_tolerance,
+    )
+}
+
+/// [`vertex_states`] of a level of the model's LOD chain (`mesh`: the model's
+/// vertices with the level's triangles) in the capture of the full model, whose
+/// triangles are `captured_triangles`: "front-facing" is judged on the level's
+/// triangles, the depth test's surface plane on the captured triangle under the
+/// vertex's pixel (the triangle-ID buffer indexes the captured mesh, not the level).
+pub fn vertex_states_captured(
+    mesh: &Mesh,
+    captured_triangles: &[[u32; 3]],
+    transform: Mat4,
+    capture: &Capture,
+    classes: &[PixelClass],
+    object_id: u32,
+    depth_tolerance: DepthTolerance,
+) -> Vec<VertexState> {
     // Step 1: per vertex, "some incident triangle is front-facing" from the eye.
     let world = world_positions(mesh, transform);
     let front_facing_vertex = front_facing_vertices_of(&world, &mesh.triangles, capture.view.eye);
 
     // Step 2: depth-buffer visibility and the pixel each visible vertex projects to.
     let visibility = depth_visibility_of(
-        mesh,
         &world,
         &front_facing_vertex,
+        captured_triangles,
         capture,
         object_id,
         depth_tolerance,
