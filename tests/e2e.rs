@@ -826,8 +826,8 @@ fn demo_bake_holds_every_representation_and_the_player_draws_each() {
     assert!(!culled.is_empty(), "the demo bake culls nothing");
 
     // The player, facing one object of each kind from inside a cell that has it: the
-    // cell's centre and six points halfway to its edges (another object may hide it
-    // from one of them), pitch 0 so that the ground (as white as an original in this
+    // cell's centre and twelve points around it (another object may hide it from
+    // some of them), pitch 0 so that the ground (as white as an original in this
     // colouring) stays below the horizon, where originals are not counted.
     let opts = player::view::ViewOptions {
         size: (320, 240),
@@ -852,9 +852,17 @@ fn demo_bake_holds_every_representation_and_the_player_draws_each() {
     };
     let eyes = |cell: u32| {
         let c = grid.centre(cell);
-        let r = 0.5 * 0.5 * 3f32.sqrt() * grid.cell_size();
-        std::iter::once(c).chain((0..6).map(move |k| {
-            let a = (30.0 + 60.0 * k as f32).to_radians();
+        let inner = 0.5 * 0.5 * 3f32.sqrt() * grid.cell_size();
+        let outer = 0.9 * grid.cell_size();
+        // The centre, six points halfway to the edges' midpoints and six near the
+        // corners (the hexagons have corners at 0°, 60°, …).
+        std::iter::once(c).chain((0..12).map(move |k| {
+            let (deg, r) = if k < 6 {
+                (30.0 + 60.0 * k as f32, inner)
+            } else {
+                (60.0 * (k - 6) as f32, outer)
+            };
+            let a = f32::to_radians(deg);
             c + r * glam::Vec2::new(a.cos(), a.sin())
         }))
     };

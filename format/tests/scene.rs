@@ -45,13 +45,14 @@ fn assert_normalised(scene: &Scene, target_heights: &[f32]) {
 #[test]
 fn demo_manifest_loads_and_normalises() {
     let scene = demo_scene();
-    // 18 generated statues of 6 models, then 12 placed objects of 4 more (the
-    // cluster group's spheres, the block, the vase behind it, the pebbles).
-    assert_eq!(scene.models.len(), 10);
-    assert_eq!(scene.instances.len(), 30);
+    // 18 generated statues of 6 models, then 14 placed objects of 5 more (the
+    // cluster group's spheres, the block, the vase behind it, the pebbles, the
+    // knots in the far corners).
+    assert_eq!(scene.models.len(), 11);
+    assert_eq!(scene.instances.len(), 32);
     assert_normalised(
         &scene,
-        &[20.0, 30.0, 14.0, 10.0, 6.0, 8.0, 6.0, 40.0, 5.0, 0.3],
+        &[20.0, 30.0, 14.0, 10.0, 6.0, 8.0, 6.0, 40.0, 5.0, 0.3, 16.0],
     );
     let names: Vec<&str> = scene.models.iter().map(|m| m.name.as_str()).collect();
     assert_eq!(
@@ -66,7 +67,8 @@ fn demo_manifest_loads_and_normalises() {
             "sphere#2",
             "box#2",
             "vase#2",
-            "sphere#3"
+            "sphere#3",
+            "torus_knot#2"
         ]
     );
     // Every instance stands on the ground, inside the ground rectangle.
@@ -399,7 +401,7 @@ fn placed_objects_follow_the_park_and_move_nothing() {
     let format::manifest::SceneSpec::Park(park) = &with.scene else {
         panic!("the demo is a park")
     };
-    assert_eq!(park.placed.len(), 12);
+    assert_eq!(park.placed.len(), 14);
     let mut alone = with.clone();
     if let format::manifest::SceneSpec::Park(p) = &mut alone.scene {
         p.placed.clear();
@@ -407,7 +409,7 @@ fn placed_objects_follow_the_park_and_move_nothing() {
     let (a, w) = (alone.load_scene().unwrap(), with.load_scene().unwrap());
     assert_eq!(w.instances[..a.instances.len()], a.instances[..]);
     let placed = &w.instances[a.instances.len()..];
-    assert_eq!(placed.len(), 12);
+    assert_eq!(placed.len(), 14);
     let first = placed[0].transform.w_axis;
     assert_eq!([first.x, first.y, first.z], park.placed[0].translation);
 
