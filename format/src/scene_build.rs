@@ -401,6 +401,9 @@ fn build_with_placements(plan: &Plan) -> Result<(Scene, Option<Vec<park::Placeme
                     })
                     .collect();
                 let generated = instances.len();
+                // Each model's footprint radius, once (the test below runs for every
+                // placed × generated pair).
+                let reach: Vec<f32> = models.iter().map(|m| footprint_radius(&m.mesh)).collect();
                 for (j, (inst, &model)) in spec
                     .placed
                     .iter()
@@ -409,7 +412,7 @@ fn build_with_placements(plan: &Plan) -> Result<(Scene, Option<Vec<park::Placeme
                 {
                     let new = listed_instance(inst, model);
                     if let Some(k) =
-                        (0..generated).find(|&k| footprints_overlap(&models, &instances[k], &new))
+                        (0..generated).find(|&k| footprints_overlap(&reach, &instances[k], &new))
                     {
                         return Err(SceneError::PlacedOverlaps {
                             manifest: plan.manifest_path.clone(),
@@ -563,17 +566,20 @@ fn listed_instance(spec: &InstanceSpec, model: u32) -> Instance {
 }
 
 /// Whether the x–z circles around two instances' footprints meet: each circle is
-/// centred on the instance's base and has half the footprint's diagonal (times its
-/// scale) as radius, so it holds the footprint at any yaw. Conservative: two
-/// objects whose circles meet may still stand clear of each other.
-fn footprints_overlap(models: &[Model], a: &Instance, b: &Instance) -> bool {
-    let radius = |i: &Instance| {
-        let [w, d] = footprint(&models[i.model as usize].mesh);
-        let scale = i.transform.x_axis.truncate().length();
-        0.5 * w.hypot(d) * scale
-    };
+/// centred on the instance's base and has its model's [`footprint_radius`] (`reach`,
+/// per model) times its scale as radius, so it holds the footprint at any yaw.
+/// Conservative: two objects whose circles meet may still stand clear of each other.
+fn footprints_overlap(reach: &[f32], a: &Instance, b: &Instance) -> bool {
+    let radius = |i: &Instance| reach[i.model as usize] * i.transform.x_axis.truncate().length();
     let (pa, pb) = (a.transform.w_axis, b.transform.w_axis);
     (pa.x - pb.x).hypot(pa.z - pb.z) < radius(a) + radius(b)
+}
+
+/// Half the diagonal of a normalised model's x–z [`footprint`]: the radius of the
+/// circle around its base centre that holds it at any yaw.
+fn footprint_radius(mesh: &Mesh) -> f32 {
+    let [w, d] = footprint(mesh);
+    0.5 * w.hypot(d)
 }
 
 pub fn footprint(mesh: &Mesh) -> [f32; 2] {

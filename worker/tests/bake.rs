@@ -2,8 +2,8 @@
 //! issue 4). Every proxy mesh goes through `simplify::validate`.
 
 mod common;
-use common::{fetched_model, in_pool, repo};
-use format::manifest::{parse_manifest, BakeParams, CellParams};
+use common::{demo, fetched_model, in_pool};
+use format::manifest::{BakeParams, CellParams};
 use format::{Ground, Instance, Model, Scene};
 use glam::{Mat4, Vec3};
 use worker::bake::{bake_cell, bake_cell_with, Assignment, CellBake};
@@ -38,13 +38,6 @@ fn validate_bake(scene: &Scene, bake: &CellBake) {
             }
         }
     }
-}
-
-fn demo() -> (Scene, HexGrid, CellParams, BakeParams) {
-    let plan = parse_manifest(&repo().join("manifests/demo.ron")).unwrap();
-    let scene = plan.load_scene().unwrap();
-    let grid = HexGrid::new(plan.ground, plan.cells.cell_size);
-    (scene, grid, plan.cells, plan.bake)
 }
 
 /// [`demo`] and its [`busy_cell`].

@@ -5,20 +5,12 @@
 //! objective selection culls from far cells before clustering (`bake.rs` step 2b).
 
 mod common;
-use common::repo;
-use format::manifest::{parse_manifest, BakeParams, CellParams};
+use common::demo;
+use format::pack::ProxyKind;
 use format::Scene;
-use worker::bake::{bake_cell, bake_cell_with, Assignment, ProxyReuse};
-use worker::grid::HexGrid;
+use worker::bake::{bake_cell, bake_cell_with, Assignment, BakedMember, ProxyReuse};
 use worker::lod_chain::LodChains;
 use worker::select::subpixel_from_region;
-
-fn demo() -> (Scene, HexGrid, CellParams, BakeParams) {
-    let plan = parse_manifest(&repo().join("manifests/demo.ron")).unwrap();
-    let scene = plan.load_scene().unwrap();
-    let grid = HexGrid::new(plan.ground, plan.cells.cell_size);
-    (scene, grid, plan.cells, plan.bake)
-}
 
 /// The only instance of the model of `height` (the demo's block: 40 units).
 fn instance_of_height(scene: &Scene, height: f32) -> u32 {
@@ -32,36 +24,58 @@ fn instance_of_height(scene: &Scene, height: f32) -> u32 {
     found[0]
 }
 
-/// A cell that sees two faces of the block starts its proxy from a chain level
-/// where each face is two triangles. The speck tidying once counted those four
-/// triangles as a speck (≤ 4 triangles) and dropped them: the proxy had no
-/// triangle and the block vanished from the cell. Counted in the original
-/// triangles they stand for, they are kept.
-#[test]
-fn a_large_flat_block_keeps_its_faces_when_starting_from_its_lod_chain() {
-    let (scene, grid, cells, mut params) = demo();
+/// The block's member of its proxy in each of `cells` that proxies it (far field
+/// off, collapses from the LOD chains as `pipeline run` does), with the proxy kind.
+fn block_members(cells: impl IntoIterator<Item = u32>) -> Vec<(u32, ProxyKind, BakedMember)> {
+    let (scene, grid, cell_params, mut params) = demo();
     params.far_field = false;
     let block = instance_of_height(&scene, 40.0);
     let (chains, _) = LodChains::prepare(&scene, None).unwrap();
     let reuse = ProxyReuse::new();
-    let mut checked = 0;
-    for cell in 0..grid.cell_count() {
-        let bake =
-            bake_cell_with(&scene, &chains, &reuse, &grid, cell, &cells, &params, None).unwrap();
+    let mut found = Vec::new();
+    for cell in cells {
+        let bake = bake_cell_with(
+            &scene,
+            &chains,
+            &reuse,
+            &grid,
+            cell,
+            &cell_params,
+            &params,
+            None,
+        )
+        .unwrap();
         let Assignment::Proxy(k) = bake.assignment[block as usize] else {
             continue;
         };
         let proxy = &bake.proxies[k as usize];
         let member = proxy.members.iter().find(|m| m.instance == block).unwrap();
+        found.push((cell, proxy.kind, member.clone()));
+    }
+    found
+}
+
+/// A cell that sees two faces of the block starts its proxy from a chain level
+/// where each face is two triangles. The speck tidying once counted those four
+/// triangles as a speck (≤ 4 triangles) and dropped them: the proxy had no
+/// triangle and the block vanished from the cell. A speck must now also be small
+/// on screen (`svmesh::SPECK_AREA_PX`): the faces are kept.
+#[test]
+fn a_large_flat_block_keeps_its_faces_when_starting_from_its_lod_chain() {
+    let grid_cells = demo().1.cell_count();
+    let proxied = block_members(0..grid_cells);
+    for (cell, kind, member) in &proxied {
         assert!(
             member.triangles.len() >= 2,
-            "cell {cell}: the block's {:?} has {} triangles",
-            proxy.kind,
+            "cell {cell}: the block's {kind:?} has {} triangles",
             member.triangles.len()
         );
-        checked += 1;
     }
-    assert!(checked >= 3, "the block has a proxy in {checked} cells");
+    assert!(
+        proxied.len() >= 3,
+        "the block has a proxy in {} cells",
+        proxied.len()
+    );
 }
 
 /// With objective selection, a pebble under a pixel from the whole prism is Culled
@@ -117,20 +131,8 @@ fn subpixel_objects_are_culled_before_clustering() {
 /// the images, so no view set held them and the block was drawn untextured.
 #[test]
 fn the_block_is_textured_from_every_cell_that_proxies_it() {
-    let (scene, grid, cells, mut params) = demo();
-    params.far_field = false;
-    let block = instance_of_height(&scene, 40.0);
-    let (chains, _) = LodChains::prepare(&scene, None).unwrap();
-    let reuse = ProxyReuse::new();
     let mut checked = 0;
-    for cell in [1, 5, 9] {
-        let bake =
-            bake_cell_with(&scene, &chains, &reuse, &grid, cell, &cells, &params, None).unwrap();
-        let Assignment::Proxy(k) = bake.assignment[block as usize] else {
-            continue;
-        };
-        let proxy = &bake.proxies[k as usize];
-        let member = proxy.members.iter().find(|m| m.instance == block).unwrap();
+    for (cell, _, member) in block_members([1, 5, 9]) {
         if member.view_masks.is_empty() {
             continue; // not an MvMesh here
         }

@@ -157,3 +157,16 @@ pub fn bunny_capture(mesh: &format::Mesh, transform: Mat4, view: &View) -> Captu
     };
     ray_cast_capture(&[item], view, CullMode::None)
 }
+
+/// `manifests/demo.ron`: its scene, grid, cell and bake parameters.
+pub fn demo() -> (
+    format::Scene,
+    worker::grid::HexGrid,
+    format::manifest::CellParams,
+    format::manifest::BakeParams,
+) {
+    let plan = format::manifest::parse_manifest(&repo().join("manifests/demo.ron")).unwrap();
+    let scene = plan.load_scene().unwrap();
+    let grid = worker::grid::HexGrid::new(plan.ground, plan.cells.cell_size);
+    (scene, grid, plan.cells, plan.bake)
+}
