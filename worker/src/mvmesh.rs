@@ -41,7 +41,7 @@ use crate::svmesh::{
     draw_item, ms_since, projected_areas_px, tidy_selection_sized, world_vertices, MemberMesh,
     ProxyError, ProxySettings, StageTimes, StartMesh,
 };
-use crate::weights::{vertex_states_captured, VertexState, BACK_FACING_WEIGHT};
+use crate::weights::{VertexState, BACK_FACING_WEIGHT};
 use format::Scene;
 use glam::Vec3;
 use std::time::Instant;
@@ -131,10 +131,8 @@ pub fn derive_mvmesh(
             settings.t_c1,
             WindowDepth::paper(settings.cell_size),
         );
-        let states = vertex_states_captured(
-            mesh,
-            &item.mesh.triangles,
-            item.transform,
+        let states = start.vertex_states(
+            &item,
             &capture.capture,
             &classes,
             instance,

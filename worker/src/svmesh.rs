@@ -160,6 +160,28 @@ impl<'a> StartMesh<'a> {
     }
 
     /// The selected triangles and their carried lists, in mesh order.
+    /// The state of every vertex in `capture`, a capture of `item` (the full model
+    /// drawn as `object_id`): [`vertex_states_captured`] of this start mesh against
+    /// the captured mesh's triangles.
+    pub(crate) fn vertex_states(
+        &self,
+        item: &DrawItem,
+        capture: &crate::raster::Capture,
+        classes: &[crate::classify::PixelClass],
+        object_id: u32,
+        tolerance: DepthTolerance,
+    ) -> Vec<VertexState> {
+        vertex_states_captured(
+            self.mesh,
+            &item.mesh.triangles,
+            item.transform,
+            capture,
+            classes,
+            object_id,
+            tolerance,
+        )
+    }
+
     pub(crate) fn select(&self, selected: &[bool]) -> (Vec<[u32; 3]>, Option<Vec<Vec<u32>>>) {
         let picked = || (0..self.mesh.triangles.len()).filter(|&t| selected[t]);
         let triangles = picked().map(|t| self.mesh.triangles[t]).collect();
@@ -330,10 +352,8 @@ pub fn derive_svmesh(
         let t = Instant::now();
         let start = StartMesh::of(scene, chains, item, settings);
         let mesh = start.mesh;
-        let states = vertex_states_captured(
-            mesh,
-            &item.mesh.triangles,
-            item.transform,
+        let states = start.vertex_states(
+            item,
             &capture.capture,
             &classes,
             item.object_id,
