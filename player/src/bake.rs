@@ -66,7 +66,8 @@ pub struct Bake {
     /// Distance that covers the whole ground (far plane).
     pub extent: f32,
     /// Patch data for drawing originals patch by patch (issue 17); `None` without
-    /// it or with both tests switched off ([`crate::patches::tests_from_env`]).
+    /// it or with every test switched off ([`crate::patches::tests_from_env`],
+    /// [`crate::patches::frustum_test_from_env`]).
     pub patches: Option<crate::patches::PatchRuntime>,
 }
 
@@ -125,7 +126,11 @@ impl Bake {
         } else {
             (scene.max - scene.min).length()
         };
-        let patches = crate::patches::PatchRuntime::new(&base, crate::patches::tests_from_env());
+        let patches = crate::patches::PatchRuntime::new(
+            &base,
+            crate::patches::tests_from_env(),
+            crate::patches::frustum_test_from_env(),
+        );
         Bake {
             patches,
             dir: dir.to_path_buf(),

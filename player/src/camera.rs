@@ -165,6 +165,16 @@ impl Frustum {
         })
     }
 
+    /// The same frustum in the object space of an instance placed by
+    /// `world_from_object` (a plane `q` becomes `Mᵀ q`: `q·(M x) = (Mᵀ q)·x`), so
+    /// object-space boxes can be tested without transforming them.
+    pub fn in_object_space(&self, world_from_object: &Mat4) -> Frustum {
+        let t = world_from_object.transpose();
+        Frustum {
+            planes: self.planes.map(|q| t * q),
+        }
+    }
+
     pub fn contains_point(&self, p: Vec3) -> bool {
         self.planes.iter().all(|q| q.truncate().dot(p) + q.w >= 0.0)
     }

@@ -194,7 +194,10 @@ fn cell_list<'a>(
         proxies,
         lit_proxies,
         patched: Vec::new(),
-        cull_eye: Some(camera.eye),
+        cull: Some(crate::patches::CullView {
+            eye: camera.eye,
+            frustum: f,
+        }),
     };
     // Issue 17: the originals' visible patches only (bitfields and normal cones).
     if let Some(runtime) = &bake.patches {
@@ -202,7 +205,7 @@ fn cell_list<'a>(
             runtime,
             &bake.base,
             &shown,
-            camera.eye,
+            (camera.eye, &f),
             &bake.instances,
             &mut list,
         );
@@ -236,10 +239,20 @@ fn stand_ins_for<'a>(
     chosen
 }
 
-/// Triangles and texture bytes a draw list submits.
-pub fn list_stats(list: &DrawList<'_>, models: &GpuModels) -> (u64, u64) {
-    (
-        list.triangle_count(models),
-        list.proxies.iter().map(|p| p.texture_bytes).sum(),
-    )
+/// What a draw list submits.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ListStats {
+    pub triangles: u64,
+    /// Texture bytes of the proxies drawn.
+    pub texture_bytes: u64,
+    pub draw_calls: u64,
+}
+
+/// Triangles, texture bytes and draw calls a draw list submits.
+pub fn list_stats(list: &DrawList<'_>, models: &GpuModels) -> ListStats {
+    ListStats {
+        triangles: list.triangle_count(models),
+        texture_bytes: list.proxies.iter().map(|p| p.texture_bytes).sum(),
+        draw_calls: list.draw_calls(models),
+    }
 }

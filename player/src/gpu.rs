@@ -143,15 +143,16 @@ impl GpuProxy {
         self.vertex_count as u64 / 3
     }
 
-    /// The vertex ranges to draw from `eye`: clusters wholly back-facing to it are
-    /// left out (issue 17); everything when `eye` is `None`.
-    pub fn ranges(&self, eye: Option<Vec3>) -> Vec<(u32, u32)> {
-        crate::patches::proxy_ranges(&self.clusters, self.vertex_count, eye)
+    /// The vertex ranges to draw from `view`: clusters wholly back-facing to its eye
+    /// or outside its frustum are left out (issue 17); everything when `view` is
+    /// `None`.
+    pub fn ranges(&self, view: Option<&crate::patches::CullView>) -> Vec<(u32, u32)> {
+        crate::patches::proxy_ranges(&self.clusters, self.vertex_count, view)
     }
 
     /// Triangles [`GpuProxy::ranges`] draws.
-    pub fn triangles_from(&self, eye: Option<Vec3>) -> u64 {
-        self.ranges(eye)
+    pub fn triangles_from(&self, view: Option<&crate::patches::CullView>) -> u64 {
+        self.ranges(view)
             .iter()
             .map(|(a, b)| (b - a) as u64 / 3)
             .sum()
@@ -175,9 +176,9 @@ pub struct DrawList<'a> {
     pub lit_proxies: Vec<&'a GpuProxy>,
     /// Originals drawn patch by patch (issue 17, [`crate::patches`]).
     pub patched: Vec<PatchedDraw>,
-    /// The eye the proxies' normal clusters are tested against (issue 17); `None`
-    /// draws every proxy triangle.
-    pub cull_eye: Option<Vec3>,
+    /// The view the proxies' clusters are tested against (issue 17); `None` draws
+    /// every proxy triangle.
+    pub cull: Option<crate::patches::CullView>,
 }
 
 /// One original drawn as the index ranges of its visible patches.
@@ -191,6 +192,63 @@ pub struct PatchedDraw {
 }
 
 impl DrawList<'_> {
+    /// Draw calls [`Renderer::render`] submits for this list: the ground, one per
+    /// non-empty instanced group, one per index range of a patched original and
+    /// one per vertex range of a proxy.
+    pub fn draw_calls(&self, models: &GpuModels) -> u64 {
+        let group = |m: u32, n: usize| {
+            u64::from(
+                n > 0
+                    && models
+                        .models
+                        .get(m as usize)
+                        .is_some_and(|g| g.index_count > 0),
+            )
+        };
+        let proxies: u64 = self
+            .proxies
+            .iter()
+            .filter(|p| p.bind_group.is_some())
+            .chain(&self.lit_proxies)
+            .filter(|p| p.vertex_count > 0)
+            .map(|p| p.ranges(self.cull.as_ref()).len() as u64)
+            .sum();
+        1 + self
+            .originals
+            .iter()
+            .map(|(m, i)| group(*m, i.len()))
+            .sum::<u64>()
+            + self
+                .levels
+                .iter()
+                .filter(|((m, l), i)| {
+                    let Some(model) = models.models.get(*m as usize) else {
+                        return false;
+                    };
+                    let count = match *l {
+                        0 => model.index_count,
+                        l => model
+                            .lods
+                            .get(l as usize - 1)
+                            .map_or(model.index_count, |g| g.index_count),
+                    };
+                    count > 0 && !i.is_empty()
+                })
+                .count() as u64
+            + self
+                .patched
+                .iter()
+                .filter(|p| {
+                    models
+                        .models
+                        .get(p.model as usize)
+                        .is_some_and(|g| g.patch_ordered)
+                })
+                .map(|p| p.ranges.len() as u64)
+                .sum::<u64>()
+            + proxies
+    }
+
     pub fn triangle_count(&self, models: &GpuModels) -> u64 {
         let o: u64 = self
             .originals
@@ -219,7 +277,7 @@ impl DrawList<'_> {
                 .proxies
                 .iter()
                 .chain(&self.lit_proxies)
-                .map(|p| p.triangles_from(self.cull_eye))
+                .map(|p| p.triangles_from(self.cull.as_ref()))
                 .sum::<u64>()
     }
 }
@@ -228,6 +286,9 @@ impl DrawList<'_> {
 pub struct Renderer {
     pub device: wgpu::Device,
     pub queue: wgpu::Queue,
+    /// Draw calls the last [`Renderer::render`] issued (what
+    /// [`DrawList::draw_calls`] predicts).
+    pub last_draw_calls: u64,
     adapter: AdapterSummary,
     width: u32,
     height: u32,
@@ -346,6 +407,7 @@ impl Renderer {
         Ok(Renderer {
             device,
             queue,
+            last_draw_calls: 0,
             adapter,
             width,
             height,
@@ -440,93 +502,93 @@ impl Renderer {
 
     /// Uploads every model of the base pack once.
     pub fn upload_models(&self, base: &BasePack) -> GpuModels {
-        let models = base
-            .models
-            .iter()
-            .enumerate()
-            .map(|(model_index, m)| {
-                let mesh = &m.mesh;
-                let uvs = m.albedo_map.as_ref().map(|a| &a.uvs);
-                let verts: Vec<ModelVertex> = (0..mesh.positions.len())
-                    .map(|i| ModelVertex {
-                        pos: mesh.positions[i],
-                        normal: mesh.normals[i],
-                        albedo: mesh.albedo[i],
-                        uv: uvs.and_then(|u| u.get(i)).copied().unwrap_or([0.0; 2]),
-                    })
-                    .collect();
-                // The albedo texture (issue 18); too large for the adapter: untextured.
-                let max = self.device.limits().max_texture_dimension_2d;
-                let albedo = match &m.albedo_map {
-                    Some(a)
-                        if a.texture.validate().is_ok()
-                            && a.texture.width <= max
-                            && a.texture.height <= max =>
-                    {
-                        albedo_bind_group(
-                            &self.device,
-                            &self.queue,
-                            &self.albedo_bgl,
-                            &m.name,
-                            (a.texture.width, a.texture.height),
-                            &a.texture.rgba,
-                            a.texture.wrap,
-                        )
-                    }
-                    Some(a) => {
-                        eprintln!(
-                            "player: warning: model {}: albedo texture {}x{} not uploadable \
+        let models =
+            base.models
+                .iter()
+                .enumerate()
+                .map(|(model_index, m)| {
+                    let mesh = &m.mesh;
+                    let uvs = m.albedo_map.as_ref().map(|a| &a.uvs);
+                    let verts: Vec<ModelVertex> = (0..mesh.positions.len())
+                        .map(|i| ModelVertex {
+                            pos: mesh.positions[i],
+                            normal: mesh.normals[i],
+                            albedo: mesh.albedo[i],
+                            uv: uvs.and_then(|u| u.get(i)).copied().unwrap_or([0.0; 2]),
+                        })
+                        .collect();
+                    // The albedo texture (issue 18); too large for the adapter: untextured.
+                    let max = self.device.limits().max_texture_dimension_2d;
+                    let albedo = match &m.albedo_map {
+                        Some(a)
+                            if a.texture.validate().is_ok()
+                                && a.texture.width <= max
+                                && a.texture.height <= max =>
+                        {
+                            albedo_bind_group(
+                                &self.device,
+                                &self.queue,
+                                &self.albedo_bgl,
+                                &m.name,
+                                (a.texture.width, a.texture.height),
+                                &a.texture.rgba,
+                                a.texture.wrap,
+                            )
+                        }
+                        Some(a) => {
+                            eprintln!(
+                                "player: warning: model {}: albedo texture {}x{} not uploadable \
                              (max side {max}); drawn with its vertex colours",
-                            m.name, a.texture.width, a.texture.height
-                        );
-                        self.white_albedo.clone()
+                                m.name, a.texture.width, a.texture.height
+                            );
+                            self.white_albedo.clone()
+                        }
+                        None => self.white_albedo.clone(),
+                    };
+                    // wgpu refuses zero-sized vertex buffers with a binding; keep one vertex.
+                    let verts = if verts.is_empty() {
+                        vec![ModelVertex::zeroed()]
+                    } else {
+                        verts
+                    };
+                    // With patch data (issue 17) the triangles are uploaded grouped by
+                    // patch and tile (`patches::refine_patches`), for every mode alike:
+                    // the full-geometry reference and the hybrid then rasterize
+                    // surviving triangles in the same order, so equal-depth ties
+                    // resolve the same way in both.
+                    let order = base.patches.as_ref().map(|set| {
+                        crate::patches::refine_patches(&set.models[model_index], mesh).0
+                    });
+                    let mut idx: Vec<u32> = match &order {
+                        Some(order) => order
+                            .iter()
+                            .flat_map(|&t| mesh.triangles[t as usize])
+                            .collect(),
+                        None => mesh.triangles.iter().flatten().copied().collect(),
+                    };
+                    let index_count = idx.len() as u32;
+                    if idx.is_empty() {
+                        idx = vec![0; 3];
                     }
-                    None => self.white_albedo.clone(),
-                };
-                // wgpu refuses zero-sized vertex buffers with a binding; keep one vertex.
-                let verts = if verts.is_empty() {
-                    vec![ModelVertex::zeroed()]
-                } else {
-                    verts
-                };
-                // With patch data (issue 17) the triangles are uploaded grouped by
-                // patch, for every mode alike: the full-geometry reference and the
-                // hybrid then rasterize surviving triangles in the same order, so
-                // equal-depth ties resolve the same way in both.
-                let order = base
-                    .patches
-                    .as_ref()
-                    .map(|set| &set.models[model_index].triangle_order);
-                let mut idx: Vec<u32> = match order {
-                    Some(order) => order
-                        .iter()
-                        .flat_map(|&t| mesh.triangles[t as usize])
-                        .collect(),
-                    None => mesh.triangles.iter().flatten().copied().collect(),
-                };
-                let index_count = idx.len() as u32;
-                if idx.is_empty() {
-                    idx = vec![0; 3];
-                }
-                GpuModel {
-                    vertices: self.buffer_init(
-                        &m.name,
-                        bytemuck::cast_slice(&verts),
-                        wgpu::BufferUsages::VERTEX,
-                    ),
-                    indices: self.buffer_init(
-                        &m.name,
-                        bytemuck::cast_slice(&idx),
-                        wgpu::BufferUsages::INDEX,
-                    ),
-                    index_count,
-                    triangle_count: mesh.triangles.len() as u64,
-                    lods: Vec::new(),
-                    albedo,
-                    patch_ordered: order.is_some(),
-                }
-            })
-            .collect();
+                    GpuModel {
+                        vertices: self.buffer_init(
+                            &m.name,
+                            bytemuck::cast_slice(&verts),
+                            wgpu::BufferUsages::VERTEX,
+                        ),
+                        indices: self.buffer_init(
+                            &m.name,
+                            bytemuck::cast_slice(&idx),
+                            wgpu::BufferUsages::INDEX,
+                        ),
+                        index_count,
+                        triangle_count: mesh.triangles.len() as u64,
+                        lods: Vec::new(),
+                        albedo,
+                        patch_ordered: order.is_some(),
+                    }
+                })
+                .collect();
         // The ground rectangle, world space, drawn with an identity instance.
         let g = &base.grid;
         let ground_mesh = format::scene::Ground {
@@ -861,6 +923,7 @@ impl Renderer {
         let mut enc = self
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+        let mut draws = 0u64;
         {
             let sky = |c: u8| srgb_to_linear(c);
             let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
@@ -898,6 +961,7 @@ impl Renderer {
             pass.set_vertex_buffer(0, models.ground.slice(..));
             pass.set_vertex_buffer(1, self.instances.slice(..));
             pass.draw(0..6, ground_instance..ground_instance + 1);
+            draws += 1;
             pass.set_pipeline(&self.lit_pipeline);
             let mut first = 0u32;
             for (m, inst) in &list.originals {
@@ -909,6 +973,7 @@ impl Renderer {
                     pass.set_vertex_buffer(1, self.instances.slice(..));
                     pass.set_index_buffer(model.indices.slice(..), wgpu::IndexFormat::Uint32);
                     pass.draw_indexed(0..model.index_count, 0, first..first + n);
+                    draws += 1;
                 }
                 first += n;
             }
@@ -928,6 +993,7 @@ impl Renderer {
                     pass.set_vertex_buffer(1, self.instances.slice(..));
                     pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
                     pass.draw_indexed(0..count, 0, first..first + n);
+                    draws += 1;
                 }
                 first += n;
             }
@@ -940,6 +1006,7 @@ impl Renderer {
                     pass.set_index_buffer(model.indices.slice(..), wgpu::IndexFormat::Uint32);
                     for &(a, b) in &p.ranges {
                         pass.draw_indexed(a..b, 0, first..first + 1);
+                        draws += 1;
                     }
                 }
                 first += 1;
@@ -966,8 +1033,9 @@ impl Renderer {
                     pipeline_for(&mut pass, p);
                     pass.set_bind_group(1, Some(bg), &[]);
                     pass.set_vertex_buffer(0, p.vertices.slice(..));
-                    for (a, b) in p.ranges(list.cull_eye) {
+                    for (a, b) in p.ranges(list.cull.as_ref()) {
                         pass.draw(a..b, 0..1);
+                        draws += 1;
                     }
                 }
             }
@@ -978,11 +1046,13 @@ impl Renderer {
                 pipeline_for(&mut pass, p);
                 pass.set_bind_group(1, Some(&p.lit_bind_group), &[]);
                 pass.set_vertex_buffer(0, p.vertices.slice(..));
-                for (a, b) in p.ranges(list.cull_eye) {
+                for (a, b) in p.ranges(list.cull.as_ref()) {
                     pass.draw(a..b, 0..1);
+                    draws += 1;
                 }
             }
         }
+        self.last_draw_calls = draws;
         let t0 = Instant::now();
         let idx = self.queue.submit([enc.finish()]);
         let _ = self.device.poll(wgpu::PollType::Wait {

@@ -3,27 +3,43 @@
 //! bitfields (paper 002 §3.3) and the per-patch normal-cone back-face test (003
 //! §4.1; Zhang & Hoff's normal masks at patch granularity), both from
 //! [`format::patch_visibility::select_patches`], turn into a few index ranges of the
-//! model's patch-ordered index buffer.
+//! model's patch-ordered index buffer. At load time each patch is further split
+//! into spatial tiles of at most [`cluster_triangles`] ([`refine_patches`]; the index
+//! buffer is uploaded in that order), and a tile is drawn only when its own normal
+//! cone is not wholly back-facing and its object-space box meets the view frustum
+//! carried into the instance's object space (000's run-time step (3), view-frustum
+//! culling, at tile rather than object granularity). The cone and frustum tests are
+//! conservative; only the bitfields are not (002 §4).
 //!
 //! Switches for measurements (environment, read once per process):
 //! `HEXBAKE_PATCH_BITFIELDS=0` turns the bitfields off, `HEXBAKE_PATCH_BACKFACE=0` the
-//! back-face test; with both off the originals are drawn whole as before.
+//! back-face test, `HEXBAKE_PATCH_FRUSTUM=0` the per-patch frustum test (instances
+//! are still culled whole); with all three off the originals are drawn whole.
 
+use crate::camera::{Aabb, Frustum};
 use crate::gpu::{DrawList, PatchedDraw};
 use crate::vertex::InstanceRaw;
 use format::pack::BasePack;
 use format::patch_visibility::{
-    select_patches, ModelPatchView, PatchBounds, PatchTests, SamplingSphere,
+    patch_backfacing, select_patches, ModelPatchView, PatchBounds, PatchTests, SamplingSphere,
 };
 use glam::{Mat4, Vec3};
 
-/// Which tests the environment leaves on (both unless set to `0`).
+fn env_on(name: &str) -> bool {
+    std::env::var(name).map_or(true, |v| v.trim() != "0")
+}
+
+/// Which of the bake-data tests the environment leaves on (both unless set to `0`).
 pub fn tests_from_env() -> PatchTests {
-    let on = |name: &str| std::env::var(name).map_or(true, |v| v.trim() != "0");
     PatchTests {
-        bitfields: on("HEXBAKE_PATCH_BITFIELDS"),
-        backface: on("HEXBAKE_PATCH_BACKFACE"),
+        bitfields: env_on("HEXBAKE_PATCH_BITFIELDS"),
+        backface: env_on("HEXBAKE_PATCH_BACKFACE"),
     }
+}
+
+/// Whether the per-patch frustum test is on (`HEXBAKE_PATCH_FRUSTUM`, on unless `0`).
+pub fn frustum_test_from_env() -> bool {
+    env_on("HEXBAKE_PATCH_FRUSTUM")
 }
 
 /// One model's patch data in the form the per-frame test wants.
@@ -32,8 +48,22 @@ pub struct ModelRuntime {
     radius: f32,
     bounds: Vec<PatchBounds>,
     samples: Vec<u32>,
-    /// Per patch its first index in the patch-ordered index buffer, plus the end.
-    pub index_first: Vec<u32>,
+    /// The patches' spatial tiles in index-buffer order.
+    tiles: Vec<Tile>,
+}
+
+/// A run of a patch's triangles in the model's refined index buffer
+/// ([`refine_patches`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Tile {
+    pub patch: u32,
+    /// First index and end in the index buffer.
+    pub first: u32,
+    pub end: u32,
+    /// Normal cone and plane offset of the tile's triangles (object space).
+    pub bounds: PatchBounds,
+    /// Object-space box of the tile's corners.
+    pub aabb: Aabb,
 }
 
 /// The patch data of a bake (from `base.pack`'s optional sections).
@@ -42,49 +72,43 @@ pub struct PatchRuntime {
     shells: Vec<f32>,
     words: usize,
     pub models: Vec<ModelRuntime>,
-    /// Per instance: world → object transform, and whether it mirrors (then the
-    /// back-face test is skipped: the winding flips).
-    inverse: Vec<(Mat4, bool)>,
+    /// Per instance: object → world and world → object transforms, and whether it
+    /// mirrors (then the back-face test is skipped: the winding flips).
+    placement: Vec<(Mat4, Mat4, bool)>,
     pub tests: PatchTests,
+    /// Whether patches outside the view frustum are dropped.
+    pub frustum_test: bool,
 }
 
 impl PatchRuntime {
-    /// `None` when the base pack has no patch data or both tests are off.
-    pub fn new(base: &BasePack, tests: PatchTests) -> Option<PatchRuntime> {
+    /// `None` when the base pack has no patch data or every test is off.
+    pub fn new(base: &BasePack, tests: PatchTests, frustum_test: bool) -> Option<PatchRuntime> {
         let set = base.patches.as_ref()?;
-        if !tests.bitfields && !tests.backface {
+        if !tests.bitfields && !tests.backface && !frustum_test {
             return None;
         }
         let models = set
             .models
             .iter()
-            .map(|m| {
-                let mut index_first = Vec::with_capacity(m.patches.len() + 1);
-                let mut first = 0u32;
-                for p in &m.patches {
-                    index_first.push(first);
-                    first += 3 * p.triangle_count;
-                }
-                index_first.push(first);
-                ModelRuntime {
-                    centre: Vec3::from(m.centre),
-                    radius: m.radius,
-                    bounds: m.patches.iter().map(|p| p.bounds).collect(),
-                    samples: m
-                        .patches
-                        .iter()
-                        .flat_map(|p| p.samples.iter().copied())
-                        .collect(),
-                    index_first,
-                }
+            .zip(&base.models)
+            .map(|(m, model)| ModelRuntime {
+                centre: Vec3::from(m.centre),
+                radius: m.radius,
+                bounds: m.patches.iter().map(|p| p.bounds).collect(),
+                samples: m
+                    .patches
+                    .iter()
+                    .flat_map(|p| p.samples.iter().copied())
+                    .collect(),
+                tiles: refine_patches(m, &model.mesh).1,
             })
             .collect();
-        let inverse = base
+        let placement = base
             .instances
             .iter()
             .map(|i| {
                 let t = Mat4::from_cols_array(&i.transform);
-                (t.inverse(), t.determinant() < 0.0)
+                (t, t.inverse(), t.determinant() < 0.0)
             })
             .collect();
         Some(PatchRuntime {
@@ -92,22 +116,25 @@ impl PatchRuntime {
             shells: set.shell_radius.clone(),
             words: set.words_per_patch(),
             models,
-            inverse,
+            placement,
             tests,
+            frustum_test,
         })
     }
 
     /// The index ranges of instance `instance` (of model `model`) to draw from `eye`
-    /// (world), merged where patches are adjacent; and the triangles they hold.
+    /// (world) with view frustum `frustum` (world), merged where patches are
+    /// adjacent; and the triangles they hold.
     pub fn ranges(
         &self,
         model: u32,
         instance: u32,
         eye: Vec3,
+        frustum: &Frustum,
         keep: &mut Vec<bool>,
     ) -> Option<(Vec<(u32, u32)>, u64)> {
         let m = self.models.get(model as usize)?;
-        let &(inv, mirrored) = self.inverse.get(instance as usize)?;
+        let &(fwd, inv, mirrored) = self.placement.get(instance as usize)?;
         let eye_obj = inv.transform_point3(eye);
         let tests = PatchTests {
             backface: self.tests.backface && !mirrored,
@@ -121,13 +148,18 @@ impl PatchRuntime {
             words: self.words,
         };
         select_patches(&view, &self.sphere, &self.shells, eye_obj, tests, keep);
+        let f = self.frustum_test.then(|| frustum.in_object_space(&fwd));
+        let eps = 1e-4 * m.radius;
         let mut ranges: Vec<(u32, u32)> = Vec::new();
         let mut indices = 0u64;
-        for (p, &k) in keep.iter().enumerate() {
-            if !k {
+        for t in &m.tiles {
+            if !keep.get(t.patch as usize).copied().unwrap_or(true)
+                || (tests.backface && patch_backfacing(&t.bounds, eye_obj, eps))
+                || f.as_ref().is_some_and(|f| !f.intersects(&t.aabb))
+            {
                 continue;
             }
-            let (a, b) = (m.index_first[p], m.index_first[p + 1]);
+            let (a, b) = (t.first, t.end);
             if a == b {
                 continue;
             }
@@ -141,14 +173,72 @@ impl PatchRuntime {
     }
 }
 
+/// The model's triangle order for upload (patch by patch as the bake wrote them,
+/// each patch's triangles reordered into spatial tiles by [`split_spatially`]) and
+/// the tiles. `mesh` is the model the patches partition; triangle or vertex indices
+/// out of range are skipped, so a bad pack cannot panic here (the reader has
+/// checked them already). Deterministic: the upload and the run-time test
+/// ([`PatchRuntime`]) call it separately and must agree.
+pub fn refine_patches(
+    m: &format::pack::patches::ModelPatches,
+    mesh: &format::Mesh,
+) -> (Vec<u32>, Vec<Tile>) {
+    let corners = |t: u32| -> Option<[Vec3; 3]> {
+        let tri = mesh.triangles.get(t as usize)?;
+        let mut c = [Vec3::ZERO; 3];
+        for (k, &v) in tri.iter().enumerate() {
+            c[k] = Vec3::from(*mesh.positions.get(v as usize)?);
+        }
+        Some(c)
+    };
+    let mut order = Vec::with_capacity(m.triangle_order.len());
+    let mut tiles = Vec::new();
+    let mut rest = &m.triangle_order[..];
+    let mut runs = Vec::new();
+    for (patch, p) in m.patches.iter().enumerate() {
+        let (mine, tail) = rest.split_at((p.triangle_count as usize).min(rest.len()));
+        rest = tail;
+        let mut members: Vec<(usize, Vec3)> = mine
+            .iter()
+            .filter_map(|&t| corners(t).map(|c| (t as usize, (c[0] + c[1] + c[2]) / 3.0)))
+            .collect();
+        runs.clear();
+        split_spatially(&mut members, &mut runs);
+        let mut left = &members[..];
+        for &len in &runs {
+            let (run, tail) = left.split_at(len);
+            left = tail;
+            let first = 3 * order.len() as u32;
+            let mut aabb = Aabb::EMPTY;
+            let mut tris = Vec::with_capacity(run.len());
+            for &(t, _) in run {
+                let c = corners(t as u32).unwrap_or([Vec3::ZERO; 3]);
+                for q in c {
+                    aabb.add(q);
+                }
+                tris.push(c.map(|q| q.as_dvec3()));
+                order.push(t as u32);
+            }
+            tiles.push(Tile {
+                patch: patch as u32,
+                first,
+                end: 3 * order.len() as u32,
+                bounds: PatchBounds::of_triangles(tris.into_iter()),
+                aabb,
+            });
+        }
+    }
+    (order, tiles)
+}
+
 /// Moves every original of `list` whose model has patch data into
-/// `list.patched`, with the ranges its visible patches make from `eye`. Instances
-/// with nothing left to draw are dropped.
+/// `list.patched`, with the ranges its visible patches make from `eye` within
+/// `frustum`. Instances with nothing left to draw are dropped.
 pub fn apply(
     runtime: &PatchRuntime,
     base: &BasePack,
     ids: &[u32],
-    eye: Vec3,
+    (eye, frustum): (Vec3, &Frustum),
     instances: &[InstanceRaw],
     list: &mut DrawList<'_>,
 ) {
@@ -158,7 +248,8 @@ pub fn apply(
         let Some(inst) = base.instances.get(i as usize) else {
             continue;
         };
-        let Some((ranges, triangles)) = runtime.ranges(inst.model, i, eye, &mut keep) else {
+        let Some((ranges, triangles)) = runtime.ranges(inst.model, i, eye, frustum, &mut keep)
+        else {
             continue;
         };
         moved.insert(i);
@@ -193,12 +284,16 @@ pub fn apply(
     list.originals = by_model.into_iter().collect();
 }
 
-/// A run of a proxy's (de-indexed, world-space) triangles in one normal cluster, with
-/// the bounds of [`format::patch_visibility::patch_backfacing`] (issue 17 item 4
-/// applied to proxies too: 003 §4.1's normal clusters, formed at load time).
+/// A run of a proxy's (de-indexed, world-space) triangles in one normal cluster and
+/// one spatial tile of it, with the bounds of
+/// [`format::patch_visibility::patch_backfacing`] (issue 17 item 4 applied to proxies
+/// too: 003 §4.1's normal clusters, formed at load time) and its box for the
+/// per-cluster frustum test.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ProxyCluster {
     pub bounds: PatchBounds,
+    /// World box of the run's vertices.
+    pub aabb: Aabb,
     /// First vertex and vertex count in the proxy's vertex buffer.
     pub first: u32,
     pub count: u32,
@@ -226,9 +321,57 @@ fn cluster_of(n: Vec3) -> u8 {
     ((axis * 2 + major) << 2) | (u8::from(u < 0.0) << 1) | u8::from(v < 0.0)
 }
 
-/// Reorders a proxy's triangles by normal cluster (stable within a cluster) and
-/// returns the clusters with their normal cones. Every mode draws the reordered
-/// buffer, so switching the test off changes nothing but the culling.
+/// Most triangles in one proxy cluster or original tile (default): a normal cluster
+/// (or a bake patch) with more is split in halves at the median centroid along its
+/// longest axis until every piece holds at most this many. Smaller pieces cull more
+/// (tighter boxes and plane offsets) but cost a draw call each where they are not
+/// adjacent to another drawn piece. Park-4m's walk (BENCHMARKS.md, "Per-tile
+/// culling"): 256 → 32 cuts 6.5 % of the triangles for 15 % more draw calls, 32 → 16
+/// another 2.1 % for 14 % more; 32 is where a halving starts to cost more calls
+/// than it saves triangles. `HEXBAKE_CLUSTER_TRIANGLES` overrides it (measurements).
+pub const CLUSTER_TRIANGLES: usize = 32;
+
+/// [`CLUSTER_TRIANGLES`] or the environment's override (read once, at least 1).
+pub fn cluster_triangles() -> usize {
+    static N: std::sync::OnceLock<usize> = std::sync::OnceLock::new();
+    *N.get_or_init(|| {
+        std::env::var("HEXBAKE_CLUSTER_TRIANGLES")
+            .ok()
+            .and_then(|v| v.trim().parse::<usize>().ok())
+            .map_or(CLUSTER_TRIANGLES, |n| n.max(1))
+    })
+}
+
+/// Splits `tris` (triangle ids with their centroids) in place into runs of at most
+/// [`cluster_triangles`], median-splitting along the longest centroid axis
+/// (ties by id, so the order is deterministic); returns the run lengths in order.
+fn split_spatially(tris: &mut [(usize, Vec3)], out: &mut Vec<usize>) {
+    if tris.len() <= cluster_triangles() {
+        out.push(tris.len());
+        return;
+    }
+    let mut b = Aabb::EMPTY;
+    for &(_, c) in tris.iter() {
+        b.add(c);
+    }
+    let ext = b.max - b.min;
+    let axis = if ext.x >= ext.y && ext.x >= ext.z {
+        0
+    } else if ext.y >= ext.z {
+        1
+    } else {
+        2
+    };
+    tris.sort_unstable_by(|a, b| a.1[axis].total_cmp(&b.1[axis]).then(a.0.cmp(&b.0)));
+    let (lo, hi) = tris.split_at_mut(tris.len() / 2);
+    split_spatially(lo, out);
+    split_spatially(hi, out);
+}
+
+/// Reorders a proxy's triangles by normal cluster and, within one, by spatial tile
+/// ([`split_spatially`]), and returns the clusters with their normal cones and
+/// boxes. Every mode draws the reordered buffer, so switching the tests off changes
+/// nothing but the culling.
 pub fn cluster_proxy_vertices(
     vertices: &[crate::vertex::ProxyVertex],
 ) -> (Vec<crate::vertex::ProxyVertex>, Vec<ProxyCluster>) {
@@ -237,6 +380,8 @@ pub fn cluster_proxy_vertices(
         let [a, b, c] = [0, 1, 2].map(|k| Vec3::from(vertices[3 * t + k].pos).as_dvec3());
         (b - a).cross(c - a)
     };
+    let centroid =
+        |t: usize| (0..3).fold(Vec3::ZERO, |s, k| s + Vec3::from(vertices[3 * t + k].pos)) / 3.0;
     let mut order: Vec<(u8, usize)> = (0..tris)
         .map(|t| (cluster_of(normal(t).as_vec3()), t))
         .collect();
@@ -244,20 +389,35 @@ pub fn cluster_proxy_vertices(
     let mut out = Vec::with_capacity(vertices.len());
     let mut clusters = Vec::new();
     let mut k = 0;
+    let mut runs = Vec::new();
     while k < order.len() {
         let mut j = k;
         while j < order.len() && order[j].0 == order[k].0 {
             j += 1;
         }
-        let first = out.len() as u32;
-        for &(_, t) in &order[k..j] {
-            out.extend_from_slice(&vertices[3 * t..3 * t + 3]);
+        let mut members: Vec<(usize, Vec3)> =
+            order[k..j].iter().map(|&(_, t)| (t, centroid(t))).collect();
+        runs.clear();
+        split_spatially(&mut members, &mut runs);
+        let mut rest = &members[..];
+        for &len in &runs {
+            let (run, tail) = rest.split_at(len);
+            rest = tail;
+            let first = out.len() as u32;
+            let mut aabb = Aabb::EMPTY;
+            for &(t, _) in run {
+                for v in &vertices[3 * t..3 * t + 3] {
+                    aabb.add(Vec3::from(v.pos));
+                }
+                out.extend_from_slice(&vertices[3 * t..3 * t + 3]);
+            }
+            clusters.push(ProxyCluster {
+                bounds: cone_of(&out[first as usize..]),
+                aabb,
+                first,
+                count: out.len() as u32 - first,
+            });
         }
-        clusters.push(ProxyCluster {
-            bounds: cone_of(&out[first as usize..]),
-            first,
-            count: out.len() as u32 - first,
-        });
         k = j;
     }
     out.extend_from_slice(&vertices[3 * tris..]);
@@ -273,20 +433,40 @@ fn cone_of(v: &[crate::vertex::ProxyVertex]) -> PatchBounds {
     )
 }
 
-/// The vertex ranges of a proxy to draw from `eye` (world): its clusters that are
-/// not wholly back-facing, adjacent ones merged; everything without clusters.
+/// Whether the per-cluster frustum test of proxies is on (`HEXBAKE_PATCH_FRUSTUM`,
+/// read once).
+pub fn proxy_frustum_on() -> bool {
+    static ON: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+    *ON.get_or_init(frustum_test_from_env)
+}
+
+/// The view the proxies' clusters are tested against: the eye (back faces) and the
+/// frustum (world).
+#[derive(Clone, Copy, Debug)]
+pub struct CullView {
+    pub eye: Vec3,
+    pub frustum: Frustum,
+}
+
+/// The vertex ranges of a proxy to draw from `view`: its clusters that are neither
+/// wholly back-facing nor outside the frustum, adjacent ones merged; everything
+/// without clusters or without a view.
 pub fn proxy_ranges(
     clusters: &[ProxyCluster],
     vertex_count: u32,
-    eye: Option<Vec3>,
+    view: Option<&CullView>,
 ) -> Vec<(u32, u32)> {
-    let (Some(eye), true) = (eye, proxy_backface_on() && !clusters.is_empty()) else {
+    let (backface, frustum) = (proxy_backface_on(), proxy_frustum_on());
+    let (Some(view), true) = (view, (backface || frustum) && !clusters.is_empty()) else {
         return vec![(0, vertex_count)];
     };
     let mut ranges: Vec<(u32, u32)> = Vec::new();
     for c in clusters {
         let eps = 1e-5 * (1.0 + Vec3::from(c.bounds.centre).length());
-        if format::patch_visibility::patch_backfacing(&c.bounds, eye, eps) {
+        if backface && format::patch_visibility::patch_backfacing(&c.bounds, view.eye, eps) {
+            continue;
+        }
+        if frustum && !view.frustum.intersects(&c.aabb) {
             continue;
         }
         let (a, b) = (c.first, c.first + c.count);
@@ -303,6 +483,156 @@ mod tests {
     use super::*;
     use crate::vertex::ProxyVertex;
     use bytemuck::Zeroable;
+    use glam::Mat4;
+
+    /// A frustum holding the box [-1000, 1000]³.
+    fn everything() -> Frustum {
+        Frustum::from_clip_gl(Mat4::from_scale(Vec3::splat(1e-3)))
+    }
+
+    /// A seeded generator of floats in [lo, hi).
+    fn rng(seed: u64) -> impl FnMut(f32, f32) -> f32 {
+        let mut s = seed;
+        move |lo, hi| {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            lo + (hi - lo) * ((s >> 40) as f32 / (1u64 << 24) as f32)
+        }
+    }
+
+    /// A bumpy n × n height field (2n² triangles) on [0, 10]², as a model mesh.
+    fn terrain(n: u32) -> format::Mesh {
+        let mut positions = Vec::new();
+        for j in 0..=n {
+            for i in 0..=n {
+                let (x, y) = (10.0 * i as f32 / n as f32, 10.0 * j as f32 / n as f32);
+                positions.push([x, y, (x * 1.3).sin() * (y * 0.7).cos()]);
+            }
+        }
+        let v = |i: u32, j: u32| j * (n + 1) + i;
+        let mut triangles = Vec::new();
+        for j in 0..n {
+            for i in 0..n {
+                triangles.push([v(i, j), v(i + 1, j), v(i + 1, j + 1)]);
+                triangles.push([v(i, j), v(i + 1, j + 1), v(i, j + 1)]);
+            }
+        }
+        format::Mesh {
+            normals: vec![[0.0, 0.0, 1.0]; positions.len()],
+            albedo: vec![[200; 4]; positions.len()],
+            positions,
+            triangles,
+        }
+    }
+
+    /// Patches of 700, 33 and the rest of `mesh`'s triangles in reversed order.
+    fn uneven_patches(mesh: &format::Mesh) -> format::pack::patches::ModelPatches {
+        let n = mesh.triangles.len() as u32;
+        let patch = |count: u32| format::pack::patches::ModelPatch {
+            triangle_count: count,
+            bounds: PatchBounds {
+                cone_axis: [0.0, 0.0, 1.0],
+                cone_cos: -1.0,
+                centre: [5.0, 5.0, 0.0],
+                offset: 0.0,
+            },
+            samples: Vec::new(),
+        };
+        format::pack::patches::ModelPatches {
+            centre: [5.0, 5.0, 0.0],
+            radius: 8.0,
+            patches: vec![patch(700), patch(33), patch(n - 733)],
+            triangle_order: (0..n).rev().collect(),
+        }
+    }
+
+    #[test]
+    fn tiles_split_each_patch_into_small_runs_of_its_own_triangles() {
+        let mesh = terrain(30);
+        let m = uneven_patches(&mesh);
+        let (order, tiles) = refine_patches(&m, &mesh);
+        // The order is a permutation that keeps every patch's triangles together.
+        let mut sorted = order.clone();
+        sorted.sort_unstable();
+        assert_eq!(sorted, (0..mesh.triangles.len() as u32).collect::<Vec<_>>());
+        let mut start = 0usize;
+        for (p, patch) in m.patches.iter().enumerate() {
+            let end = start + patch.triangle_count as usize;
+            let mut a: Vec<u32> = order[start..end].to_vec();
+            let mut b: Vec<u32> = m.triangle_order[start..end].to_vec();
+            a.sort_unstable();
+            b.sort_unstable();
+            assert_eq!(a, b, "patch {p}");
+            // Its tiles cover exactly its index range, each within the size.
+            let mine: Vec<&Tile> = tiles.iter().filter(|t| t.patch == p as u32).collect();
+            assert_eq!(mine.first().unwrap().first, 3 * start as u32);
+            assert_eq!(mine.last().unwrap().end, 3 * end as u32);
+            for w in mine.windows(2) {
+                assert_eq!(w[0].end, w[1].first);
+            }
+            for t in &mine {
+                assert!(t.end > t.first && (t.end - t.first) as usize <= 3 * cluster_triangles());
+                for &tri in &order[t.first as usize / 3..t.end as usize / 3] {
+                    for &v in &mesh.triangles[tri as usize] {
+                        let q = Vec3::from(mesh.positions[v as usize]);
+                        assert!(q.cmpge(t.aabb.min).all() && q.cmple(t.aabb.max).all());
+                    }
+                }
+            }
+            start = end;
+        }
+        // Deterministic: the upload and the run-time test call it separately.
+        assert_eq!(refine_patches(&m, &mesh), (order, tiles));
+    }
+
+    #[test]
+    fn object_space_frustum_keeps_every_tile_with_a_corner_in_view() {
+        let mesh = terrain(24);
+        let m = uneven_patches(&mesh);
+        let (order, tiles) = refine_patches(&m, &mesh);
+        let mut r = rng(17);
+        let (mut culled, mut total) = (0usize, 0usize);
+        for _ in 0..200 {
+            let place = Mat4::from_scale_rotation_translation(
+                Vec3::new(r(0.5, 3.0), r(0.5, 3.0), r(0.5, 3.0)),
+                glam::Quat::from_euler(
+                    glam::EulerRot::XYZ,
+                    r(-3.0, 3.0),
+                    r(-3.0, 3.0),
+                    r(-3.0, 3.0),
+                ),
+                Vec3::new(r(-20.0, 20.0), r(-20.0, 20.0), r(-5.0, 5.0)),
+            );
+            let cam = crate::camera::Camera {
+                eye: Vec3::new(r(-30.0, 30.0), r(-30.0, 30.0), r(-10.0, 10.0)),
+                dir: Vec3::new(r(-1.0, 1.0), r(-1.0, 1.0), r(-0.5, 0.5)).normalize_or(Vec3::X),
+                fov_y_deg: r(30.0, 90.0),
+                width: 64,
+                height: 48,
+                near: 0.25,
+                far: r(5.0, 100.0),
+            };
+            let world = cam.frustum();
+            let object = world.in_object_space(&place);
+            for t in &tiles {
+                total += 1;
+                if object.intersects(&t.aabb) {
+                    continue;
+                }
+                culled += 1;
+                for &tri in &order[t.first as usize / 3..t.end as usize / 3] {
+                    for &v in &mesh.triangles[tri as usize] {
+                        let q = place.transform_point3(Vec3::from(mesh.positions[v as usize]));
+                        let inside = world.contains_point(q);
+                        assert!(!inside, "tile {t:?} culled with corner {q:?} in view");
+                    }
+                }
+            }
+        }
+        // The test culls something, and not everything.
+        assert!(culled > total / 10 && culled < total, "{culled} of {total}");
+    }
 
     /// A closed box of 12 triangles as proxy vertices.
     fn box_vertices() -> Vec<ProxyVertex> {
@@ -347,7 +677,11 @@ mod tests {
         };
         for _ in 0..500 {
             let eye = Vec3::new(rnd(), rnd(), rnd());
-            let ranges = proxy_ranges(&clusters, ordered.len() as u32, Some(eye));
+            let view = CullView {
+                eye,
+                frustum: everything(),
+            };
+            let ranges = proxy_ranges(&clusters, ordered.len() as u32, Some(&view));
             let kept = |t: usize| {
                 ranges
                     .iter()

@@ -3,7 +3,7 @@
 
 use crate::bake::Bake;
 use crate::camera::Camera;
-use crate::frame::{hybrid_list, list_stats, lod_list, originals_list, Mode};
+use crate::frame::{hybrid_list, list_stats, lod_list, originals_list, ListStats, Mode};
 use crate::gpu::{GpuError, GpuModels, Renderer};
 use crate::lod::LodSet;
 use crate::metrics::{
@@ -75,6 +75,8 @@ pub struct FrameRecord {
     pub triangles: u64,
     /// Texture bytes of the proxies the frame draws.
     pub texture_bytes: u64,
+    /// Draw calls the frame submits ([`crate::gpu::DrawList::draw_calls`]).
+    pub draw_calls: u64,
     pub cache_hits: u64,
     pub cache_misses: u64,
     /// Render-thread streaming work this frame (demand loads, uploads), milliseconds.
@@ -94,7 +96,7 @@ impl FrameRecord {
         time_s: f32,
         stats: &crate::stream::StreamStats,
         prev: Option<Option<u32>>,
-        (frame_ms, triangles, texture_bytes): (f64, u64, u64),
+        (frame_ms, list): (f64, ListStats),
     ) -> FrameRecord {
         FrameRecord {
             frame,
@@ -102,8 +104,9 @@ impl FrameRecord {
             cell: stats.cell,
             crossing: prev.is_some_and(|p| p != stats.cell),
             frame_ms,
-            triangles,
-            texture_bytes,
+            triangles: list.triangles,
+            texture_bytes: list.texture_bytes,
+            draw_calls: list.draw_calls,
             cache_hits: stats.hits,
             cache_misses: stats.misses,
             stream_ms: stats.stream_ms,
@@ -113,12 +116,12 @@ impl FrameRecord {
     }
 }
 
-pub const CSV_HEADER: &str = "frame,time_s,cell,crossing,frame_ms,triangles,texture_bytes,cache_hits,cache_misses,stream_ms,uploaded_bytes,pending_proxies";
+pub const CSV_HEADER: &str = "frame,time_s,cell,crossing,frame_ms,triangles,texture_bytes,cache_hits,cache_misses,stream_ms,uploaded_bytes,pending_proxies,draw_calls";
 
 impl FrameRecord {
     pub fn csv(&self) -> String {
         format!(
-            "{},{:.4},{},{},{:.3},{},{},{},{},{:.3},{},{}",
+            "{},{:.4},{},{},{:.3},{},{},{},{},{:.3},{},{},{}",
             self.frame,
             self.time_s,
             self.cell.map_or(-1, |c| c as i64),
@@ -130,7 +133,8 @@ impl FrameRecord {
             self.cache_misses,
             self.stream_ms,
             self.uploaded_bytes,
-            self.pending_proxies
+            self.pending_proxies,
+            self.draw_calls
         )
     }
 }
@@ -194,35 +198,46 @@ impl Player {
         mode: Mode,
         streamer: Option<&mut Streamer>,
     ) -> (f64, u64, u64, crate::stream::StreamStats) {
+        let (ms, list, stats) = self.draw_listed(camera, mode, streamer);
+        (ms, list.triangles, list.texture_bytes, stats)
+    }
+
+    /// [`Player::draw`] with everything the list submitted (draw calls too).
+    pub fn draw_listed(
+        &mut self,
+        camera: &Camera,
+        mode: Mode,
+        streamer: Option<&mut Streamer>,
+    ) -> (f64, ListStats, crate::stream::StreamStats) {
         match (mode, streamer) {
             (Mode::Hybrid, Some(s)) => {
                 let pending = s.config().pending;
                 let (current, stats) = s.begin_frame(&self.renderer, &self.bake, camera);
                 let list = hybrid_list(&self.bake, camera, &current, pending);
-                let (tris, tex) = list_stats(&list, &self.models);
+                let stats_of_list = list_stats(&list, &self.models);
                 let ms =
                     self.renderer
                         .render_fastest(self.timing_repeats, camera, &self.models, &list);
                 s.undrawn_frames(&self.renderer, &self.bake, camera);
-                (ms, tris, tex, stats)
+                (ms, stats_of_list, stats)
             }
             (Mode::Lod, _) => {
                 self.prepare_lod();
                 let set = self.lod.as_ref().expect("prepared");
                 let list = lod_list(&self.bake, set, camera, self.lod_pixel_error);
-                let (tris, tex) = list_stats(&list, &self.models);
+                let stats_of_list = list_stats(&list, &self.models);
                 let ms =
                     self.renderer
                         .render_fastest(self.timing_repeats, camera, &self.models, &list);
-                (ms, tris, tex, self.cell_stats(camera))
+                (ms, stats_of_list, self.cell_stats(camera))
             }
             (m, _) => {
                 let list = originals_list(&self.bake, camera, m != Mode::Full);
-                let (tris, tex) = list_stats(&list, &self.models);
+                let stats_of_list = list_stats(&list, &self.models);
                 let ms =
                     self.renderer
                         .render_fastest(self.timing_repeats, camera, &self.models, &list);
-                (ms, tris, tex, self.cell_stats(camera))
+                (ms, stats_of_list, self.cell_stats(camera))
             }
         }
     }
@@ -311,13 +326,13 @@ pub fn render(
     let mut prev: Option<Option<u32>> = None;
     for (i, f) in frames.iter().enumerate() {
         let cam = camera_for(f, path, size, far);
-        let (ms, tris, tex, stats) = player.draw(&cam, opts.mode, Some(&mut streamer));
+        let (ms, list, stats) = player.draw_listed(&cam, opts.mode, Some(&mut streamer));
         if opts.png {
             let px = player.renderer.read_pixels()?;
             let p = opts.frames_dir.join(format!("{i:05}.png"));
             write_png(&p, size.0, size.1, &px)?;
         }
-        records.push(FrameRecord::new(i, f.time_s, &stats, prev, (ms, tris, tex)));
+        records.push(FrameRecord::new(i, f.time_s, &stats, prev, (ms, list)));
         prev = Some(stats.cell);
     }
     drop(streamer);
@@ -505,7 +520,7 @@ pub fn compare(
         let (ref_ms, ref_tris, _, _) = player.draw(&cam, Mode::Full, None);
         let reference = player.renderer.read_pixels()?;
         let (fr_ms, _, _, _) = player.draw(&cam, Mode::Frustum, None);
-        let (ms, tris, tex, stats) = player.draw(&cam, opts.mode, Some(&mut streamer));
+        let (ms, list, stats) = player.draw_listed(&cam, opts.mode, Some(&mut streamer));
         let hybrid = player.renderer.read_pixels()?;
         // 2. The anti-aliased reference: A at ss × ss samples, box-filtered in
         //    linear light.
@@ -539,13 +554,14 @@ pub fn compare(
             object_psnr_y_db: q.object_psnr_y_db,
             object_ssim: q.object_ssim,
             aa_reference: aa,
-            triangles: tris,
+            triangles: list.triangles,
             reference_triangles: ref_tris,
+            draw_calls: list.draw_calls,
             frame_ms: ms,
             reference_frame_ms: ref_ms,
             frustum_frame_ms: fr_ms,
         });
-        hybrid_records.push(FrameRecord::new(i, f.time_s, &stats, prev, (ms, tris, tex)));
+        hybrid_records.push(FrameRecord::new(i, f.time_s, &stats, prev, (ms, list)));
         prev = Some(stats.cell);
         // 4. The worst frames by object-pixel PSNR (frames without objects last).
         if opts.worst_dir.is_some() && opts.worst_count > 0 {
@@ -570,8 +586,8 @@ pub fn compare(
         let mut prev: Option<Option<u32>> = None;
         for (i, f) in frames.iter().enumerate() {
             let cam = camera_for(f, path, size, far);
-            let (ms, tris, tex, stats) = player.draw(&cam, Mode::Hybrid, Some(&mut s));
-            recs.push(FrameRecord::new(i, f.time_s, &stats, prev, (ms, tris, tex)));
+            let (ms, list, stats) = player.draw_listed(&cam, Mode::Hybrid, Some(&mut s));
+            recs.push(FrameRecord::new(i, f.time_s, &stats, prev, (ms, list)));
             prev = Some(stats.cell);
         }
         Some(crossing_stats(&recs))
@@ -635,6 +651,7 @@ pub fn compare(
         }),
         mean_triangles: mean(per_frame.iter().map(|f| f.triangles as f64)),
         reference_triangles: mean(per_frame.iter().map(|f| f.reference_triangles as f64)),
+        mean_draw_calls: mean(per_frame.iter().map(|f| f.draw_calls as f64)),
         frame_time_ratio: mean(per_frame.iter().map(|f| f.frame_ms))
             / mean(per_frame.iter().map(|f| f.reference_frame_ms)),
         frame_time_ratio_frustum: mean(per_frame.iter().map(|f| f.frame_ms))

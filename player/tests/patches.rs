@@ -4,7 +4,8 @@
 //! data is written here with format code only (the player never links the worker):
 //! one patch per triangle, its exact normal as a zero-width cone, every sample bit
 //! set — so the test exercises the ranges, the patch-ordered index buffers and the
-//! conservative cone test.
+//! conservative cone test; a camera close to an instance exercises the per-tile
+//! frustum test (`patches::refine_patches`).
 
 use format::pack::{BasePack, ModelPatch, ModelPatches, PatchSet};
 use format::patch_visibility::{direction_count, PatchBounds};
@@ -83,7 +84,10 @@ fn per_triangle_patches(base: &BasePack) -> PatchSet {
     }
 }
 
-fn frame(dir: &std::path::Path) -> Option<(u64, Vec<u8>, Vec<u8>)> {
+/// (hybrid triangles, hybrid frame, full frame) from a camera 3 radii in front of
+/// instance 0 (`close`: 0.6 radii, narrow, off-centre, so part of it is out of
+/// view), with the per-tile frustum test on or off.
+fn frame(dir: &std::path::Path, close: bool, frustum: bool) -> Option<(u64, Vec<u8>, Vec<u8>)> {
     let mut p = match Player::open(dir, (128, 128)) {
         Ok(p) => p,
         Err(player::run::RunError::Gpu(GpuError::NoAdapter(e))) => {
@@ -92,12 +96,20 @@ fn frame(dir: &std::path::Path) -> Option<(u64, Vec<u8>, Vec<u8>)> {
         }
         Err(e) => panic!("{e}"),
     };
+    if let Some(runtime) = p.bake.patches.as_mut() {
+        runtime.frustum_test = frustum;
+    }
     let b = p.bake.instance_bounds[0];
     let r = (b.max - b.min).length() * 0.5;
+    let (offset, fov_y_deg) = if close {
+        (Vec3::new(0.4 * r, 0.1 * r, 0.6 * r), 35.0)
+    } else {
+        (Vec3::new(0.3 * r, 0.2 * r, 3.0 * r), 60.0)
+    };
     let cam = Camera {
-        eye: b.centre() + Vec3::new(0.3 * r, 0.2 * r, 3.0 * r),
+        eye: b.centre() + offset,
         dir: Vec3::NEG_Z,
-        fov_y_deg: 60.0,
+        fov_y_deg,
         width: 128,
         height: 128,
         near: 0.25,
@@ -105,9 +117,13 @@ fn frame(dir: &std::path::Path) -> Option<(u64, Vec<u8>, Vec<u8>)> {
     };
     p.warm_up(&cam);
     let mut s = Streamer::new(&p.bake, StreamConfig::default());
-    let (_, tris, _, _) = p.draw(&cam, Mode::Hybrid, Some(&mut s));
+    let (_, list, _) = p.draw_listed(&cam, Mode::Hybrid, Some(&mut s));
+    // The draw calls counted for the report are the ones the renderer issued.
+    assert_eq!(list.draw_calls, p.renderer.last_draw_calls);
+    let tris = list.triangles;
     let hybrid = p.renderer.read_pixels().unwrap();
-    p.draw(&cam, Mode::Full, None);
+    let (_, list_full, _) = p.draw_listed(&cam, Mode::Full, None);
+    assert_eq!(list_full.draw_calls, p.renderer.last_draw_calls);
     let full = p.renderer.read_pixels().unwrap();
     Some((tris, hybrid, full))
 }
@@ -116,7 +132,7 @@ fn frame(dir: &std::path::Path) -> Option<(u64, Vec<u8>, Vec<u8>)> {
 fn patch_culling_changes_no_pixel_and_draws_fewer_triangles() {
     let dir = tempfile::tempdir().unwrap();
     write_synthetic_bake_with(dir.path(), true).unwrap();
-    let Some((tris_plain, hybrid_plain, full_plain)) = frame(dir.path()) else {
+    let Some((tris_plain, hybrid_plain, full_plain)) = frame(dir.path(), false, true) else {
         return;
     };
     assert_eq!(psnr_y(&hybrid_plain, &full_plain), f64::INFINITY);
@@ -124,9 +140,20 @@ fn patch_culling_changes_no_pixel_and_draws_fewer_triangles() {
     let mut base = BasePack::read(&path).unwrap();
     base.patches = Some(per_triangle_patches(&base));
     base.write(&path).unwrap();
-    let (tris, hybrid, full) = frame(dir.path()).unwrap();
+    let (tris, hybrid, full) = frame(dir.path(), false, true).unwrap();
     eprintln!("triangles: {tris} with patches, {tris_plain} without");
     assert!(tris < tris_plain, "{tris} >= {tris_plain}");
     assert_eq!(psnr_y(&hybrid, &full), f64::INFINITY);
     assert_eq!(psnr_y(&full, &full_plain), f64::INFINITY);
+    // Close up, the frustum test drops the tiles out of view and no pixel changes.
+    let (tris_all, hybrid_all, full_all) = frame(dir.path(), true, false).unwrap();
+    let (tris_in, hybrid_in, full_in) = frame(dir.path(), true, true).unwrap();
+    eprintln!("close up: {tris_in} triangles with the frustum test, {tris_all} without");
+    assert!(tris_in < tris_all, "{tris_in} >= {tris_all}");
+    assert_eq!(psnr_y(&hybrid_all, &full_all), f64::INFINITY);
+    assert_eq!(psnr_y(&hybrid_in, &full_in), f64::INFINITY);
+    assert_eq!(psnr_y(&full_in, &full_all), f64::INFINITY);
+    // The close-up frame shows the object over most of the image.
+    let covered = player::metrics::measure_frame(&full_in, &hybrid_in, 128, 128).object_pixels;
+    assert!(covered > 128 * 128 / 2, "{covered} object pixels");
 }

@@ -112,6 +112,9 @@ pub struct CompareFrame {
     pub aa_reference: Option<AaFrame>,
     pub triangles: u64,
     pub reference_triangles: u64,
+    /// Draw calls the compared mode submits (0 in reports written before they were
+    /// counted).
+    pub draw_calls: u64,
     #[serde(deserialize_with = "nan_if_null")]
     pub frame_ms: f64,
     #[serde(deserialize_with = "nan_if_null")]
@@ -187,6 +190,11 @@ pub struct CompareReport {
     pub mean_triangles: f64,
     #[serde(deserialize_with = "nan_if_null")]
     pub reference_triangles: f64,
+    /// Mean draw calls per frame of the compared mode (one per instanced model
+    /// group, per index range of a patched original, per vertex range of a proxy,
+    /// plus the ground); 0 in reports written before they were counted.
+    #[serde(deserialize_with = "nan_if_null")]
+    pub mean_draw_calls: f64,
     /// Mean frame time of the compared mode (hybrid or lod) / mean full-geometry
     /// frame time.
     #[serde(deserialize_with = "nan_if_null")]
