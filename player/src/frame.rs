@@ -198,6 +198,7 @@ fn cell_list<'a>(
             eye: camera.eye,
             frustum: f,
         }),
+        ..Default::default()
     };
     // Issue 17: the originals' visible patches only (bitfields and normal cones).
     if let Some(runtime) = &bake.patches {

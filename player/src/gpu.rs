@@ -98,6 +98,55 @@ pub struct GpuModel {
     /// `indices` holds the triangles grouped by patch (issue 17, `base.pack`'s
     /// patch sections), as [`DrawList::patched`] needs.
     pub patch_ordered: bool,
+    /// A CPU copy of `indices` when patch-ordered: the visible tiles' indices of an
+    /// instance are gathered from it into the frame's index buffer (one draw call
+    /// per instance, [`FrameIndices`]).
+    cpu_indices: Vec<u32>,
+}
+
+/// The frame's gathered index buffer: for every patched original and every proxy
+/// with more than one visible range, the indices of those ranges one after the
+/// other (for a proxy, its vertex numbers), so that each is one indexed draw
+/// whatever the number of tiles it keeps. The order of the triangles is the one of
+/// the ranges, so the pixels are those of drawing the ranges one by one.
+#[derive(Default)]
+struct FrameIndices {
+    indices: Vec<u32>,
+}
+
+impl FrameIndices {
+    /// Appends `ranges` of `source` (or the numbers themselves when `source` is
+    /// `None`) and returns the span they take.
+    fn gather(&mut self, ranges: &[(u32, u32)], source: Option<&[u32]>) -> std::ops::Range<u32> {
+        let start = self.indices.len() as u32;
+        for &(a, b) in ranges {
+            match source {
+                Some(src) => self
+                    .indices
+                    .extend_from_slice(src.get(a as usize..b as usize).unwrap_or(&[])),
+                None => self.indices.extend(a..b),
+            }
+        }
+        start..self.indices.len() as u32
+    }
+
+    /// How a patched original or a proxy with visible `ranges` is drawn: nothing,
+    /// its one range from its own buffer, or its ranges gathered here.
+    fn span(&mut self, ranges: &[(u32, u32)], source: Option<&[u32]>) -> Option<Span> {
+        match ranges {
+            [] => None,
+            &[(a, b)] => Some(Span::Own(a..b)),
+            _ => Some(Span::Gathered(self.gather(ranges, source))),
+        }
+    }
+}
+
+/// One draw of a patched original or a proxy ([`FrameIndices::span`]).
+enum Span {
+    /// A range of its own index (original) or vertex (proxy) buffer.
+    Own(std::ops::Range<u32>),
+    /// A range of the frame's gathered index buffer.
+    Gathered(std::ops::Range<u32>),
 }
 
 /// One simplified level of a model on the GPU (an index buffer only).
@@ -150,14 +199,6 @@ impl GpuProxy {
         crate::patches::proxy_ranges(&self.clusters, self.vertex_count, view)
     }
 
-    /// Triangles [`GpuProxy::ranges`] draws.
-    pub fn triangles_from(&self, view: Option<&crate::patches::CullView>) -> u64 {
-        self.ranges(view)
-            .iter()
-            .map(|(a, b)| (b - a) as u64 / 3)
-            .sum()
-    }
-
     pub fn missing_textures(&self) -> usize {
         self.textures.iter().filter(|t| t.is_none()).count()
     }
@@ -179,6 +220,9 @@ pub struct DrawList<'a> {
     /// The view the proxies' clusters are tested against (issue 17); `None` draws
     /// every proxy triangle.
     pub cull: Option<crate::patches::CullView>,
+    /// Per proxy of `proxies`, then of `lit_proxies`, the vertex ranges drawn
+    /// ([`DrawList::proxy_ranges`], computed once).
+    pub(crate) ranges: std::cell::OnceCell<Vec<Vec<(u32, u32)>>>,
 }
 
 /// One original drawn as the index ranges of its visible patches.
@@ -192,9 +236,21 @@ pub struct PatchedDraw {
 }
 
 impl DrawList<'_> {
+    /// Per proxy of `proxies`, then of `lit_proxies`, the vertex ranges it draws
+    /// from [`DrawList::cull`] ([`GpuProxy::ranges`]); the tests run once per list.
+    pub fn proxy_ranges(&self) -> &[Vec<(u32, u32)>] {
+        self.ranges.get_or_init(|| {
+            self.proxies
+                .iter()
+                .chain(&self.lit_proxies)
+                .map(|p| p.ranges(self.cull.as_ref()))
+                .collect()
+        })
+    }
+
     /// Draw calls [`Renderer::render`] submits for this list: the ground, one per
-    /// non-empty instanced group, one per index range of a patched original and
-    /// one per vertex range of a proxy.
+    /// non-empty instanced group, one per patched original and one per proxy that
+    /// keep any tile (their several ranges are gathered into one index buffer).
     pub fn draw_calls(&self, models: &GpuModels) -> u64 {
         let group = |m: u32, n: usize| {
             u64::from(
@@ -205,14 +261,17 @@ impl DrawList<'_> {
                         .is_some_and(|g| g.index_count > 0),
             )
         };
-        let proxies: u64 = self
+        let n = self.proxies.len();
+        let proxies = self
             .proxies
             .iter()
-            .filter(|p| p.bind_group.is_some())
             .chain(&self.lit_proxies)
-            .filter(|p| p.vertex_count > 0)
-            .map(|p| p.ranges(self.cull.as_ref()).len() as u64)
-            .sum();
+            .zip(self.proxy_ranges())
+            .enumerate()
+            .filter(|(k, (p, r))| {
+                (*k >= n || p.bind_group.is_some()) && p.vertex_count > 0 && !r.is_empty()
+            })
+            .count() as u64;
         1 + self
             .originals
             .iter()
@@ -239,13 +298,13 @@ impl DrawList<'_> {
                 .patched
                 .iter()
                 .filter(|p| {
-                    models
-                        .models
-                        .get(p.model as usize)
-                        .is_some_and(|g| g.patch_ordered)
+                    !p.ranges.is_empty()
+                        && models
+                            .models
+                            .get(p.model as usize)
+                            .is_some_and(|g| g.patch_ordered)
                 })
-                .map(|p| p.ranges.len() as u64)
-                .sum::<u64>()
+                .count() as u64
             + proxies
     }
 
@@ -274,10 +333,10 @@ impl DrawList<'_> {
         o + l
             + self.patched.iter().map(|p| p.triangles).sum::<u64>()
             + self
-                .proxies
+                .proxy_ranges()
                 .iter()
-                .chain(&self.lit_proxies)
-                .map(|p| p.triangles_from(self.cull.as_ref()))
+                .flatten()
+                .map(|(a, b)| (b - a) as u64 / 3)
                 .sum::<u64>()
     }
 }
@@ -316,6 +375,8 @@ pub struct Renderer {
     sampler: wgpu::Sampler,
     dummy_view: wgpu::TextureView,
     instances: wgpu::Buffer,
+    /// The frame's gathered index buffer ([`FrameIndices`]), grown as needed.
+    frame_indices: Option<wgpu::Buffer>,
     /// Clear the sky with alpha 0 instead of 1 ([`Renderer::set_coverage_alpha`]).
     coverage_alpha: bool,
     /// Colour by representation ([`Renderer::set_representation_colours`]).
@@ -428,6 +489,7 @@ impl Renderer {
             sampler: shared.sampler,
             dummy_view: shared.dummy_view,
             instances: shared.instances,
+            frame_indices: None,
             coverage_alpha: false,
             representation_colours: false,
             native_bc,
@@ -586,6 +648,7 @@ impl Renderer {
                         lods: Vec::new(),
                         albedo,
                         patch_ordered: order.is_some(),
+                        cpu_indices: if order.is_some() { idx } else { Vec::new() },
                     }
                 })
                 .collect();
@@ -866,7 +929,7 @@ impl Renderer {
     /// Draws one frame and waits for the GPU; returns the submit → done wall time in
     /// milliseconds. Proxies of `list.proxies` that are not ready (textures missing)
     /// are skipped; `list.lit_proxies` are drawn without their textures.
-    pub fn render(&mut self, camera: &Camera, models: &GpuModels, list: &DrawList<'_>) -> f64 {
+    pub fn render<'a>(&mut self, camera: &Camera, models: &GpuModels, list: &DrawList<'a>) -> f64 {
         use crate::overlay::Representation;
         let debug = self.representation_colours;
         let g = Globals {
@@ -919,6 +982,46 @@ impl Renderer {
         if !all.is_empty() {
             self.queue
                 .write_buffer(&self.instances, 0, bytemuck::cast_slice(&all));
+        }
+        // Every patched original and proxy is one draw: where it keeps several
+        // ranges, their indices are gathered into the frame's index buffer.
+        let mut gathered = FrameIndices::default();
+        let patched: Vec<(&PatchedDraw, &GpuModel, Span)> = list
+            .patched
+            .iter()
+            .filter_map(|p| {
+                let model = &models.models[p.model as usize];
+                let span = model
+                    .patch_ordered
+                    .then(|| gathered.span(&p.ranges, Some(&model.cpu_indices)))??;
+                Some((p, model, span))
+            })
+            .collect();
+        let ranges = list.proxy_ranges();
+        let mut proxy_spans = |proxies: &[&'a GpuProxy], ranges: &[Vec<(u32, u32)>]| {
+            near_to_far(proxies, camera.eye)
+                .into_iter()
+                .filter(|&k| proxies[k].vertex_count > 0)
+                .filter_map(|k| Some((proxies[k], gathered.span(&ranges[k], None)?)))
+                .collect::<Vec<(&'a GpuProxy, Span)>>()
+        };
+        let (ready, lit_ranges) = ranges.split_at(list.proxies.len().min(ranges.len()));
+        let textured = proxy_spans(&list.proxies, ready);
+        let lit = proxy_spans(&list.lit_proxies, lit_ranges);
+        if !gathered.indices.is_empty() {
+            let need = std::mem::size_of_val(gathered.indices.as_slice()) as u64;
+            if self.frame_indices.as_ref().is_none_or(|b| b.size() < need) {
+                self.frame_indices = Some(self.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("frame indices"),
+                    size: need.next_power_of_two(),
+                    usage: wgpu::BufferUsages::INDEX | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                }));
+            }
+            if let Some(b) = &self.frame_indices {
+                self.queue
+                    .write_buffer(b, 0, bytemuck::cast_slice(&gathered.indices));
+            }
         }
         let mut enc = self
             .device
@@ -997,19 +1100,24 @@ impl Renderer {
                 }
                 first += n;
             }
-            for p in &list.patched {
-                let model = &models.models[p.model as usize];
-                if model.patch_ordered {
-                    pass.set_bind_group(2, Some(&model.albedo), &[]);
-                    pass.set_vertex_buffer(0, model.vertices.slice(..));
-                    pass.set_vertex_buffer(1, self.instances.slice(..));
-                    pass.set_index_buffer(model.indices.slice(..), wgpu::IndexFormat::Uint32);
-                    for &(a, b) in &p.ranges {
-                        pass.draw_indexed(a..b, 0, first..first + 1);
-                        draws += 1;
-                    }
-                }
-                first += 1;
+            let frame_indices = self.frame_indices.as_ref();
+            let mut p_iter = patched.iter().peekable();
+            for (k, p) in list.patched.iter().enumerate() {
+                let instance = first + k as u32;
+                let Some((_, model, span)) = p_iter.next_if(|(q, _, _)| std::ptr::eq(*q, p)) else {
+                    continue;
+                };
+                pass.set_bind_group(2, Some(&model.albedo), &[]);
+                pass.set_vertex_buffer(0, model.vertices.slice(..));
+                pass.set_vertex_buffer(1, self.instances.slice(..));
+                let (buffer, r) = match (span, frame_indices) {
+                    (Span::Own(r), _) => (&model.indices, r),
+                    (Span::Gathered(r), Some(b)) => (b, r),
+                    (Span::Gathered(_), None) => continue,
+                };
+                pass.set_index_buffer(buffer.slice(..), wgpu::IndexFormat::Uint32);
+                pass.draw_indexed(r.clone(), 0, instance..instance + 1);
+                draws += 1;
             }
             // Mesh proxies with a discard-free pipeline (the one for their number of
             // views), impostor layers with the other (a pipeline switch only where
@@ -1028,28 +1136,23 @@ impl Renderer {
                     });
                 }
             };
-            for p in near_to_far(&list.proxies, camera.eye) {
-                if let (Some(bg), true) = (&p.bind_group, p.vertex_count > 0) {
-                    pipeline_for(&mut pass, p);
-                    pass.set_bind_group(1, Some(bg), &[]);
-                    pass.set_vertex_buffer(0, p.vertices.slice(..));
-                    for (a, b) in p.ranges(list.cull.as_ref()) {
-                        pass.draw(a..b, 0..1);
-                        draws += 1;
-                    }
-                }
-            }
-            for p in near_to_far(&list.lit_proxies, camera.eye)
-                .into_iter()
-                .filter(|p| p.vertex_count > 0)
-            {
+            let textured = textured
+                .iter()
+                .filter_map(|(p, span)| Some((*p, p.bind_group.as_ref()?, span)));
+            let lit = lit.iter().map(|(p, span)| (*p, &p.lit_bind_group, span));
+            for (p, bind_group, span) in textured.chain(lit) {
                 pipeline_for(&mut pass, p);
-                pass.set_bind_group(1, Some(&p.lit_bind_group), &[]);
+                pass.set_bind_group(1, Some(bind_group), &[]);
                 pass.set_vertex_buffer(0, p.vertices.slice(..));
-                for (a, b) in p.ranges(list.cull.as_ref()) {
-                    pass.draw(a..b, 0..1);
-                    draws += 1;
+                match (span, frame_indices) {
+                    (Span::Own(r), _) => pass.draw(r.clone(), 0..1),
+                    (Span::Gathered(r), Some(b)) => {
+                        pass.set_index_buffer(b.slice(..), wgpu::IndexFormat::Uint32);
+                        pass.draw_indexed(r.clone(), 0, 0..1);
+                    }
+                    (Span::Gathered(_), None) => continue,
                 }
+                draws += 1;
             }
         }
         self.last_draw_calls = draws;
@@ -1120,13 +1223,14 @@ impl Renderer {
 
 /// `proxies` ordered by the distance from `eye` to their bounds, nearest first (ties
 /// keep their order).
-fn near_to_far<'a>(proxies: &[&'a GpuProxy], eye: Vec3) -> Vec<&'a GpuProxy> {
-    let mut keyed: Vec<(f32, &GpuProxy)> = proxies
+fn near_to_far(proxies: &[&GpuProxy], eye: Vec3) -> Vec<usize> {
+    let mut keyed: Vec<(f32, usize)> = proxies
         .iter()
-        .map(|p| (crate::lod::distance_to_box(eye, &p.bounds), *p))
+        .enumerate()
+        .map(|(k, p)| (crate::lod::distance_to_box(eye, &p.bounds), k))
         .collect();
     keyed.sort_by(|a, b| a.0.total_cmp(&b.0));
-    keyed.into_iter().map(|(_, p)| p).collect()
+    keyed.into_iter().map(|(_, k)| k).collect()
 }
 
 /// Bind group 2 of the lit pipeline: an `Rgba8UnormSrgb` texture (sampled in

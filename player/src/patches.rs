@@ -324,12 +324,16 @@ fn cluster_of(n: Vec3) -> u8 {
 /// Most triangles in one proxy cluster or original tile (default): a normal cluster
 /// (or a bake patch) with more is split in halves at the median centroid along its
 /// longest axis until every piece holds at most this many. Smaller pieces cull more
-/// (tighter boxes and plane offsets) but cost a draw call each where they are not
-/// adjacent to another drawn piece. Park-4m's walk (BENCHMARKS.md, "Per-tile
-/// culling"): 256 → 32 cuts 6.5 % of the triangles for 15 % more draw calls, 32 → 16
-/// another 2.1 % for 14 % more; 32 is where a halving starts to cost more calls
-/// than it saves triangles. `HEXBAKE_CLUSTER_TRIANGLES` overrides it (measurements).
-pub const CLUSTER_TRIANGLES: usize = 32;
+/// (tighter boxes and plane offsets); the draw calls do not grow with their number
+/// (a proxy's or an original's kept tiles are gathered into one index buffer per
+/// frame, `gpu::FrameIndices`), the CPU time of the tests does. Park-4m's walk
+/// (BENCHMARKS.md, "Per-tile culling"): each halving from 256 down to 8 removes
+/// about 2 % of the triangles; the tests and gathering take 0.19 ms per frame with
+/// whole patches, 0.22 ms at 32, 0.24 ms at 16, 0.30 ms at 8 on the 2-core VM. 16 is
+/// a judgement, said plainly: it is the largest size at which that walk meets issue
+/// 16's triangle line (32 misses it by 0.07 %), for 0.05 ms of CPU per frame over
+/// whole patches. `HEXBAKE_CLUSTER_TRIANGLES` overrides it.
+pub const CLUSTER_TRIANGLES: usize = 16;
 
 /// [`CLUSTER_TRIANGLES`] or the environment's override (read once, at least 1).
 pub fn cluster_triangles() -> usize {
