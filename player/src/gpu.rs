@@ -149,6 +149,17 @@ enum Span {
     Gathered(std::ops::Range<u32>),
 }
 
+impl GpuModel {
+    /// Level `l` of the model (0 = the original): its index buffer, index count and
+    /// triangle count. A level that is not uploaded is drawn as the original.
+    fn level(&self, l: u32) -> (&wgpu::Buffer, u32, u64) {
+        match l.checked_sub(1).and_then(|k| self.lods.get(k as usize)) {
+            Some(g) => (&g.indices, g.index_count, g.triangle_count),
+            None => (&self.indices, self.index_count, self.triangle_count),
+        }
+    }
+}
+
 /// One simplified level of a model on the GPU (an index buffer only).
 pub struct GpuLod {
     indices: wgpu::Buffer,
@@ -281,17 +292,11 @@ impl DrawList<'_> {
                 .levels
                 .iter()
                 .filter(|((m, l), i)| {
-                    let Some(model) = models.models.get(*m as usize) else {
-                        return false;
-                    };
-                    let count = match *l {
-                        0 => model.index_count,
-                        l => model
-                            .lods
-                            .get(l as usize - 1)
-                            .map_or(model.index_count, |g| g.index_count),
-                    };
-                    count > 0 && !i.is_empty()
+                    !i.is_empty()
+                        && models
+                            .models
+                            .get(*m as usize)
+                            .is_some_and(|model| model.level(*l).1 > 0)
                 })
                 .count() as u64
             + self
@@ -317,18 +322,7 @@ impl DrawList<'_> {
         let l: u64 = self
             .levels
             .iter()
-            .map(|((m, l), i)| {
-                let model = &models.models[*m as usize];
-                let t = match *l {
-                    0 => model.triangle_count,
-                    // A level that is not uploaded is drawn as the original.
-                    l => model
-                        .lods
-                        .get(l as usize - 1)
-                        .map_or(model.triangle_count, |g| g.triangle_count),
-                };
-                t * i.len() as u64
-            })
+            .map(|((m, l), i)| models.models[*m as usize].level(*l).2 * i.len() as u64)
             .sum();
         o + l
             + self.patched.iter().map(|p| p.triangles).sum::<u64>()
@@ -1083,13 +1077,7 @@ impl Renderer {
             for ((m, l), inst) in &list.levels {
                 let model = &models.models[*m as usize];
                 let n = inst.len() as u32;
-                let (indices, count) = match *l {
-                    0 => (&model.indices, model.index_count),
-                    l => match model.lods.get(l as usize - 1) {
-                        Some(g) => (&g.indices, g.index_count),
-                        None => (&model.indices, model.index_count),
-                    },
-                };
+                let (indices, count, _) = model.level(*l);
                 if count > 0 && n > 0 {
                     pass.set_bind_group(2, Some(&model.albedo), &[]);
                     pass.set_vertex_buffer(0, model.vertices.slice(..));

@@ -194,7 +194,6 @@ pub fn refine_patches(
     let mut order = Vec::with_capacity(m.triangle_order.len());
     let mut tiles = Vec::new();
     let mut rest = &m.triangle_order[..];
-    let mut runs = Vec::new();
     for (patch, p) in m.patches.iter().enumerate() {
         let (mine, tail) = rest.split_at((p.triangle_count as usize).min(rest.len()));
         rest = tail;
@@ -202,12 +201,7 @@ pub fn refine_patches(
             .iter()
             .filter_map(|&t| corners(t).map(|c| (t as usize, (c[0] + c[1] + c[2]) / 3.0)))
             .collect();
-        runs.clear();
-        split_spatially(&mut members, &mut runs);
-        let mut left = &members[..];
-        for &len in &runs {
-            let (run, tail) = left.split_at(len);
-            left = tail;
+        for run in spatial_runs(&mut members) {
             let first = 3 * order.len() as u32;
             let mut aabb = Aabb::EMPTY;
             let mut tris = Vec::with_capacity(run.len());
@@ -372,6 +366,21 @@ fn split_spatially(tris: &mut [(usize, Vec3)], out: &mut Vec<usize>) {
     split_spatially(hi, out);
 }
 
+/// `tris` reordered by [`split_spatially`] and cut into its runs, in order.
+fn spatial_runs(tris: &mut [(usize, Vec3)]) -> Vec<&[(usize, Vec3)]> {
+    let mut lengths = Vec::new();
+    split_spatially(tris, &mut lengths);
+    let mut rest: &[(usize, Vec3)] = tris;
+    lengths
+        .into_iter()
+        .map(|len| {
+            let (run, tail) = rest.split_at(len);
+            rest = tail;
+            run
+        })
+        .collect()
+}
+
 /// Reorders a proxy's triangles by normal cluster and, within one, by spatial tile
 /// ([`split_spatially`]), and returns the clusters with their normal cones and
 /// boxes. Every mode draws the reordered buffer, so switching the tests off changes
@@ -393,7 +402,6 @@ pub fn cluster_proxy_vertices(
     let mut out = Vec::with_capacity(vertices.len());
     let mut clusters = Vec::new();
     let mut k = 0;
-    let mut runs = Vec::new();
     while k < order.len() {
         let mut j = k;
         while j < order.len() && order[j].0 == order[k].0 {
@@ -401,12 +409,7 @@ pub fn cluster_proxy_vertices(
         }
         let mut members: Vec<(usize, Vec3)> =
             order[k..j].iter().map(|&(_, t)| (t, centroid(t))).collect();
-        runs.clear();
-        split_spatially(&mut members, &mut runs);
-        let mut rest = &members[..];
-        for &len in &runs {
-            let (run, tail) = rest.split_at(len);
-            rest = tail;
+        for run in spatial_runs(&mut members) {
             let first = out.len() as u32;
             let mut aabb = Aabb::EMPTY;
             for &(t, _) in run {
