@@ -112,8 +112,9 @@ pub struct CompareFrame {
     pub aa_reference: Option<AaFrame>,
     pub triangles: u64,
     pub reference_triangles: u64,
-    /// Draw calls the compared mode submits (0 in reports written before they were
-    /// counted).
+    /// Draw calls the compared mode submits (at least 1, the ground). 0 stands for a
+    /// report written before they were counted, and is not written.
+    #[serde(skip_serializing_if = "is_zero_u64")]
     pub draw_calls: u64,
     #[serde(deserialize_with = "nan_if_null")]
     pub frame_ms: f64,
@@ -192,8 +193,9 @@ pub struct CompareReport {
     pub reference_triangles: f64,
     /// Mean draw calls per frame of the compared mode (one per instanced model
     /// group, per index range of a patched original, per vertex range of a proxy,
-    /// plus the ground); 0 in reports written before they were counted.
-    #[serde(deserialize_with = "nan_if_null")]
+    /// plus the ground). 0 stands for a report written before they were counted,
+    /// and is not written.
+    #[serde(deserialize_with = "nan_if_null", skip_serializing_if = "is_zero_f64")]
     pub mean_draw_calls: f64,
     /// Mean frame time of the compared mode (hybrid or lod) / mean full-geometry
     /// frame time.
@@ -218,6 +220,14 @@ pub struct CompareReport {
 }
 
 /// serde_json writes a non-finite f64 as `null`: read it back as NaN.
+fn is_zero_u64(v: &u64) -> bool {
+    *v == 0
+}
+
+fn is_zero_f64(v: &f64) -> bool {
+    *v == 0.0
+}
+
 fn nan_if_null<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
     Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
 }
@@ -258,5 +268,31 @@ mod tests {
         assert_eq!(r.object, ObjectQuality::default());
         assert!(r.aa_reference.is_none() && r.per_frame[0].aa_reference.is_none());
         assert_eq!(r.per_frame[0].object_psnr_y_db, None);
+        assert_eq!((r.mean_draw_calls, r.per_frame[0].draw_calls), (0.0, 0));
+    }
+
+    #[test]
+    fn draw_calls_are_written_when_counted_and_read_back() {
+        let mut r = CompareReport {
+            mean_draw_calls: 32.5,
+            per_frame: vec![CompareFrame {
+                draw_calls: 33,
+                ..Default::default()
+            }],
+            ..Default::default()
+        };
+        let json = serde_json::to_string(&r).unwrap();
+        assert!(json.contains("\"mean_draw_calls\":32.5"), "{json}");
+        assert!(json.contains("\"draw_calls\":33"), "{json}");
+        let back: CompareReport = serde_json::from_str(&json).unwrap();
+        assert_eq!(
+            (back.mean_draw_calls, back.per_frame[0].draw_calls),
+            (32.5, 33)
+        );
+        // Uncounted (an older report read back) they stay out, as they came in.
+        r.mean_draw_calls = 0.0;
+        r.per_frame[0].draw_calls = 0;
+        let json = serde_json::to_string(&r).unwrap();
+        assert!(!json.contains("draw_calls"), "{json}");
     }
 }
