@@ -157,3 +157,72 @@ fn patch_culling_changes_no_pixel_and_draws_fewer_triangles() {
     let covered = player::metrics::measure_frame(&full_in, &hybrid_in, 128, 128).object_pixels;
     assert!(covered > 128 * 128 / 2, "{covered} object pixels");
 }
+
+/// Proxies split into tiles (`patches::cluster_proxy_vertices`) and drawn as the
+/// tiles that pass the cone and frustum tests, gathered into one draw each
+/// (`gpu::FrameIndices`), give the frame that drawing every proxy triangle gives, with
+/// fewer triangles.
+#[test]
+fn proxy_tile_culling_changes_no_pixel_and_draws_fewer_triangles() {
+    use player::frame::hybrid_list;
+    use player::stream::PendingDraw;
+    let dir = tempfile::tempdir().unwrap();
+    write_synthetic_bake_with(dir.path(), false).unwrap();
+    let mut p = match Player::open(dir.path(), (96, 96)) {
+        Ok(p) => p,
+        Err(player::run::RunError::Gpu(GpuError::NoAdapter(e))) => {
+            eprintln!("SKIP: no graphics adapter ({e})");
+            return;
+        }
+        Err(e) => panic!("{e}"),
+    };
+    // Looking across the park from a corner, with proxies partly out of view.
+    let cam = Camera {
+        eye: Vec3::new(30.0, 6.0, 40.0),
+        dir: Vec3::new(120.0, -2.0, 80.0),
+        fov_y_deg: 40.0,
+        width: 96,
+        height: 96,
+        near: 0.25,
+        far: p.bake.extent,
+    };
+    p.warm_up(&cam);
+    // Sky pixels read alpha 0: the object-pixel count below is the covered part.
+    p.renderer.set_coverage_alpha(true);
+    let mut s = Streamer::new(
+        &p.bake,
+        StreamConfig {
+            prefetch: false,
+            upload_budget_bytes: 1 << 30,
+            ..Default::default()
+        },
+    );
+    p.draw(&cam, Mode::Hybrid, Some(&mut s));
+    let (current, _) = s.begin_frame(&p.renderer, &p.bake, &cam);
+    let culled = hybrid_list(&p.bake, &cam, &current, PendingDraw::StandIns);
+    assert!(!culled.proxies.is_empty());
+    let mut whole = hybrid_list(&p.bake, &cam, &current, PendingDraw::StandIns);
+    whole.cull = None;
+    let (t_culled, t_whole) = (
+        culled.triangle_count(&p.models),
+        whole.triangle_count(&p.models),
+    );
+    p.renderer.render(&cam, &p.models, &culled);
+    let a = p.renderer.read_pixels().unwrap();
+    assert_eq!(culled.draw_calls(&p.models), p.renderer.last_draw_calls);
+    p.renderer.render(&cam, &p.models, &whole);
+    let b = p.renderer.read_pixels().unwrap();
+    eprintln!("proxies: {t_culled} triangles with tile culling, {t_whole} without");
+    assert!(t_culled < t_whole, "{t_culled} >= {t_whole}");
+    assert!(
+        a == b,
+        "tile culling changed pixels (PSNR {})",
+        psnr_y(&a, &b)
+    );
+    let covered = player::metrics::measure_frame(&a, &b, 96, 96).object_pixels;
+    eprintln!("{covered} of {} pixels show objects", 96 * 96);
+    assert!(
+        covered > 96 * 96 / 10,
+        "too little of the frame shows objects to tell"
+    );
+}
