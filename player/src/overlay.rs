@@ -126,6 +126,7 @@ pub struct OverlayInfo {
     /// The 3D frame's GPU time (submit → done), milliseconds.
     pub frame_ms: f64,
     pub triangles: u64,
+    pub draw_calls: u64,
     pub cell: Option<u32>,
     pub resident_packs: usize,
     pub resident_mib: f64,
@@ -156,8 +157,9 @@ pub fn overlay_lines(info: &OverlayInfo) -> Vec<String> {
             info.frame_ms
         ),
         format!(
-            "{} tris  cell {}",
+            "{} tris  {} draws  cell {}",
             group_thousands(info.triangles),
+            info.draw_calls,
             info.cell.map_or("-".to_string(), |c| c.to_string())
         ),
         format!(
@@ -325,6 +327,7 @@ mod tests {
         let mut px = vec![100u8; (w * h * 4) as usize];
         let info = OverlayInfo {
             triangles: 1_234_567,
+            draw_calls: 33,
             cell: Some(7),
             colouring: true,
             ..Default::default()
@@ -345,7 +348,7 @@ mod tests {
             .filter(|&(x, y)| (x >= pw || y >= ph) && white(x, y))
             .count();
         assert_eq!(outside, 0);
-        assert_eq!(overlay_lines(&info)[1], "1,234,567 tris  cell 7");
+        assert_eq!(overlay_lines(&info)[1], "1,234,567 tris  33 draws  cell 7");
     }
 
     #[test]

@@ -4,7 +4,8 @@
 //! lower/raise the eye within the cell prism's eye heights. M flips hybrid → full →
 //! LOD baseline → hybrid at the same pose, C colours every triangle by its
 //! representation (original, SV, MV, cluster, LOD level; [`crate::overlay`]), H hides
-//! the overlay (FPS, frame ms, triangles, cell, resident packs and queued uploads).
+//! the overlay (FPS, frame ms, triangles, draw calls, cell, resident packs and queued
+//! uploads).
 //!
 //! Frames are rendered with the same offscreen renderer as `render`/`compare` (the
 //! hybrid configuration, with streaming and prefetching) and copied into the window's
@@ -164,7 +165,9 @@ impl ViewSession {
     /// overlay showed.
     pub fn frame(&mut self) -> Result<(Vec<u8>, OverlayInfo), String> {
         let cam = self.camera();
-        let (ms, tris, _, stats) = self.player.draw(&cam, self.mode, Some(&mut self.streamer));
+        let (ms, list, stats) = self
+            .player
+            .draw_listed(&cam, self.mode, Some(&mut self.streamer));
         let mut px = self
             .player
             .renderer
@@ -190,7 +193,8 @@ impl ViewSession {
             mode: self.mode,
             fps,
             frame_ms: ms,
-            triangles: tris,
+            triangles: list.triangles,
+            draw_calls: list.draw_calls,
             cell: stats.cell,
             resident_packs: self.streamer.resident_cells().len(),
             resident_mib: self.streamer.resident_bytes() as f64 / (1 << 20) as f64,
