@@ -69,6 +69,9 @@ pub struct Bake {
     /// it or with every test switched off ([`crate::patches::tests_from_env`],
     /// [`crate::patches::frustum_test_from_env`]).
     pub patches: Option<crate::patches::PatchRuntime>,
+    /// Per model, its triangles in tile order (`patches::refine_patches`) when the
+    /// base pack has patch data: the order every mode uploads them in.
+    pub draw_order: Option<Vec<Vec<u32>>>,
 }
 
 impl Bake {
@@ -126,13 +129,25 @@ impl Bake {
         } else {
             (scene.max - scene.min).length()
         };
+        // Issue 17: the patches' tiles, once; the upload takes their triangle order.
+        let (draw_order, tiles): (Vec<Vec<u32>>, Vec<_>) = match &base.patches {
+            Some(set) => set
+                .models
+                .iter()
+                .zip(&base.models)
+                .map(|(m, model)| crate::patches::refine_patches(m, &model.mesh))
+                .unzip(),
+            None => (Vec::new(), Vec::new()),
+        };
         let patches = crate::patches::PatchRuntime::new(
             &base,
+            tiles,
             crate::patches::tests_from_env(),
             crate::patches::frustum_test_from_env(),
         );
         Bake {
             patches,
+            draw_order: base.patches.is_some().then_some(draw_order),
             dir: dir.to_path_buf(),
             grid: CellGrid::new(base.grid),
             base: Arc::new(base),

@@ -556,96 +556,97 @@ impl Renderer {
             })
     }
 
-    /// Uploads every model of the base pack once.
-    pub fn upload_models(&self, base: &BasePack) -> GpuModels {
-        let models =
-            base.models
+    /// One model: vertices, its albedo texture (issue 18; too large for the adapter:
+    /// untextured) and its triangles in `order` when given.
+    fn upload_model(&self, m: &format::pack::PackedModel, order: Option<&Vec<u32>>) -> GpuModel {
+        let mesh = &m.mesh;
+        let uvs = m.albedo_map.as_ref().map(|a| &a.uvs);
+        let verts: Vec<ModelVertex> = (0..mesh.positions.len())
+            .map(|i| ModelVertex {
+                pos: mesh.positions[i],
+                normal: mesh.normals[i],
+                albedo: mesh.albedo[i],
+                uv: uvs.and_then(|u| u.get(i)).copied().unwrap_or([0.0; 2]),
+            })
+            .collect();
+        let max = self.device.limits().max_texture_dimension_2d;
+        let albedo = match &m.albedo_map {
+            Some(a)
+                if a.texture.validate().is_ok()
+                    && a.texture.width <= max
+                    && a.texture.height <= max =>
+            {
+                albedo_bind_group(
+                    &self.device,
+                    &self.queue,
+                    &self.albedo_bgl,
+                    &m.name,
+                    (a.texture.width, a.texture.height),
+                    &a.texture.rgba,
+                    a.texture.wrap,
+                )
+            }
+            Some(a) => {
+                eprintln!(
+                    "player: warning: model {}: albedo texture {}x{} not uploadable \
+                     (max side {max}); drawn with its vertex colours",
+                    m.name, a.texture.width, a.texture.height
+                );
+                self.white_albedo.clone()
+            }
+            None => self.white_albedo.clone(),
+        };
+        // wgpu refuses zero-sized vertex buffers with a binding; keep one vertex.
+        let verts = if verts.is_empty() {
+            vec![ModelVertex::zeroed()]
+        } else {
+            verts
+        };
+        let mut idx: Vec<u32> = match order {
+            Some(order) => order
                 .iter()
-                .enumerate()
-                .map(|(model_index, m)| {
-                    let mesh = &m.mesh;
-                    let uvs = m.albedo_map.as_ref().map(|a| &a.uvs);
-                    let verts: Vec<ModelVertex> = (0..mesh.positions.len())
-                        .map(|i| ModelVertex {
-                            pos: mesh.positions[i],
-                            normal: mesh.normals[i],
-                            albedo: mesh.albedo[i],
-                            uv: uvs.and_then(|u| u.get(i)).copied().unwrap_or([0.0; 2]),
-                        })
-                        .collect();
-                    // The albedo texture (issue 18); too large for the adapter: untextured.
-                    let max = self.device.limits().max_texture_dimension_2d;
-                    let albedo = match &m.albedo_map {
-                        Some(a)
-                            if a.texture.validate().is_ok()
-                                && a.texture.width <= max
-                                && a.texture.height <= max =>
-                        {
-                            albedo_bind_group(
-                                &self.device,
-                                &self.queue,
-                                &self.albedo_bgl,
-                                &m.name,
-                                (a.texture.width, a.texture.height),
-                                &a.texture.rgba,
-                                a.texture.wrap,
-                            )
-                        }
-                        Some(a) => {
-                            eprintln!(
-                                "player: warning: model {}: albedo texture {}x{} not uploadable \
-                             (max side {max}); drawn with its vertex colours",
-                                m.name, a.texture.width, a.texture.height
-                            );
-                            self.white_albedo.clone()
-                        }
-                        None => self.white_albedo.clone(),
-                    };
-                    // wgpu refuses zero-sized vertex buffers with a binding; keep one vertex.
-                    let verts = if verts.is_empty() {
-                        vec![ModelVertex::zeroed()]
-                    } else {
-                        verts
-                    };
-                    // With patch data (issue 17) the triangles are uploaded grouped by
-                    // patch and tile (`patches::refine_patches`), for every mode alike:
-                    // the full-geometry reference and the hybrid then rasterize
-                    // surviving triangles in the same order, so equal-depth ties
-                    // resolve the same way in both.
-                    let order = base.patches.as_ref().map(|set| {
-                        crate::patches::refine_patches(&set.models[model_index], mesh).0
-                    });
-                    let mut idx: Vec<u32> = match &order {
-                        Some(order) => order
-                            .iter()
-                            .flat_map(|&t| mesh.triangles[t as usize])
-                            .collect(),
-                        None => mesh.triangles.iter().flatten().copied().collect(),
-                    };
-                    let index_count = idx.len() as u32;
-                    if idx.is_empty() {
-                        idx = vec![0; 3];
-                    }
-                    GpuModel {
-                        vertices: self.buffer_init(
-                            &m.name,
-                            bytemuck::cast_slice(&verts),
-                            wgpu::BufferUsages::VERTEX,
-                        ),
-                        indices: self.buffer_init(
-                            &m.name,
-                            bytemuck::cast_slice(&idx),
-                            wgpu::BufferUsages::INDEX,
-                        ),
-                        index_count,
-                        triangle_count: mesh.triangles.len() as u64,
-                        lods: Vec::new(),
-                        albedo,
-                        patch_ordered: order.is_some(),
-                        cpu_indices: if order.is_some() { idx } else { Vec::new() },
-                    }
-                })
-                .collect();
+                .filter_map(|&t| mesh.triangles.get(t as usize))
+                .flatten()
+                .copied()
+                .collect(),
+            None => mesh.triangles.iter().flatten().copied().collect(),
+        };
+        let index_count = idx.len() as u32;
+        if idx.is_empty() {
+            idx = vec![0; 3];
+        }
+        GpuModel {
+            vertices: self.buffer_init(
+                &m.name,
+                bytemuck::cast_slice(&verts),
+                wgpu::BufferUsages::VERTEX,
+            ),
+            indices: self.buffer_init(
+                &m.name,
+                bytemuck::cast_slice(&idx),
+                wgpu::BufferUsages::INDEX,
+            ),
+            index_count,
+            triangle_count: mesh.triangles.len() as u64,
+            lods: Vec::new(),
+            albedo,
+            patch_ordered: order.is_some(),
+            cpu_indices: if order.is_some() { idx } else { Vec::new() },
+        }
+    }
+
+    /// Uploads every model of the base pack once. `draw_order`: per model, the
+    /// triangle order of its tiles (`Bake::draw_order`, issue 17), for every mode
+    /// alike, so that the full-geometry reference and the hybrid rasterize the
+    /// triangles they share in the same order and equal-depth ties resolve the same
+    /// way in both.
+    pub fn upload_models(&self, base: &BasePack, draw_order: Option<&[Vec<u32>]>) -> GpuModels {
+        let models = base
+            .models
+            .iter()
+            .enumerate()
+            .map(|(k, m)| self.upload_model(m, draw_order.and_then(|o| o.get(k))))
+            .collect();
         // The ground rectangle, world space, drawn with an identity instance.
         let g = &base.grid;
         let ground_mesh = format::scene::Ground {
@@ -980,28 +981,40 @@ impl Renderer {
         // Every patched original and proxy is one draw: where it keeps several
         // ranges, their indices are gathered into the frame's index buffer.
         let mut gathered = FrameIndices::default();
-        let patched: Vec<(&PatchedDraw, &GpuModel, Span)> = list
+        // Per patched original (in list order: its instance follows the groups').
+        let patched: Vec<Option<Span>> = list
             .patched
             .iter()
-            .filter_map(|p| {
+            .map(|p| {
                 let model = &models.models[p.model as usize];
-                let span = model
+                model
                     .patch_ordered
-                    .then(|| gathered.span(&p.ranges, Some(&model.cpu_indices)))??;
-                Some((p, model, span))
+                    .then(|| gathered.span(&p.ranges, Some(&model.cpu_indices)))?
             })
             .collect();
         let ranges = list.proxy_ranges();
-        let mut proxy_spans = |proxies: &[&'a GpuProxy], ranges: &[Vec<(u32, u32)>]| {
+        // Proxies nearest first, each with the bind group it is drawn with: its
+        // textures, or none (lit) for `lit_proxies`.
+        let mut proxy_spans = |proxies: &[&'a GpuProxy], ranges: &[Vec<(u32, u32)>], lit: bool| {
             near_to_far(proxies, camera.eye)
                 .into_iter()
-                .filter(|&k| proxies[k].vertex_count > 0)
-                .filter_map(|k| Some((proxies[k], gathered.span(&ranges[k], None)?)))
-                .collect::<Vec<(&'a GpuProxy, Span)>>()
+                .filter_map(|k| {
+                    let p = proxies[k];
+                    if p.vertex_count == 0 {
+                        return None;
+                    }
+                    let group = if lit {
+                        &p.lit_bind_group
+                    } else {
+                        p.bind_group.as_ref()?
+                    };
+                    Some((p, group, gathered.span(&ranges[k], None)?))
+                })
+                .collect::<Vec<(&'a GpuProxy, &'a wgpu::BindGroup, Span)>>()
         };
         let (ready, lit_ranges) = ranges.split_at(list.proxies.len().min(ranges.len()));
-        let textured = proxy_spans(&list.proxies, ready);
-        let lit = proxy_spans(&list.lit_proxies, lit_ranges);
+        let mut proxy_draws = proxy_spans(&list.proxies, ready, false);
+        proxy_draws.extend(proxy_spans(&list.lit_proxies, lit_ranges, true));
         if !gathered.indices.is_empty() {
             let need = std::mem::size_of_val(gathered.indices.as_slice()) as u64;
             if self.frame_indices.as_ref().is_none_or(|b| b.size() < need) {
@@ -1089,12 +1102,12 @@ impl Renderer {
                 first += n;
             }
             let frame_indices = self.frame_indices.as_ref();
-            let mut p_iter = patched.iter().peekable();
-            for (k, p) in list.patched.iter().enumerate() {
+            for (k, (p, span)) in list.patched.iter().zip(&patched).enumerate() {
                 let instance = first + k as u32;
-                let Some((_, model, span)) = p_iter.next_if(|(q, _, _)| std::ptr::eq(*q, p)) else {
+                let Some(span) = span else {
                     continue;
                 };
+                let model = &models.models[p.model as usize];
                 pass.set_bind_group(2, Some(&model.albedo), &[]);
                 pass.set_vertex_buffer(0, model.vertices.slice(..));
                 pass.set_vertex_buffer(1, self.instances.slice(..));
@@ -1124,11 +1137,7 @@ impl Renderer {
                     });
                 }
             };
-            let textured = textured
-                .iter()
-                .filter_map(|(p, span)| Some((*p, p.bind_group.as_ref()?, span)));
-            let lit = lit.iter().map(|(p, span)| (*p, &p.lit_bind_group, span));
-            for (p, bind_group, span) in textured.chain(lit) {
+            for &(p, bind_group, ref span) in &proxy_draws {
                 pipeline_for(&mut pass, p);
                 pass.set_bind_group(1, Some(bind_group), &[]);
                 pass.set_vertex_buffer(0, p.vertices.slice(..));

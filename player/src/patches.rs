@@ -81,8 +81,14 @@ pub struct PatchRuntime {
 }
 
 impl PatchRuntime {
-    /// `None` when the base pack has no patch data or every test is off.
-    pub fn new(base: &BasePack, tests: PatchTests, frustum_test: bool) -> Option<PatchRuntime> {
+    /// `None` when the base pack has no patch data or every test is off. `tiles`:
+    /// per model, the tiles [`refine_patches`] made of its patches.
+    pub fn new(
+        base: &BasePack,
+        tiles: Vec<Vec<Tile>>,
+        tests: PatchTests,
+        frustum_test: bool,
+    ) -> Option<PatchRuntime> {
         let set = base.patches.as_ref()?;
         if !tests.bitfields && !tests.backface && !frustum_test {
             return None;
@@ -90,8 +96,8 @@ impl PatchRuntime {
         let models = set
             .models
             .iter()
-            .zip(&base.models)
-            .map(|(m, model)| ModelRuntime {
+            .zip(tiles)
+            .map(|(m, tiles)| ModelRuntime {
                 centre: Vec3::from(m.centre),
                 radius: m.radius,
                 bounds: m.patches.iter().map(|p| p.bounds).collect(),
@@ -100,7 +106,7 @@ impl PatchRuntime {
                     .iter()
                     .flat_map(|p| p.samples.iter().copied())
                     .collect(),
-                tiles: refine_patches(m, &model.mesh).1,
+                tiles,
             })
             .collect();
         let placement = base
@@ -177,8 +183,8 @@ impl PatchRuntime {
 /// each patch's triangles reordered into spatial tiles by [`split_spatially`]) and
 /// the tiles. `mesh` is the model the patches partition; triangle or vertex indices
 /// out of range are skipped, so a bad pack cannot panic here (the reader has
-/// checked them already). Deterministic: the upload and the run-time test
-/// ([`PatchRuntime`]) call it separately and must agree.
+/// checked them already). Computed once per bake (`Bake::open`): the upload takes
+/// the order, [`PatchRuntime`] the tiles.
 pub fn refine_patches(
     m: &format::pack::patches::ModelPatches,
     mesh: &format::Mesh,
@@ -589,7 +595,7 @@ mod tests {
             }
             start = end;
         }
-        // Deterministic: the upload and the run-time test call it separately.
+        // Deterministic: a bake's models upload in the same order on every run.
         assert_eq!(refine_patches(&m, &mesh), (order, tiles));
     }
 

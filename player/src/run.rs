@@ -157,7 +157,7 @@ impl Player {
     pub fn open(dir: &Path, size: (u32, u32)) -> Result<Player, RunError> {
         let bake = Bake::open(dir)?;
         let renderer = Renderer::new(size.0, size.1)?;
-        let models = renderer.upload_models(&bake.base);
+        let models = renderer.upload_models(&bake.base, bake.draw_order.as_deref());
         Ok(Player::from_parts(bake, renderer, models))
     }
 

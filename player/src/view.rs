@@ -332,7 +332,7 @@ impl App {
         let bake = crate::bake::Bake::open(&self.opts.out).map_err(|e| e.to_string())?;
         let renderer = Renderer::with_device(device.clone(), queue, summary, w, h)
             .map_err(|e| e.to_string())?;
-        let models = renderer.upload_models(&bake.base);
+        let models = renderer.upload_models(&bake.base, bake.draw_order.as_deref());
         let session = ViewSession::new(Player::from_parts(bake, renderer, models), &self.opts);
         Ok(State {
             window,
