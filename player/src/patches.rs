@@ -209,21 +209,16 @@ pub fn refine_patches(
             .collect();
         for run in spatial_runs(&mut members) {
             let first = 3 * order.len() as u32;
-            let mut aabb = Aabb::EMPTY;
-            let mut tris = Vec::with_capacity(run.len());
-            for &(t, _) in run {
-                let c = corners(t as u32).unwrap_or([Vec3::ZERO; 3]);
-                for q in c {
-                    aabb.add(q);
-                }
-                tris.push(c.map(|q| q.as_dvec3()));
-                order.push(t as u32);
-            }
+            order.extend(run.iter().map(|&(t, _)| t as u32));
+            let (bounds, aabb) = run_bounds(
+                run.iter()
+                    .map(|&(t, _)| corners(t as u32).unwrap_or([Vec3::ZERO; 3])),
+            );
             tiles.push(Tile {
                 patch: patch as u32,
                 first,
                 end: 3 * order.len() as u32,
-                bounds: PatchBounds::of_triangles(tris.into_iter()),
+                bounds,
                 aabb,
             });
         }
@@ -417,15 +412,16 @@ pub fn cluster_proxy_vertices(
             order[k..j].iter().map(|&(_, t)| (t, centroid(t))).collect();
         for run in spatial_runs(&mut members) {
             let first = out.len() as u32;
-            let mut aabb = Aabb::EMPTY;
             for &(t, _) in run {
-                for v in &vertices[3 * t..3 * t + 3] {
-                    aabb.add(Vec3::from(v.pos));
-                }
                 out.extend_from_slice(&vertices[3 * t..3 * t + 3]);
             }
+            let (bounds, aabb) = run_bounds(
+                out[first as usize..]
+                    .chunks_exact(3)
+                    .map(|t| [0, 1, 2].map(|k| Vec3::from(t[k].pos))),
+            );
             clusters.push(ProxyCluster {
-                bounds: cone_of(&out[first as usize..]),
+                bounds,
                 aabb,
                 first,
                 count: out.len() as u32 - first,
@@ -438,12 +434,18 @@ pub fn cluster_proxy_vertices(
 }
 
 /// Normal cone, box centre and plane offset of a run of triangles, as the bake
-/// computes them for patches ([`PatchBounds::of_triangles`]).
-fn cone_of(v: &[crate::vertex::ProxyVertex]) -> PatchBounds {
-    PatchBounds::of_triangles(
-        v.chunks_exact(3)
-            .map(|t| [0, 1, 2].map(|k| Vec3::from(t[k].pos).as_dvec3())),
-    )
+/// computes them for patches ([`PatchBounds::of_triangles`]), and the run's box.
+fn run_bounds(triangles: impl Iterator<Item = [Vec3; 3]>) -> (PatchBounds, Aabb) {
+    let mut aabb = Aabb::EMPTY;
+    let corners: Vec<[glam::DVec3; 3]> = triangles
+        .map(|t| {
+            for q in t {
+                aabb.add(q);
+            }
+            t.map(|q| q.as_dvec3())
+        })
+        .collect();
+    (PatchBounds::of_triangles(corners.into_iter()), aabb)
 }
 
 /// Whether the per-cluster frustum test of proxies is on (`HEXBAKE_PATCH_FRUSTUM`,
