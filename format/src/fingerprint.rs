@@ -42,8 +42,10 @@ pub type Fingerprint = [u8; 32];
 /// culled before clustering (issue 16, worker `bake.rs` step 2b);
 /// 14 — the vertex depth test of a collapse started from an LOD-chain level looks up
 /// the captured (full) mesh's triangle under the pixel, and a vertex on the tight
-/// capture's border is in the image (worker `visibility.rs`).
-pub const BAKE_REVISION: u32 = 14;
+/// capture's border is in the image (worker `visibility.rs`);
+/// 15 — levels of far-field groups, merged layered impostors beyond the first level
+/// (issue 27, `bake.far_levels`, worker `far_field.rs`).
+pub const BAKE_REVISION: u32 = 15;
 
 /// Hex form for file names, logs and reports.
 pub fn to_hex(f: &Fingerprint) -> String {
@@ -105,6 +107,7 @@ pub fn params_fingerprint(bake: &BakeParams, cells: &CellParams) -> Fingerprint 
         occlusion_culling,
         max_deviation_px,
         far_field,
+        far_levels,
         quality,
         // The check changes no pack: switching it does not rebake (a job's record
         // has the figures of the bake that made it).
@@ -126,6 +129,7 @@ pub fn params_fingerprint(bake: &BakeParams, cells: &CellParams) -> Fingerprint 
         *occlusion_culling as u8,
         *far_field as u8,
     ]);
+    h.update(&far_levels.to_le_bytes());
     // Objective selection (issue 16): absent, or its floor.
     match quality {
         None => h.update(&[0]),
@@ -210,6 +214,7 @@ mod tests {
             |b, _| b.occlusion_culling = true,
             |b, _| b.max_deviation_px = 0.0,
             |b, _| b.far_field = false,
+            |b, _| b.far_levels = 1,
             |b, _| b.quality = Some(Default::default()),
             |b, _| {
                 b.quality = Some(crate::manifest::QualityFloor {

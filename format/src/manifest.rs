@@ -158,6 +158,13 @@ pub struct BakeParams {
     /// one proxy for the group, stored once in `groups/<id>.pack`. Default on;
     /// `false` gives every cell its own proxy of every object (the paper's layout).
     pub far_field: bool,
+    /// Levels of far-field groups (issue 27; worker `far_field.rs`, "Levels"): level 1
+    /// the 7-cell groups, level k+1 the 7-groups of level k (49, 343, … cells); a
+    /// level beyond the first draws its far objects as merged layered impostors
+    /// (one per sector and depth band), so what a cell draws from all levels does not
+    /// grow with the world. 0 (default) = every level the grid needs (until one
+    /// group covers it); 1 = the one-level far field of bake revision 6–14.
+    pub far_levels: u32,
     /// Objective selection of representations (paper 004; issue 16; worker
     /// `select.rs`): the quality floor every proxy must meet on its own pixels from
     /// every sample viewpoint of its region; the cheapest candidate that does is
@@ -240,6 +247,7 @@ impl Default for BakeParams {
             occlusion_culling: false,
             max_deviation_px: DEFAULT_MAX_DEVIATION_PX,
             far_field: true,
+            far_levels: 0,
             quality: None,
             quality_check: true,
         }
@@ -793,6 +801,7 @@ struct RawBake {
     occlusion_culling: bool,
     max_deviation_px: f32,
     far_field: bool,
+    far_levels: u32,
     quality: Option<RawQuality>,
     quality_check: bool,
 }
@@ -827,6 +836,7 @@ impl Default for RawBake {
             occlusion_culling: d.occlusion_culling,
             max_deviation_px: d.max_deviation_px,
             far_field: d.far_field,
+            far_levels: d.far_levels,
             quality: None,
             quality_check: d.quality_check,
         }
@@ -1363,6 +1373,7 @@ impl Validator<'_> {
             occlusion_culling: b.occlusion_culling,
             max_deviation_px: self.non_negative("bake.max_deviation_px", b.max_deviation_px)?,
             far_field: b.far_field,
+            far_levels: b.far_levels,
             quality: b.quality.map(|q| self.quality(q)).transpose()?,
             quality_check: b.quality_check,
         };

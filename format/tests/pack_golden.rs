@@ -139,19 +139,52 @@ fn golden_v4_packs_decode_to_the_samples() {
     assert_base_group_and_index_are_the_samples(4);
 }
 
+/// Version 5 (issue 27): a group names its parent, the index lists each group's
+/// parent; the base and cell files hold the version-4 samples.
+#[test]
+fn golden_v5_packs_decode_to_the_samples() {
+    let open = |name: &str| PackFile::open(&golden(name)).unwrap();
+    assert_eq!(
+        CellPack::read(&golden("cell-v5.pack")).unwrap(),
+        sample::small_cell_v4()
+    );
+    assert_eq!(
+        BasePack::decode(&open("base-v5.pack")).unwrap(),
+        sample::small_base()
+    );
+    let group = CellPack::decode_group(&open("group-v5.pack")).unwrap();
+    assert_eq!(group, sample::small_group_v5());
+    assert_eq!(group.far_group, Some(7));
+    let index = Index::decode(&open("index-v5.pack")).unwrap();
+    assert_eq!(index, sample::small_index_v5());
+    assert_eq!(index.group(1).unwrap().group, Some(7));
+    assert_eq!(index.group(7).unwrap().group, None);
+    // Before version 5 a group with a parent is refused.
+    let mut v4 = std::fs::read(golden("group-v5.pack")).unwrap();
+    v4[12..16].copy_from_slice(&4u32.to_le_bytes());
+    let path = std::env::temp_dir().join(format!("hexbake-group-v4-{}.pack", std::process::id()));
+    std::fs::write(&path, &v4).unwrap();
+    let refused = PackFile::open(&path).and_then(|p| CellPack::decode_group(&p));
+    std::fs::remove_file(&path).ok();
+    assert!(
+        refused.is_err(),
+        "a version-4 group with a parent must be refused"
+    );
+}
+
 #[test]
 fn regenerating_the_golden_packs_gives_the_same_bytes() {
     assert_eq!(
-        FORMAT_VERSION, 4,
+        FORMAT_VERSION, 5,
         "a new version needs new golden files; keep the old ones"
     );
-    check_or_bless("base-v4.pack", sample::small_base().encode().unwrap());
-    check_or_bless("cell-v4.pack", sample::small_cell_v4().encode().unwrap());
+    check_or_bless("base-v5.pack", sample::small_base().encode().unwrap());
+    check_or_bless("cell-v5.pack", sample::small_cell_v4().encode().unwrap());
     check_or_bless(
-        "group-v4.pack",
-        sample::small_group().encode_group().unwrap(),
+        "group-v5.pack",
+        sample::small_group_v5().encode_group().unwrap(),
     );
-    check_or_bless("index-v4.pack", sample::small_index_v2().encode().unwrap());
+    check_or_bless("index-v5.pack", sample::small_index_v5().encode().unwrap());
 }
 
 /// Issue 16: a cell pack with a layered impostor (section `layered-impostors`)
@@ -163,10 +196,10 @@ fn golden_layered_impostor_pack() {
         CellPack::read(&golden("cell-impostor-v3.pack")).unwrap(),
         sample::small_cell_impostor()
     );
-    let path = golden("cell-impostor-v4.pack");
-    if FORMAT_VERSION == 4 {
+    let path = golden("cell-impostor-v5.pack");
+    if FORMAT_VERSION == 5 {
         check_or_bless(
-            "cell-impostor-v4.pack",
+            "cell-impostor-v5.pack",
             sample::small_cell_impostor().encode().unwrap(),
         );
     }
@@ -194,10 +227,10 @@ fn golden_packs_exercise_every_codec() {
     use format::pack::Codec;
     let mut seen = std::collections::BTreeSet::new();
     for name in [
-        "base-v4.pack",
-        "cell-v4.pack",
-        "group-v4.pack",
-        "index-v4.pack",
+        "base-v5.pack",
+        "cell-v5.pack",
+        "group-v5.pack",
+        "index-v5.pack",
     ] {
         for s in PackFile::read(&golden(name)).unwrap().sections() {
             seen.insert(s.codec as u32);

@@ -183,9 +183,10 @@ fn summarize(file: &PackFile) -> Result<String, format::pack::PackError> {
                 .flat_map(|p| &p.views)
                 .map(|v| v.texture.width as u64 * v.texture.height as u64)
                 .sum();
-            let far = match c.far_group {
-                Some(g) => format!(" (far field: group {g})"),
-                None => String::new(),
+            let far = match (c.far_group, group) {
+                (Some(g), false) => format!(" (far field: group {g})"),
+                (Some(g), true) => format!(" (parent: group {g})"),
+                (None, _) => String::new(),
             };
             // Textures by encoding: count and encoded bytes (issue 15).
             let mut by_encoding: std::collections::BTreeMap<&str, (usize, usize)> =
@@ -365,9 +366,10 @@ pub fn check_bake(dir: &Path) -> anyhow::Result<BakeCheck> {
                     entry.cell_id
                 ));
             }
-            if !is_group && pack.far_group != entry.group {
+            // A cell's far-field group, a group's parent (format version 5).
+            if pack.far_group != entry.group {
                 return Err(format!(
-                    "{}: far-field group {:?}, the index says {:?}",
+                    "{}: far-field group or parent {:?}, the index says {:?}",
                     path.display(),
                     pack.far_group,
                     entry.group

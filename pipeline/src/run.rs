@@ -282,7 +282,8 @@ pub fn assemble_available(l: &Loaded) -> Result<(Index, Vec<u32>), RunError> {
 }
 
 /// The index of the done jobs' packs. A cell is listed only when its far-field
-/// group (its record's `far_group`) is listed too.
+/// group (its record's `far_group`) is listed too, and a group only when its parent
+/// is.
 fn write_index(l: &Loaded, done: &[(&Job, JobRecord)]) -> Result<Index, RunError> {
     let mut entries = Vec::new();
     let mut groups = Vec::new();
@@ -299,10 +300,21 @@ fn write_index(l: &Loaded, done: &[(&Job, JobRecord)]) -> Result<Index, RunError
     for (job, record) in done {
         fps.push(job.fingerprint);
         for c in &record.groups {
-            groups.push(entry(c, Vec::new(), job.fingerprint, None));
+            // A group's `far_group` is its parent (format version 5, issue 27).
+            groups.push(entry(c, Vec::new(), job.fingerprint, c.report.far_group));
         }
     }
     groups.sort_by_key(|e| e.cell_id);
+    // A group is listed only when its parent is: from the top level down (parents
+    // have larger ids), so a listed cell's whole chain is listed.
+    let mut keep = vec![true; groups.len()];
+    for k in (0..groups.len()).rev() {
+        if let Some(p) = groups[k].group {
+            keep[k] = matches!(groups.binary_search_by_key(&p, |e| e.cell_id), Ok(j) if keep[j]);
+        }
+    }
+    let mut keep = keep.into_iter();
+    groups.retain(|_| keep.next().unwrap_or(false));
     let listed = |g: u32| groups.binary_search_by_key(&g, |e| e.cell_id).is_ok();
     for (job, record) in done {
         for c in &record.cells {
@@ -448,7 +460,7 @@ pub fn run_local_selected(
     // 2. The selected jobs; with --force their records go.
     let groups = &l.build.groups;
     let selected =
-        crate::subset::jobs_for_cells(&l.build.jobs, &selection.cells, |c| groups.group_of(c));
+        crate::subset::jobs_for_cells(&l.build.jobs, &selection.cells, |c| groups.chain(c));
     if force {
         for job in &selected {
             let _ = std::fs::remove_file(worker::job::record_path(&l.out, job.id));

@@ -193,18 +193,18 @@ pub fn resolve_cells(
 }
 
 /// The jobs holding at least one of `cells`, and the far-field jobs of every group
-/// (`group_of`) a cell of those jobs belongs to (so that each baked cell has its
-/// group and is listed in the index), in job order.
+/// (`groups_of`: a cell's chain, every level) a cell of those jobs belongs to (so
+/// that each baked cell has its groups and is listed in the index), in job order.
 pub fn jobs_for_cells(
     jobs: &[Job],
     cells: &BTreeSet<u32>,
-    group_of: impl Fn(u32) -> u32,
+    groups_of: impl Fn(u32) -> Vec<u32>,
 ) -> Vec<Job> {
     let holds = |j: &Job| j.cells.iter().any(|c| cells.contains(c));
     let groups: BTreeSet<u32> = jobs
         .iter()
         .filter(|j| holds(j))
-        .flat_map(|j| j.cells.iter().map(|&c| group_of(c)))
+        .flat_map(|j| j.cells.iter().flat_map(|&c| groups_of(c)))
         .collect();
     jobs.iter()
         .filter(|j| holds(j) || j.groups.iter().any(|g| groups.contains(g)))
@@ -359,12 +359,12 @@ mod tests {
                 fingerprint: [0; 32],
             });
         }
-        let picked = jobs_for_cells(&jobs, &BTreeSet::from([1, 6]), |c| c / 2);
+        let picked = jobs_for_cells(&jobs, &BTreeSet::from([1, 6]), |c| vec![c / 2]);
         assert_eq!(
             picked.iter().map(|j| j.id).collect::<Vec<_>>(),
             vec![0, 3, 4, 5]
         );
-        let picked = jobs_for_cells(&jobs, &BTreeSet::from([1]), |c| c / 2);
+        let picked = jobs_for_cells(&jobs, &BTreeSet::from([1]), |c| vec![c / 2]);
         assert_eq!(picked.iter().map(|j| j.id).collect::<Vec<_>>(), vec![0, 4]);
     }
 }

@@ -226,9 +226,10 @@ pub fn load_cell(
             found: pack.cell_id,
         });
     }
-    if group.is_none() && pack.far_group != entry.group {
+    // A cell's far-field group, or a group's parent (format version 5).
+    if pack.far_group != entry.group {
         return Err(not_this_bake(format!(
-            "its far-field group {:?} differs from index.pack's {:?}",
+            "its far-field group or parent {:?} differs from index.pack's {:?}",
             pack.far_group, entry.group
         )));
     }

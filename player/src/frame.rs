@@ -148,7 +148,9 @@ fn cell_list<'a>(
 ) -> DrawList<'a> {
     let f = camera.frustum();
     let packs: Vec<&'a ResidentCell> = match far {
-        Far::Pack(g) => vec![cell, *g],
+        Far::Packs(groups) => std::iter::once(cell)
+            .chain(groups.iter().copied())
+            .collect(),
         Far::None | Far::Unavailable => vec![cell],
     };
     let mut ids: std::collections::BTreeSet<u32> = cell.originals.iter().copied().collect();

@@ -35,7 +35,8 @@
 //!   geometry.
 //! - **Far field** (format version 2, issue 13): a cell whose index entry names a
 //!   far-field group also draws that group's pack (`groups/<id>.pack`), shared by
-//!   the group's cells. Groups stream like cells under keys after the cell ids
+//!   the group's cells, and (version 5, issue 27) the pack of each parent group
+//!   of the chain the index lists (levels of 7, 49, 343 … cells). Groups stream like cells under keys after the cell ids
 //!   ([`crate::bake::group_key`]): loaded on demand with the current cell,
 //!   prefetched with each neighbour, uploaded under the same budget, evicted LRU
 //!   (never the current cell's group). While a group is unavailable (missing or
@@ -267,9 +268,9 @@ pub enum CurrentCell<'a> {
 pub enum Far<'a> {
     /// The cell has no far-field group (format version 1, or `bake.far_field` off).
     None,
-    /// Its group's pack, resident.
-    Pack(&'a ResidentCell),
-    /// Its group's pack could not be loaded: the objects the cell has neither as
+    /// Its groups' packs, every level (level 1 first), resident.
+    Packs(Vec<&'a ResidentCell>),
+    /// A group's pack of its chain could not be loaded: the objects the cell has neither as
     /// originals nor as proxies are drawn as original geometry.
     Unavailable,
 }
@@ -305,26 +306,35 @@ pub struct Streamer {
     clock: u64,
     last_step: Option<(Vec3, Vec3)>,
     current: Option<u32>,
-    /// Streaming key of the current cell's far-field group.
-    current_group: Option<u32>,
+    /// Streaming keys of the current cell's far-field groups (level 1 first).
+    current_groups: Vec<u32>,
     /// Keys of the packs drawn before the last crossing (cell, group), kept as
     /// stand-ins until the current packs are ready.
     previous: Vec<u32>,
     stats: StreamStats,
 }
 
-/// The cell under `camera` and the streaming key of its far-field group.
-fn cell_and_group(bake: &Bake, camera: &Camera) -> (Option<u32>, Option<u32>) {
+/// The cell under `camera` and the streaming keys of its far-field groups.
+fn cell_and_group(bake: &Bake, camera: &Camera) -> (Option<u32>, Vec<u32>) {
     let cell = bake
         .grid
         .nearest_cell(Vec2::new(camera.eye.x, camera.eye.z));
-    (cell, cell.and_then(|id| group_key_of(bake, id)))
+    (cell, cell.map_or(Vec::new(), |id| group_keys_of(bake, id)))
 }
 
-/// The streaming key of `cell`'s far-field group, if it has one.
-fn group_key_of(bake: &Bake, cell: u32) -> Option<u32> {
-    let g = bake.index.as_ref()?.cell(cell)?.group?;
-    Some(crate::bake::group_key(&bake.base, g))
+/// The streaming keys of `cell`'s far-field groups: its group, then each parent
+/// (format version 5, issue 27; parents have larger ids, so the walk ends).
+fn group_keys_of(bake: &Bake, cell: u32) -> Vec<u32> {
+    let Some(index) = bake.index.as_ref() else {
+        return Vec::new();
+    };
+    let mut group = index.cell(cell).and_then(|e| e.group);
+    let mut keys = Vec::new();
+    while let Some(g) = group {
+        keys.push(crate::bake::group_key(&bake.base, g));
+        group = index.group(g).and_then(|e| e.group).filter(|&p| p > g);
+    }
+    keys
 }
 
 impl Streamer {
@@ -360,7 +370,7 @@ impl Streamer {
             clock: 0,
             last_step: None,
             current: None,
-            current_group: None,
+            current_groups: Vec::new(),
             previous: Vec::new(),
             stats: StreamStats::default(),
         }
@@ -403,18 +413,20 @@ impl Streamer {
         let (cell, group) = cell_and_group(bake, camera);
         if cell != self.current {
             // A crossing: the packs drawn so far become the stand-ins.
-            self.previous = [self.current, self.current_group]
-                .into_iter()
-                .flatten()
-                .filter(|k| Some(*k) != group && self.cells.contains_key(k))
+            self.previous = self
+                .current
+                .iter()
+                .chain(&self.current_groups)
+                .copied()
+                .filter(|k| !group.contains(k) && self.cells.contains_key(k))
                 .collect();
         }
         self.current = cell;
-        self.current_group = group;
+        self.current_groups = group;
         self.step_timestamp(bake, camera, cell);
         // 3. Make the current cell and its far-field group resident (demand load on
         //    a miss).
-        if let Some(k) = self.current_group {
+        for k in self.current_groups.clone() {
             self.load_now(renderer, bake, k);
             self.prioritise(k);
         }
@@ -438,7 +450,7 @@ impl Streamer {
         self.stats.timestamp = self.timestamp();
         let clock = self.clock;
         self.stats.pending_proxies = 0;
-        for k in [cell, self.current_group].into_iter().flatten() {
+        for k in cell.iter().chain(&self.current_groups) {
             if let Some(c) = self.cells.get_mut(&k) {
                 c.last_used = clock;
                 self.stats.pending_proxies += c.pending_proxies();
@@ -449,9 +461,15 @@ impl Streamer {
         }
         let current = match cell.and_then(|id| self.cells.get(&id)) {
             Some(c) => {
-                let far = match self.current_group {
-                    None => Far::None,
-                    Some(k) => self.cells.get(&k).map_or(Far::Unavailable, Far::Pack),
+                let groups: Option<Vec<&ResidentCell>> = self
+                    .current_groups
+                    .iter()
+                    .map(|k| self.cells.get(k))
+                    .collect();
+                let far = match groups {
+                    _ if self.current_groups.is_empty() => Far::None,
+                    Some(packs) => Far::Packs(packs),
+                    None => Far::Unavailable,
                 };
                 let stand_ins = self
                     .previous
@@ -474,8 +492,8 @@ impl Streamer {
     /// every object as original geometry. Streaming goes on from there as usual.
     /// The cache statistics do not count it.
     pub fn prime(&mut self, renderer: &Renderer, bake: &Bake, camera: &Camera) {
-        let (cell, group) = cell_and_group(bake, camera);
-        for key in [cell, group].into_iter().flatten() {
+        let (cell, groups) = cell_and_group(bake, camera);
+        for key in cell.into_iter().chain(groups) {
             self.load_now(renderer, bake, key);
             self.prioritise(key);
             while let Some(&(id, pi, vi)) = self.uploads.front().filter(|e| e.0 == key) {
@@ -545,7 +563,7 @@ impl Streamer {
             };
             let priority = cell_priority(camera, &prism, c);
             // The neighbour and its far-field group (often the current cell's own).
-            for key in std::iter::once(n).chain(group_key_of(bake, n)) {
+            for key in std::iter::once(n).chain(group_keys_of(bake, n)) {
                 if pushed.insert(key)
                     && !self.cells.contains_key(&key)
                     && !self.failed.contains(&key)
@@ -681,7 +699,7 @@ impl Streamer {
                 .values()
                 .filter(|c| {
                     Some(c.cell_id) != self.current
-                        && Some(c.cell_id) != self.current_group
+                        && !self.current_groups.contains(&c.cell_id)
                         && !self.previous.contains(&c.cell_id)
                 })
                 .min_by_key(|c| (c.last_used, c.cell_id))

@@ -38,7 +38,7 @@
 use crate::backface::all_culled;
 use crate::capture::pack_texture;
 use crate::cluster::{greedy_clusters, ClusterCandidate, ClusterSettings};
-use crate::far_field::{far_instances, CellGroups, FarField};
+use crate::far_field::{served_instances, CellGroups, FarField};
 use crate::grid::{HexGrid, Prism};
 use crate::impostor::{build_layered_impostor, LayeredImpostor};
 use crate::lod_chain::LodChains;
@@ -550,33 +550,41 @@ pub fn bake_group(
     let mut times = CellTimes::default();
     let t = Instant::now();
     let prism = groups.prism(grid, group, cells);
-    let far = far_instances(scene, &prism, params);
+    let far = served_instances(scene, grid, groups, group, cells, params);
     times.split_ms = ms_since(t);
-    // Step 2b on the group's prism: far objects under a pixel from all of it.
-    let (sv, small): (Vec<u32>, Vec<u32>) = (0..far.len() as u32)
-        .filter(|&i| far[i as usize])
-        .partition(|&i| {
+    let served: Vec<u32> = (0..far.len() as u32).filter(|&i| far[i as usize]).collect();
+    let (proxies, stage, culled) = if groups.level(group) >= 2 {
+        // Beyond the first level: merged layered impostors (`levels.rs`).
+        let (proxies, dropped) = merged_level(
+            scene, reuse, group, &prism, &served, cells, params, &mut times,
+        )?;
+        (proxies, StageTimes::default(), dropped)
+    } else {
+        // Step 2b on the group's prism: far objects under a pixel from all of it.
+        let (sv, small): (Vec<u32>, Vec<u32>) = served.iter().partition(|&&i| {
             let (lo, hi) = scene.instance_bounds(i as usize);
             params.quality.is_none() || !subpixel_from_region(lo, hi, &prism, params.image_res)
         });
-    let region = Region {
-        id: group,
-        prism,
-        eyes: vec![prism.centre3()],
-        size: prism.cell_size,
+        let region = Region {
+            id: group,
+            prism,
+            eyes: vec![prism.centre3()],
+            size: prism.cell_size,
+        };
+        let (proxies, stage) = derive_region(
+            scene,
+            chains,
+            reuse,
+            &region,
+            &sv,
+            &[],
+            cells,
+            params,
+            &mut times,
+        )?;
+        let culled = small.len() as u32 + selection_culled(sv.len(), &proxies);
+        (proxies, stage, culled)
     };
-    let (proxies, stage) = derive_region(
-        scene,
-        chains,
-        reuse,
-        &region,
-        &sv,
-        &[],
-        cells,
-        params,
-        &mut times,
-    )?;
-    let culled = small.len() as u32 + selection_culled(sv.len(), &proxies);
     let mut assignment = vec![Assignment::Culled; scene.instances.len()];
     for (k, p) in proxies.iter().enumerate() {
         for m in &p.members {
@@ -593,14 +601,68 @@ pub fn bake_group(
         times,
         start,
     );
+    bake.far_group = groups.parent(group);
     bake.stats.far_objects = groups.cells(group).len() as u32;
     bake.stats.selection_culled = culled;
     Ok(bake)
 }
 
+/// The proxies of a group of level ≥ 2 ([`crate::levels`]): one merged layered
+/// impostor per sector and depth band of the objects it serves, each reused by key
+/// when an earlier bake has it; also the count of objects dropped as under a pixel.
+#[allow(clippy::too_many_arguments)]
+fn merged_level(
+    scene: &Scene,
+    reuse: &ProxyReuse,
+    group: u32,
+    prism: &Prism,
+    served: &[u32],
+    cells: &CellParams,
+    params: &BakeParams,
+    times: &mut CellTimes,
+) -> Result<(Vec<BakedProxy>, u32), BakeError> {
+    let t = Instant::now();
+    let (bands, dropped) = crate::levels::bands(scene, prism, served, params.image_res);
+    times.cluster_ms += ms_since(t);
+    let t = Instant::now();
+    let params_fp = format::fingerprint::params_fingerprint(params, cells);
+    let centre = prism.centre3();
+    let built: Vec<Result<Option<BakedProxy>, BakeError>> = bands
+        .par_iter()
+        .map(|band| {
+            let kind = ProxyKind::LayeredImpostor;
+            let key = proxy_key(scene, &params_fp, kind, &band.members, prism, &[centre]);
+            if let Some(packed) = reuse.get(&key) {
+                return Ok(Some(BakedProxy::reused(packed, key)));
+            }
+            crate::levels::merged_impostor(scene, prism, band, params.image_res, key).map_err(|e| {
+                BakeError::Texture {
+                    cell: group,
+                    instance: band.members[0],
+                    what: format!(
+                        "merged layered impostor of {} objects: {e}",
+                        band.members.len()
+                    ),
+                }
+            })
+        })
+        .collect();
+    let mut proxies = Vec::with_capacity(built.len());
+    let mut empty = 0u32;
+    for (band, b) in bands.iter().zip(built) {
+        match b? {
+            Some(p) => proxies.push(p),
+            None => empty += band.members.len() as u32,
+        }
+    }
+    times.capture_ms += ms_since(t);
+    Ok((proxies, dropped.len() as u32 + empty))
+}
+
 /// Everything the hybrid draws from `cell` (for `worker check` and CPU renders):
-/// the cell's bake ([`bake_cell_with`]) with, when `params.far_field` is on, its
-/// group's far-field proxies ([`bake_group`]) appended and its [`Assignment::Far`]
+/// the cell's bake ([`bake_cell_with`]) with, when `params.far_field` is on, the
+/// far-field proxies of every group of its chain ([`bake_group`], level 1 first)
+/// appended and its [`Assignment::Far`]
 /// objects pointing at them. Stats are the cell's own plus the group proxies'
 /// counts, polygons and texture bytes.
 #[allow(clippy::too_many_arguments)]
@@ -628,20 +690,28 @@ pub fn bake_cell_hybrid(
     let Some(far) = far else {
         return Ok(bake);
     };
-    let group = bake_group(scene, chains, &none, grid, groups, far.group, cells, params)?;
+    // Every level of the cell's chain: level 1, then each parent.
+    for g in groups.ancestors_and_self(far.group) {
+        let group = bake_group(scene, chains, &none, grid, groups, g, cells, params)?;
+        append_group(&mut bake, group);
+    }
+    // Far objects that no group drew (under a pixel from all of a group's prism).
+    for a in bake.assignment.iter_mut() {
+        if *a == Assignment::Far {
+            *a = Assignment::Culled;
+            bake.stats.culled += 1;
+        }
+    }
+    Ok(bake)
+}
+
+/// Appends a group's proxies to a cell's bake: its [`Assignment::Far`] objects that
+/// the group draws point at them, and the stats add up.
+fn append_group(bake: &mut CellBake, group: CellBake) {
     let offset = bake.proxies.len() as u32;
     for (i, a) in group.assignment.iter().enumerate() {
-        match (*a, bake.assignment[i]) {
-            (Assignment::Proxy(k), Assignment::Far) => {
-                bake.assignment[i] = Assignment::Proxy(offset + k)
-            }
-            // Culled by the group's objective selection (under a pixel from all of
-            // the group's prism): culled from the cell too.
-            (_, Assignment::Far) => {
-                bake.assignment[i] = Assignment::Culled;
-                bake.stats.culled += 1;
-            }
-            _ => {}
+        if let (Assignment::Proxy(k), Assignment::Far) = (*a, bake.assignment[i]) {
+            bake.assignment[i] = Assignment::Proxy(offset + k)
         }
     }
     let (s, g) = (&mut bake.stats, &group.stats);
@@ -664,7 +734,6 @@ pub fn bake_cell_hybrid(
         *t.0 += t.1;
     }
     bake.proxies.extend(group.proxies);
-    Ok(bake)
 }
 
 /// Candidates (SV and MV objects) that ended in no proxy: culled by the objective

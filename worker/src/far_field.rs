@@ -36,9 +36,35 @@
 //! it) is a *far* object of the group: it gets one SvMesh or cluster proxy, derived
 //! once from the group centre exactly as a cell derives its SV proxies (captures,
 //! classes, weights, collapse, clustering), stored once in `groups/<id>.pack` and
-//! drawn by every cell of the group. Nearer objects keep per-cell proxies. One level
-//! of groups: a second level (49 cells) would serve only objects √7 times farther
-//! still, of which the paper's parks have few.
+//! drawn by every cell of the group. Nearer objects keep per-cell proxies.
+//!
+//! # Levels (issue 27)
+//!
+//! One level is not enough for a world: a 7-cell group's far objects are every
+//! single-view object of the *whole* world, so what a cell draws grew with the world
+//! (park-2m tiled 3 × 3: 50× the far objects of the cell's group). The flower
+//! construction repeats: the level-1 centres form a hexagonal lattice of their own
+//! — in the basis a = (2, 1), b = (3, −2) (axial), whose six shortest vectors are
+//! ±a, ±b, ±(a − b), lattice coordinates `(u, v)` (`(q, r) = u·a + v·b`) are axial
+//! coordinates of a hex grid √7 times larger, rotated by atan(√3/5) ≈ 19.1° — so
+//! level 2 is the flowers of level-1 groups (49 cells), level 3 of level-2 groups
+//! (343 cells), and so on, until one group holds every cell (at most
+//! [`MAX_LEVELS`]). Group ids run over the levels, level 1 first (its ids and
+//! prisms are those of the one-level far field). Each group names its parent.
+//!
+//! A level-k group's cells lie within R_k of its centre, R₁ = √7·c (exact) and
+//! R_{k+1} = R_k + √3·√7^k·c (its children's centres lie one level-k lattice step,
+//! √3·√7^k·c, from its centre; partial groups at the border only shrink); its prism
+//! is the flat-top hexagon of inradius R_k ([`level_radius`]), so it holds the prism
+//! of every cell and of every child group, and every test above stays conservative.
+//!
+//! Which group draws an object is decided for a cell's whole chain (level 1, its
+//! parent, …): the *highest* group for which the object is far
+//! ([`served_instances`]: far for the group, far for none of its ancestors); a
+//! cell derives only objects far for no group of its chain ([`FarField::of_cell`]).
+//! The sets are disjoint and cover what the cell would have derived. Level 1 keeps
+//! SvMesh and cluster proxies, one per object of a bounded annulus; higher levels
+//! draw merged layered impostors ([`crate::levels`]), a bounded number per group.
 
 use crate::backface::all_culled;
 use crate::grid::{HexGrid, Prism};
@@ -47,17 +73,28 @@ use format::manifest::{BakeParams, CellParams};
 use format::Scene;
 use rayon::prelude::*;
 
-/// Size (centre-to-corner) of a group prism in cell sizes: 2√7/√3 (module docs).
+/// Size (centre-to-corner) of a level-1 group prism in cell sizes: 2√7/√3 (module
+/// docs).
 pub const GROUP_SIZE_FACTOR: f32 = 3.055_050_5;
 
-/// The 7-cell groups of a grid (module docs, "Layout").
+/// Most levels of groups a grid gets (7⁸ ≈ 5.8M cells in one top group).
+pub const MAX_LEVELS: u32 = 8;
+
+/// The groups of a grid at every level (module docs, "Layout" and "Levels"): level 1
+/// the 7-cell flowers, level k+1 the flowers of level-k groups. Ids run over all
+/// levels, level 1 first (ids `0..level_len(1)`, unchanged from the one-level far
+/// field), then level 2, and so on.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CellGroups {
     /// Per group: its centre's lattice position `(col, row)` (possibly off the grid).
     centres: Vec<(i64, i64)>,
+    /// Per group: its level (1, 2, …).
+    levels: Vec<u32>,
+    /// Per group: its parent (the group of the next level holding its cells).
+    parents: Vec<Option<u32>>,
     /// Per group: its cells, ascending.
     cells: Vec<Vec<u32>>,
-    /// Per cell: its group.
+    /// Per cell: its level-1 group.
     of_cell: Vec<u32>,
 }
 
@@ -79,42 +116,124 @@ fn is_centre(q: i64, r: i64) -> bool {
     (q - 2 * r).rem_euclid(7) == 0
 }
 
+/// The flower centre of axial `(q, r)`: itself or the one neighbour that is a centre.
+fn flower_centre(q: i64, r: i64) -> (i64, i64) {
+    let (dq, dr) = std::iter::once((0, 0))
+        .chain(AXIAL_NEIGHBOURS)
+        .find(|&(dq, dr)| is_centre(q + dq, r + dr))
+        .expect("every position is a flower centre or next to exactly one");
+    (q + dq, r + dr)
+}
+
+/// Lattice coordinates `(u, v)` of flower centre `(q, r)` in the basis
+/// a = (2, 1), b = (3, −2) (module docs, "Levels"): `(q, r) = u·a + v·b`.
+fn to_lattice(q: i64, r: i64) -> (i64, i64) {
+    debug_assert!(is_centre(q, r));
+    let v = (q - 2 * r).div_euclid(7);
+    (r + 2 * v, v)
+}
+
+/// Inverse of [`to_lattice`]: `u·a + v·b`.
+fn from_lattice(u: i64, v: i64) -> (i64, i64) {
+    (2 * u + 3 * v, u - 2 * v)
+}
+
+/// Radius (in cell sizes) of the disc about a level-`level` group's centre that
+/// holds every point of its cells (module docs, "Levels"): R₁ = √7, then
+/// R_{k+1} = R_k + √3·√7^k (a child's centre lies one level-k lattice step away).
+pub fn level_radius(level: u32) -> f64 {
+    let (s3, s7) = (3f64.sqrt(), 7f64.sqrt());
+    let mut r = s7;
+    for k in 1..level.max(1) {
+        r += s3 * s7.powi(k as i32);
+    }
+    r
+}
+
 impl CellGroups {
+    /// Every level a grid needs (up to [`MAX_LEVELS`]): levels are added until one
+    /// has a single group.
     pub fn new(grid: &HexGrid) -> CellGroups {
-        let n = grid.cell_count();
-        let centre_of: Vec<(i64, i64)> = (0..n)
-            .map(|id| {
-                let (col, row) = grid.col_row(id);
-                let (q, r) = axial(col as i64, row as i64);
-                let (dq, dr) = std::iter::once((0, 0))
-                    .chain(AXIAL_NEIGHBOURS)
-                    .find(|&(dq, dr)| is_centre(q + dq, r + dr))
-                    .expect("every cell is a flower centre or next to exactly one");
-                let (c, rw) = offset(q + dq, r + dr);
-                (rw, c)
-            })
-            .collect();
-        let mut centres: Vec<(i64, i64)> = centre_of.clone();
-        centres.sort_unstable();
-        centres.dedup();
-        let mut cells = vec![Vec::new(); centres.len()];
-        let of_cell: Vec<u32> = centre_of
-            .iter()
-            .enumerate()
-            .map(|(id, key)| {
-                let g = centres.binary_search(key).expect("listed above");
-                cells[g].push(id as u32);
-                g as u32
-            })
-            .collect();
-        CellGroups {
-            centres: centres.into_iter().map(|(row, col)| (col, row)).collect(),
-            cells,
-            of_cell,
+        CellGroups::with_levels(grid, MAX_LEVELS)
+    }
+
+    /// The levels `params.far_levels` asks for (0 = every level the grid needs).
+    pub fn for_params(grid: &HexGrid, params: &BakeParams) -> CellGroups {
+        match params.far_levels {
+            0 => CellGroups::new(grid),
+            n => CellGroups::with_levels(grid, n),
         }
     }
 
-    /// Number of groups.
+    /// At most `max_levels` levels (at least 1); fewer when a level has one group.
+    pub fn with_levels(grid: &HexGrid, max_levels: u32) -> CellGroups {
+        let n = grid.cell_count();
+        // Per cell: its centre at the current level, in that level's lattice
+        // coordinates (level 0: the cell's own axial position).
+        let mut at: Vec<(i64, i64)> = (0..n)
+            .map(|id| {
+                let (col, row) = grid.col_row(id);
+                axial(col as i64, row as i64)
+            })
+            .collect();
+        let mut groups = CellGroups {
+            centres: Vec::new(),
+            levels: Vec::new(),
+            parents: Vec::new(),
+            cells: Vec::new(),
+            of_cell: vec![0; n as usize],
+        };
+        let mut previous: Vec<u32> = Vec::new(); // per cell: its group one level down
+        for level in 1..=max_levels.clamp(1, MAX_LEVELS) {
+            // Centres at this level, in level-0 axial coordinates for the ordering.
+            let mut key_of: Vec<(i64, i64)> = Vec::with_capacity(n as usize);
+            for p in at.iter_mut() {
+                let (q, r) = flower_centre(p.0, p.1);
+                *p = to_lattice(q, r);
+                let (mut q0, mut r0) = (q, r);
+                for _ in 1..level {
+                    (q0, r0) = from_lattice(q0, r0);
+                }
+                let (c, rw) = offset(q0, r0);
+                key_of.push((rw, c));
+            }
+            let mut keys = key_of.clone();
+            keys.sort_unstable();
+            keys.dedup();
+            let first = groups.cells.len() as u32;
+            groups
+                .cells
+                .extend(std::iter::repeat_n(Vec::new(), keys.len()));
+            let mine: Vec<u32> = key_of
+                .iter()
+                .enumerate()
+                .map(|(id, key)| {
+                    let g = first + keys.binary_search(key).expect("listed above") as u32;
+                    groups.cells[g as usize].push(id as u32);
+                    g
+                })
+                .collect();
+            groups
+                .centres
+                .extend(keys.iter().map(|&(row, col)| (col, row)));
+            groups.levels.extend(std::iter::repeat_n(level, keys.len()));
+            groups.parents.extend(std::iter::repeat_n(None, keys.len()));
+            if level == 1 {
+                groups.of_cell = mine.clone();
+            } else {
+                for (cell, &child) in previous.iter().enumerate() {
+                    groups.parents[child as usize] = Some(mine[cell]);
+                }
+            }
+            previous = mine;
+            if keys.len() <= 1 {
+                break;
+            }
+        }
+        groups
+    }
+
+    /// Number of groups over all levels.
     pub fn len(&self) -> u32 {
         self.cells.len() as u32
     }
@@ -123,9 +242,34 @@ impl CellGroups {
         self.cells.is_empty()
     }
 
-    /// The group of a cell of the grid.
+    /// Number of levels.
+    pub fn level_count(&self) -> u32 {
+        self.levels.last().copied().unwrap_or(0)
+    }
+
+    /// The level of a group (1 = 7-cell flowers).
+    pub fn level(&self, group: u32) -> u32 {
+        self.levels[group as usize]
+    }
+
+    /// The group of the next level that holds this group's cells.
+    pub fn parent(&self, group: u32) -> Option<u32> {
+        self.parents[group as usize]
+    }
+
+    /// The level-1 group of a cell of the grid.
     pub fn group_of(&self, cell: u32) -> u32 {
         self.of_cell[cell as usize]
+    }
+
+    /// The groups of a cell, level 1 first, then each parent.
+    pub fn chain(&self, cell: u32) -> Vec<u32> {
+        self.ancestors_and_self(self.group_of(cell))
+    }
+
+    /// `group`, then its parent, its parent's parent, … .
+    pub fn ancestors_and_self(&self, group: u32) -> Vec<u32> {
+        std::iter::successors(Some(group), |&g| self.parent(g)).collect()
     }
 
     /// The cells of a group, ascending.
@@ -133,12 +277,18 @@ impl CellGroups {
         &self.cells[group as usize]
     }
 
-    /// The group prism (module docs, "The region a group serves").
+    /// The group prism (module docs, "The region a group serves" and "Levels").
     pub fn prism(&self, grid: &HexGrid, group: u32, cells: &CellParams) -> Prism {
         let (col, row) = self.centres[group as usize];
+        let level = self.level(group);
+        let factor = if level <= 1 {
+            GROUP_SIZE_FACTOR
+        } else {
+            (2.0 / 3f64.sqrt() * level_radius(level)) as f32
+        };
         Prism {
             centre: grid.lattice_centre(col, row),
-            cell_size: GROUP_SIZE_FACTOR * grid.cell_size(),
+            cell_size: factor * grid.cell_size(),
             min_y: cells.min_eye_height,
             max_y: cells.max_eye_height,
         }
@@ -162,25 +312,50 @@ pub fn far_instances(scene: &Scene, prism: &Prism, params: &BakeParams) -> Vec<b
                 return false;
             }
             let (lo, hi) = scene.instance_bounds(i);
-            if prism.intersects_aabb(lo, hi) || all_culled(&model.mesh, inst.transform, &corners) {
+            if prism.intersects_aabb(lo, hi) {
                 return false;
             }
+            // The cheap test first: the back-face test reads every triangle.
             let error = object_self_occluding_error(prism.cell_size, params.image_res, eye, lo, hi);
             choose_representation(error, params.self_occluding_tolerance_px) == Representation::Sv
+                && !all_culled(&model.mesh, inst.transform, &corners)
         })
         .collect()
 }
 
-/// What a cell's bake needs to know of its group's far field.
+/// What group `group` serves (module docs, "Levels"): its far objects that are far
+/// for none of its ancestors (those draw them).
+pub fn served_instances(
+    scene: &Scene,
+    grid: &HexGrid,
+    groups: &CellGroups,
+    group: u32,
+    cells: &CellParams,
+    params: &BakeParams,
+) -> Vec<bool> {
+    let chain = groups.ancestors_and_self(group);
+    let mut served = far_instances(scene, &groups.prism(grid, group, cells), params);
+    for &a in &chain[1..] {
+        let far = far_instances(scene, &groups.prism(grid, a, cells), params);
+        for (s, f) in served.iter_mut().zip(far) {
+            *s &= !f;
+        }
+    }
+    served
+}
+
+/// What a cell's bake needs to know of its groups' far field.
 #[derive(Clone, Debug, PartialEq)]
 pub struct FarField {
+    /// The cell's level-1 group (its pack names it; the groups name their parents).
     pub group: u32,
-    /// Per instance: drawn from the group's pack, not derived for the cell.
+    /// Per instance: drawn from one of the groups' packs, not derived for the cell
+    /// (far for at least one group of the cell's chain).
     pub instances: Vec<bool>,
 }
 
 impl FarField {
-    /// The far field of `cell`'s group, or `None` when `params.far_field` is off.
+    /// The far field of `cell`'s groups, or `None` when `params.far_field` is off.
     pub fn of_cell(
         scene: &Scene,
         grid: &HexGrid,
@@ -193,11 +368,14 @@ impl FarField {
             return None;
         }
         let group = groups.group_of(cell);
-        let prism = groups.prism(grid, group, cells);
-        Some(FarField {
-            group,
-            instances: far_instances(scene, &prism, params),
-        })
+        let mut instances = vec![false; scene.instances.len()];
+        for g in groups.chain(cell) {
+            let far = far_instances(scene, &groups.prism(grid, g, cells), params);
+            for (s, f) in instances.iter_mut().zip(far) {
+                *s |= f;
+            }
+        }
+        Some(FarField { group, instances })
     }
 }
 

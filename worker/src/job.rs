@@ -82,7 +82,7 @@ pub fn plan_jobs(plan: &Plan, scene: &Scene) -> BuildPlan {
             col = end;
         }
     }
-    let groups = CellGroups::new(&grid);
+    let groups = CellGroups::for_params(&grid, &plan.bake);
     if plan.bake.far_field {
         let ids: Vec<u32> = (0..groups.len()).collect();
         for chunk in ids.chunks(per_job as usize) {

@@ -13,6 +13,7 @@ pub mod far_field;
 pub mod grid;
 pub mod impostor;
 pub mod job;
+pub mod levels;
 pub mod lod_chain;
 pub mod mesh_order;
 pub mod mvmesh;

@@ -227,7 +227,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
                 format::manifest::parse_manifest_with(&manifest, &overrides).map_err(bad_input)?;
             let scene = plan.load_scene().map_err(bad_input)?;
             let grid = worker::grid::HexGrid::new(scene.ground, plan.cells.cell_size);
-            let groups = worker::far_field::CellGroups::new(&grid);
+            let groups = worker::far_field::CellGroups::for_params(&grid, &plan.bake);
             // The chains of the manifest's output, as the bake uses them.
             let chains = if no_lod_chain {
                 worker::lod_chain::LodChains::none()

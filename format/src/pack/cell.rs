@@ -364,10 +364,17 @@ impl CellPack {
     }
 
     fn check_group(&self) -> Result<(), PackError> {
-        if !self.originals.is_empty() || self.far_group.is_some() {
+        if !self.originals.is_empty() {
             return Err(invalid(format!(
-                "group {}: a group pack has no originals and no far group",
+                "group {}: a group pack has no originals",
                 self.cell_id
+            )));
+        }
+        // Version 5 (issue 27): a group's `far_group` is its parent, of a larger id.
+        if self.far_group.is_some_and(|p| p <= self.cell_id) {
+            return Err(invalid(format!(
+                "group {}: its parent {:?} must have a larger id",
+                self.cell_id, self.far_group
             )));
         }
         Ok(())
@@ -491,12 +498,13 @@ impl CellPack {
     pub fn decode_group(pack: &PackFile) -> Result<CellPack, PackError> {
         pack.expect_kind(FileKind::Group)?;
         let group = CellPack::decode_any(pack)?;
-        if !group.originals.is_empty() || group.far_group.is_some() {
+        // Version 5 (issue 27): a group's `far_group` is its parent group.
+        if !group.originals.is_empty() || (pack.version() < 5 && group.far_group.is_some()) {
             return Err(malformed(
                 pack.path(),
                 SectionKind::CELL_META,
                 36,
-                "a group pack lists originals or a far group",
+                "a group pack lists originals or (before version 5) a far group",
             ));
         }
         Ok(group)

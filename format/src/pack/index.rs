@@ -27,8 +27,9 @@ pub struct IndexEntry {
     pub neighbours: Vec<u32>,
     /// The job fingerprint the cell was baked with.
     pub fingerprint: [u8; 32],
-    /// A cell's far-field group (an entry of [`Index::groups`]), `None` without one;
-    /// always `None` for a group's own entry (format version 2; `None` in version 1).
+    /// A cell's far-field group (an entry of [`Index::groups`]), `None` without one
+    /// (format version 2; `None` in version 1); for a group's own entry, its parent
+    /// group of the next level, of a larger id (version 5, issue 27; `None` before).
     pub group: Option<u32>,
 }
 
@@ -249,11 +250,20 @@ impl Index {
                     g.cell_id
                 )));
             }
-            if !g.neighbours.is_empty() || g.group.is_some() {
+            if !g.neighbours.is_empty() {
                 return Err(invalid(format!(
-                    "group {}: a group entry has no neighbours and no group",
+                    "group {}: a group entry has no neighbours",
                     g.cell_id
                 )));
+            }
+            // Version 5: a group names its parent, a listed group of a larger id.
+            if let Some(p) = g.group {
+                if p <= g.cell_id || self.group(p).is_none() {
+                    return Err(invalid(format!(
+                        "group {}: its parent {p} is not a listed group of a larger id",
+                        g.cell_id
+                    )));
+                }
             }
         }
         for (i, c) in self.cells.iter().enumerate() {
@@ -281,6 +291,7 @@ impl Index {
         for g in &self.groups {
             check_file_and_size("group", g)?;
             group_records.push(entry_record(g, &mut names)?);
+            cell_groups.push(g.group.unwrap_or(NO_GROUP));
         }
         let meta = IndexMetaRecord {
             build_fingerprint: self.build_fingerprint,
@@ -461,15 +472,37 @@ impl Index {
             });
         }
         let cell_groups: Vec<u32> = pack.section_vec(SectionKind::INDEX_CELL_GROUPS)?;
-        if cell_groups.len() != cells.len() {
+        // Version 5: the cells' groups, then each group's parent.
+        let parents = if pack.version() >= 5 { groups.len() } else { 0 };
+        if cell_groups.len() != cells.len() + parents {
             return Err(malformed(
                 file,
                 SectionKind::INDEX_CELL_GROUPS,
                 0,
-                format!("{} entries for {} cells", cell_groups.len(), cells.len()),
+                format!(
+                    "{} entries for {} cells and {parents} group parents",
+                    cell_groups.len(),
+                    cells.len()
+                ),
             ));
         }
-        for (k, (cell, &g)) in cells.iter_mut().zip(&cell_groups).enumerate() {
+        let (cell_groups, group_parents) = cell_groups.split_at(cells.len());
+        for k in 0..group_parents.len() {
+            let (id, p) = (groups[k].cell_id, group_parents[k]);
+            if p == NO_GROUP {
+                continue;
+            }
+            if p <= id || groups.binary_search_by_key(&p, |e| e.cell_id).is_err() {
+                return Err(malformed(
+                    file,
+                    SectionKind::INDEX_CELL_GROUPS,
+                    ((cells.len() + k) * 4) as u64,
+                    format!("group {id}: its parent {p} is not a listed group of a larger id"),
+                ));
+            }
+            groups[k].group = Some(p);
+        }
+        for (k, (cell, &g)) in cells.iter_mut().zip(cell_groups).enumerate() {
             if g == NO_GROUP {
                 continue;
             }

@@ -11,7 +11,7 @@ use std::fmt;
 /// First 8 bytes of every pack.
 pub const MAGIC: [u8; 8] = *b"HEXBAKE\0";
 /// The format version this crate writes (and the newest it reads).
-pub const FORMAT_VERSION: u32 = 4;
+pub const FORMAT_VERSION: u32 = 5;
 /// Every section starts at a multiple of this many bytes from the file start, so a
 /// memory-mapped (page-aligned) raw section can be viewed as `&[f32]`, `&[[u32; 3]]`...
 pub const SECTION_ALIGN: u64 = 64;

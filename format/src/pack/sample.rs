@@ -459,6 +459,34 @@ pub fn small_group() -> CellPack {
     }
 }
 
+/// The content of `tests/data/group-v5.pack`: [`small_group`] naming its parent,
+/// group 7 (format version 5, issue 27).
+pub fn small_group_v5() -> CellPack {
+    CellPack {
+        far_group: Some(7),
+        ..small_group()
+    }
+}
+
+/// The content of `tests/data/index-v5.pack`: [`small_index_v2`] with a level-2
+/// group 7 that is the parent of groups 1 and 3 (format version 5, issue 27).
+pub fn small_index_v5() -> Index {
+    let mut index = small_index_v2();
+    for g in &mut index.groups {
+        g.group = Some(7);
+    }
+    index.groups.push(IndexEntry {
+        cell_id: 7,
+        file: "groups/7.pack".into(),
+        bytes: 2007,
+        checksum: *blake3::hash(b"group 7").as_bytes(),
+        neighbours: Vec::new(),
+        fingerprint: *blake3::hash(b"group job 7").as_bytes(),
+        group: None,
+    });
+    index
+}
+
 /// The content of `tests/data/index-v2.pack`: [`small_index`] plus far-field groups
 /// 1 (cells 5, 6) and 3 (cells 12, 13).
 pub fn small_index_v2() -> Index {

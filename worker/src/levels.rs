@@ -1,0 +1,208 @@
+//! Merged far field beyond the first level (issue 27; DESIGN.md "Far away, cells
+//! share — at every scale"): the objects a group of level ≥ 2 serves
+//! ([`crate::far_field::served_instances`]) are drawn as a bounded number of merged
+//! layered impostors (paper 001, [`crate::impostor`]) instead of one proxy each.
+//!
+//! # Merging: sectors and depth bands
+//!
+//! Seen from the group centre, the served objects are split by the azimuth of their
+//! box centre into [`SECTORS`] sectors of 60° (the cell hexagon's side faces, the
+//! capture's angular unit), and each sector, in order of distance, into depth bands:
+//! a band grows while 001 §3.3's layer count for its inverse-depth range, viewers up
+//! to the group prism's farthest corner and an error of one output pixel stays
+//! within [`BAND_LAYERS`] (below [`crate::impostor::MAX_LAYERS`], so the impostor
+//! builder never clamps, and its error bound of one pixel holds). One band of one
+//! sector is one capture (colour + depth code, the members alone) and one impostor
+//! of at most `MAX_LAYERS` quads, drawn with one draw call.
+//!
+//! # Why the count is bounded
+//!
+//! A level-k group's prism is √7 times the size of a level-(k−1) one and the objects
+//! it serves are those the level below passes up: single-view from a region √7 times
+//! larger, i.e. about √7 times farther. The whole configuration (region size,
+//! distances, 1/depth ranges × viewer offset) scales by the same factor, so the
+//! number of depth bands per sector — and of impostors per group — is the same at
+//! every level, whatever the number of objects in the annulus. A cell draws its own
+//! proxies, the level-1 group's (one per object of a bounded annulus) and at most
+//! `SECTORS × bands` impostors per higher level; levels grow as log₇ of the world's
+//! cell count.
+//!
+//! # Error bound
+//!
+//! Every served object passed the paper's tests for the whole group region (outside
+//! its prism, regional back-face, self-occluding error below T_s from the group
+//! centre with c = the region's size), as the level-1 groups' objects do. The
+//! impostor adds 001's parallax error, at most one output pixel for every viewer in
+//! the group prism (`BAND_LAYERS` layers per band), and draws the capture's texels
+//! (one texel per output pixel seen from the centre). Objects under a pixel from the
+//! whole region are dropped ([`crate::select::subpixel_from_region`]), the one
+//! object-dropping rule of every level; nothing is clipped by distance.
+
+use crate::bake::{BakedMember, BakedProxy};
+use crate::grid::Prism;
+use crate::impostor::build_layered_impostor;
+use crate::raster::DrawItem;
+use crate::select::subpixel_from_region;
+use format::pack::ProxyKind;
+use format::Scene;
+use glam::Vec3;
+
+/// Azimuth sectors of a merged level (60° each).
+pub const SECTORS: usize = 6;
+
+/// Most layers a depth band may need (module docs, "Merging").
+pub const BAND_LAYERS: f64 = 24.0;
+
+/// One merged impostor to build: its members, in ascending instance order.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Band {
+    pub sector: usize,
+    pub members: Vec<u32>,
+}
+
+/// The largest distance from the capture eye to the prism's corners: 001's viewer
+/// offset `e`.
+pub fn max_offset(prism: &Prism) -> f32 {
+    let eye = prism.centre3();
+    prism
+        .corners()
+        .iter()
+        .map(|c| c.distance(eye))
+        .fold(0.0f32, f32::max)
+}
+
+/// 001 §3.3's layer count, unclamped, for depths `near..far` (module docs).
+fn layers_needed(near: f32, far: f32, offset: f32, image_res: u32) -> f64 {
+    let pixel_angle = std::f64::consts::FRAC_PI_3 / f64::from(image_res.max(1));
+    let span = (1.0 / f64::from(near.max(1e-6)) - 1.0 / f64::from(far.max(near))).max(0.0);
+    f64::from(offset) * span / (2.0 * pixel_angle)
+}
+
+/// Splits `served` (instance ids, ascending) into sectors and depth bands seen from
+/// the prism's centre (module docs, "Merging"). Objects under a pixel from the whole
+/// prism are left out (second value). Deterministic: sectors in order, bands by
+/// distance, ties by instance id.
+pub fn bands(
+    scene: &Scene,
+    prism: &Prism,
+    served: &[u32],
+    image_res: u32,
+) -> (Vec<Band>, Vec<u32>) {
+    let eye = prism.centre3();
+    let offset = max_offset(prism);
+    let mut sectors: Vec<Vec<(f32, f32, u32)>> = vec![Vec::new(); SECTORS];
+    let mut dropped = Vec::new();
+    for &i in served {
+        let (lo, hi) = scene.instance_bounds(i as usize);
+        if subpixel_from_region(lo, hi, prism, image_res) {
+            dropped.push(i);
+            continue;
+        }
+        let mid = 0.5 * (lo + hi) - eye;
+        let turn = mid.z.atan2(mid.x).rem_euclid(std::f32::consts::TAU);
+        let sector = ((turn / std::f32::consts::TAU * SECTORS as f32) as usize).min(SECTORS - 1);
+        let near = Vec3::new(
+            eye.x.clamp(lo.x, hi.x),
+            eye.y.clamp(lo.y, hi.y),
+            eye.z.clamp(lo.z, hi.z),
+        )
+        .distance(eye);
+        let far = (0..8)
+            .map(|k| {
+                let c = Vec3::new(
+                    if k & 1 == 0 { lo.x } else { hi.x },
+                    if k & 2 == 0 { lo.y } else { hi.y },
+                    if k & 4 == 0 { lo.z } else { hi.z },
+                );
+                c.distance(eye)
+            })
+            .fold(0.0f32, f32::max);
+        sectors[sector].push((near, far, i));
+    }
+    let mut out = Vec::new();
+    for (sector, mut objects) in sectors.into_iter().enumerate() {
+        objects.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.2.cmp(&b.2)));
+        let mut band: Vec<u32> = Vec::new();
+        let (mut near, mut far) = (f32::INFINITY, 0.0f32);
+        for (n, f, i) in objects {
+            let (nn, ff) = (near.min(n), far.max(f));
+            if !band.is_empty() && layers_needed(nn, ff, offset, image_res) > BAND_LAYERS {
+                band.sort_unstable();
+                out.push(Band {
+                    sector,
+                    members: std::mem::take(&mut band),
+                });
+                (near, far) = (n, f);
+            } else {
+                (near, far) = (nn, ff);
+            }
+            band.push(i);
+        }
+        if !band.is_empty() {
+            band.sort_unstable();
+            out.push(Band {
+                sector,
+                members: band,
+            });
+        }
+    }
+    (out, dropped)
+}
+
+/// Builds the merged impostor of one band, captured from the prism's centre at
+/// `image_res` for viewers anywhere in the prism; `None` when it covers no pixel.
+pub fn merged_impostor(
+    scene: &Scene,
+    prism: &Prism,
+    band: &Band,
+    image_res: u32,
+    key: crate::bake::ProxyKey,
+) -> Result<Option<BakedProxy>, crate::capture::CaptureError> {
+    let items: Vec<DrawItem> = band
+        .members
+        .iter()
+        .map(|&i| DrawItem::instance(scene, i))
+        .collect();
+    let built = build_layered_impostor(
+        prism.centre3(),
+        &items,
+        image_res,
+        image_res,
+        max_offset(prism),
+    )?;
+    Ok(built.map(|imp| BakedProxy {
+        kind: ProxyKind::LayeredImpostor,
+        members: band
+            .members
+            .iter()
+            .map(|&instance| BakedMember {
+                instance,
+                input_triangles: Vec::new(),
+                triangles: Vec::new(),
+                view_masks: Vec::new(),
+                vertex_view_sets: Vec::new(),
+            })
+            .collect(),
+        views: vec![imp.texture.clone()],
+        key,
+        packed: None,
+        impostor: Some(imp),
+        quality: None,
+    }))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn layer_need_shrinks_with_distance_and_grows_with_offset() {
+        let a = layers_needed(100.0, 200.0, 50.0, 1024);
+        assert!(layers_needed(200.0, 400.0, 50.0, 1024) < a);
+        assert!(layers_needed(100.0, 200.0, 100.0, 1024) > a);
+        // Scale invariance (module docs): everything ×√7 needs the same count.
+        let s = 7f32.sqrt();
+        let b = layers_needed(100.0 * s, 200.0 * s, 50.0 * s, 1024);
+        assert!((a - b).abs() < 1e-6 * a);
+    }
+}
