@@ -296,7 +296,33 @@ pub enum SceneSpec {
     /// A glTF file read as a whole scene (issue 18; `load::load_gltf_scene`): every
     /// node with a mesh is placed with its composed transform, in the file's units.
     Gltf(GltfSpec),
+    /// Another manifest's scene repeated k × k times on whole grid periods (issue 27,
+    /// "Worlds"; [`TiledSpec`]).
+    Tiled(TiledSpec),
 }
+
+/// `scene: Tiled((manifest: "park-2m.ron", tiles: 3))`: the scene of another
+/// manifest (any kind but `Tiled`, the same cell size) repeated `tiles` × `tiles`
+/// times. Tiles are shifted by whole periods of the hex grid — `N` columns rounded
+/// up to even (the odd-q layout repeats every 2 columns) and `M` rows, for the
+/// base's `N × M` grid — and the world's ground is chosen so that its grid has the
+/// base's origin: cell (col + i·N′, row + j·M) of the world sees the objects of tile
+/// (i, j) exactly where cell (col, row) of the base scene sees the base's. The
+/// manifest gives no `ground` (it is the tiles'); models are shared by every tile
+/// (one model, many instances).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TiledSpec {
+    /// The base manifest, resolved against this manifest's folder.
+    pub manifest: PathBuf,
+    /// Tiles per side (1..=[`MAX_TILES`]).
+    pub tiles: u32,
+    /// The base grid's period in columns (even) and rows: tile (i, j) is shifted by
+    /// `(i·period[0]·1.5·c, j·period[1]·√3·c)`.
+    pub period: [u32; 2],
+}
+
+/// Most tiles per side of a `Tiled` scene.
+pub const MAX_TILES: u32 = 15;
 
 /// A glTF scene file (`scene: Gltf("file.glb")`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -661,7 +687,9 @@ fn check_coordinate(field: &str, v: f32) -> Result<f32, Violation> {
 struct RawManifest {
     #[serde(default)]
     name: Option<String>,
-    ground: RawGround,
+    /// Required, except for a `Tiled` scene (whose ground is its tiles').
+    #[serde(default)]
+    ground: Option<RawGround>,
     scene: RawScene,
     cells: RawCells,
     #[serde(default)]
@@ -685,6 +713,14 @@ enum RawScene {
     Instances(Vec<RawInstance>),
     City(RawCity),
     Gltf(RawGltf),
+    Tiled(RawTiled),
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawTiled {
+    manifest: String,
+    tiles: u32,
 }
 
 /// `Gltf("file.glb")` or `Gltf((file: "file.glb", group_by_parent: true))`.
@@ -1196,6 +1232,74 @@ impl Validator<'_> {
         Ok(models)
     }
 
+    /// A `Tiled` scene ([`TiledSpec`]): the base manifest parses, is not tiled
+    /// itself, has cell size `cell_size`; and the world's ground.
+    fn tiled(&self, raw: &RawTiled, cell_size: f32) -> Result<(TiledSpec, Ground), ManifestError> {
+        if !(1..=MAX_TILES).contains(&raw.tiles) {
+            return Err(self.error(
+                "scene.tiles",
+                format!("must be in 1..={MAX_TILES}, found {}", raw.tiles),
+            ));
+        }
+        if raw.manifest.is_empty() {
+            return Err(self.error("scene.manifest", "names an empty file path".into()));
+        }
+        let path = self.base_dir().join(&raw.manifest);
+        let base = parse_manifest(&path)
+            .map_err(|e| self.error("scene.manifest", format!("`{}`: {e}", raw.manifest)))?;
+        if matches!(base.scene, SceneSpec::Tiled(_)) {
+            return Err(self.error(
+                "scene.manifest",
+                format!("`{}` is tiled itself; tile its base manifest", raw.manifest),
+            ));
+        }
+        if base.cells.cell_size != cell_size {
+            return Err(self.error(
+                "cells.cell_size",
+                format!(
+                    "must equal the tiled manifest's ({}) so that tiles fall on whole grid periods, found {cell_size}",
+                    base.cells.cell_size
+                ),
+            ));
+        }
+        let invalid = |what: String| self.error("scene", what);
+        let [n, m] = base
+            .ground
+            .hex_grid_dims(cell_size)
+            .ok_or_else(|| invalid("the base manifest's ground makes no grid".into()))?;
+        let period = [n + n % 2, m];
+        let k = u64::from(raw.tiles) - 1;
+        let dims = [n + k * period[0], m + k * period[1]];
+        let c = f64::from(cell_size);
+        let [w, h] = base.ground.size();
+        let min = base.ground.min;
+        // Same origin (format::grid: the column strip is centred on the ground).
+        let w = f64::from(w) + (dims[0] - n) as f64 * 1.5 * c;
+        let h = f64::from(h) + (dims[1] - m) as f64 * 3f64.sqrt() * c;
+        let ground = Ground {
+            min,
+            max: [
+                (f64::from(min[0]) + w) as f32,
+                (f64::from(min[1]) + h) as f32,
+            ],
+        };
+        if ground.hex_grid_dims(cell_size) != Some(dims) {
+            return Err(invalid(format!(
+                "{} tiles of a {n} × {m} grid make no whole {} × {} grid (rounding); try another count",
+                raw.tiles, dims[0], dims[1]
+            )));
+        }
+        let period = [period[0] as u32, period[1] as u32];
+        Ok((
+            TiledSpec {
+                manifest: path,
+                tiles: raw.tiles,
+                period,
+            },
+            ground,
+        ))
+    }
+
     /// A `City` scene: lengths positive and within the limits, heights ordered,
     /// whole floors, a bounded number of buildings per block and variants.
     fn city(&self, c: RawCity) -> Result<SceneSpec, ManifestError> {
@@ -1278,10 +1382,24 @@ impl Validator<'_> {
                 .unwrap_or_else(|| "scene".into()),
         };
 
-        // Ground rectangle.
-        let ground = Ground {
-            min: raw.ground.min,
-            max: raw.ground.max,
+        // Ground rectangle: given, or a `Tiled` scene's tiles'.
+        let tiled = match &raw.scene {
+            RawScene::Tiled(t) => Some(self.tiled(t, raw.cells.cell_size)?),
+            _ => None,
+        };
+        let ground = match (&raw.ground, &tiled) {
+            (Some(_), Some(_)) => {
+                return Err(self.error(
+                    "ground",
+                    "a Tiled scene's ground is its tiles': leave `ground` out".into(),
+                ))
+            }
+            (None, None) => return Err(self.error("ground", "missing".into())),
+            (Some(g), None) => Ground {
+                min: g.min,
+                max: g.max,
+            },
+            (None, Some((_, g))) => *g,
         };
         check_ground(&ground).map_err(|e| self.violation(e))?;
 
@@ -1331,6 +1449,10 @@ impl Validator<'_> {
             RawScene::City(city) => self.city(city)?,
             RawScene::Gltf(RawGltf::File(file)) => self.gltf(file, false)?,
             RawScene::Gltf(RawGltf::Spec(spec)) => self.gltf(spec.file, spec.group_by_parent)?,
+            RawScene::Tiled(_) => {
+                let (spec, _) = tiled.expect("parsed above");
+                SceneSpec::Tiled(spec)
+            }
             RawScene::Instances(list) => {
                 if list.is_empty() {
                     return Err(self.error("scene", "lists no instance".into()));

@@ -48,6 +48,9 @@ pub enum SceneError {
         manifest.display()
     )]
     CityAsInstances { manifest: PathBuf },
+    /// A `Tiled` scene whose base manifest no longer parses.
+    #[error("{}: its tiled manifest: {what}", manifest.display())]
+    Tiled { manifest: PathBuf, what: String },
     /// A park's hand-placed object standing on a generated one.
     #[error(
         "{}: scene.placed[{placed}] ({model} at {at:?}) overlaps the park's generated \
@@ -164,6 +167,40 @@ pub fn build_scene(plan: &Plan) -> Result<Scene, SceneError> {
     Ok(build_with_placements(plan)?.0)
 }
 
+/// A `Tiled` scene ([`crate::manifest::TiledSpec`]): the base manifest's scene, its
+/// instances repeated tile by tile (row of tiles by row, each in the base's order)
+/// shifted by whole grid periods; the models are the base's, shared.
+fn build_tiled_scene(plan: &Plan, spec: &crate::manifest::TiledSpec) -> Result<Scene, SceneError> {
+    let base_plan =
+        crate::manifest::parse_manifest(&spec.manifest).map_err(|e| SceneError::Tiled {
+            manifest: plan.manifest_path.clone(),
+            what: e.to_string(),
+        })?;
+    let base = build_scene(&base_plan)?;
+    let c = f64::from(plan.cells.cell_size);
+    let mut instances = Vec::with_capacity(base.instances.len() * (spec.tiles as usize).pow(2));
+    for j in 0..spec.tiles {
+        for i in 0..spec.tiles {
+            let shift = glam::Vec3::new(
+                (f64::from(i * spec.period[0]) * 1.5 * c) as f32,
+                0.0,
+                (f64::from(j * spec.period[1]) * 3f64.sqrt() * c) as f32,
+            );
+            let t = glam::Mat4::from_translation(shift);
+            instances.extend(base.instances.iter().map(|inst| crate::Instance {
+                transform: t * inst.transform,
+                ..inst.clone()
+            }));
+        }
+    }
+    Ok(Scene {
+        models: base.models,
+        instances,
+        ground: plan.ground,
+        model_bounds: Default::default(),
+    })
+}
+
 /// The scene of `plan` as an `Instances` manifest (RON): its ground, cells, bake
 /// parameters and every instance with its model, height, pre-rotation, translation,
 /// yaw and tint, so a generated park becomes an editable list (move one statue and
@@ -215,7 +252,7 @@ pub fn instances_manifest(plan: &Plan) -> Result<String, SceneError> {
         }
         (SceneSpec::Instances(list), _) => lines.extend(list.iter().map(listed)),
         (SceneSpec::Park(_), None) => unreachable!("a park scene has placements"),
-        (SceneSpec::City(_), _) | (SceneSpec::Gltf(_), _) => {
+        (SceneSpec::City(_), _) | (SceneSpec::Gltf(_), _) | (SceneSpec::Tiled(_), _) => {
             return Err(SceneError::CityAsInstances {
                 manifest: plan.manifest_path.clone(),
             })
@@ -261,9 +298,12 @@ fn build_with_placements(plan: &Plan) -> Result<(Scene, Option<Vec<park::Placeme
     if let SceneSpec::Gltf(spec) = &plan.scene {
         return Ok((build_gltf_scene(plan, spec)?, None));
     }
+    if let SceneSpec::Tiled(spec) = &plan.scene {
+        return Ok((build_tiled_scene(plan, spec)?, None));
+    }
     // Step 1: distinct models in manifest order.
     let wanted: Vec<(ModelSource, [f32; 3], f32)> = match &plan.scene {
-        SceneSpec::Gltf(_) => unreachable!("built above"),
+        SceneSpec::Gltf(_) | SceneSpec::Tiled(_) => unreachable!("built above"),
         SceneSpec::Park(p) => p
             .models
             .iter()
@@ -429,7 +469,7 @@ fn build_with_placements(plan: &Plan) -> Result<(Scene, Option<Vec<park::Placeme
                 placed = Some(placements.clone());
                 instances
             }
-            SceneSpec::Gltf(_) => unreachable!("built above"),
+            SceneSpec::Gltf(_) | SceneSpec::Tiled(_) => unreachable!("built above"),
             SceneSpec::City(spec) => {
                 let props: Vec<crate::city::PropEntry> = spec
                     .props

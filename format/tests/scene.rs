@@ -461,3 +461,110 @@ fn placed_objects_are_validated() {
         + 1;
     assert!(err.contains(&format!("demo.ron:{line}:")), "{err}");
 }
+
+/// Issue 27: a tiled world's centre tile is the base scene shifted by whole grid
+/// periods — every base cell's prism and every base instance's box reappear shifted
+/// by the same vector, so the world's centre cell has exactly the neighbourhood of
+/// the base's cell inside its tile, and per-cell figures compare 1:1.
+#[test]
+fn tiled_world_centre_tile_is_the_base_shifted_by_whole_periods() {
+    use format::grid::HexGrid;
+    use format::manifest::SceneSpec;
+    let base_plan = parse_manifest(&repo_root().join("manifests/demo.ron")).unwrap();
+    let world_plan = parse_manifest(&repo_root().join("manifests/demo-world.ron")).unwrap();
+    let SceneSpec::Tiled(spec) = &world_plan.scene else {
+        panic!("demo-world.ron is a Tiled scene");
+    };
+    assert_eq!(spec.tiles, 3);
+    let base = base_plan.load_scene().unwrap();
+    let world = world_plan.load_scene().unwrap();
+    assert_eq!(world.instances.len(), 9 * base.instances.len());
+    assert_eq!(
+        world.models.len(),
+        base.models.len(),
+        "tiles share the models"
+    );
+    let c = base_plan.cells.cell_size;
+    let (bg, wg) = (HexGrid::new(base.ground, c), HexGrid::new(world.ground, c));
+    let [pc, pr] = spec.period;
+    assert_eq!(pc % 2, 0, "an even column period keeps the odd-q layout");
+    assert_eq!(wg.n_cols(), bg.n_cols() + 2 * pc);
+    assert_eq!(wg.n_rows(), bg.n_rows() + 2 * pr);
+    let shift = glam::Vec2::new(pc as f32 * 1.5 * c, pr as f32 * 3f32.sqrt() * c);
+    let tol = 1e-3 * c;
+    for id in 0..bg.cell_count() {
+        let (col, row) = bg.col_row(id);
+        let w = wg
+            .id(i64::from(col + pc), i64::from(row + pr))
+            .expect("the centre tile's cell");
+        for (a, b) in bg.corners(id).iter().zip(wg.corners(w)) {
+            assert!(
+                (*a + shift - b).length() < tol,
+                "cell {id} → {w}: corner {a} vs {b}"
+            );
+        }
+        // Inside the tile, the same neighbours (a border cell of the base has more
+        // in the world: the next tile's).
+        let mut bn: Vec<(u32, u32)> = bg.neighbours(id).iter().map(|&n| bg.col_row(n)).collect();
+        let mut wn: Vec<(u32, u32)> = wg
+            .neighbours(w)
+            .iter()
+            .map(|&n| wg.col_row(n))
+            .filter(|&(c2, r2)| {
+                (pc..pc + bg.n_cols()).contains(&c2) && (pr..pr + bg.n_rows()).contains(&r2)
+            })
+            .map(|(c2, r2)| (c2 - pc, r2 - pr))
+            .collect();
+        bn.sort_unstable();
+        wn.sort_unstable();
+        assert_eq!(bn, wn, "cell {id}: the same neighbours");
+    }
+    // The centre tile (1, 1) is the 5th block of instances.
+    let n = base.instances.len();
+    let shift3 = glam::Vec3::new(shift.x, 0.0, shift.y);
+    for i in 0..n {
+        let (lo, hi) = base.instance_bounds(i);
+        let (wlo, whi) = world.instance_bounds(4 * n + i);
+        assert!((lo + shift3 - wlo).length() < tol && (hi + shift3 - whi).length() < tol);
+        assert_eq!(world.instances[4 * n + i].model, base.instances[i].model);
+    }
+}
+
+/// A Tiled manifest gives no ground, tiles a manifest that is not tiled, with the
+/// same cell size; each mistake is named.
+#[test]
+fn tiled_manifest_mistakes_are_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let demo = repo_root().join("manifests/demo.ron");
+    let write = |name: &str, text: String| {
+        let p = dir.path().join(name);
+        std::fs::write(&p, text).unwrap();
+        p
+    };
+    let tiled = |extra: &str, tiles: u32, cell: f32| {
+        format!(
+            "(scene: Tiled((manifest: {demo:?}, tiles: {tiles})), {extra} cells: (cell_size: {cell}, min_eye_height: 6.0, max_eye_height: 12.0))"
+        )
+    };
+    for (text, expected) in [
+        (
+            tiled("ground: (min: (0.0, 0.0), max: (10.0, 10.0)),", 3, 50.0),
+            "leave `ground` out",
+        ),
+        (tiled("", 0, 50.0), "scene.tiles"),
+        (tiled("", 3, 40.0), "cells.cell_size"),
+    ] {
+        let e = parse_manifest(&write("w.ron", text))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains(expected), "{e}");
+    }
+    let inner = write("inner.ron", tiled("", 2, 50.0));
+    let outer = format!(
+        "(scene: Tiled((manifest: {inner:?}, tiles: 2)), cells: (cell_size: 50.0, min_eye_height: 6.0, max_eye_height: 12.0))"
+    );
+    let e = parse_manifest(&write("outer.ron", outer))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("tiled itself"), "{e}");
+}

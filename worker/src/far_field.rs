@@ -435,7 +435,7 @@ mod tests {
             let groups = CellGroups::new(&g);
             let cells = CellParams { cell_size: c, min_eye_height: 1.0, max_eye_height: 2.0 };
             let mut seen = vec![0u32; g.cell_count() as usize];
-            for k in 0..groups.len() {
+            for k in (0..groups.len()).filter(|&k| groups.level(k) == 1) {
                 let members = groups.cells(k);
                 prop_assert!(!members.is_empty() && members.len() <= 7);
                 let prism = groups.prism(&g, k, &cells);
@@ -454,10 +454,73 @@ mod tests {
         }
     }
 
+    proptest! {
+        /// Levels (module docs, "Levels"): at each level every cell is in exactly
+        /// one group; a level-k group has at most 7^k cells, and they are the union
+        /// of its children's; every cell's prism lies inside the prism of each group
+        /// of its chain; parents have larger ids and the top level has one group.
+        #[test]
+        fn levels_nest_and_contain_their_cells(
+            w in 50.0f32..3000.0, h in 50.0f32..3000.0, c in 20.0f32..120.0
+        ) {
+            let g = grid(w, h, c);
+            let groups = CellGroups::new(&g);
+            let cells = CellParams { cell_size: c, min_eye_height: 1.0, max_eye_height: 2.0 };
+            let levels = groups.level_count();
+            prop_assert!(levels >= 1);
+            let top: Vec<u32> = (0..groups.len()).filter(|&k| groups.level(k) == levels).collect();
+            prop_assert!(top.len() == 1 || levels == MAX_LEVELS);
+            for k in 0..groups.len() {
+                let level = groups.level(k);
+                prop_assert!(groups.cells(k).len() <= 7usize.pow(level));
+                if let Some(p) = groups.parent(k) {
+                    prop_assert!(p > k && groups.level(p) == level + 1);
+                    for m in groups.cells(k) {
+                        prop_assert!(groups.cells(p).binary_search(m).is_ok());
+                    }
+                } else {
+                    prop_assert_eq!(level, levels);
+                }
+            }
+            for cell in 0..g.cell_count() {
+                let chain = groups.chain(cell);
+                prop_assert_eq!(chain.len() as u32, levels);
+                for (i, &k) in chain.iter().enumerate() {
+                    prop_assert_eq!(groups.level(k), i as u32 + 1);
+                    prop_assert!(groups.cells(k).binary_search(&cell).is_ok());
+                    let prism = groups.prism(&g, k, &cells);
+                    for corner in g.prism_corners(cell, 1.0, 2.0) {
+                        prop_assert!(prism.contains(corner), "cell {} group {} corner {:?}", cell, k, corner);
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn lattice_coordinates_are_a_hex_grid_of_flower_centres() {
+        // The basis a = (2, 1), b = (3, -2) maps the axial neighbours to the six
+        // nearest flower centres (hex distance 3).
+        for &(du, dv) in &AXIAL_NEIGHBOURS {
+            let (q, r) = from_lattice(du, dv);
+            assert!(is_centre(q, r));
+            assert_eq!((q.abs() + r.abs() + (q + r).abs()) / 2, 3, "{du},{dv}");
+            assert_eq!(to_lattice(q, r), (du, dv));
+        }
+        // A level-2 group of a large grid is 49 cells.
+        let g = grid(3000.0, 3000.0, 20.0);
+        let groups = CellGroups::with_levels(&g, 2);
+        assert_eq!(groups.level_count(), 2);
+        assert!((0..groups.len()).any(|k| groups.level(k) == 2 && groups.cells(k).len() == 49));
+        // The level radius: R1 = √7, R2 = √7 + √21.
+        assert!((level_radius(1) - 7f64.sqrt()).abs() < 1e-12);
+        assert!((level_radius(2) - 7f64.sqrt() - 21f64.sqrt()).abs() < 1e-12);
+    }
+
     #[test]
     fn a_full_flower_has_seven_cells() {
         let g = grid(1650.0, 2035.0, 50.0);
-        let groups = CellGroups::new(&g);
+        let groups = CellGroups::with_levels(&g, 1);
         assert!(groups.len() < g.cell_count() / 5);
         assert!((0..groups.len()).any(|k| groups.cells(k).len() == 7));
     }
