@@ -108,6 +108,7 @@ pub fn params_fingerprint(bake: &BakeParams, cells: &CellParams) -> Fingerprint 
         max_deviation_px,
         far_field,
         far_levels,
+        merge_level,
         quality,
         // The check changes no pack: switching it does not rebake (a job's record
         // has the figures of the bake that made it).
@@ -130,6 +131,7 @@ pub fn params_fingerprint(bake: &BakeParams, cells: &CellParams) -> Fingerprint 
         *far_field as u8,
     ]);
     h.update(&far_levels.to_le_bytes());
+    h.update(&merge_level.to_le_bytes());
     // Objective selection (issue 16): absent, or its floor.
     match quality {
         None => h.update(&[0]),
@@ -215,6 +217,7 @@ mod tests {
             |b, _| b.max_deviation_px = 0.0,
             |b, _| b.far_field = false,
             |b, _| b.far_levels = 1,
+            |b, _| b.merge_level = 1,
             |b, _| b.quality = Some(Default::default()),
             |b, _| {
                 b.quality = Some(crate::manifest::QualityFloor {

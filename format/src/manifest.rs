@@ -165,6 +165,11 @@ pub struct BakeParams {
     /// grow with the world. 0 (default) = every level the grid needs (until one
     /// group covers it); 1 = the one-level far field of bake revision 6–14.
     pub far_levels: u32,
+    /// The first level of far-field groups whose objects are merged into layered
+    /// impostors (issue 27; worker `levels.rs`); the levels below it give every far
+    /// object its own SvMesh or cluster proxy. Default 2 (DESIGN.md: "beyond the
+    /// first level far objects are merged"); 1 merges the 7-cell groups' objects too.
+    pub merge_level: u32,
     /// Objective selection of representations (paper 004; issue 16; worker
     /// `select.rs`): the quality floor every proxy must meet on its own pixels from
     /// every sample viewpoint of its region; the cheapest candidate that does is
@@ -248,6 +253,7 @@ impl Default for BakeParams {
             max_deviation_px: DEFAULT_MAX_DEVIATION_PX,
             far_field: true,
             far_levels: 0,
+            merge_level: 2,
             quality: None,
             quality_check: true,
         }
@@ -320,6 +326,10 @@ pub struct TiledSpec {
     /// `(i·period[0]·1.5·c, j·period[1]·√3·c)`.
     pub period: [u32; 2],
 }
+
+/// Most levels of far-field groups (`bake.far_levels`; 7⁸ ≈ 5.8M cells in one top
+/// group).
+pub const MAX_FAR_LEVELS: u32 = 8;
 
 /// Most tiles per side of a `Tiled` scene.
 pub const MAX_TILES: u32 = 15;
@@ -838,6 +848,7 @@ struct RawBake {
     max_deviation_px: f32,
     far_field: bool,
     far_levels: u32,
+    merge_level: u32,
     quality: Option<RawQuality>,
     quality_check: bool,
 }
@@ -873,6 +884,7 @@ impl Default for RawBake {
             max_deviation_px: d.max_deviation_px,
             far_field: d.far_field,
             far_levels: d.far_levels,
+            merge_level: d.merge_level,
             quality: None,
             quality_check: d.quality_check,
         }
@@ -1495,7 +1507,27 @@ impl Validator<'_> {
             occlusion_culling: b.occlusion_culling,
             max_deviation_px: self.non_negative("bake.max_deviation_px", b.max_deviation_px)?,
             far_field: b.far_field,
-            far_levels: b.far_levels,
+            far_levels: if b.far_levels <= MAX_FAR_LEVELS {
+                b.far_levels
+            } else {
+                return Err(self.error(
+                    "bake.far_levels",
+                    format!("must be in 0..={MAX_FAR_LEVELS} (0 = every level the grid needs), found {}", b.far_levels),
+                ));
+            },
+            merge_level: if (1..=MAX_FAR_LEVELS + 1).contains(&b.merge_level) {
+                b.merge_level
+            } else {
+                return Err(self.error(
+                    "bake.merge_level",
+                    format!(
+                        "must be in 1..={} ({} = never merge), found {}",
+                        MAX_FAR_LEVELS + 1,
+                        MAX_FAR_LEVELS + 1,
+                        b.merge_level
+                    ),
+                ));
+            },
             quality: b.quality.map(|q| self.quality(q)).transpose()?,
             quality_check: b.quality_check,
         };

@@ -553,8 +553,8 @@ pub fn bake_group(
     let far = served_instances(scene, grid, groups, group, cells, params);
     times.split_ms = ms_since(t);
     let served: Vec<u32> = (0..far.len() as u32).filter(|&i| far[i as usize]).collect();
-    let (proxies, stage, culled) = if groups.level(group) >= 2 {
-        // Beyond the first level: merged layered impostors (`levels.rs`).
+    let (proxies, stage, culled) = if groups.level(group) >= params.merge_level {
+        // From `bake.merge_level` on: merged layered impostors (`levels.rs`).
         let (proxies, dropped) = merged_level(
             scene, reuse, group, &prism, &served, cells, params, &mut times,
         )?;

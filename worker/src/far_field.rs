@@ -78,7 +78,7 @@ use rayon::prelude::*;
 pub const GROUP_SIZE_FACTOR: f32 = 3.055_050_5;
 
 /// Most levels of groups a grid gets (7⁸ ≈ 5.8M cells in one top group).
-pub const MAX_LEVELS: u32 = 8;
+pub const MAX_LEVELS: u32 = format::manifest::MAX_FAR_LEVELS;
 
 /// The groups of a grid at every level (module docs, "Layout" and "Levels"): level 1
 /// the 7-cell flowers, level k+1 the flowers of level-k groups. Ids run over all

@@ -48,6 +48,8 @@ pub const KEYS: &[(&str, &[&str])] = &[
     ("bake.clustering", &[]),
     ("bake.occlusion_culling", &[]),
     ("bake.far_field", &[]),
+    ("bake.far_levels", &["far_levels"]),
+    ("bake.merge_level", &["merge_level"]),
     ("bake.quality", &[]),
     ("bake.quality.min_psnr_db", &["min_psnr_db"]),
     ("bake.quality.min_ssim", &["min_ssim"]),
@@ -149,6 +151,8 @@ pub(super) fn apply(raw: &mut RawManifest, o: &Override) -> Result<(), String> {
         "bake.clustering" => bake.clustering = o.boolean()?,
         "bake.occlusion_culling" => bake.occlusion_culling = o.boolean()?,
         "bake.far_field" => bake.far_field = o.boolean()?,
+        "bake.far_levels" => bake.far_levels = o.integer()?,
+        "bake.merge_level" => bake.merge_level = o.integer()?,
         // `off` bakes without objective selection (every outside object a mesh
         // proxy, as before issue 16); `on` the default floor.
         "bake.quality" => bake.quality = o.boolean()?.then(RawQuality::default),
