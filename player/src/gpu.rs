@@ -36,11 +36,6 @@ pub fn shader_source() -> String {
     )
 }
 
-/// Environment variable that, when set, turns native BC texture sampling off: BC1/BC3
-/// capture textures are then decoded to RGBA8 on the CPU as on an adapter without
-/// `TEXTURE_COMPRESSION_BC` ([`Renderer::set_native_bc`]).
-pub const NO_BC_ENV: &str = "HEXBAKE_NO_BC";
-
 const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
 const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 
@@ -375,10 +370,11 @@ pub struct Renderer {
     coverage_alpha: bool,
     /// Colour by representation ([`Renderer::set_representation_colours`]).
     representation_colours: bool,
-    /// Upload BC1/BC3 capture textures as they are (the device has
-    /// `TEXTURE_COMPRESSION_BC` and [`Renderer::set_native_bc`] did not turn it off);
+    /// What it draws with ([`Renderer::options`]): the tile size of proxies'
+    /// clusters, and `bc_textures`: upload BC1/BC3 capture textures as they are (the
+    /// device has `TEXTURE_COMPRESSION_BC` and the options did not turn it off);
     /// otherwise they are decoded to RGBA8 on the CPU first.
-    native_bc: bool,
+    options: crate::DrawOptions,
 }
 
 /// Opens an adapter: `WGPU_BACKEND` and the like from the environment,
@@ -422,10 +418,14 @@ pub fn open_device_for(
 }
 
 impl Renderer {
-    /// A renderer with a `width × height` offscreen target.
-    pub fn new(width: u32, height: u32) -> Result<Renderer, GpuError> {
+    /// A renderer with a `width × height` offscreen target drawing with `options`.
+    pub fn new(
+        width: u32,
+        height: u32,
+        options: &crate::DrawOptions,
+    ) -> Result<Renderer, GpuError> {
         let (device, queue, adapter) = open_device()?;
-        Renderer::with_device(device, queue, adapter, width, height)
+        Renderer::with_device(device, queue, adapter, (width, height), options)
     }
 
     /// A renderer on an already opened device (e.g. one that presents to a window).
@@ -433,8 +433,8 @@ impl Renderer {
         device: wgpu::Device,
         queue: wgpu::Queue,
         adapter: AdapterSummary,
-        width: u32,
-        height: u32,
+        (width, height): (u32, u32),
+        options: &crate::DrawOptions,
     ) -> Result<Renderer, GpuError> {
         // Step 0: the frame size must fit the device's textures.
         let max = device.limits().max_texture_dimension_2d;
@@ -454,11 +454,14 @@ impl Renderer {
         // instance buffer.
         let shared = setup::shared(&device, &queue, &globals_bgl, &albedo_bgl);
         // Step 5: BC capture textures natively where the device samples them and
-        // HEXBAKE_NO_BC does not turn it off.
-        let native_bc = device
-            .features()
-            .contains(wgpu::Features::TEXTURE_COMPRESSION_BC)
-            && std::env::var_os(NO_BC_ENV).is_none();
+        // the options do not turn it off.
+        let options = crate::DrawOptions {
+            bc_textures: options.bc_textures
+                && device
+                    .features()
+                    .contains(wgpu::Features::TEXTURE_COMPRESSION_BC),
+            ..*options
+        };
         Ok(Renderer {
             device,
             queue,
@@ -486,7 +489,7 @@ impl Renderer {
             frame_indices: None,
             coverage_alpha: false,
             representation_colours: false,
-            native_bc,
+            options,
         })
     }
 
@@ -495,20 +498,15 @@ impl Renderer {
     /// coverage mask (255 where a triangle was drawn, 0 on the sky) — what
     /// `player compare` tells object pixels by. Off by default: frames for PNGs and
     /// the window stay opaque.
-    /// Whether BC capture textures are sampled natively (else decoded on the CPU).
-    pub fn native_bc(&self) -> bool {
-        self.native_bc
+    /// What it draws with, as in effect: `bc_textures` is false where the device
+    /// cannot sample BC textures.
+    pub fn options(&self) -> &crate::DrawOptions {
+        &self.options
     }
 
-    /// Turns native BC sampling off (CPU decoding to RGBA8 instead, as on an adapter
-    /// without `TEXTURE_COMPRESSION_BC`) or back on where the device has it. Affects
-    /// later uploads only.
-    pub fn set_native_bc(&mut self, on: bool) {
-        self.native_bc = on
-            && self
-                .device
-                .features()
-                .contains(wgpu::Features::TEXTURE_COMPRESSION_BC);
+    /// Whether BC capture textures are sampled natively (else decoded on the CPU).
+    pub fn native_bc(&self) -> bool {
+        self.options.bc_textures
     }
 
     pub fn set_coverage_alpha(&mut self, on: bool) {
@@ -527,14 +525,15 @@ impl Renderer {
     }
 
     /// A second renderer on this one's device with a `width × height` target (e.g. a
-    /// supersampled reference): models uploaded by either can be drawn by both.
+    /// supersampled reference) and the same options: models uploaded by either can
+    /// be drawn by both.
     pub fn sibling(&self, width: u32, height: u32) -> Result<Renderer, GpuError> {
         Renderer::with_device(
             self.device.clone(),
             self.queue.clone(),
             self.adapter.clone(),
-            width,
-            height,
+            (width, height),
+            &self.options,
         )
     }
 
@@ -711,7 +710,8 @@ impl Renderer {
         }
         u.counts[0] = views.len().min(MAX_VIEWS) as u32;
         // Issue 17: triangles grouped by normal cluster for the per-frame test.
-        let (vertices, clusters) = crate::patches::cluster_proxy_vertices(vertices);
+        let (vertices, clusters) =
+            crate::patches::cluster_proxy_vertices(vertices, self.options.tile_size());
         let vertices = vertices.as_slice();
         let contents: &[u8] = if vertices.is_empty() {
             bytemuck::bytes_of(&ProxyVertex::ZERO)
@@ -786,7 +786,7 @@ impl Renderer {
             self.try_bind(proxy);
             return;
         }
-        if !self.native_bc || width > max || height > max {
+        if !self.options.bc_textures || width > max || height > max {
             match texture.to_rgba8() {
                 Ok(rgba) => self.upload_view_texture(proxy, view, width, height, &rgba),
                 Err(what) => {

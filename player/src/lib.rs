@@ -38,6 +38,11 @@
 //! [--worst DIR] [--worst-count N] [--no-crossings] [--reference-ss N] [--size WxH]`,
 //! `player synth <out>` (a synthetic bake of `manifests/demo.ron`).
 
+/// The switches of the frame model (culling tests, tile size, BC textures; issue
+/// 28), passed explicitly to [`bake::Bake::open`] and [`gpu::Renderer::new`] (or
+/// [`run::Player::open`]), never read from the environment.
+pub use format::schema::frames::DrawOptions;
+
 pub mod bake;
 pub mod camera;
 pub mod frame;
