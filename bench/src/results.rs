@@ -378,7 +378,6 @@ fn listed(dir: &Path, prefix: &str, suffix: &str) -> anyhow::Result<Vec<PathBuf>
     Ok(v)
 }
 
-
 /// `sweep=PARAM:VALUE` lines.
 fn parse_sweeps(f: &Fields, file: &Path) -> anyhow::Result<Vec<Sweep>> {
     f.all("sweep")

@@ -297,9 +297,39 @@ enum Command {
     },
 }
 
+/// The environment variables that switched the frame model before issue 28, with
+/// the flag that replaced each. The player reads none of them; one left set would
+/// silently measure the defaults, so `main` refuses to start while one is set.
+const REPLACED_ENV: [(&str, &str); 5] = [
+    ("HEXBAKE_PATCH_BITFIELDS", "--no-patch-bitfields"),
+    ("HEXBAKE_PATCH_BACKFACE", "--no-backface"),
+    ("HEXBAKE_PATCH_FRUSTUM", "--no-frustum"),
+    ("HEXBAKE_CLUSTER_TRIANGLES", "--tile-triangles N"),
+    ("HEXBAKE_NO_BC", "--no-bc"),
+];
+
+/// The message for the replaced variables among `set`, if any.
+fn replaced_env_message(set: impl Fn(&str) -> bool) -> Option<String> {
+    let found: Vec<String> = REPLACED_ENV
+        .iter()
+        .filter(|(name, _)| set(name))
+        .map(|(name, flag)| format!("{name} (now `{flag}`)"))
+        .collect();
+    (!found.is_empty()).then(|| {
+        format!(
+            "the environment no longer configures the player: unset {} and pass the flag instead",
+            found.join(", ")
+        )
+    })
+}
+
 fn main() -> ExitCode {
     restore_default_sigpipe();
     let cli = Cli::parse();
+    if let Some(msg) = replaced_env_message(|name| std::env::var_os(name).is_some()) {
+        eprintln!("player: error: {msg}");
+        return ExitCode::FAILURE;
+    }
     let result = match cli.command {
         Command::Render {
             out,
@@ -627,6 +657,10 @@ mod tests {
             }
         );
         assert!(draw(&["--tile-triangles", "0"]).is_err());
+        // The old variables are refused by name, with the flag that replaced each.
+        assert_eq!(replaced_env_message(|_| false), None);
+        let msg = replaced_env_message(|n| n == "HEXBAKE_NO_BC").unwrap();
+        assert!(msg.contains("HEXBAKE_NO_BC (now `--no-bc`)"), "{msg}");
         let Command::Render { draw, .. } = Cli::try_parse_from([
             "player",
             "render",
