@@ -9,6 +9,9 @@
 //! once ([`GpuModels`]); originals are drawn as instanced draws, one per model, with
 //! per-instance transforms. Proxies are de-indexed world-space triangle lists carrying
 //! each triangle's view mask and centroid (flat attributes), one draw per proxy.
+//! What a frame draws — the draw list, its counts and the plan the renderer
+//! uploads and encodes — is decided in `gpu/frame_model.rs` (re-exported here:
+//! [`DrawList`], [`PatchedDraw`]).
 
 mod frame_model;
 mod setup;
