@@ -610,7 +610,7 @@ fn slurm_resubmits_only_the_cancelled_task() {
 /// GPU tests skip without an adapter unless HEXBAKE_REQUIRE_GPU=1 (CI sets it:
 /// Mesa's lavapipe is always there).
 fn open_player(dir: &Path, size: (u32, u32)) -> Option<player::run::Player> {
-    match player::run::Player::open(dir, size) {
+    match player::run::Player::open(dir, size, &player::DrawOptions::default()) {
         Ok(p) => Some(p),
         Err(e) => {
             assert!(

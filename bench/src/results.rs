@@ -31,6 +31,8 @@ use crate::labels::SweepParam;
 use anyhow::Context;
 use format::pack::{BasePack, CellPack, Index, PackFile};
 pub use format::schema::compare::{CompareFrame, CompareReport, CrossingStats};
+// `frames.csv`: the player's row type (issue 28: one shape, read by header).
+pub use format::schema::frames::{parse_frames_csv, FrameRow};
 use pipeline::report::Report;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -139,22 +141,6 @@ pub struct CompareResult {
     pub message: Option<String>,
     /// `player compare --json` (older run files lack the newer keys: defaults).
     pub summary: Option<CompareReport>,
-}
-
-/// One row of `frames.csv` (player/README.md).
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
-pub struct FrameRow {
-    pub frame: usize,
-    pub time_s: f64,
-    pub cell: i64,
-    pub crossing: bool,
-    pub frame_ms: f64,
-    pub triangles: u64,
-    pub texture_bytes: u64,
-    pub cache_hits: u64,
-    pub cache_misses: u64,
-    pub stream_ms: f64,
 }
 
 /// One `player render --mode M` along a path.
@@ -392,57 +378,6 @@ fn listed(dir: &Path, prefix: &str, suffix: &str) -> anyhow::Result<Vec<PathBuf>
     Ok(v)
 }
 
-/// Parses `frames.csv` by its header (columns in any order; unknown ones ignored).
-pub fn parse_frames_csv(text: &str) -> anyhow::Result<Vec<FrameRow>> {
-    let mut lines = text.lines().filter(|l| !l.trim().is_empty());
-    let header: Vec<&str> = lines
-        .next()
-        .context("frames.csv: empty")?
-        .split(',')
-        .map(str::trim)
-        .collect();
-    let col = |name: &str| header.iter().position(|h| *h == name);
-    let cols = [
-        "frame",
-        "time_s",
-        "cell",
-        "crossing",
-        "frame_ms",
-        "triangles",
-        "texture_bytes",
-        "cache_hits",
-        "cache_misses",
-        "stream_ms",
-    ]
-    .map(col);
-    let mut rows = Vec::new();
-    for (n, line) in lines.enumerate() {
-        let f: Vec<&str> = line.split(',').map(str::trim).collect();
-        let num = |i: usize| -> anyhow::Result<f64> {
-            match cols[i] {
-                None => Ok(0.0),
-                Some(c) => f
-                    .get(c)
-                    .and_then(|v| v.parse::<f64>().ok())
-                    .with_context(|| format!("frames.csv line {}: bad number", n + 2)),
-            }
-        };
-        rows.push(FrameRow {
-            frame: num(0)? as usize,
-            time_s: num(1)?,
-            cell: num(2)? as i64,
-            crossing: num(3)? != 0.0,
-            frame_ms: num(4)?,
-            triangles: num(5)? as u64,
-            texture_bytes: num(6)? as u64,
-            cache_hits: num(7)? as u64,
-            cache_misses: num(8)? as u64,
-            stream_ms: num(9)?,
-        });
-    }
-    Ok(rows)
-}
-
 /// `sweep=PARAM:VALUE` lines.
 fn parse_sweeps(f: &Fields, file: &Path) -> anyhow::Result<Vec<Sweep>> {
     f.all("sweep")
@@ -674,15 +609,16 @@ mod tests {
 
     #[test]
     fn frames_csv_is_read_by_header() {
+        // The columns of 2026-11's player (no draw calls or options).
         let csv = "frame,time_s,cell,crossing,frame_ms,triangles,texture_bytes,cache_hits,cache_misses,stream_ms\n\
                    0,0.0000,5,0,1.500,1200,0,0,1,3.000\n\
                    1,0.1000,-1,1,2.000,900,64,1,1,0.500\n";
         let rows = parse_frames_csv(csv).unwrap();
         assert_eq!(rows.len(), 2);
-        assert_eq!(rows[0].cell, 5);
+        assert_eq!(rows[0].cell, Some(5));
         assert!(!rows[0].crossing && rows[1].crossing);
         assert_eq!(rows[1].triangles, 900);
-        assert_eq!(rows[1].cell, -1);
+        assert_eq!(rows[1].cell, None);
         assert!(parse_frames_csv("frame,cell\n1,x\n").is_err());
     }
 

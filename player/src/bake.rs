@@ -66,17 +66,20 @@ pub struct Bake {
     /// Distance that covers the whole ground (far plane).
     pub extent: f32,
     /// Patch data for drawing originals patch by patch (issue 17); `None` without
-    /// it or with every test switched off ([`crate::patches::tests_from_env`],
-    /// [`crate::patches::frustum_test_from_env`]).
+    /// it or with every test of [`Bake::options`] switched off.
     pub patches: Option<crate::patches::PatchRuntime>,
     /// Per model, its triangles in tile order (`patches::refine_patches`) when the
     /// base pack has patch data: the order every mode uploads them in.
     pub draw_order: Option<Vec<Vec<u32>>>,
+    /// What it was opened with: the culling tests of its originals and proxies and
+    /// the tile size of its patches.
+    pub options: crate::DrawOptions,
 }
 
 impl Bake {
-    /// Reads `<dir>/base.pack` (required) and `<dir>/index.pack` (logged if bad).
-    pub fn open(dir: &Path) -> Result<Bake, BakeError> {
+    /// Reads `<dir>/base.pack` (required) and `<dir>/index.pack` (logged if bad);
+    /// its patches are tiled and tested as `options` say.
+    pub fn open(dir: &Path, options: &crate::DrawOptions) -> Result<Bake, BakeError> {
         let base_path = dir.join("base.pack");
         let base = BasePack::read(&base_path).map_err(|source| BakeError::Base {
             path: base_path,
@@ -94,10 +97,15 @@ impl Bake {
                 None
             }
         };
-        Ok(Bake::from_parts(dir, base, index))
+        Ok(Bake::from_parts(dir, base, index, options))
     }
 
-    pub fn from_parts(dir: &Path, base: BasePack, index: Option<Arc<Index>>) -> Bake {
+    pub fn from_parts(
+        dir: &Path,
+        base: BasePack,
+        index: Option<Arc<Index>>,
+        options: &crate::DrawOptions,
+    ) -> Bake {
         let model_bounds: Vec<Aabb> = base
             .models
             .iter()
@@ -135,17 +143,15 @@ impl Bake {
                 .models
                 .iter()
                 .zip(&base.models)
-                .map(|(m, model)| crate::patches::refine_patches(m, &model.mesh))
+                .map(|(m, model)| {
+                    crate::patches::refine_patches(m, &model.mesh, options.tile_size())
+                })
                 .unzip(),
             None => (Vec::new(), Vec::new()),
         };
-        let patches = crate::patches::PatchRuntime::new(
-            &base,
-            tiles,
-            crate::patches::tests_from_env(),
-            crate::patches::frustum_test_from_env(),
-        );
+        let patches = crate::patches::PatchRuntime::new(&base, tiles, options);
         Bake {
+            options: *options,
             patches,
             draw_order: base.patches.is_some().then_some(draw_order),
             dir: dir.to_path_buf(),

@@ -196,10 +196,7 @@ fn cell_list<'a>(
         proxies,
         lit_proxies,
         patched: Vec::new(),
-        cull: Some(crate::patches::CullView {
-            eye: camera.eye,
-            frustum: f,
-        }),
+        cull: Some(crate::patches::CullView::new(camera.eye, f, &bake.options)),
         ..Default::default()
     };
     // Issue 17: the originals' visible patches only (bitfields and normal cones).

@@ -9,15 +9,22 @@
 //! once ([`GpuModels`]); originals are drawn as instanced draws, one per model, with
 //! per-instance transforms. Proxies are de-indexed world-space triangle lists carrying
 //! each triangle's view mask and centroid (flat attributes), one draw per proxy.
+//! What a frame draws — the draw list, its counts and the plan the renderer
+//! uploads and encodes — is decided in `gpu/frame_model.rs` (re-exported here:
+//! [`DrawList`], [`PatchedDraw`]).
 
+mod frame_model;
 mod setup;
+
+pub use frame_model::{DrawList, PatchedDraw};
+use frame_model::{FramePlan, Span};
 
 use crate::camera::Camera;
 use crate::metrics::srgb_to_linear;
-use crate::vertex::{Globals, InstanceRaw, ModelVertex, ProxyUniform, ProxyVertex};
+use crate::vertex::{Globals, ModelVertex, ProxyUniform, ProxyVertex};
 use bytemuck::Zeroable;
 use format::pack::{BasePack, Texture, TextureEncoding};
-use glam::{Mat4, Vec3};
+use glam::Vec3;
 use std::time::Instant;
 use wgpu::util::DeviceExt;
 
@@ -35,11 +42,6 @@ pub fn shader_source() -> String {
         include_str!("shader.wgsl")
     )
 }
-
-/// Environment variable that, when set, turns native BC texture sampling off: BC1/BC3
-/// capture textures are then decoded to RGBA8 on the CPU as on an adapter without
-/// `TEXTURE_COMPRESSION_BC` ([`Renderer::set_native_bc`]).
-pub const NO_BC_ENV: &str = "HEXBAKE_NO_BC";
 
 const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
 const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
@@ -102,51 +104,6 @@ pub struct GpuModel {
     /// instance are gathered from it into the frame's index buffer (one draw call
     /// per instance, [`FrameIndices`]).
     cpu_indices: Vec<u32>,
-}
-
-/// The frame's gathered index buffer: for every patched original and every proxy
-/// with more than one visible range, the indices of those ranges one after the
-/// other (for a proxy, its vertex numbers), so that each is one indexed draw
-/// whatever the number of tiles it keeps. The order of the triangles is the one of
-/// the ranges, so the pixels are those of drawing the ranges one by one.
-#[derive(Default)]
-struct FrameIndices {
-    indices: Vec<u32>,
-}
-
-impl FrameIndices {
-    /// Appends `ranges` of `source` (or the numbers themselves when `source` is
-    /// `None`) and returns the span they take.
-    fn gather(&mut self, ranges: &[(u32, u32)], source: Option<&[u32]>) -> std::ops::Range<u32> {
-        let start = self.indices.len() as u32;
-        for &(a, b) in ranges {
-            match source {
-                Some(src) => self
-                    .indices
-                    .extend_from_slice(src.get(a as usize..b as usize).unwrap_or(&[])),
-                None => self.indices.extend(a..b),
-            }
-        }
-        start..self.indices.len() as u32
-    }
-
-    /// How a patched original or a proxy with visible `ranges` is drawn: nothing,
-    /// its one range from its own buffer, or its ranges gathered here.
-    fn span(&mut self, ranges: &[(u32, u32)], source: Option<&[u32]>) -> Option<Span> {
-        match ranges {
-            [] => None,
-            &[(a, b)] => Some(Span::Own(a..b)),
-            _ => Some(Span::Gathered(self.gather(ranges, source))),
-        }
-    }
-}
-
-/// One draw of a patched original or a proxy ([`FrameIndices::span`]).
-enum Span {
-    /// A range of its own index (original) or vertex (proxy) buffer.
-    Own(std::ops::Range<u32>),
-    /// A range of the frame's gathered index buffer.
-    Gathered(std::ops::Range<u32>),
 }
 
 impl GpuModel {
@@ -215,126 +172,6 @@ impl GpuProxy {
     }
 }
 
-/// What to draw in one frame.
-#[derive(Default)]
-pub struct DrawList<'a> {
-    /// Originals grouped by model: (model index, instances).
-    pub originals: Vec<(u32, Vec<InstanceRaw>)>,
-    /// Originals at a simplified level (LOD baseline): ((model, level ≥ 1), instances).
-    pub levels: Vec<((u32, u32), Vec<InstanceRaw>)>,
-    pub proxies: Vec<&'a GpuProxy>,
-    /// Proxies drawn lit (vertex colours, no texture) because their textures are not
-    /// resident yet (`--pending lit`).
-    pub lit_proxies: Vec<&'a GpuProxy>,
-    /// Originals drawn patch by patch (issue 17, [`crate::patches`]).
-    pub patched: Vec<PatchedDraw>,
-    /// The view the proxies' clusters are tested against (issue 17); `None` draws
-    /// every proxy triangle.
-    pub cull: Option<crate::patches::CullView>,
-    /// Per proxy of `proxies`, then of `lit_proxies`, the vertex ranges drawn
-    /// ([`DrawList::proxy_ranges`], computed once).
-    pub(crate) ranges: std::cell::OnceCell<Vec<Vec<(u32, u32)>>>,
-}
-
-/// One original drawn as the index ranges of its visible patches.
-#[derive(Clone, Debug)]
-pub struct PatchedDraw {
-    pub model: u32,
-    pub instance: InstanceRaw,
-    /// Ranges of the model's patch-ordered index buffer.
-    pub ranges: Vec<(u32, u32)>,
-    pub triangles: u64,
-}
-
-impl DrawList<'_> {
-    /// Per proxy of `proxies`, then of `lit_proxies`, the vertex ranges it draws
-    /// from [`DrawList::cull`] ([`GpuProxy::ranges`]); the tests run once per list.
-    pub fn proxy_ranges(&self) -> &[Vec<(u32, u32)>] {
-        self.ranges.get_or_init(|| {
-            self.proxies
-                .iter()
-                .chain(&self.lit_proxies)
-                .map(|p| p.ranges(self.cull.as_ref()))
-                .collect()
-        })
-    }
-
-    /// Draw calls [`Renderer::render`] submits for this list: the ground, one per
-    /// non-empty instanced group, one per patched original and one per proxy that
-    /// keep any tile (their several ranges are gathered into one index buffer).
-    pub fn draw_calls(&self, models: &GpuModels) -> u64 {
-        let group = |m: u32, n: usize| {
-            u64::from(
-                n > 0
-                    && models
-                        .models
-                        .get(m as usize)
-                        .is_some_and(|g| g.index_count > 0),
-            )
-        };
-        let n = self.proxies.len();
-        let proxies = self
-            .proxies
-            .iter()
-            .chain(&self.lit_proxies)
-            .zip(self.proxy_ranges())
-            .enumerate()
-            .filter(|(k, (p, r))| {
-                (*k >= n || p.bind_group.is_some()) && p.vertex_count > 0 && !r.is_empty()
-            })
-            .count() as u64;
-        1 + self
-            .originals
-            .iter()
-            .map(|(m, i)| group(*m, i.len()))
-            .sum::<u64>()
-            + self
-                .levels
-                .iter()
-                .filter(|((m, l), i)| {
-                    !i.is_empty()
-                        && models
-                            .models
-                            .get(*m as usize)
-                            .is_some_and(|model| model.level(*l).1 > 0)
-                })
-                .count() as u64
-            + self
-                .patched
-                .iter()
-                .filter(|p| {
-                    !p.ranges.is_empty()
-                        && models
-                            .models
-                            .get(p.model as usize)
-                            .is_some_and(|g| g.patch_ordered)
-                })
-                .count() as u64
-            + proxies
-    }
-
-    pub fn triangle_count(&self, models: &GpuModels) -> u64 {
-        let o: u64 = self
-            .originals
-            .iter()
-            .map(|(m, i)| models.models[*m as usize].triangle_count * i.len() as u64)
-            .sum();
-        let l: u64 = self
-            .levels
-            .iter()
-            .map(|((m, l), i)| models.models[*m as usize].level(*l).2 * i.len() as u64)
-            .sum();
-        o + l
-            + self.patched.iter().map(|p| p.triangles).sum::<u64>()
-            + self
-                .proxy_ranges()
-                .iter()
-                .flatten()
-                .map(|(a, b)| (b - a) as u64 / 3)
-                .sum::<u64>()
-    }
-}
-
 /// The headless renderer.
 pub struct Renderer {
     pub device: wgpu::Device,
@@ -375,10 +212,11 @@ pub struct Renderer {
     coverage_alpha: bool,
     /// Colour by representation ([`Renderer::set_representation_colours`]).
     representation_colours: bool,
-    /// Upload BC1/BC3 capture textures as they are (the device has
-    /// `TEXTURE_COMPRESSION_BC` and [`Renderer::set_native_bc`] did not turn it off);
+    /// What it draws with ([`Renderer::options`]): the tile size of proxies'
+    /// clusters, and `bc_textures`: upload BC1/BC3 capture textures as they are (the
+    /// device has `TEXTURE_COMPRESSION_BC` and the options did not turn it off);
     /// otherwise they are decoded to RGBA8 on the CPU first.
-    native_bc: bool,
+    options: crate::DrawOptions,
 }
 
 /// Opens an adapter: `WGPU_BACKEND` and the like from the environment,
@@ -422,10 +260,14 @@ pub fn open_device_for(
 }
 
 impl Renderer {
-    /// A renderer with a `width × height` offscreen target.
-    pub fn new(width: u32, height: u32) -> Result<Renderer, GpuError> {
+    /// A renderer with a `width × height` offscreen target drawing with `options`.
+    pub fn new(
+        width: u32,
+        height: u32,
+        options: &crate::DrawOptions,
+    ) -> Result<Renderer, GpuError> {
         let (device, queue, adapter) = open_device()?;
-        Renderer::with_device(device, queue, adapter, width, height)
+        Renderer::with_device(device, queue, adapter, (width, height), options)
     }
 
     /// A renderer on an already opened device (e.g. one that presents to a window).
@@ -433,8 +275,8 @@ impl Renderer {
         device: wgpu::Device,
         queue: wgpu::Queue,
         adapter: AdapterSummary,
-        width: u32,
-        height: u32,
+        (width, height): (u32, u32),
+        options: &crate::DrawOptions,
     ) -> Result<Renderer, GpuError> {
         // Step 0: the frame size must fit the device's textures.
         let max = device.limits().max_texture_dimension_2d;
@@ -454,11 +296,14 @@ impl Renderer {
         // instance buffer.
         let shared = setup::shared(&device, &queue, &globals_bgl, &albedo_bgl);
         // Step 5: BC capture textures natively where the device samples them and
-        // HEXBAKE_NO_BC does not turn it off.
-        let native_bc = device
-            .features()
-            .contains(wgpu::Features::TEXTURE_COMPRESSION_BC)
-            && std::env::var_os(NO_BC_ENV).is_none();
+        // the options do not turn it off.
+        let options = crate::DrawOptions {
+            bc_textures: options.bc_textures
+                && device
+                    .features()
+                    .contains(wgpu::Features::TEXTURE_COMPRESSION_BC),
+            ..*options
+        };
         Ok(Renderer {
             device,
             queue,
@@ -486,7 +331,7 @@ impl Renderer {
             frame_indices: None,
             coverage_alpha: false,
             representation_colours: false,
-            native_bc,
+            options,
         })
     }
 
@@ -495,20 +340,15 @@ impl Renderer {
     /// coverage mask (255 where a triangle was drawn, 0 on the sky) — what
     /// `player compare` tells object pixels by. Off by default: frames for PNGs and
     /// the window stay opaque.
-    /// Whether BC capture textures are sampled natively (else decoded on the CPU).
-    pub fn native_bc(&self) -> bool {
-        self.native_bc
+    /// What it draws with, as in effect: `bc_textures` is false where the device
+    /// cannot sample BC textures.
+    pub fn options(&self) -> &crate::DrawOptions {
+        &self.options
     }
 
-    /// Turns native BC sampling off (CPU decoding to RGBA8 instead, as on an adapter
-    /// without `TEXTURE_COMPRESSION_BC`) or back on where the device has it. Affects
-    /// later uploads only.
-    pub fn set_native_bc(&mut self, on: bool) {
-        self.native_bc = on
-            && self
-                .device
-                .features()
-                .contains(wgpu::Features::TEXTURE_COMPRESSION_BC);
+    /// Whether BC capture textures are sampled natively (else decoded on the CPU).
+    pub fn native_bc(&self) -> bool {
+        self.options.bc_textures
     }
 
     pub fn set_coverage_alpha(&mut self, on: bool) {
@@ -527,14 +367,15 @@ impl Renderer {
     }
 
     /// A second renderer on this one's device with a `width × height` target (e.g. a
-    /// supersampled reference): models uploaded by either can be drawn by both.
+    /// supersampled reference) and the same options: models uploaded by either can
+    /// be drawn by both.
     pub fn sibling(&self, width: u32, height: u32) -> Result<Renderer, GpuError> {
         Renderer::with_device(
             self.device.clone(),
             self.queue.clone(),
             self.adapter.clone(),
-            width,
-            height,
+            (width, height),
+            &self.options,
         )
     }
 
@@ -711,7 +552,8 @@ impl Renderer {
         }
         u.counts[0] = views.len().min(MAX_VIEWS) as u32;
         // Issue 17: triangles grouped by normal cluster for the per-frame test.
-        let (vertices, clusters) = crate::patches::cluster_proxy_vertices(vertices);
+        let (vertices, clusters) =
+            crate::patches::cluster_proxy_vertices(vertices, self.options.tile_size());
         let vertices = vertices.as_slice();
         let contents: &[u8] = if vertices.is_empty() {
             bytemuck::bytes_of(&ProxyVertex::ZERO)
@@ -786,7 +628,7 @@ impl Renderer {
             self.try_bind(proxy);
             return;
         }
-        if !self.native_bc || width > max || height > max {
+        if !self.options.bc_textures || width > max || height > max {
             match texture.to_rgba8() {
                 Ok(rgba) => self.upload_view_texture(proxy, view, width, height, &rgba),
                 Err(what) => {
@@ -925,46 +767,51 @@ impl Renderer {
     /// milliseconds. Proxies of `list.proxies` that are not ready (textures missing)
     /// are skipped; `list.lit_proxies` are drawn without their textures.
     pub fn render<'a>(&mut self, camera: &Camera, models: &GpuModels, list: &DrawList<'a>) -> f64 {
-        use crate::overlay::Representation;
-        let debug = self.representation_colours;
+        // 1. The frame's globals: camera, eye, the debug switches and palette.
+        self.write_globals(camera);
+        // 2. The frame model (`frame_model.rs`): every instance's data, one span per
+        //    patched original and proxy (several ranges gathered into the frame's
+        //    index buffer), proxies nearest first with their bind groups.
+        let plan = FramePlan::new(list, models, camera.eye, self.representation_colours);
+        // 3. Its instance data and gathered indices to the GPU.
+        self.upload_plan(&plan);
+        // 4. One render pass: the ground, instanced originals and LOD levels,
+        //    patched originals, proxies.
+        let mut enc = self
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+        self.last_draw_calls = self.encode_frame(&mut enc, models, list, &plan);
+        // 5. Submit and wait: the frame time.
+        let t0 = Instant::now();
+        let idx = self.queue.submit([enc.finish()]);
+        let _ = self.device.poll(wgpu::PollType::Wait {
+            submission_index: Some(idx),
+            timeout: None,
+        });
+        t0.elapsed().as_secs_f64() * 1e3
+    }
+
+    /// Step 1 of [`Renderer::render`]: the globals of the frame seen by `camera`.
+    fn write_globals(&self, camera: &Camera) {
         let g = Globals {
             clip_from_world: camera.clip_from_world_wgpu().to_cols_array(),
             eye: camera.eye.extend(1.0).to_array(),
-            debug: [u32::from(debug), u32::from(self.coverage_alpha), 0, 0],
-            palette: Representation::linear_palette(),
+            debug: [
+                u32::from(self.representation_colours),
+                u32::from(self.coverage_alpha),
+                0,
+                0,
+            ],
+            palette: crate::overlay::Representation::linear_palette(),
         };
         self.queue
             .write_buffer(&self.globals, 0, bytemuck::bytes_of(&g));
-        // With representation colours the shader takes an original's albedo from its
-        // tint: the representation's colour.
-        let palette = Representation::linear_palette();
-        let recolour = |mut i: InstanceRaw, r: Representation| {
-            if debug {
-                i.tint = palette[r as usize];
-            }
-            i
-        };
-        let mut all: Vec<InstanceRaw> = list
-            .originals
-            .iter()
-            .flat_map(|(_, v)| v.iter().map(|&i| recolour(i, Representation::Original)))
-            .chain(list.levels.iter().flat_map(|((_, level), v)| {
-                let r = if *level == 0 {
-                    Representation::Original
-                } else {
-                    Representation::LodLevel
-                };
-                v.iter().map(move |&i| recolour(i, r))
-            }))
-            .chain(
-                list.patched
-                    .iter()
-                    .map(|p| recolour(p.instance, Representation::Original)),
-            )
-            .collect();
-        // The ground's instance (identity, white tint) comes last.
-        let ground_instance = all.len() as u32;
-        all.push(InstanceRaw::new(Mat4::IDENTITY, Vec3::ONE));
+    }
+
+    /// Step 3 of [`Renderer::render`]: the plan's instances into the instance buffer
+    /// and its gathered indices into the frame's index buffer, each grown as needed.
+    fn upload_plan(&mut self, plan: &FramePlan<'_>) {
+        let all = &plan.instances;
         let need = std::mem::size_of_val(all.as_slice()) as u64;
         if need > self.instances.size() {
             self.instances = self.device.create_buffer(&wgpu::BufferDescriptor {
@@ -976,47 +823,11 @@ impl Renderer {
         }
         if !all.is_empty() {
             self.queue
-                .write_buffer(&self.instances, 0, bytemuck::cast_slice(&all));
+                .write_buffer(&self.instances, 0, bytemuck::cast_slice(all));
         }
-        // Every patched original and proxy is one draw: where it keeps several
-        // ranges, their indices are gathered into the frame's index buffer.
-        let mut gathered = FrameIndices::default();
-        // Per patched original (in list order: its instance follows the groups').
-        let patched: Vec<Option<Span>> = list
-            .patched
-            .iter()
-            .map(|p| {
-                let model = &models.models[p.model as usize];
-                model
-                    .patch_ordered
-                    .then(|| gathered.span(&p.ranges, Some(&model.cpu_indices)))?
-            })
-            .collect();
-        let ranges = list.proxy_ranges();
-        // Proxies nearest first, each with the bind group it is drawn with: its
-        // textures, or none (lit) for `lit_proxies`.
-        let mut proxy_spans = |proxies: &[&'a GpuProxy], ranges: &[Vec<(u32, u32)>], lit: bool| {
-            near_to_far(proxies, camera.eye)
-                .into_iter()
-                .filter_map(|k| {
-                    let p = proxies[k];
-                    if p.vertex_count == 0 {
-                        return None;
-                    }
-                    let group = if lit {
-                        &p.lit_bind_group
-                    } else {
-                        p.bind_group.as_ref()?
-                    };
-                    Some((p, group, gathered.span(&ranges[k], None)?))
-                })
-                .collect::<Vec<(&'a GpuProxy, &'a wgpu::BindGroup, Span)>>()
-        };
-        let (ready, lit_ranges) = ranges.split_at(list.proxies.len().min(ranges.len()));
-        let mut proxy_draws = proxy_spans(&list.proxies, ready, false);
-        proxy_draws.extend(proxy_spans(&list.lit_proxies, lit_ranges, true));
-        if !gathered.indices.is_empty() {
-            let need = std::mem::size_of_val(gathered.indices.as_slice()) as u64;
+        let gathered = &plan.indices;
+        if !gathered.is_empty() {
+            let need = std::mem::size_of_val(gathered.as_slice()) as u64;
             if self.frame_indices.as_ref().is_none_or(|b| b.size() < need) {
                 self.frame_indices = Some(self.device.create_buffer(&wgpu::BufferDescriptor {
                     label: Some("frame indices"),
@@ -1027,139 +838,155 @@ impl Renderer {
             }
             if let Some(b) = &self.frame_indices {
                 self.queue
-                    .write_buffer(b, 0, bytemuck::cast_slice(&gathered.indices));
+                    .write_buffer(b, 0, bytemuck::cast_slice(gathered));
             }
         }
-        let mut enc = self
-            .device
-            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
-        let mut draws = 0u64;
-        {
-            let sky = |c: u8| srgb_to_linear(c);
-            let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("frame"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &self.color_view,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color {
-                            r: sky(SKY[0]),
-                            g: sky(SKY[1]),
-                            b: sky(SKY[2]),
-                            a: if self.coverage_alpha { 0.0 } else { 1.0 },
-                        }),
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &self.depth_view,
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(1.0),
-                        store: wgpu::StoreOp::Store,
+    }
+
+    /// Step 4 of [`Renderer::render`]: the frame's render pass, cleared to the sky
+    /// (alpha 0 with coverage alpha) and depth 1; returns the draw calls issued.
+    fn encode_frame(
+        &self,
+        enc: &mut wgpu::CommandEncoder,
+        models: &GpuModels,
+        list: &DrawList<'_>,
+        plan: &FramePlan<'_>,
+    ) -> u64 {
+        let sky = |c: u8| srgb_to_linear(c);
+        let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("frame"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &self.color_view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color {
+                        r: sky(SKY[0]),
+                        g: sky(SKY[1]),
+                        b: sky(SKY[2]),
+                        a: if self.coverage_alpha { 0.0 } else { 1.0 },
                     }),
-                    stencil_ops: None,
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &self.depth_view,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(1.0),
+                    store: wgpu::StoreOp::Store,
                 }),
-                timestamp_writes: None,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
-            pass.set_bind_group(0, Some(&self.globals_bg), &[]);
-            // The ground first (issue 18): lit, white albedo texture.
-            pass.set_pipeline(&self.ground_pipeline);
-            pass.set_bind_group(2, Some(&self.white_albedo), &[]);
-            pass.set_vertex_buffer(0, models.ground.slice(..));
-            pass.set_vertex_buffer(1, self.instances.slice(..));
-            pass.draw(0..6, ground_instance..ground_instance + 1);
-            draws += 1;
-            pass.set_pipeline(&self.lit_pipeline);
-            let mut first = 0u32;
-            for (m, inst) in &list.originals {
-                let model = &models.models[*m as usize];
-                let n = inst.len() as u32;
-                if model.index_count > 0 && n > 0 {
-                    pass.set_bind_group(2, Some(&model.albedo), &[]);
-                    pass.set_vertex_buffer(0, model.vertices.slice(..));
-                    pass.set_vertex_buffer(1, self.instances.slice(..));
-                    pass.set_index_buffer(model.indices.slice(..), wgpu::IndexFormat::Uint32);
-                    pass.draw_indexed(0..model.index_count, 0, first..first + n);
-                    draws += 1;
-                }
-                first += n;
-            }
-            for ((m, l), inst) in &list.levels {
-                let model = &models.models[*m as usize];
-                let n = inst.len() as u32;
-                let (indices, count, _) = model.level(*l);
-                if count > 0 && n > 0 {
-                    pass.set_bind_group(2, Some(&model.albedo), &[]);
-                    pass.set_vertex_buffer(0, model.vertices.slice(..));
-                    pass.set_vertex_buffer(1, self.instances.slice(..));
-                    pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
-                    pass.draw_indexed(0..count, 0, first..first + n);
-                    draws += 1;
-                }
-                first += n;
-            }
-            let frame_indices = self.frame_indices.as_ref();
-            for (k, (p, span)) in list.patched.iter().zip(&patched).enumerate() {
-                let instance = first + k as u32;
-                let Some(span) = span else {
-                    continue;
-                };
-                let model = &models.models[p.model as usize];
+                stencil_ops: None,
+            }),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_bind_group(0, Some(&self.globals_bg), &[]);
+        // The ground first (issue 18): lit, white albedo texture.
+        pass.set_pipeline(&self.ground_pipeline);
+        pass.set_bind_group(2, Some(&self.white_albedo), &[]);
+        pass.set_vertex_buffer(0, models.ground.slice(..));
+        pass.set_vertex_buffer(1, self.instances.slice(..));
+        let g = plan.ground_instance;
+        pass.draw(0..6, g..g + 1);
+        1 + self.draw_originals(&mut pass, models, list, plan) + self.draw_proxies(&mut pass, plan)
+    }
+
+    /// Instanced originals, then LOD levels, then patched originals (each its one
+    /// span), with the lit pipeline; instances in the plan's order. Returns the
+    /// draw calls.
+    fn draw_originals(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        models: &GpuModels,
+        list: &DrawList<'_>,
+        plan: &FramePlan<'_>,
+    ) -> u64 {
+        let mut draws = 0u64;
+        pass.set_pipeline(&self.lit_pipeline);
+        let mut first = 0u32;
+        for (m, inst) in &list.originals {
+            let model = &models.models[*m as usize];
+            let n = inst.len() as u32;
+            if model.index_count > 0 && n > 0 {
                 pass.set_bind_group(2, Some(&model.albedo), &[]);
                 pass.set_vertex_buffer(0, model.vertices.slice(..));
                 pass.set_vertex_buffer(1, self.instances.slice(..));
-                let (buffer, r) = match (span, frame_indices) {
-                    (Span::Own(r), _) => (&model.indices, r),
-                    (Span::Gathered(r), Some(b)) => (b, r),
-                    (Span::Gathered(_), None) => continue,
-                };
-                pass.set_index_buffer(buffer.slice(..), wgpu::IndexFormat::Uint32);
-                pass.draw_indexed(r.clone(), 0, instance..instance + 1);
+                pass.set_index_buffer(model.indices.slice(..), wgpu::IndexFormat::Uint32);
+                pass.draw_indexed(0..model.index_count, 0, first..first + n);
                 draws += 1;
             }
-            // Mesh proxies with a discard-free pipeline (the one for their number of
-            // views), impostor layers with the other (a pipeline switch only where
-            // that changes); nearest first,
-            // so that the depth test rejects more hidden proxy fragments before
-            // they are shaded.
-            let mut bound = None;
-            let mut pipeline_for = |pass: &mut wgpu::RenderPass<'_>, p: &GpuProxy| {
-                let key = (p.layered, p.view_slots);
-                if bound != Some(key) {
-                    bound = Some(key);
-                    pass.set_pipeline(if p.layered {
-                        &self.proxy_pipeline
-                    } else {
-                        &self.proxy_mesh_pipelines[p.view_slots]
-                    });
-                }
-            };
-            for &(p, bind_group, ref span) in &proxy_draws {
-                pipeline_for(&mut pass, p);
-                pass.set_bind_group(1, Some(bind_group), &[]);
-                pass.set_vertex_buffer(0, p.vertices.slice(..));
-                match (span, frame_indices) {
-                    (Span::Own(r), _) => pass.draw(r.clone(), 0..1),
-                    (Span::Gathered(r), Some(b)) => {
-                        pass.set_index_buffer(b.slice(..), wgpu::IndexFormat::Uint32);
-                        pass.draw_indexed(r.clone(), 0, 0..1);
-                    }
-                    (Span::Gathered(_), None) => continue,
-                }
-                draws += 1;
-            }
+            first += n;
         }
-        self.last_draw_calls = draws;
-        let t0 = Instant::now();
-        let idx = self.queue.submit([enc.finish()]);
-        let _ = self.device.poll(wgpu::PollType::Wait {
-            submission_index: Some(idx),
-            timeout: None,
-        });
-        t0.elapsed().as_secs_f64() * 1e3
+        for ((m, l), inst) in &list.levels {
+            let model = &models.models[*m as usize];
+            let n = inst.len() as u32;
+            let (indices, count, _) = model.level(*l);
+            if count > 0 && n > 0 {
+                pass.set_bind_group(2, Some(&model.albedo), &[]);
+                pass.set_vertex_buffer(0, model.vertices.slice(..));
+                pass.set_vertex_buffer(1, self.instances.slice(..));
+                pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
+                pass.draw_indexed(0..count, 0, first..first + n);
+                draws += 1;
+            }
+            first += n;
+        }
+        let frame_indices = self.frame_indices.as_ref();
+        for (k, (p, span)) in list.patched.iter().zip(&plan.patched).enumerate() {
+            let instance = first + k as u32;
+            let Some(span) = span else {
+                continue;
+            };
+            let model = &models.models[p.model as usize];
+            pass.set_bind_group(2, Some(&model.albedo), &[]);
+            pass.set_vertex_buffer(0, model.vertices.slice(..));
+            pass.set_vertex_buffer(1, self.instances.slice(..));
+            let (buffer, r) = match (span, frame_indices) {
+                (Span::Own(r), _) => (&model.indices, r),
+                (Span::Gathered(r), Some(b)) => (b, r),
+                (Span::Gathered(_), None) => continue,
+            };
+            pass.set_index_buffer(buffer.slice(..), wgpu::IndexFormat::Uint32);
+            pass.draw_indexed(r.clone(), 0, instance..instance + 1);
+            draws += 1;
+        }
+        draws
+    }
+
+    /// The plan's proxies in its order (nearest first, so that the depth test
+    /// rejects more hidden proxy fragments before they are shaded): mesh proxies
+    /// with a discard-free pipeline (the one for their number of views), impostor
+    /// layers with the other, a pipeline switch only where that changes. Returns the
+    /// draw calls.
+    fn draw_proxies(&self, pass: &mut wgpu::RenderPass<'_>, plan: &FramePlan<'_>) -> u64 {
+        let mut draws = 0u64;
+        let frame_indices = self.frame_indices.as_ref();
+        let mut bound = None;
+        for d in &plan.proxies {
+            let p = d.proxy;
+            let key = (p.layered, p.view_slots);
+            if bound != Some(key) {
+                bound = Some(key);
+                pass.set_pipeline(if p.layered {
+                    &self.proxy_pipeline
+                } else {
+                    &self.proxy_mesh_pipelines[p.view_slots]
+                });
+            }
+            pass.set_bind_group(1, Some(d.bind_group), &[]);
+            pass.set_vertex_buffer(0, p.vertices.slice(..));
+            match (&d.span, frame_indices) {
+                (Span::Own(r), _) => pass.draw(r.clone(), 0..1),
+                (Span::Gathered(r), Some(b)) => {
+                    pass.set_index_buffer(b.slice(..), wgpu::IndexFormat::Uint32);
+                    pass.draw_indexed(r.clone(), 0, 0..1);
+                }
+                (Span::Gathered(_), None) => continue,
+            }
+            draws += 1;
+        }
+        draws
     }
 
     /// The last frame as tightly packed RGBA8 sRGB, row 0 at the top.
@@ -1216,18 +1043,6 @@ impl Renderer {
         self.readback.unmap();
         Ok(out)
     }
-}
-
-/// `proxies` ordered by the distance from `eye` to their bounds, nearest first (ties
-/// keep their order).
-fn near_to_far(proxies: &[&GpuProxy], eye: Vec3) -> Vec<usize> {
-    let mut keyed: Vec<(f32, usize)> = proxies
-        .iter()
-        .enumerate()
-        .map(|(k, p)| (crate::lod::distance_to_box(eye, &p.bounds), k))
-        .collect();
-    keyed.sort_by(|a, b| a.0.total_cmp(&b.0));
-    keyed.into_iter().map(|(_, k)| k).collect()
 }
 
 /// Bind group 2 of the lit pipeline: an `Rgba8UnormSrgb` texture (sampled in

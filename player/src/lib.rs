@@ -36,7 +36,14 @@
 //! [--mode hybrid|full|frustum|lod] [--lod-pixel-error PX] [--png] [--no-prefetch]
 //! [--size WxH]`, `player compare <out> --path <path.ron> [--mode hybrid|lod] [--json]
 //! [--worst DIR] [--worst-count N] [--no-crossings] [--reference-ss N] [--size WxH]`,
-//! `player synth <out>` (a synthetic bake of `manifests/demo.ron`).
+//! `player synth <out>` (a synthetic bake of `manifests/demo.ron`). `view`, `render`
+//! and `compare` also take the draw options ([`DrawOptions`]: `--no-patch-bitfields`,
+//! `--no-backface`, `--no-frustum`, `--tile-triangles N`, `--no-bc`).
+
+/// The switches of the frame model (culling tests, tile size, BC textures; issue
+/// 28), passed explicitly to [`bake::Bake::open`] and [`gpu::Renderer::new`] (or
+/// [`run::Player::open`]), never read from the environment.
+pub use format::schema::frames::DrawOptions;
 
 pub mod bake;
 pub mod camera;

@@ -57,6 +57,43 @@ struct StreamArgs {
     lod_pixel_error: f32,
 }
 
+/// The frame model's switches ([`player::DrawOptions`]; issue 28): every default is
+/// what the player draws without flags. For measurements; the report and
+/// `frames.csv` record them.
+#[derive(clap::Args, Clone)]
+struct DrawArgs {
+    /// Originals: do not select patches by the bake's patch bitfields (paper 002).
+    #[arg(long)]
+    no_patch_bitfields: bool,
+    /// Originals and proxies: draw tiles whose normal cone is wholly back-facing.
+    #[arg(long)]
+    no_backface: bool,
+    /// Originals and proxies: no per-tile frustum test (instances and proxies are
+    /// still culled whole).
+    #[arg(long)]
+    no_frustum: bool,
+    /// Most triangles in one tile of a patch or proxy normal cluster.
+    #[arg(long, default_value_t = format::schema::frames::DEFAULT_TILE_TRIANGLES,
+          value_parser = clap::value_parser!(u32).range(1..))]
+    tile_triangles: u32,
+    /// Decode BC1/BC3 capture textures to RGBA8 on the CPU instead of sampling
+    /// them natively.
+    #[arg(long)]
+    no_bc: bool,
+}
+
+impl DrawArgs {
+    fn options(&self) -> player::DrawOptions {
+        player::DrawOptions {
+            patch_bitfields: !self.no_patch_bitfields,
+            backface: !self.no_backface,
+            frustum: !self.no_frustum,
+            tile_triangles: self.tile_triangles,
+            bc_textures: !self.no_bc,
+        }
+    }
+}
+
 impl StreamArgs {
     /// The stream settings for a headless walk of `path`: display_hz / frame_rate
     /// display frames per path frame (rounded, at least one).
@@ -171,6 +208,8 @@ enum Command {
         png: bool,
         #[command(flatten)]
         stream: StreamArgs,
+        #[command(flatten)]
+        draw: DrawArgs,
     },
     /// Walk through a bake in a window (WASD, arrows or left-drag to turn, Q/E eye
     /// height, Esc quits).
@@ -213,6 +252,8 @@ enum Command {
         headless: bool,
         #[command(flatten)]
         stream: StreamArgs,
+        #[command(flatten)]
+        draw: DrawArgs,
     },
     /// Write a synthetic bake of manifests/demo.ron (hand-made proxies, flat
     /// textures) for trying the player without a bake.
@@ -251,12 +292,44 @@ enum Command {
         repeat: u32,
         #[command(flatten)]
         stream: StreamArgs,
+        #[command(flatten)]
+        draw: DrawArgs,
     },
+}
+
+/// The environment variables that switched the frame model before issue 28, with
+/// the flag that replaced each. The player reads none of them; one left set would
+/// silently measure the defaults, so `main` refuses to start while one is set.
+const REPLACED_ENV: [(&str, &str); 5] = [
+    ("HEXBAKE_PATCH_BITFIELDS", "--no-patch-bitfields"),
+    ("HEXBAKE_PATCH_BACKFACE", "--no-backface"),
+    ("HEXBAKE_PATCH_FRUSTUM", "--no-frustum"),
+    ("HEXBAKE_CLUSTER_TRIANGLES", "--tile-triangles N"),
+    ("HEXBAKE_NO_BC", "--no-bc"),
+];
+
+/// The message for the replaced variables among `set`, if any.
+fn replaced_env_message(set: impl Fn(&str) -> bool) -> Option<String> {
+    let found: Vec<String> = REPLACED_ENV
+        .iter()
+        .filter(|(name, _)| set(name))
+        .map(|(name, flag)| format!("{name} (now `{flag}`)"))
+        .collect();
+    (!found.is_empty()).then(|| {
+        format!(
+            "the environment no longer configures the player: unset {} and pass the flag instead",
+            found.join(", ")
+        )
+    })
 }
 
 fn main() -> ExitCode {
     restore_default_sigpipe();
     let cli = Cli::parse();
+    if let Some(msg) = replaced_env_message(|name| std::env::var_os(name).is_some()) {
+        eprintln!("player: error: {msg}");
+        return ExitCode::FAILURE;
+    }
     let result = match cli.command {
         Command::Render {
             out,
@@ -265,6 +338,7 @@ fn main() -> ExitCode {
             mode,
             png,
             stream,
+            draw,
         } => format::path::CameraPath::load(&path)
             .map_err(player::run::RunError::from)
             .and_then(|p| {
@@ -275,6 +349,7 @@ fn main() -> ExitCode {
                     stream: stream.path_config(&p),
                     size: stream.size,
                     lod_pixel_error: stream.lod_pixel_error,
+                    draw: draw.options(),
                 };
                 render(&out, &p, &opts)
             })
@@ -309,6 +384,7 @@ fn main() -> ExitCode {
             no_overlay,
             headless,
             stream,
+            draw,
         } => {
             let opts = player::view::ViewOptions {
                 size: stream.size.unwrap_or((1024, 768)),
@@ -321,6 +397,7 @@ fn main() -> ExitCode {
                 overlay: !no_overlay,
                 exit_after,
                 screenshot,
+                draw: draw.options(),
                 ..player::view::ViewOptions::new(out.clone())
             };
             if headless {
@@ -355,6 +432,7 @@ fn main() -> ExitCode {
             reference_ss,
             repeat,
             stream,
+            draw,
         } => format::path::CameraPath::load(&path)
             .map_err(player::run::RunError::from)
             .and_then(|p| {
@@ -371,6 +449,7 @@ fn main() -> ExitCode {
                         lod_pixel_error: stream.lod_pixel_error,
                         reference_ss,
                         repeat,
+                        draw: draw.options(),
                     },
                 )
             })
@@ -543,6 +622,72 @@ mod tests {
                 && e.contains("`--upload-budget-mib 1024`"),
             "{e}"
         );
+    }
+
+    /// Issue 28: the frame model's switches are flags (no environment variable),
+    /// on every command that draws; none given is the library's default.
+    #[test]
+    fn draw_flags_set_the_draw_options() {
+        let draw = |args: &[&str]| -> Result<player::DrawOptions, clap::Error> {
+            let mut argv = vec!["player", "compare", "out", "--path", "p.ron"];
+            argv.extend_from_slice(args);
+            match Cli::try_parse_from(argv)?.command {
+                Command::Compare { draw, .. } => Ok(draw.options()),
+                _ => unreachable!("parsed a compare command"),
+            }
+        };
+        assert_eq!(draw(&[]).unwrap(), player::DrawOptions::default());
+        let all = draw(&[
+            "--no-patch-bitfields",
+            "--no-backface",
+            "--no-frustum",
+            "--tile-triangles",
+            "1000000",
+            "--no-bc",
+        ])
+        .unwrap();
+        assert_eq!(
+            all,
+            player::DrawOptions {
+                patch_bitfields: false,
+                backface: false,
+                frustum: false,
+                tile_triangles: 1_000_000,
+                bc_textures: false,
+            }
+        );
+        assert!(draw(&["--tile-triangles", "0"]).is_err());
+        // The old variables are refused by name, with the flag that replaced each.
+        assert_eq!(replaced_env_message(|_| false), None);
+        let msg = replaced_env_message(|n| n == "HEXBAKE_NO_BC").unwrap();
+        assert!(msg.contains("HEXBAKE_NO_BC (now `--no-bc`)"), "{msg}");
+        let Command::Render { draw, .. } = Cli::try_parse_from([
+            "player",
+            "render",
+            "out",
+            "--path",
+            "p.ron",
+            "--frames",
+            "f",
+            "--no-frustum",
+        ])
+        .unwrap()
+        .command
+        else {
+            panic!("a render command")
+        };
+        assert!(!draw.options().frustum);
+        #[cfg(feature = "view")]
+        {
+            let Command::View { draw, .. } =
+                Cli::try_parse_from(["player", "view", "out", "--no-bc"])
+                    .unwrap()
+                    .command
+            else {
+                panic!("a view command")
+            };
+            assert!(!draw.options().bc_textures);
+        }
     }
 
     #[test]

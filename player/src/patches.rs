@@ -4,42 +4,35 @@
 //! §4.1; Zhang & Hoff's normal masks at patch granularity), both from
 //! [`format::patch_visibility::select_patches`], turn into a few index ranges of the
 //! model's patch-ordered index buffer. At load time each patch is further split
-//! into spatial tiles of at most [`cluster_triangles`] ([`refine_patches`]; the index
+//! into spatial tiles of at most [`DrawOptions::tile_triangles`] ([`refine_patches`]; the index
 //! buffer is uploaded in that order), and a tile is drawn only when its own normal
 //! cone is not wholly back-facing and its object-space box meets the view frustum
 //! carried into the instance's object space (000's run-time step (3), view-frustum
 //! culling, at tile rather than object granularity). The cone and frustum tests are
 //! conservative; only the bitfields are not (002 §4).
 //!
-//! Switches for measurements (environment, read once per process):
-//! `HEXBAKE_PATCH_BITFIELDS=0` turns the bitfields off, `HEXBAKE_PATCH_BACKFACE=0` the
-//! back-face test, `HEXBAKE_PATCH_FRUSTUM=0` the per-patch frustum test (instances
-//! are still culled whole); with all three off the originals are drawn whole.
+//! Switches for measurements ([`DrawOptions`], passed in; `player` flags):
+//! `patch_bitfields` (`--no-patch-bitfields`), `backface` (`--no-backface`, originals
+//! and proxies), `frustum` (`--no-frustum`, the per-tile test; instances and proxies
+//! are still culled whole) and `tile_triangles` (`--tile-triangles N`); with the
+//! three tests off the originals are drawn whole.
 
 use crate::camera::{Aabb, Frustum};
 use crate::gpu::{DrawList, PatchedDraw};
 use crate::vertex::InstanceRaw;
+use crate::DrawOptions;
 use format::pack::BasePack;
 use format::patch_visibility::{
     patch_backfacing, select_patches, ModelPatchView, PatchBounds, PatchTests, SamplingSphere,
 };
 use glam::{Mat4, Vec3};
 
-fn env_on(name: &str) -> bool {
-    std::env::var(name).map_or(true, |v| v.trim() != "0")
-}
-
-/// Which of the bake-data tests the environment leaves on (both unless set to `0`).
-pub fn tests_from_env() -> PatchTests {
+/// Which of the bake-data tests `options` leave on.
+pub fn patch_tests(options: &DrawOptions) -> PatchTests {
     PatchTests {
-        bitfields: env_on("HEXBAKE_PATCH_BITFIELDS"),
-        backface: env_on("HEXBAKE_PATCH_BACKFACE"),
+        bitfields: options.patch_bitfields,
+        backface: options.backface,
     }
-}
-
-/// Whether the per-patch frustum test is on (`HEXBAKE_PATCH_FRUSTUM`, on unless `0`).
-pub fn frustum_test_from_env() -> bool {
-    env_on("HEXBAKE_PATCH_FRUSTUM")
 }
 
 /// One model's patch data in the form the per-frame test wants.
@@ -81,14 +74,14 @@ pub struct PatchRuntime {
 }
 
 impl PatchRuntime {
-    /// `None` when the base pack has no patch data or every test is off. `tiles`:
-    /// per model, the tiles [`refine_patches`] made of its patches.
+    /// `None` when the base pack has no patch data or every test of `options` is
+    /// off. `tiles`: per model, the tiles [`refine_patches`] made of its patches.
     pub fn new(
         base: &BasePack,
         tiles: Vec<Vec<Tile>>,
-        tests: PatchTests,
-        frustum_test: bool,
+        options: &DrawOptions,
     ) -> Option<PatchRuntime> {
+        let (tests, frustum_test) = (patch_tests(options), options.frustum);
         let set = base.patches.as_ref()?;
         if !tests.bitfields && !tests.backface && !frustum_test {
             return None;
@@ -181,13 +174,14 @@ impl PatchRuntime {
 
 /// The model's triangle order for upload (patch by patch as the bake wrote them,
 /// each patch's triangles reordered into spatial tiles by [`split_spatially`]) and
-/// the tiles. `mesh` is the model the patches partition; triangle or vertex indices
-/// out of range are skipped, so a bad pack cannot panic here (the reader has
-/// checked them already). Computed once per bake (`Bake::open`): the upload takes
-/// the order, [`PatchRuntime`] the tiles.
+/// the tiles of at most `tile` triangles. `mesh` is the model the patches
+/// partition; triangle or vertex indices out of range are skipped, so a bad pack
+/// cannot panic here (the reader has checked them already). Computed once per bake
+/// (`Bake::open`): the upload takes the order, [`PatchRuntime`] the tiles.
 pub fn refine_patches(
     m: &format::pack::patches::ModelPatches,
     mesh: &format::Mesh,
+    tile: usize,
 ) -> (Vec<u32>, Vec<Tile>) {
     let corners = |t: u32| -> Option<[Vec3; 3]> {
         let tri = mesh.triangles.get(t as usize)?;
@@ -207,7 +201,7 @@ pub fn refine_patches(
             .iter()
             .filter_map(|&t| corners(t).map(|c| (t as usize, (c[0] + c[1] + c[2]) / 3.0)))
             .collect();
-        for run in spatial_runs(&mut members) {
+        for run in spatial_runs(&mut members, tile) {
             let first = 3 * order.len() as u32;
             order.extend(run.iter().map(|&(t, _)| t as u32));
             let (bounds, aabb) = run_bounds(
@@ -294,13 +288,6 @@ pub struct ProxyCluster {
     pub count: u32,
 }
 
-/// Whether the per-cluster back-face test of proxies is on (`HEXBAKE_PATCH_BACKFACE`,
-/// read once).
-pub fn proxy_backface_on() -> bool {
-    static ON: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
-    *ON.get_or_init(|| tests_from_env().backface)
-}
-
 /// The cluster (Zhang & Hoff's cube-face partition, 24 clusters) of a geometric
 /// normal; the same partition as the bake's patches (worker `patches.rs`).
 fn cluster_of(n: Vec3) -> u8 {
@@ -327,25 +314,15 @@ fn cluster_of(n: Vec3) -> u8 {
 /// whole patches, 0.22 ms at 32, 0.24 ms at 16, 0.30 ms at 8 on the 2-core VM. 16 is
 /// a judgement, said plainly: it is the largest size at which that walk meets issue
 /// 16's triangle line (32 misses it by 0.07 %), for 0.05 ms of CPU per frame over
-/// whole patches. `HEXBAKE_CLUSTER_TRIANGLES` overrides it.
-pub const CLUSTER_TRIANGLES: usize = 16;
-
-/// [`CLUSTER_TRIANGLES`] or the environment's override (read once, at least 1).
-pub fn cluster_triangles() -> usize {
-    static N: std::sync::OnceLock<usize> = std::sync::OnceLock::new();
-    *N.get_or_init(|| {
-        std::env::var("HEXBAKE_CLUSTER_TRIANGLES")
-            .ok()
-            .and_then(|v| v.trim().parse::<usize>().ok())
-            .map_or(CLUSTER_TRIANGLES, |n| n.max(1))
-    })
-}
+/// whole patches. [`DrawOptions::tile_triangles`] (`--tile-triangles N`) sets
+/// another; its default is this.
+pub const CLUSTER_TRIANGLES: usize = format::schema::frames::DEFAULT_TILE_TRIANGLES as usize;
 
 /// Splits `tris` (triangle ids with their centroids) in place into runs of at most
-/// [`cluster_triangles`], median-splitting along the longest centroid axis
+/// `tile` (at least 1), median-splitting along the longest centroid axis
 /// (ties by id, so the order is deterministic); returns the run lengths in order.
-fn split_spatially(tris: &mut [(usize, Vec3)], out: &mut Vec<usize>) {
-    if tris.len() <= cluster_triangles() {
+fn split_spatially(tris: &mut [(usize, Vec3)], tile: usize, out: &mut Vec<usize>) {
+    if tris.len() <= tile.max(1) {
         out.push(tris.len());
         return;
     }
@@ -363,14 +340,15 @@ fn split_spatially(tris: &mut [(usize, Vec3)], out: &mut Vec<usize>) {
     };
     tris.sort_unstable_by(|a, b| a.1[axis].total_cmp(&b.1[axis]).then(a.0.cmp(&b.0)));
     let (lo, hi) = tris.split_at_mut(tris.len() / 2);
-    split_spatially(lo, out);
-    split_spatially(hi, out);
+    split_spatially(lo, tile, out);
+    split_spatially(hi, tile, out);
 }
 
-/// `tris` reordered by [`split_spatially`] and cut into its runs, in order.
-fn spatial_runs(tris: &mut [(usize, Vec3)]) -> Vec<&[(usize, Vec3)]> {
+/// `tris` reordered by [`split_spatially`] into runs of at most `tile` and cut into
+/// them, in order.
+fn spatial_runs(tris: &mut [(usize, Vec3)], tile: usize) -> Vec<&[(usize, Vec3)]> {
     let mut lengths = Vec::new();
-    split_spatially(tris, &mut lengths);
+    split_spatially(tris, tile, &mut lengths);
     let mut rest: &[(usize, Vec3)] = tris;
     lengths
         .into_iter()
@@ -383,11 +361,12 @@ fn spatial_runs(tris: &mut [(usize, Vec3)]) -> Vec<&[(usize, Vec3)]> {
 }
 
 /// Reorders a proxy's triangles by normal cluster and, within one, by spatial tile
-/// ([`split_spatially`]), and returns the clusters with their normal cones and
-/// boxes. Every mode draws the reordered buffer, so switching the tests off changes
-/// nothing but the culling.
+/// of at most `tile` triangles ([`split_spatially`]), and returns the clusters with
+/// their normal cones and boxes. Every mode draws the reordered buffer, so switching
+/// the tests off changes nothing but the culling.
 pub fn cluster_proxy_vertices(
     vertices: &[crate::vertex::ProxyVertex],
+    tile: usize,
 ) -> (Vec<crate::vertex::ProxyVertex>, Vec<ProxyCluster>) {
     let tris = vertices.len() / 3;
     let normal = |t: usize| {
@@ -410,7 +389,7 @@ pub fn cluster_proxy_vertices(
         }
         let mut members: Vec<(usize, Vec3)> =
             order[k..j].iter().map(|&(_, t)| (t, centroid(t))).collect();
-        for run in spatial_runs(&mut members) {
+        for run in spatial_runs(&mut members, tile) {
             let first = out.len() as u32;
             for &(t, _) in run {
                 out.extend_from_slice(&vertices[3 * t..3 * t + 3]);
@@ -448,19 +427,27 @@ fn run_bounds(triangles: impl Iterator<Item = [Vec3; 3]>) -> (PatchBounds, Aabb)
     (PatchBounds::of_triangles(corners.into_iter()), aabb)
 }
 
-/// Whether the per-cluster frustum test of proxies is on (`HEXBAKE_PATCH_FRUSTUM`,
-/// read once).
-pub fn proxy_frustum_on() -> bool {
-    static ON: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
-    *ON.get_or_init(frustum_test_from_env)
-}
-
 /// The view the proxies' clusters are tested against: the eye (back faces) and the
-/// frustum (world).
+/// frustum (world), and which of the two tests are on
+/// ([`DrawOptions::backface`], [`DrawOptions::frustum`]).
 #[derive(Clone, Copy, Debug)]
 pub struct CullView {
     pub eye: Vec3,
     pub frustum: Frustum,
+    pub backface_test: bool,
+    pub frustum_test: bool,
+}
+
+impl CullView {
+    /// The view from `eye` within `frustum` with the tests `options` leave on.
+    pub fn new(eye: Vec3, frustum: Frustum, options: &DrawOptions) -> CullView {
+        CullView {
+            eye,
+            frustum,
+            backface_test: options.backface,
+            frustum_test: options.frustum,
+        }
+    }
 }
 
 /// The vertex ranges of a proxy to draw from `view`: its clusters that are neither
@@ -471,10 +458,13 @@ pub fn proxy_ranges(
     vertex_count: u32,
     view: Option<&CullView>,
 ) -> Vec<(u32, u32)> {
-    let (backface, frustum) = (proxy_backface_on(), proxy_frustum_on());
-    let (Some(view), true) = (view, (backface || frustum) && !clusters.is_empty()) else {
+    let Some(view) = view else {
         return vec![(0, vertex_count)];
     };
+    let (backface, frustum) = (view.backface_test, view.frustum_test);
+    if !(backface || frustum) || clusters.is_empty() {
+        return vec![(0, vertex_count)];
+    }
     let mut ranges: Vec<(u32, u32)> = Vec::new();
     for c in clusters {
         let eps = 1e-5 * (1.0 + Vec3::from(c.bounds.centre).length());
@@ -566,7 +556,7 @@ mod tests {
     fn tiles_split_each_patch_into_small_runs_of_its_own_triangles() {
         let mesh = terrain(30);
         let m = uneven_patches(&mesh);
-        let (order, tiles) = refine_patches(&m, &mesh);
+        let (order, tiles) = refine_patches(&m, &mesh, CLUSTER_TRIANGLES);
         // The order is a permutation that keeps every patch's triangles together.
         let mut sorted = order.clone();
         sorted.sort_unstable();
@@ -587,7 +577,7 @@ mod tests {
                 assert_eq!(w[0].end, w[1].first);
             }
             for t in &mine {
-                assert!(t.end > t.first && (t.end - t.first) as usize <= 3 * cluster_triangles());
+                assert!(t.end > t.first && (t.end - t.first) as usize <= 3 * CLUSTER_TRIANGLES);
                 for &tri in &order[t.first as usize / 3..t.end as usize / 3] {
                     for &v in &mesh.triangles[tri as usize] {
                         let q = Vec3::from(mesh.positions[v as usize]);
@@ -598,14 +588,14 @@ mod tests {
             start = end;
         }
         // Deterministic: a bake's models upload in the same order on every run.
-        assert_eq!(refine_patches(&m, &mesh), (order, tiles));
+        assert_eq!(refine_patches(&m, &mesh, CLUSTER_TRIANGLES), (order, tiles));
     }
 
     #[test]
     fn object_space_frustum_keeps_every_tile_with_a_corner_in_view() {
         let mesh = terrain(24);
         let m = uneven_patches(&mesh);
-        let (order, tiles) = refine_patches(&m, &mesh);
+        let (order, tiles) = refine_patches(&m, &mesh, CLUSTER_TRIANGLES);
         let mut r = rng(17);
         let (mut culled, mut total) = (0usize, 0usize);
         for _ in 0..200 {
@@ -667,7 +657,7 @@ mod tests {
     #[test]
     fn clustering_keeps_every_triangle_and_culls_only_back_faces() {
         let v = box_vertices();
-        let (ordered, clusters) = cluster_proxy_vertices(&v);
+        let (ordered, clusters) = cluster_proxy_vertices(&v, CLUSTER_TRIANGLES);
         assert_eq!(ordered.len(), v.len());
         let key = |t: &[ProxyVertex]| {
             t.iter()
@@ -692,10 +682,7 @@ mod tests {
         };
         for _ in 0..500 {
             let eye = Vec3::new(rnd(), rnd(), rnd());
-            let view = CullView {
-                eye,
-                frustum: everything(),
-            };
+            let view = CullView::new(eye, everything(), &DrawOptions::default());
             let ranges = proxy_ranges(&clusters, ordered.len() as u32, Some(&view));
             let kept = |t: usize| {
                 ranges

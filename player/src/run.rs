@@ -16,6 +16,8 @@ use format::path::{CameraPath, PathFrame};
 pub use format::schema::compare::{
     AaFrame, AaQuality, AaReference, CompareFrame, CompareReport, CrossingStats,
 };
+// `frames.csv`: one row type, also read by the benchmark tool (issue 28).
+pub use format::schema::frames::{FrameRow, FRAMES_CSV_HEADER};
 use glam::Vec2;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -63,79 +65,31 @@ pub fn camera_for(frame: &PathFrame, path: &CameraPath, size: (u32, u32), far: f
     }
 }
 
-/// One row of `frames.csv`.
-#[derive(Clone, Debug, PartialEq)]
-pub struct FrameRecord {
-    pub frame: usize,
-    pub time_s: f32,
-    pub cell: Option<u32>,
-    pub crossing: bool,
-    /// GPU submit → done, milliseconds.
-    pub frame_ms: f64,
-    pub triangles: u64,
-    /// Texture bytes of the proxies the frame draws.
-    pub texture_bytes: u64,
-    /// Draw calls the frame submits ([`crate::gpu::DrawList::draw_calls`]).
-    pub draw_calls: u64,
-    pub cache_hits: u64,
-    pub cache_misses: u64,
-    /// Render-thread streaming work this frame (demand loads, uploads), milliseconds.
-    pub stream_ms: f64,
-    /// Texture bytes uploaded from the texture queue before this frame (≤ the
-    /// per-frame budget unless one texture alone is larger).
-    pub uploaded_bytes: u64,
-    /// Proxies of the current cell drawn as original geometry (textures queued).
-    pub pending_proxies: usize,
-}
-
-impl FrameRecord {
-    /// The record of frame `frame` drawn with `stats`; `prev` is the previous frame's
-    /// cell (`None` for the first frame), which marks crossings.
-    pub fn new(
-        frame: usize,
-        time_s: f32,
-        stats: &crate::stream::StreamStats,
-        prev: Option<Option<u32>>,
-        (frame_ms, list): (f64, ListStats),
-    ) -> FrameRecord {
-        FrameRecord {
-            frame,
-            time_s,
-            cell: stats.cell,
-            crossing: prev.is_some_and(|p| p != stats.cell),
-            frame_ms,
-            triangles: list.triangles,
-            texture_bytes: list.texture_bytes,
-            draw_calls: list.draw_calls,
-            cache_hits: stats.hits,
-            cache_misses: stats.misses,
-            stream_ms: stats.stream_ms,
-            uploaded_bytes: stats.uploaded_bytes,
-            pending_proxies: stats.pending_proxies,
-        }
-    }
-}
-
-pub const CSV_HEADER: &str = "frame,time_s,cell,crossing,frame_ms,triangles,texture_bytes,cache_hits,cache_misses,stream_ms,uploaded_bytes,pending_proxies,draw_calls";
-
-impl FrameRecord {
-    pub fn csv(&self) -> String {
-        format!(
-            "{},{:.4},{},{},{:.3},{},{},{},{},{:.3},{},{},{}",
-            self.frame,
-            self.time_s,
-            self.cell.map_or(-1, |c| c as i64),
-            self.crossing as u8,
-            self.frame_ms,
-            self.triangles,
-            self.texture_bytes,
-            self.cache_hits,
-            self.cache_misses,
-            self.stream_ms,
-            self.uploaded_bytes,
-            self.pending_proxies,
-            self.draw_calls
-        )
+/// The `frames.csv` row of frame `frame` drawn with `stats` and `options`; `prev` is
+/// the previous frame's cell (`None` for the first frame), which marks crossings.
+pub fn frame_row(
+    frame: usize,
+    time_s: f32,
+    stats: &crate::stream::StreamStats,
+    prev: Option<Option<u32>>,
+    (frame_ms, list): (f64, ListStats),
+    options: &crate::DrawOptions,
+) -> FrameRow {
+    FrameRow {
+        frame,
+        time_s,
+        cell: stats.cell,
+        crossing: prev.is_some_and(|p| p != stats.cell),
+        frame_ms,
+        triangles: list.triangles,
+        texture_bytes: list.texture_bytes,
+        draw_calls: list.draw_calls,
+        cache_hits: stats.hits,
+        cache_misses: stats.misses,
+        stream_ms: stats.stream_ms,
+        uploaded_bytes: stats.uploaded_bytes,
+        pending_proxies: stats.pending_proxies as u64,
+        draw_options: Some(*options),
     }
 }
 
@@ -154,9 +108,14 @@ pub struct Player {
 }
 
 impl Player {
-    pub fn open(dir: &Path, size: (u32, u32)) -> Result<Player, RunError> {
-        let bake = Bake::open(dir)?;
-        let renderer = Renderer::new(size.0, size.1)?;
+    /// The bake in `dir` on a renderer of `size`, both drawing with `options`.
+    pub fn open(
+        dir: &Path,
+        size: (u32, u32),
+        options: &crate::DrawOptions,
+    ) -> Result<Player, RunError> {
+        let bake = Bake::open(dir, options)?;
+        let renderer = Renderer::new(size.0, size.1, options)?;
         let models = renderer.upload_models(&bake.base, bake.draw_order.as_deref());
         Ok(Player::from_parts(bake, renderer, models))
     }
@@ -169,6 +128,15 @@ impl Player {
             lod: None,
             lod_pixel_error: crate::lod::DEFAULT_PIXEL_ERROR,
             timing_repeats: 1,
+        }
+    }
+
+    /// What its frames are drawn with, as in effect: the bake's culling tests and
+    /// tile size, the renderer's texture path (BC off where the device lacks it).
+    pub fn draw_options(&self) -> crate::DrawOptions {
+        crate::DrawOptions {
+            bc_textures: self.renderer.native_bc(),
+            ..self.bake.options
         }
     }
 
@@ -298,6 +266,8 @@ pub struct RenderOptions {
     pub size: Option<(u32, u32)>,
     /// `--lod-pixel-error` of `lod` mode.
     pub lod_pixel_error: f32,
+    /// The frame model's switches (`--no-backface`, `--tile-triangles`, ...).
+    pub draw: crate::DrawOptions,
 }
 
 /// Renders every frame of `path`; writes `frames.csv` (and PNGs) into the frames dir.
@@ -305,13 +275,14 @@ pub fn render(
     out: &Path,
     path: &CameraPath,
     opts: &RenderOptions,
-) -> Result<(Vec<FrameRecord>, Player), RunError> {
+) -> Result<(Vec<FrameRow>, Player), RunError> {
     let size = opts.size.unwrap_or(path.resolution);
     let frames = path.frames();
     if frames.is_empty() {
         return Err(RunError::NoFrames);
     }
-    let mut player = Player::open(out, size)?;
+    let mut player = Player::open(out, size, &opts.draw)?;
+    let options = player.draw_options();
     eprintln!("player: adapter {}", player.renderer.adapter());
     std::fs::create_dir_all(&opts.frames_dir).map_err(|e| write_err(&opts.frames_dir, e))?;
     player.lod_pixel_error = opts.lod_pixel_error;
@@ -332,7 +303,7 @@ pub fn render(
             let p = opts.frames_dir.join(format!("{i:05}.png"));
             write_png(&p, size.0, size.1, &px)?;
         }
-        records.push(FrameRecord::new(i, f.time_s, &stats, prev, (ms, list)));
+        records.push(frame_row(i, f.time_s, &stats, prev, (ms, list), &options));
         prev = Some(stats.cell);
     }
     drop(streamer);
@@ -341,13 +312,9 @@ pub fn render(
     Ok((records, player))
 }
 
-pub fn write_csv(path: &Path, records: &[FrameRecord]) -> Result<(), RunError> {
-    let mut s = String::from(CSV_HEADER);
-    s.push('\n');
-    for r in records {
-        s.push_str(&r.csv());
-        s.push('\n');
-    }
+/// Writes `records` as `frames.csv` ([`format::schema::frames::write_frames_csv`]).
+pub fn write_csv(path: &Path, records: &[FrameRow]) -> Result<(), RunError> {
+    let s = format::schema::frames::write_frames_csv(records);
     let mut f = std::fs::File::create(path).map_err(|e| write_err(path, e))?;
     f.write_all(s.as_bytes()).map_err(|e| write_err(path, e))
 }
@@ -367,8 +334,8 @@ fn median(v: &mut [f64]) -> f64 {
 
 /// Frame-time behaviour at cell crossings (paper Fig. 14); see
 /// [`CrossingStats`].
-pub fn crossing_stats(records: &[FrameRecord]) -> CrossingStats {
-    let total = |r: &FrameRecord| r.frame_ms + r.stream_ms;
+pub fn crossing_stats(records: &[FrameRow]) -> CrossingStats {
+    let total = |r: &FrameRow| r.frame_ms + r.stream_ms;
     let mut near = vec![false; records.len()];
     let mut crossings = 0;
     for (i, r) in records.iter().enumerate() {
@@ -442,6 +409,9 @@ pub struct CompareOptions {
     /// `--repeat`: each configuration's frame is drawn this many times and timed by
     /// its fastest draw ([`Player::timing_repeats`]); 1 (default) draws once.
     pub repeat: u32,
+    /// The frame model's switches, for every configuration drawn (written into the
+    /// report as `draw_options`).
+    pub draw: crate::DrawOptions,
 }
 
 impl Default for CompareOptions {
@@ -456,6 +426,7 @@ impl Default for CompareOptions {
             lod_pixel_error: crate::lod::DEFAULT_PIXEL_ERROR,
             reference_ss: DEFAULT_REFERENCE_SS,
             repeat: 1,
+            draw: crate::DrawOptions::default(),
         }
     }
 }
@@ -488,7 +459,8 @@ pub fn compare(
         return Err(RunError::ReferenceSs(opts.reference_ss));
     }
     let ss = opts.reference_ss.max(1);
-    let mut player = Player::open(out, size)?;
+    let mut player = Player::open(out, size, &opts.draw)?;
+    let options = player.draw_options();
     eprintln!("player: adapter {}", player.renderer.adapter());
     player.lod_pixel_error = opts.lod_pixel_error;
     player.timing_repeats = opts.repeat;
@@ -561,7 +533,7 @@ pub fn compare(
             reference_frame_ms: ref_ms,
             frustum_frame_ms: fr_ms,
         });
-        hybrid_records.push(FrameRecord::new(i, f.time_s, &stats, prev, (ms, list)));
+        hybrid_records.push(frame_row(i, f.time_s, &stats, prev, (ms, list), &options));
         prev = Some(stats.cell);
         // 4. The worst frames by object-pixel PSNR (frames without objects last).
         if opts.worst_dir.is_some() && opts.worst_count > 0 {
@@ -587,7 +559,7 @@ pub fn compare(
         for (i, f) in frames.iter().enumerate() {
             let cam = camera_for(f, path, size, far);
             let (ms, list, stats) = player.draw_listed(&cam, Mode::Hybrid, Some(&mut s));
-            recs.push(FrameRecord::new(i, f.time_s, &stats, prev, (ms, list)));
+            recs.push(frame_row(i, f.time_s, &stats, prev, (ms, list), &options));
             prev = Some(stats.cell);
         }
         Some(crossing_stats(&recs))
@@ -662,6 +634,7 @@ pub fn compare(
         mode: opts.mode.name().to_string(),
         lod_pixel_error: (opts.mode == Mode::Lod).then_some(opts.lod_pixel_error),
         lod_build_ms,
+        draw_options: Some(options),
         crossing_prefetch: Some(crossing_stats(&hybrid_records)),
         crossing_no_prefetch,
         per_frame,

@@ -50,6 +50,8 @@ pub struct ViewOptions {
     pub exit_after: Option<u64>,
     /// Save the last frame here as PNG on exit.
     pub screenshot: Option<PathBuf>,
+    /// The frame model's switches (`--no-backface`, `--tile-triangles`, ...).
+    pub draw: crate::DrawOptions,
 }
 
 impl ViewOptions {
@@ -67,6 +69,7 @@ impl ViewOptions {
             overlay: true,
             exit_after: None,
             screenshot: None,
+            draw: crate::DrawOptions::default(),
         }
     }
 }
@@ -119,7 +122,7 @@ impl ViewSession {
 
     /// A session on an offscreen renderer (no window).
     pub fn open_headless(opts: &ViewOptions) -> Result<ViewSession, crate::run::RunError> {
-        let player = Player::open(&opts.out, opts.size)?;
+        let player = Player::open(&opts.out, opts.size, &opts.draw)?;
         eprintln!("player: adapter {}", player.renderer.adapter());
         Ok(ViewSession::new(player, opts))
     }
@@ -329,8 +332,9 @@ impl App {
         config.format = format;
         config.usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_DST;
         surface.configure(&device, &config);
-        let bake = crate::bake::Bake::open(&self.opts.out).map_err(|e| e.to_string())?;
-        let renderer = Renderer::with_device(device.clone(), queue, summary, w, h)
+        let draw = &self.opts.draw;
+        let bake = crate::bake::Bake::open(&self.opts.out, draw).map_err(|e| e.to_string())?;
+        let renderer = Renderer::with_device(device.clone(), queue, summary, (w, h), draw)
             .map_err(|e| e.to_string())?;
         let models = renderer.upload_models(&bake.base, bake.draw_order.as_deref());
         let session = ViewSession::new(Player::from_parts(bake, renderer, models), &self.opts);

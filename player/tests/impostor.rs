@@ -49,7 +49,7 @@ fn draw(lo: u8, hi: u8) -> Option<Vec<(u64, usize)>> {
         }],
     };
     write_impostor_bake(dir.path(), &capture, tex, layers).unwrap();
-    let mut p = match Player::open(dir.path(), (96, 96)) {
+    let mut p = match Player::open(dir.path(), (96, 96), &player::DrawOptions::default()) {
         Ok(p) => p,
         Err(player::run::RunError::Gpu(GpuError::NoAdapter(e))) => {
             eprintln!("SKIP: no graphics adapter ({e})");

@@ -30,7 +30,7 @@ fn levels_line(chain: &LodChain) -> String {
 /// the same models and instances as a real bake of it; LOD mode reads nothing else).
 fn demo_bake(dir: &std::path::Path) -> Bake {
     write_synthetic_bake(dir).unwrap();
-    Bake::open(dir).unwrap()
+    Bake::open(dir, &player::DrawOptions::default()).unwrap()
 }
 
 fn check_chain(name: &str, chain: &LodChain, vertex_count: usize, triangles: usize) {
@@ -163,7 +163,7 @@ fn a_bigger_pixel_error_never_adds_triangles_along_demo_walk() {
 fn lod_walk_of_the_demo_scene_stays_close_to_full_geometry() {
     let dir = tempfile::tempdir().unwrap();
     write_synthetic_bake(dir.path()).unwrap();
-    match Renderer::new(8, 8) {
+    match Renderer::new(8, 8, &player::DrawOptions::default()) {
         Ok(_) => {}
         Err(GpuError::NoAdapter(e)) => {
             eprintln!("SKIP: no graphics adapter ({e})");

@@ -11,7 +11,7 @@ use player::testdata::write_synthetic_bake;
 use player::view::{ViewOptions, ViewSession};
 
 fn open(dir: &std::path::Path, opts: &ViewOptions) -> Option<ViewSession> {
-    match Player::open(dir, opts.size) {
+    match Player::open(dir, opts.size, &opts.draw) {
         Ok(p) => {
             eprintln!("adapter: {}", p.renderer.adapter());
             Some(ViewSession::new(p, opts))

@@ -17,6 +17,7 @@ use player::metrics::psnr_y;
 use player::run::Player;
 use player::stream::{StreamConfig, Streamer};
 use player::testdata::write_synthetic_bake_with;
+use player::DrawOptions;
 
 fn per_triangle_patches(base: &BasePack) -> PatchSet {
     let (level, shells) = (0u32, vec![1.5f32, 64.0]);
@@ -88,7 +89,11 @@ fn per_triangle_patches(base: &BasePack) -> PatchSet {
 /// instance 0 (`close`: 0.6 radii, narrow, off-centre, so part of it is out of
 /// view), with the per-tile frustum test on or off.
 fn frame(dir: &std::path::Path, close: bool, frustum: bool) -> Option<(u64, Vec<u8>, Vec<u8>)> {
-    let mut p = match Player::open(dir, (128, 128)) {
+    let options = DrawOptions {
+        frustum,
+        ..Default::default()
+    };
+    let mut p = match Player::open(dir, (128, 128), &options) {
         Ok(p) => p,
         Err(player::run::RunError::Gpu(GpuError::NoAdapter(e))) => {
             eprintln!("SKIP: no graphics adapter ({e})");
@@ -96,9 +101,6 @@ fn frame(dir: &std::path::Path, close: bool, frustum: bool) -> Option<(u64, Vec<
         }
         Err(e) => panic!("{e}"),
     };
-    if let Some(runtime) = p.bake.patches.as_mut() {
-        runtime.frustum_test = frustum;
-    }
     let b = p.bake.instance_bounds[0];
     let r = (b.max - b.min).length() * 0.5;
     let (offset, fov_y_deg) = if close {
@@ -168,7 +170,7 @@ fn proxy_tile_culling_changes_no_pixel_and_draws_fewer_triangles() {
     use player::stream::PendingDraw;
     let dir = tempfile::tempdir().unwrap();
     write_synthetic_bake_with(dir.path(), false).unwrap();
-    let mut p = match Player::open(dir.path(), (96, 96)) {
+    let mut p = match Player::open(dir.path(), (96, 96), &DrawOptions::default()) {
         Ok(p) => p,
         Err(player::run::RunError::Gpu(GpuError::NoAdapter(e))) => {
             eprintln!("SKIP: no graphics adapter ({e})");
@@ -225,4 +227,40 @@ fn proxy_tile_culling_changes_no_pixel_and_draws_fewer_triangles() {
         covered > 96 * 96 / 10,
         "too little of the frame shows objects to tell"
     );
+    // Issue 28: the options reach the proxies. With both tests off the hybrid draws
+    // every proxy triangle (as `cull: None` does) and the same pixels; with tiles of
+    // one triangle the tests cull at least as much, with the same pixels.
+    let draw_with = |options: DrawOptions| {
+        let mut q = Player::open(dir.path(), (96, 96), &options).unwrap();
+        q.warm_up(&cam);
+        q.renderer.set_coverage_alpha(true);
+        let mut s = Streamer::new(
+            &q.bake,
+            StreamConfig {
+                prefetch: false,
+                upload_budget_bytes: 1 << 30,
+                ..Default::default()
+            },
+        );
+        q.draw(&cam, Mode::Hybrid, Some(&mut s));
+        let (current, _) = s.begin_frame(&q.renderer, &q.bake, &cam);
+        let list = hybrid_list(&q.bake, &cam, &current, PendingDraw::StandIns);
+        let proxy_triangles = list.triangle_count(&q.models);
+        q.renderer.render(&cam, &q.models, &list);
+        (proxy_triangles, q.renderer.read_pixels().unwrap())
+    };
+    let (t_off, off) = draw_with(DrawOptions {
+        backface: false,
+        frustum: false,
+        ..Default::default()
+    });
+    assert_eq!(t_off, t_whole);
+    assert!(off == b, "tests off: not the frame of every triangle");
+    let (t_fine, fine) = draw_with(DrawOptions {
+        tile_triangles: 1,
+        ..Default::default()
+    });
+    eprintln!("proxies: {t_fine} triangles with tiles of one triangle");
+    assert!(t_fine <= t_culled, "{t_fine} > {t_culled}");
+    assert!(fine == b, "tiles of one triangle changed pixels");
 }

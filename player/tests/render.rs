@@ -9,12 +9,13 @@ use player::camera::Camera;
 use player::frame::Mode;
 use player::gpu::{GpuError, Renderer, SKY};
 use player::metrics::psnr_y;
-use player::run::{compare, render, CompareOptions, Player, RenderOptions, CSV_HEADER};
+use player::run::{compare, render, CompareOptions, Player, RenderOptions, FRAMES_CSV_HEADER};
 use player::stream::{PendingDraw, StreamConfig, Streamer};
 use player::testdata::{capture_camera, quad_in_front, write_quad_bake, write_synthetic_bake};
+use player::DrawOptions;
 
 fn open(dir: &std::path::Path, size: (u32, u32)) -> Option<Player> {
-    match Player::open(dir, size) {
+    match Player::open(dir, size, &DrawOptions::default()) {
         Ok(p) => {
             eprintln!("adapter: {}", p.renderer.adapter());
             Some(p)
@@ -35,7 +36,7 @@ fn non_sky(px: &[u8]) -> usize {
 
 #[test]
 fn adapter_reports_backend_and_device_type() {
-    match Renderer::new(16, 16) {
+    match Renderer::new(16, 16, &DrawOptions::default()) {
         Ok(r) => {
             let a = r.adapter();
             println!(
@@ -243,7 +244,7 @@ fn render_hybrid(
     png: bool,
     stream: StreamConfig,
     size: Option<(u32, u32)>,
-) -> Vec<player::run::FrameRecord> {
+) -> Vec<player::run::FrameRow> {
     let opts = RenderOptions {
         mode: Mode::Hybrid,
         frames_dir: dir.join("frames"),
@@ -251,6 +252,7 @@ fn render_hybrid(
         stream,
         size,
         lod_pixel_error: 1.0,
+        draw: DrawOptions::default(),
     };
     render(dir, path, &opts).unwrap().0
 }
@@ -261,7 +263,7 @@ fn render_writes_csv_and_compare_reports_quality() {
     write_synthetic_bake(dir.path()).unwrap();
     let path_file = write_path(dir.path(), 64);
     let path = format::path::CameraPath::load(&path_file).unwrap();
-    if Renderer::new(8, 8).is_err() {
+    if Renderer::new(8, 8, &DrawOptions::default()).is_err() {
         eprintln!("SKIP: no graphics adapter");
         return;
     }
@@ -277,8 +279,27 @@ fn render_writes_csv_and_compare_reports_quality() {
         "one current-cell lookup per frame"
     );
     let csv = std::fs::read_to_string(frames_dir.join("frames.csv")).unwrap();
-    assert_eq!(csv.lines().next(), Some(CSV_HEADER));
+    assert_eq!(csv.lines().next(), Some(FRAMES_CSV_HEADER));
     assert_eq!(csv.lines().count(), records.len() + 1);
+    // Issue 28: every row says what it was drawn with (the defaults here; lavapipe
+    // samples BC), and reads back as the row type the benchmark tool reads.
+    let rows = format::schema::frames::parse_frames_csv(&csv).unwrap();
+    assert_eq!(rows.len(), records.len());
+    for (row, rec) in rows.iter().zip(&records) {
+        assert_eq!(row.draw_options, rec.draw_options);
+        assert_eq!(
+            (row.frame, row.cell, row.triangles),
+            (rec.frame, rec.cell, rec.triangles)
+        );
+        let o = row.draw_options.expect("written");
+        assert_eq!(
+            o,
+            DrawOptions {
+                bc_textures: o.bc_textures,
+                ..Default::default()
+            }
+        );
+    }
     assert!(frames_dir.join("00000.png").exists());
 
     let worst = dir.path().join("worst");
@@ -304,6 +325,8 @@ fn render_writes_csv_and_compare_reports_quality() {
         report.reference_triangles
     );
     assert_eq!(report.frames, records.len());
+    // Issue 28: the report says what its frames were drawn with.
+    assert_eq!(report.draw_options, rows[0].draw_options);
     assert!(report.mean_psnr_y.is_finite() && report.mean_psnr_y > 5.0);
     assert!(report.mean_ssim > 0.0 && report.mean_ssim <= 1.0);
     assert!(report.mean_triangles <= report.reference_triangles);
@@ -566,7 +589,7 @@ fn compare_of_a_bake_without_proxies_is_perfect() {
     player::testdata::write_synthetic_bake_with(dir.path(), true).unwrap();
     let path_file = write_path(dir.path(), 32);
     let path = format::path::CameraPath::load(&path_file).unwrap();
-    if Renderer::new(8, 8).is_err() {
+    if Renderer::new(8, 8, &DrawOptions::default()).is_err() {
         eprintln!("SKIP: no graphics adapter");
         return;
     }
@@ -614,7 +637,7 @@ fn holes(reference: &[u8], img: &[u8]) -> usize {
 fn texture_uploads_stay_under_the_budget_at_every_frame() {
     let dir = tempfile::tempdir().unwrap();
     write_synthetic_bake(dir.path()).unwrap();
-    if Renderer::new(8, 8).is_err() {
+    if Renderer::new(8, 8, &DrawOptions::default()).is_err() {
         eprintln!("SKIP: no graphics adapter");
         return;
     }

@@ -11,9 +11,10 @@ use player::gpu::GpuError;
 use player::run::Player;
 use player::stream::{StreamConfig, Streamer};
 use player::testdata::{quad_in_front, write_quad_bake};
+use player::DrawOptions;
 
-fn open(dir: &std::path::Path, size: (u32, u32)) -> Option<Player> {
-    match Player::open(dir, size) {
+fn open(dir: &std::path::Path, size: (u32, u32), options: &DrawOptions) -> Option<Player> {
+    match Player::open(dir, size, options) {
         Ok(p) => Some(p),
         Err(player::run::RunError::Gpu(GpuError::NoAdapter(e))) => {
             eprintln!("SKIP: no graphics adapter ({e}); install mesa-vulkan-drivers for lavapipe");
@@ -52,9 +53,13 @@ fn frames(tex: &Texture, native: bool) -> Option<(Vec<Vec<u8>>, u64, bool)> {
     let dir = tempfile::tempdir().unwrap();
     let (centre, capture) = quad_in_front();
     write_quad_bake(dir.path(), centre, &capture, tex.clone()).unwrap();
-    let mut p = open(dir.path(), (96, 96))?;
-    p.renderer.set_native_bc(native);
+    let options = DrawOptions {
+        bc_textures: native,
+        ..Default::default()
+    };
+    let mut p = open(dir.path(), (96, 96), &options)?;
     let used_native = p.renderer.native_bc();
+    assert_eq!(p.draw_options().bc_textures, used_native);
     let mut s = Streamer::new(&p.bake, StreamConfig::default());
     let mut out = Vec::new();
     let mut bytes = 0;

@@ -10,11 +10,13 @@
 //! Golden file: `format/tests/data/schema/compare.json`
 //! (`format/tests/schema_compare_golden.rs`).
 
+pub use super::frames::DrawOptions;
 use serde::{Deserialize, Deserializer, Serialize};
 
 /// The top-level keys every `player compare --json` report has, whatever its mode
-/// (for readers and tests that check the contract).
-pub const REQUIRED_KEYS: [&str; 7] = [
+/// (for readers and tests that check the contract; reports of older players may
+/// lack `draw_options`, which reads as `None`).
+pub const REQUIRED_KEYS: [&str; 8] = [
     "frames",
     "mean_psnr_y",
     "min_psnr_y",
@@ -22,6 +24,7 @@ pub const REQUIRED_KEYS: [&str; 7] = [
     "mean_triangles",
     "reference_triangles",
     "frame_time_ratio",
+    "draw_options",
 ];
 
 /// Frame-time behaviour at cell crossings (paper Fig. 14): per crossing, the maximum
@@ -214,6 +217,10 @@ pub struct CompareReport {
     pub lod_pixel_error: Option<f32>,
     /// Wall time of building the LOD chains (`lod` mode only), milliseconds.
     pub lod_build_ms: Option<f64>,
+    /// What every configuration's frames were drawn with (the player's flags; issue
+    /// 28). `None` in reports of older players, which did not record it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub draw_options: Option<DrawOptions>,
     pub crossing_prefetch: Option<CrossingStats>,
     pub crossing_no_prefetch: Option<CrossingStats>,
     pub per_frame: Vec<CompareFrame>,
@@ -269,6 +276,27 @@ mod tests {
         assert!(r.aa_reference.is_none() && r.per_frame[0].aa_reference.is_none());
         assert_eq!(r.per_frame[0].object_psnr_y_db, None);
         assert_eq!((r.mean_draw_calls, r.per_frame[0].draw_calls), (0.0, 0));
+        assert_eq!(r.draw_options, None);
+    }
+
+    #[test]
+    fn draw_options_are_written_and_read_back() {
+        let options = DrawOptions {
+            frustum: false,
+            tile_triangles: 64,
+            ..Default::default()
+        };
+        let r = CompareReport {
+            draw_options: Some(options),
+            ..Default::default()
+        };
+        let json = serde_json::to_string(&r).unwrap();
+        assert!(
+            json.contains(r#""draw_options":{"patch_bitfields":true,"backface":true,"frustum":false,"tile_triangles":64,"bc_textures":true}"#),
+            "{json}"
+        );
+        let back: CompareReport = serde_json::from_str(&json).unwrap();
+        assert_eq!(back.draw_options, Some(options));
     }
 
     #[test]

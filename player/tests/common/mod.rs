@@ -15,7 +15,7 @@ pub fn demo_walk() -> CameraPath {
 }
 
 /// The keys every `player compare` report has.
-pub const COMPARE_KEYS: [&str; 7] = format::schema::compare::REQUIRED_KEYS;
+pub const COMPARE_KEYS: [&str; 8] = format::schema::compare::REQUIRED_KEYS;
 
 /// Asserts that the JSON object `json` has each of `keys`.
 pub fn assert_has_keys<'a>(json: &serde_json::Value, keys: impl IntoIterator<Item = &'a str>) {

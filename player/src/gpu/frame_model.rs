@@ -1,0 +1,313 @@
+//! The frame model (issue 28): what one frame draws, decided on the CPU before any
+//! GPU command. [`DrawList`] is the list the frame builders make (`crate::frame`):
+//! originals grouped by model, LOD levels, originals drawn as the index ranges of
+//! their visible patches, proxies with the view their tiles are culled against; it
+//! counts what it submits ([`DrawList::draw_calls`], [`DrawList::triangle_count`]).
+//! [`FramePlan`] turns a list into what the renderer uploads and encodes: every
+//! instance's data in draw order (the ground's last), one span per patched
+//! original and proxy (several ranges gathered into the frame's index buffer,
+//! [`FrameIndices`]), proxies nearest first with the bind group each is drawn
+//! with. `Renderer::render` (the parent module) uploads the plan and encodes it.
+
+use super::{GpuModels, GpuProxy};
+use crate::overlay::Representation;
+use crate::vertex::InstanceRaw;
+use glam::{Mat4, Vec3};
+
+/// What to draw in one frame.
+#[derive(Default)]
+pub struct DrawList<'a> {
+    /// Originals grouped by model: (model index, instances).
+    pub originals: Vec<(u32, Vec<InstanceRaw>)>,
+    /// Originals at a simplified level (LOD baseline): ((model, level ≥ 1), instances).
+    pub levels: Vec<((u32, u32), Vec<InstanceRaw>)>,
+    pub proxies: Vec<&'a GpuProxy>,
+    /// Proxies drawn lit (vertex colours, no texture) because their textures are not
+    /// resident yet (`--pending lit`).
+    pub lit_proxies: Vec<&'a GpuProxy>,
+    /// Originals drawn patch by patch (issue 17, [`crate::patches`]).
+    pub patched: Vec<PatchedDraw>,
+    /// The view the proxies' clusters are tested against (issue 17); `None` draws
+    /// every proxy triangle.
+    pub cull: Option<crate::patches::CullView>,
+    /// Per proxy of `proxies`, then of `lit_proxies`, the vertex ranges drawn
+    /// ([`DrawList::proxy_ranges`], computed once).
+    pub(crate) ranges: std::cell::OnceCell<Vec<Vec<(u32, u32)>>>,
+}
+
+/// One original drawn as the index ranges of its visible patches.
+#[derive(Clone, Debug)]
+pub struct PatchedDraw {
+    pub model: u32,
+    pub instance: InstanceRaw,
+    /// Ranges of the model's patch-ordered index buffer.
+    pub ranges: Vec<(u32, u32)>,
+    pub triangles: u64,
+}
+
+impl DrawList<'_> {
+    /// Per proxy of `proxies`, then of `lit_proxies`, the vertex ranges it draws
+    /// from [`DrawList::cull`] ([`GpuProxy::ranges`]); the tests run once per list.
+    pub fn proxy_ranges(&self) -> &[Vec<(u32, u32)>] {
+        self.ranges.get_or_init(|| {
+            self.proxies
+                .iter()
+                .chain(&self.lit_proxies)
+                .map(|p| p.ranges(self.cull.as_ref()))
+                .collect()
+        })
+    }
+
+    /// Draw calls [`super::Renderer::render`] submits for this list: the ground, one per
+    /// non-empty instanced group, one per patched original and one per proxy that
+    /// keep any tile (their several ranges are gathered into one index buffer).
+    pub fn draw_calls(&self, models: &GpuModels) -> u64 {
+        let group = |m: u32, n: usize| {
+            u64::from(
+                n > 0
+                    && models
+                        .models
+                        .get(m as usize)
+                        .is_some_and(|g| g.index_count > 0),
+            )
+        };
+        let n = self.proxies.len();
+        let proxies = self
+            .proxies
+            .iter()
+            .chain(&self.lit_proxies)
+            .zip(self.proxy_ranges())
+            .enumerate()
+            .filter(|(k, (p, r))| {
+                (*k >= n || p.bind_group.is_some()) && p.vertex_count > 0 && !r.is_empty()
+            })
+            .count() as u64;
+        1 + self
+            .originals
+            .iter()
+            .map(|(m, i)| group(*m, i.len()))
+            .sum::<u64>()
+            + self
+                .levels
+                .iter()
+                .filter(|((m, l), i)| {
+                    !i.is_empty()
+                        && models
+                            .models
+                            .get(*m as usize)
+                            .is_some_and(|model| model.level(*l).1 > 0)
+                })
+                .count() as u64
+            + self
+                .patched
+                .iter()
+                .filter(|p| {
+                    !p.ranges.is_empty()
+                        && models
+                            .models
+                            .get(p.model as usize)
+                            .is_some_and(|g| g.patch_ordered)
+                })
+                .count() as u64
+            + proxies
+    }
+
+    pub fn triangle_count(&self, models: &GpuModels) -> u64 {
+        let o: u64 = self
+            .originals
+            .iter()
+            .map(|(m, i)| models.models[*m as usize].triangle_count * i.len() as u64)
+            .sum();
+        let l: u64 = self
+            .levels
+            .iter()
+            .map(|((m, l), i)| models.models[*m as usize].level(*l).2 * i.len() as u64)
+            .sum();
+        o + l
+            + self.patched.iter().map(|p| p.triangles).sum::<u64>()
+            + self
+                .proxy_ranges()
+                .iter()
+                .flatten()
+                .map(|(a, b)| (b - a) as u64 / 3)
+                .sum::<u64>()
+    }
+}
+
+/// One proxy's draw: the proxy, its bind group (its textures, or every view
+/// "nothing captured" for a lit proxy) and its span.
+pub(super) struct ProxyDraw<'a> {
+    pub proxy: &'a GpuProxy,
+    pub bind_group: &'a wgpu::BindGroup,
+    pub span: Span,
+}
+
+/// What the renderer uploads and encodes for one [`DrawList`].
+pub(super) struct FramePlan<'a> {
+    /// Instance data in draw order: the instanced originals' groups, the LOD
+    /// levels' groups, the patched originals (one each), then the ground's
+    /// (identity, white tint). With representation colours an original's tint is
+    /// its representation's colour (the shader takes its albedo from it).
+    pub instances: Vec<InstanceRaw>,
+    /// The ground's instance in [`FramePlan::instances`].
+    pub ground_instance: u32,
+    /// The frame's gathered indices ([`FrameIndices`]).
+    pub indices: Vec<u32>,
+    /// Per patched original of the list, in list order: how it is drawn (`None`:
+    /// nothing visible, or its model is not patch-ordered).
+    pub patched: Vec<Option<Span>>,
+    /// The ready proxies nearest first, then the lit ones nearest first; proxies
+    /// with nothing to draw are left out.
+    pub proxies: Vec<ProxyDraw<'a>>,
+}
+
+impl<'a> FramePlan<'a> {
+    /// The plan of `list` seen from `eye`; `debug`: representation colours.
+    pub fn new(list: &DrawList<'a>, models: &GpuModels, eye: Vec3, debug: bool) -> FramePlan<'a> {
+        let palette = Representation::linear_palette();
+        let recolour = |mut i: InstanceRaw, r: Representation| {
+            if debug {
+                i.tint = palette[r as usize];
+            }
+            i
+        };
+        let mut instances: Vec<InstanceRaw> = list
+            .originals
+            .iter()
+            .flat_map(|(_, v)| v.iter().map(|&i| recolour(i, Representation::Original)))
+            .chain(list.levels.iter().flat_map(|((_, level), v)| {
+                let r = if *level == 0 {
+                    Representation::Original
+                } else {
+                    Representation::LodLevel
+                };
+                v.iter().map(move |&i| recolour(i, r))
+            }))
+            .chain(
+                list.patched
+                    .iter()
+                    .map(|p| recolour(p.instance, Representation::Original)),
+            )
+            .collect();
+        let ground_instance = instances.len() as u32;
+        instances.push(InstanceRaw::new(Mat4::IDENTITY, Vec3::ONE));
+        // Every patched original and proxy is one draw: where it keeps several
+        // ranges, their indices are gathered into the frame's index buffer.
+        let mut gathered = FrameIndices::default();
+        let patched: Vec<Option<Span>> = list
+            .patched
+            .iter()
+            .map(|p| {
+                let model = &models.models[p.model as usize];
+                model
+                    .patch_ordered
+                    .then(|| gathered.span(&p.ranges, Some(&model.cpu_indices)))?
+            })
+            .collect();
+        let ranges = list.proxy_ranges();
+        let (ready, lit_ranges) = ranges.split_at(list.proxies.len().min(ranges.len()));
+        let mut proxies = proxy_draws(&list.proxies, ready, false, eye, &mut gathered);
+        proxies.extend(proxy_draws(
+            &list.lit_proxies,
+            lit_ranges,
+            true,
+            eye,
+            &mut gathered,
+        ));
+        FramePlan {
+            instances,
+            ground_instance,
+            indices: gathered.indices,
+            patched,
+            proxies,
+        }
+    }
+}
+
+/// `proxies` (with their vertex `ranges`) nearest to `eye` first, each with the
+/// bind group it is drawn with: its textures (skipped while not ready), or none
+/// (`lit`); proxies without vertices or ranges are left out.
+fn proxy_draws<'a>(
+    proxies: &[&'a GpuProxy],
+    ranges: &[Vec<(u32, u32)>],
+    lit: bool,
+    eye: Vec3,
+    gathered: &mut FrameIndices,
+) -> Vec<ProxyDraw<'a>> {
+    near_to_far(proxies, eye)
+        .into_iter()
+        .filter_map(|k| {
+            let p = proxies[k];
+            if p.vertex_count == 0 {
+                return None;
+            }
+            let bind_group = if lit {
+                &p.lit_bind_group
+            } else {
+                p.bind_group.as_ref()?
+            };
+            Some(ProxyDraw {
+                proxy: p,
+                bind_group,
+                span: gathered.span(&ranges[k], None)?,
+            })
+        })
+        .collect()
+}
+
+/// The frame's gathered index buffer: for every patched original and every proxy
+/// with more than one visible range, the indices of those ranges one after the
+/// other (for a proxy, its vertex numbers), so that each is one indexed draw
+/// whatever the number of tiles it keeps. The order of the triangles is the one of
+/// the ranges, so the pixels are those of drawing the ranges one by one.
+#[derive(Default)]
+pub(super) struct FrameIndices {
+    indices: Vec<u32>,
+}
+
+impl FrameIndices {
+    /// Appends `ranges` of `source` (or the numbers themselves when `source` is
+    /// `None`) and returns the span they take.
+    fn gather(&mut self, ranges: &[(u32, u32)], source: Option<&[u32]>) -> std::ops::Range<u32> {
+        let start = self.indices.len() as u32;
+        for &(a, b) in ranges {
+            match source {
+                Some(src) => self
+                    .indices
+                    .extend_from_slice(src.get(a as usize..b as usize).unwrap_or(&[])),
+                None => self.indices.extend(a..b),
+            }
+        }
+        start..self.indices.len() as u32
+    }
+
+    /// How a patched original or a proxy with visible `ranges` is drawn: nothing,
+    /// its one range from its own buffer, or its ranges gathered here.
+    fn span(&mut self, ranges: &[(u32, u32)], source: Option<&[u32]>) -> Option<Span> {
+        match ranges {
+            [] => None,
+            &[(a, b)] => Some(Span::Own(a..b)),
+            _ => Some(Span::Gathered(self.gather(ranges, source))),
+        }
+    }
+}
+
+/// One draw of a patched original or a proxy ([`FrameIndices::span`]).
+pub(super) enum Span {
+    /// A range of its own index (original) or vertex (proxy) buffer.
+    Own(std::ops::Range<u32>),
+    /// A range of the frame's gathered index buffer.
+    Gathered(std::ops::Range<u32>),
+}
+
+/// `proxies` ordered by the distance from `eye` to their bounds, nearest first (ties
+/// keep their order).
+fn near_to_far(proxies: &[&GpuProxy], eye: Vec3) -> Vec<usize> {
+    let mut keyed: Vec<(f32, usize)> = proxies
+        .iter()
+        .enumerate()
+        .map(|(k, p)| (crate::lod::distance_to_box(eye, &p.bounds), k))
+        .collect();
+    keyed.sort_by(|a, b| a.0.total_cmp(&b.0));
+    keyed.into_iter().map(|(_, k)| k).collect()
+}
