@@ -13,7 +13,9 @@ out=${1:-out/scale}; shift || true
 bin=${BIN:-target/release}
 export WGPU_BACKEND=${WGPU_BACKEND:-vulkan}
 mkdir -p "$out"
-for spec in "park-2m 275" "world-18m 2409" "world-100m 13013"; do
+scenes=${SCENES:-"park-2m:275 world-18m:2409 world-100m:13013"}
+for spec in $scenes; do
+    spec=${spec/:/ }
     set -- $spec "$@"
     name=$1 cell=$2; shift 2
     dir="$out/$name"

@@ -15,7 +15,7 @@ use format::pack::{BasePack, PackFile, SectionKind};
 use format::schema::job::error_path;
 use format::schema::plan::{plan_path, read_partial, PlanFile};
 pub use format::schema::report::{
-    CellLine, FarFieldStats, PaperTable, Report, Storage, WORST_CELLS,
+    CellLine, FarFieldStats, FarLevelStats, PaperTable, Report, Storage, WORST_CELLS,
 };
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -89,6 +89,42 @@ pub fn build_report(out: &Path) -> anyhow::Result<Report> {
             groups.insert(g.cell, r.clone());
         }
     }
+    // Levels (issue 27): a group's parent (its `far_group`) has a larger id, so in
+    // ascending order every child is seen before its parent.
+    let mut level: BTreeMap<u32, u32> = groups.keys().map(|&g| (g, 1)).collect();
+    for (&g, r) in &groups {
+        if let Some(p) = r.far_group {
+            let l = level[&g] + 1;
+            let e = level.entry(p).or_insert(1);
+            *e = (*e).max(l);
+        }
+    }
+    for record in records.iter().flatten() {
+        for g in &record.groups {
+            let l = level.get(&g.cell).copied().unwrap_or(1) as usize;
+            if far.levels.len() < l {
+                far.levels.resize_with(l, FarLevelStats::default);
+            }
+            let s = &mut far.levels[l - 1];
+            s.level = l as u32;
+            s.groups += 1;
+            s.proxies += g.report.proxy_keys.len() as u64;
+            s.impostors += u64::from(g.report.impostors);
+            s.objects += u64::from(
+                g.report.sv_objects + g.report.cluster_objects + g.report.impostor_objects,
+            );
+            s.bytes += g.bytes;
+            s.bake_s += g
+                .report
+                .stage_ms
+                .entries()
+                .iter()
+                .map(|(_, ms)| ms)
+                .sum::<f64>()
+                / 1000.0;
+        }
+    }
+    far.levels.retain(|s| s.groups > 0);
     for (job, record) in plan.jobs.iter().zip(&records) {
         let Some(record) = record else {
             if error_path(out, job.id).exists() {
@@ -104,9 +140,14 @@ pub fn build_report(out: &Path) -> anyhow::Result<Report> {
         shared_process |= record.shared_process;
         for c in &record.cells {
             let r = &c.report;
-            // What the cell draws: its own proxies plus its group's far field.
+            // What the cell draws: its own proxies plus its groups' far field, every
+            // level of its chain (each group names its parent).
             let group = r.far_group.and_then(|g| groups.get(&g));
-            let both = |f: fn(&CellReport) -> f64| f(r) + group.map_or(0.0, f);
+            let chain: Vec<&CellReport> =
+                std::iter::successors(group, |g| g.far_group.and_then(|p| groups.get(&p)))
+                    .take(16)
+                    .collect();
+            let both = |f: fn(&CellReport) -> f64| f(r) + chain.iter().map(|g| f(g)).sum::<f64>();
             let mut line = CellLine {
                 cell: c.cell,
                 polygons_inside: r.polygons_inside as f64,
@@ -308,11 +349,11 @@ pub fn to_markdown(r: &Report) -> String {
     if let Some(f) = &r.far_field {
         let _ = writeln!(
             m,
-            "\n## Far field (7-cell groups)\n\n| | value |\n|---|---|\n\
+            "\n## Far field (levels of 7, 49, 343 … cells)\n\n| | value |\n|---|---|\n\
              | groups | {} |\n\
              | proxies in cell packs (level 0) | {} |\n\
-             | proxies in group packs (level 1) | {} |\n\
-             | objects a cell draws from its group (mean) | {:.1} |\n\
+             | proxies in group packs (levels ≥ 1) | {} |\n\
+             | objects a cell draws from its groups (mean) | {:.1} |\n\
              | group-pack bytes | {} |\n\
              | bytes shared (a copy per cell would add) | {} |",
             f.groups,
@@ -322,6 +363,26 @@ pub fn to_markdown(r: &Report) -> String {
             f.group_bytes,
             f.bytes_shared
         );
+        if !f.levels.is_empty() {
+            let _ = writeln!(
+                m,
+                "\n| level | cells per group | groups | proxies | of which merged impostors | objects drawn | bytes | bake s |\n|---:|---:|---:|---:|---:|---:|---:|---:|"
+            );
+            for l in &f.levels {
+                let _ = writeln!(
+                    m,
+                    "| {} | ≤ {} | {} | {} | {} | {} | {} | {:.1} |",
+                    l.level,
+                    7u64.saturating_pow(l.level),
+                    l.groups,
+                    l.proxies,
+                    l.impostors,
+                    l.objects,
+                    l.bytes,
+                    l.bake_s
+                );
+            }
+        }
     }
     quality_section(&mut m, r);
     time_section(&mut m, r);

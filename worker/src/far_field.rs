@@ -62,9 +62,18 @@
 //! parent, …): the *highest* group for which the object is far
 //! ([`served_instances`]: far for the group, far for none of its ancestors); a
 //! cell derives only objects far for no group of its chain ([`FarField::of_cell`]).
-//! The sets are disjoint and cover what the cell would have derived. Level 1 keeps
-//! SvMesh and cluster proxies, one per object of a bounded annulus; higher levels
-//! draw merged layered impostors ([`crate::levels`]), a bounded number per group.
+//! The sets are disjoint and cover what the cell would have derived. Levels below
+//! `bake.merge_level` keep SvMesh and cluster proxies, one per object; from it on,
+//! groups draw merged layered impostors ([`crate::levels`]), and an object is far
+//! for such a group only when it also lies at least [`merged_min_distance`] from
+//! its centre — a distance proportional to the group's size, so a merged level
+//! serves an annulus whose radii scale with the level (× √7 each), and its
+//! impostors need at most [`crate::levels::MAX_BANDS`] depth bands per sector:
+//! what a cell draws from each level is bounded, and levels grow as log₇ of the
+//! world's cells. (The paper's single-view test alone does not scale so: its
+//! distance grows only as the square root of the region's size, so the parallax
+//! of objects just past it, seen across a large region, would need ever more
+//! layers.)
 
 use crate::backface::all_culled;
 use crate::grid::{HexGrid, Prism};
@@ -323,6 +332,45 @@ pub fn far_instances(scene: &Scene, prism: &Prism, params: &BakeParams) -> Vec<b
         .collect()
 }
 
+/// The nearest an object may be to the centre of a group of a merged level
+/// (`bake.merge_level`, [`crate::levels`]) to be far for it: `e / (2θ · L · B)`
+/// for the prism's largest viewer offset `e`, one output pixel θ, `L` =
+/// [`crate::levels::BAND_LAYERS`] layers per band and `B` =
+/// [`crate::levels::MAX_BANDS`] bands. From there on, 001's parallax error stays
+/// within one pixel with at most `B` depth bands per sector, and since `e` grows by
+/// √7 per level, so does this distance: the annuli the merged levels serve are
+/// scaled copies of each other (module docs, "Levels").
+pub fn merged_min_distance(prism: &Prism, image_res: u32) -> f32 {
+    let theta = std::f64::consts::FRAC_PI_3 / f64::from(image_res.max(1));
+    let bands = crate::levels::BAND_LAYERS * crate::levels::MAX_BANDS as f64;
+    (f64::from(crate::levels::max_offset(prism)) / (2.0 * theta * bands)) as f32
+}
+
+/// The far objects of group `group` ([`far_instances`]); at a merged level, only
+/// those at least [`merged_min_distance`] from its centre.
+pub fn group_far(
+    scene: &Scene,
+    grid: &HexGrid,
+    groups: &CellGroups,
+    group: u32,
+    cells: &CellParams,
+    params: &BakeParams,
+) -> Vec<bool> {
+    let prism = groups.prism(grid, group, cells);
+    let mut far = far_instances(scene, &prism, params);
+    if groups.level(group) >= params.merge_level {
+        let min = merged_min_distance(&prism, params.image_res);
+        let eye = prism.centre3();
+        for (i, f) in far.iter_mut().enumerate() {
+            if *f {
+                let (lo, hi) = scene.instance_bounds(i);
+                *f = eye.clamp(lo, hi).distance(eye) >= min;
+            }
+        }
+    }
+    far
+}
+
 /// What group `group` serves (module docs, "Levels"): its far objects that are far
 /// for none of its ancestors (those draw them).
 pub fn served_instances(
@@ -334,9 +382,9 @@ pub fn served_instances(
     params: &BakeParams,
 ) -> Vec<bool> {
     let chain = groups.ancestors_and_self(group);
-    let mut served = far_instances(scene, &groups.prism(grid, group, cells), params);
+    let mut served = group_far(scene, grid, groups, group, cells, params);
     for &a in &chain[1..] {
-        let far = far_instances(scene, &groups.prism(grid, a, cells), params);
+        let far = group_far(scene, grid, groups, a, cells, params);
         for (s, f) in served.iter_mut().zip(far) {
             *s &= !f;
         }
@@ -370,7 +418,7 @@ impl FarField {
         let group = groups.group_of(cell);
         let mut instances = vec![false; scene.instances.len()];
         for g in groups.chain(cell) {
-            let far = far_instances(scene, &groups.prism(grid, g, cells), params);
+            let far = group_far(scene, grid, groups, g, cells, params);
             for (s, f) in instances.iter_mut().zip(far) {
                 *s |= f;
             }

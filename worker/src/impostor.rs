@@ -64,13 +64,25 @@ impl LayeredImpostor {
 /// `near..far`, served to viewers up to `max_offset` from the eye, with one pixel
 /// of `image_res` per 60° as the tolerable error angle (module docs).
 pub fn layer_count(near: f32, far: f32, max_offset: f32, image_res: u32) -> usize {
+    layer_count_up_to(near, far, max_offset, image_res, MAX_LAYERS)
+}
+
+/// [`layer_count`] clamped to `1..=max_layers` instead of [`MAX_LAYERS`] (merged
+/// impostors of the far field, `crate::levels`, go up to the format's 64).
+pub fn layer_count_up_to(
+    near: f32,
+    far: f32,
+    max_offset: f32,
+    image_res: u32,
+    max_layers: usize,
+) -> usize {
     let pixel_angle = std::f64::consts::FRAC_PI_3 / f64::from(image_res.max(1));
     let span = (1.0 / f64::from(near) - 1.0 / f64::from(far)).max(0.0);
     let n = (f64::from(max_offset) * span / (2.0 * pixel_angle)).ceil();
     if n.is_finite() {
-        (n as usize).clamp(1, MAX_LAYERS)
+        (n as usize).clamp(1, max_layers)
     } else {
-        MAX_LAYERS
+        max_layers
     }
 }
 
@@ -121,6 +133,18 @@ pub fn build_layered_impostor(
     output_res: u32,
     max_offset: f32,
 ) -> Result<Option<LayeredImpostor>, CaptureError> {
+    build_layered_impostor_up_to(eye, items, image_res, output_res, max_offset, MAX_LAYERS)
+}
+
+/// [`build_layered_impostor`] with at most `max_layers` layers.
+pub fn build_layered_impostor_up_to(
+    eye: Vec3,
+    items: &[DrawItem],
+    image_res: u32,
+    output_res: u32,
+    max_offset: f32,
+    max_layers: usize,
+) -> Result<Option<LayeredImpostor>, CaptureError> {
     // 1. The capture and its texture, as for any proxy.
     let capture = capture_objects(eye, items, image_res)?;
     if capture.covered_pixels == 0 {
@@ -168,7 +192,7 @@ pub fn build_layered_impostor(
         }
     }
     // 4. Layers by 001 §3.3's error angle, corner rays from the matrix.
-    let n = layer_count(near, far, max_offset, output_res);
+    let n = layer_count_up_to(near, far, max_offset, output_res, max_layers);
     let Some(corner_rays) = corner_rays(&texture.matrix) else {
         return Ok(None);
     };

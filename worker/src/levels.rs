@@ -10,22 +10,24 @@
 //! capture's angular unit), and each sector, in order of distance, into depth bands:
 //! a band grows while 001 §3.3's layer count for its inverse-depth range, viewers up
 //! to the group prism's farthest corner and an error of one output pixel stays
-//! within [`BAND_LAYERS`] (below [`crate::impostor::MAX_LAYERS`], so the impostor
-//! builder never clamps, and its error bound of one pixel holds). One band of one
-//! sector is one capture (colour + depth code, the members alone) and one impostor
-//! of at most `MAX_LAYERS` quads, drawn with one draw call.
+//! within [`BAND_LAYERS`] (below [`MERGED_MAX_LAYERS`], the format's 64, so the
+//! impostor builder never clamps, and its error bound of one pixel holds; the depth
+//! range a band's capture measures is within the boxes' range used here). One band
+//! of one sector is one capture (colour + depth code, the members alone) and one
+//! impostor of at most `MERGED_MAX_LAYERS` quads, drawn with one draw call: more
+//! layers per band mean fewer bands, i.e. fewer draw calls for a few more quads.
 //!
 //! # Why the count is bounded
 //!
-//! A level-k group's prism is √7 times the size of a level-(k−1) one and the objects
-//! it serves are those the level below passes up: single-view from a region √7 times
-//! larger, i.e. about √7 times farther. The whole configuration (region size,
-//! distances, 1/depth ranges × viewer offset) scales by the same factor, so the
-//! number of depth bands per sector — and of impostors per group — is the same at
-//! every level, whatever the number of objects in the annulus. A cell draws its own
-//! proxies, the level-1 group's (one per object of a bounded annulus) and at most
-//! `SECTORS × bands` impostors per higher level; levels grow as log₇ of the world's
-//! cell count.
+//! A merged level's group serves only objects at least
+//! [`crate::far_field::merged_min_distance`] from its centre, a distance `D`
+//! proportional to its prism's size `e`: 1/d over its objects spans at most
+//! 1/D = [`MAX_BANDS`] × the inverse-depth span one band of [`BAND_LAYERS`] layers
+//! covers at viewer offset `e`, so a sector needs at most `MAX_BANDS` bands,
+//! whatever the number of objects in the annulus (up to objects whose box
+//! estimate of depth misses the capture's: one more band at most). A group draws
+//! at most `SECTORS × (MAX_BANDS + 1)` impostors of at most 64 quads; levels grow
+//! as log₇ of the world's cell count.
 //!
 //! # Error bound
 //!
@@ -40,7 +42,7 @@
 
 use crate::bake::{BakedMember, BakedProxy};
 use crate::grid::Prism;
-use crate::impostor::build_layered_impostor;
+use crate::impostor::build_layered_impostor_up_to;
 use crate::raster::DrawItem;
 use crate::select::subpixel_from_region;
 use format::pack::ProxyKind;
@@ -50,8 +52,17 @@ use glam::Vec3;
 /// Azimuth sectors of a merged level (60° each).
 pub const SECTORS: usize = 6;
 
-/// Most layers a depth band may need (module docs, "Merging").
-pub const BAND_LAYERS: f64 = 24.0;
+/// Most layers a merged impostor gets: the format's limit
+/// ([`format::pack::MAX_IMPOSTOR_LAYERS`]).
+pub const MERGED_MAX_LAYERS: usize = format::pack::MAX_IMPOSTOR_LAYERS;
+
+/// Depth bands per sector the distance rule of a merged level allows
+/// ([`crate::far_field::merged_min_distance`]).
+pub const MAX_BANDS: usize = 2;
+
+/// Most layers a depth band may need (module docs, "Merging"): a margin below
+/// [`MERGED_MAX_LAYERS`] for depths the boxes' estimate misses.
+pub const BAND_LAYERS: f64 = 48.0;
 
 /// One merged impostor to build: its members, in ascending instance order.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -163,12 +174,13 @@ pub fn merged_impostor(
         .iter()
         .map(|&i| DrawItem::instance(scene, i))
         .collect();
-    let built = build_layered_impostor(
+    let built = build_layered_impostor_up_to(
         prism.centre3(),
         &items,
         image_res,
         image_res,
         max_offset(prism),
+        MERGED_MAX_LAYERS,
     )?;
     Ok(built.map(|imp| BakedProxy {
         kind: ProxyKind::LayeredImpostor,

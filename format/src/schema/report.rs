@@ -86,6 +86,26 @@ pub struct FarFieldStats {
     /// What the group packs would take if each of their cells stored its own copy,
     /// beyond the one copy stored: Σ over groups of bytes × (cells − 1).
     pub bytes_shared: u64,
+    /// Per level of groups (issue 27; level 1 = 7-cell groups), ascending.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub levels: Vec<FarLevelStats>,
+}
+
+/// One level of far-field groups in a report (issue 27).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct FarLevelStats {
+    pub level: u32,
+    /// Group packs of the level baked.
+    pub groups: u64,
+    /// Proxies in them, and how many are merged layered impostors.
+    pub proxies: u64,
+    pub impostors: u64,
+    /// Objects they draw.
+    pub objects: u64,
+    /// Their packs' bytes and bake time (stages summed).
+    pub bytes: u64,
+    pub bake_s: f64,
 }
 
 /// Per-cell averages, the rows of the paper's Tables 3–8.
