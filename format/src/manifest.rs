@@ -164,11 +164,15 @@ pub struct BakeParams {
     /// (one per sector and depth band), so what a cell draws from all levels does not
     /// grow with the world. 0 (default) = every level the grid needs (until one
     /// group covers it); 1 = the one-level far field of bake revision 6–14.
+    /// Written into plans and reports only when not the default.
+    #[serde(skip_serializing_if = "is_default_far_levels")]
     pub far_levels: u32,
     /// The first level of far-field groups whose objects are merged into layered
     /// impostors (issue 27; worker `levels.rs`); the levels below it give every far
     /// object its own SvMesh or cluster proxy. Default 2 (DESIGN.md: "beyond the
     /// first level far objects are merged"); 1 merges the 7-cell groups' objects too.
+    /// Written into plans and reports only when not the default.
+    #[serde(skip_serializing_if = "is_default_merge_level")]
     pub merge_level: u32,
     /// Objective selection of representations (paper 004; issue 16; worker
     /// `select.rs`): the quality floor every proxy must meet on its own pixels from
@@ -187,6 +191,14 @@ pub struct BakeParams {
     /// Changes no pack byte and is not in the fingerprints: switching it rebakes
     /// nothing (a job keeps the figures of the bake that made it).
     pub quality_check: bool,
+}
+
+fn is_default_far_levels(v: &u32) -> bool {
+    *v == BakeParams::default().far_levels
+}
+
+fn is_default_merge_level(v: &u32) -> bool {
+    *v == BakeParams::default().merge_level
 }
 
 impl BakeParams {
