@@ -787,9 +787,14 @@ fn demo_bake_holds_every_representation_and_the_player_draws_each() {
     let mut first_cell: Vec<Option<(u32, u32)>> = vec![None; 5]; // kind → (cell, instance)
     let mut culled: Vec<(u32, u32)> = Vec::new();
     for (c, cell) in cells.iter().enumerate() {
-        let group = cell
-            .far_group
-            .map(|g| read(out.join(format!("groups/{g}.pack")), true));
+        // Its far-field groups, every level (each group names its parent).
+        let mut group: Vec<CellPack> = Vec::new();
+        let mut next = cell.far_group;
+        while let Some(g) = next {
+            let pack = read(out.join(format!("groups/{g}.pack")), true);
+            next = pack.far_group;
+            group.push(pack);
+        }
         let mut drawn = vec![false; n];
         for &i in &cell.originals {
             drawn[i as usize] = true;

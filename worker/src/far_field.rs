@@ -63,7 +63,8 @@
 //! ([`served_instances`]: far for the group, far for none of its ancestors); a
 //! cell derives only objects far for no group of its chain ([`FarField::of_cell`]).
 //! The sets are disjoint and cover what the cell would have derived. Levels below
-//! `bake.merge_level` keep SvMesh and cluster proxies, one per object; from it on,
+//! `bake.merge_level` (default 1: none) keep SvMesh and cluster proxies, one per
+//! object, as the one-level far field did; from it on,
 //! groups draw merged layered impostors ([`crate::levels`]), and an object is far
 //! for such a group only when it also lies at least [`merged_min_distance`] from
 //! its centre — a distance proportional to the group's size, so a merged level

@@ -1,7 +1,9 @@
-//! Merged far field beyond the first level (issue 27; DESIGN.md "Far away, cells
-//! share — at every scale"): the objects a group of level ≥ 2 serves
-//! ([`crate::far_field::served_instances`]) are drawn as a bounded number of merged
-//! layered impostors (paper 001, [`crate::impostor`]) instead of one proxy each.
+//! Merged far field (issue 27; DESIGN.md "Far away, cells share — at every
+//! scale"): the objects a group of a merged level serves (`bake.merge_level` and
+//! above, default every level; [`crate::far_field::served_instances`]) are drawn as
+//! a bounded number of merged layered impostors (paper 001, [`crate::impostor`])
+//! instead of one proxy each. DESIGN.md merges "beyond the first level"; merging
+//! the 7-cell groups too was chosen by measurement (BENCHMARKS.md "Scale").
 //!
 //! # Merging: sectors and depth bands
 //!
