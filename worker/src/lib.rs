@@ -11,6 +11,7 @@ pub mod cluster;
 pub mod diagnostics;
 pub mod far_field;
 pub mod grid;
+pub mod groups;
 pub mod impostor;
 pub mod job;
 pub mod levels;
