@@ -648,30 +648,42 @@ fn check_coordinate(field: &str, v: f32) -> Result<f32, Violation> {
 // ---------------------------------------------------------------------------------
 // Stage 1: the raw mirror of the file.
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 struct RawManifest {
-    #[serde(default)]
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        serialize_with = "bare"
+    )]
     name: Option<String>,
     ground: RawGround,
     scene: RawScene,
     cells: RawCells,
     #[serde(default)]
     bake: RawBake,
-    #[serde(default)]
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        serialize_with = "bare"
+    )]
     cells_per_job: Option<u32>,
-    #[serde(default)]
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        serialize_with = "bare"
+    )]
     output: Option<String>,
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 struct RawGround {
     min: [f32; 2],
     max: [f32; 2],
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 enum RawScene {
     Park(RawPark),
     Instances(Vec<RawInstance>),
@@ -680,14 +692,14 @@ enum RawScene {
 }
 
 /// `Gltf("file.glb")` or `Gltf((file: "file.glb", group_by_parent: true))`.
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(untagged)]
 enum RawGltf {
     File(String),
     Spec(RawGltfSpec),
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 struct RawGltfSpec {
     file: String,
@@ -695,7 +707,7 @@ struct RawGltfSpec {
     group_by_parent: bool,
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 struct RawCity {
     seed: u64,
@@ -729,13 +741,13 @@ fn default_variants() -> u32 {
     16
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 enum RawModelSource {
     File(String),
     Procedural(String),
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 struct RawPark {
     seed: u64,
@@ -748,7 +760,7 @@ struct RawPark {
     placed: Vec<RawInstance>,
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 struct RawParkModel {
     model: RawModelSource,
@@ -758,7 +770,7 @@ struct RawParkModel {
     pre_rotation_deg: [f32; 3],
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 struct RawInstance {
     model: RawModelSource,
@@ -773,7 +785,7 @@ struct RawInstance {
     pre_rotation_deg: [f32; 3],
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 struct RawCells {
     cell_size: f32,
@@ -781,7 +793,7 @@ struct RawCells {
     max_eye_height: f32,
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 struct RawBake {
     image_res: u32,
@@ -793,11 +805,12 @@ struct RawBake {
     occlusion_culling: bool,
     max_deviation_px: f32,
     far_field: bool,
+    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "bare")]
     quality: Option<RawQuality>,
     quality_check: bool,
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 struct RawQuality {
     min_psnr_db: f64,
@@ -839,6 +852,139 @@ fn unit_tint() -> [f32; 3] {
 
 fn unit_scale() -> f32 {
     1.0
+}
+
+/// Writes an `Option` field as its bare value: the parser reads with
+/// `implicit_some`, and `skip_serializing_if` leaves out a `None`.
+fn bare<T: Serialize, S: serde::Serializer>(v: &Option<T>, s: S) -> Result<S::Ok, S::Error> {
+    match v {
+        Some(v) => v.serialize(s),
+        None => s.serialize_none(),
+    }
+}
+
+impl From<&BakeParams> for RawBake {
+    /// Every bake parameter (the destructuring names each field, so a new one cannot
+    /// be forgotten by the manifest writer).
+    fn from(b: &BakeParams) -> RawBake {
+        let BakeParams {
+            image_res,
+            self_occluding_tolerance_px,
+            edge_length_tolerance_px,
+            t_c0,
+            t_c1,
+            clustering,
+            occlusion_culling,
+            max_deviation_px,
+            far_field,
+            quality,
+            quality_check,
+        } = *b;
+        RawBake {
+            image_res,
+            self_occluding_tolerance_px,
+            edge_length_tolerance_px,
+            t_c0,
+            t_c1,
+            clustering,
+            occlusion_culling,
+            max_deviation_px,
+            far_field,
+            quality: quality.map(
+                |QualityFloor {
+                     min_psnr_db,
+                     min_ssim,
+                 }| RawQuality {
+                    min_psnr_db,
+                    min_ssim,
+                },
+            ),
+            quality_check,
+        }
+    }
+}
+
+/// A path as the manifest writes it: absolute, so the text works wherever it is put.
+fn absolute_text(p: &Path) -> String {
+    std::path::absolute(p)
+        .unwrap_or_else(|_| p.to_path_buf())
+        .display()
+        .to_string()
+}
+
+impl From<&InstanceSpec> for RawInstance {
+    fn from(i: &InstanceSpec) -> RawInstance {
+        let InstanceSpec {
+            model,
+            pre_rotation_deg,
+            target_height,
+            translation,
+            rotation_y_deg,
+            scale,
+            tint,
+        } = i;
+        RawInstance {
+            model: match model {
+                ModelSource::File(p) => RawModelSource::File(absolute_text(p)),
+                ModelSource::Procedural(n) => RawModelSource::Procedural(n.clone()),
+            },
+            target_height: *target_height,
+            translation: *translation,
+            rotation_y_deg: *rotation_y_deg,
+            scale: *scale,
+            tint: *tint,
+            pre_rotation_deg: *pre_rotation_deg,
+        }
+    }
+}
+
+/// The manifest text of `plan` with its scene replaced by `instances` (`pipeline
+/// scene --as-instances`): written by serde from the raw types the parser reads, so
+/// parsing the text gives back every parameter of `plan` — name, ground, cells,
+/// bake (`quality_check` and `quality` included), cells per job, output (absolute)
+/// — and the instances. `comment` becomes the first line(s), each prefixed `// `.
+/// Numbers are written in Rust's shortest round-trip form, paths absolute.
+pub fn write_instances_manifest(plan: &Plan, instances: &[InstanceSpec], comment: &str) -> String {
+    let Plan {
+        manifest_path: _,
+        name,
+        scene: _,
+        ground,
+        cells,
+        bake,
+        cells_per_job,
+        output,
+    } = plan;
+    let CellParams {
+        cell_size,
+        min_eye_height,
+        max_eye_height,
+    } = *cells;
+    let raw = RawManifest {
+        name: Some(name.clone()),
+        ground: RawGround {
+            min: ground.min,
+            max: ground.max,
+        },
+        scene: RawScene::Instances(instances.iter().map(RawInstance::from).collect()),
+        cells: RawCells {
+            cell_size,
+            min_eye_height,
+            max_eye_height,
+        },
+        bake: RawBake::from(bake),
+        cells_per_job: Some(*cells_per_job),
+        output: Some(absolute_text(output)),
+    };
+    // Depth 2: each instance, and `quality`, on one line; every other field on its own.
+    let config = ron::ser::PrettyConfig::new()
+        .depth_limit(2)
+        .indentor("    ".to_string());
+    let body = ron::ser::to_string_pretty(&raw, config).expect("a manifest serialises");
+    let mut text: String = comment.lines().map(|l| format!("// {l}\n")).collect();
+    text += &body;
+    text.push('\n');
+    text
 }
 
 /// Turns a ron error into a [`ManifestError`] naming the field involved.
