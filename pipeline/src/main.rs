@@ -295,10 +295,11 @@ fn finish_selected(
     completed(summary, "requested job(s) failed")
 }
 
-/// Success when every job of the run is done, else a failure that counts the jobs
+/// Success when every job of the run is done (or, `--no-wait`/`--hold`, submitted),
+/// else a failure that counts the jobs
 /// (`jobs`: what they are) and points at `pipeline status`.
 fn completed(summary: &pipeline::run::RunSummary, jobs: &str) -> Result<(), Failure> {
-    if summary.complete {
+    if summary.succeeded() {
         return Ok(());
     }
     Err(failed(anyhow::anyhow!(
