@@ -85,7 +85,7 @@ enum Command {
         out: Option<PathBuf>,
     },
     /// Write one cell of a bake as glTF 2.0 binary (GLB): its originals and its
-    /// SV / MV / cluster proxies with their capture textures.
+    /// SV / MV / cluster proxies and layered impostors with their capture textures.
     Export {
         /// The bake directory (output of `pipeline run`).
         out: PathBuf,
