@@ -48,8 +48,9 @@
 //!     //        pre_rotation_deg: (0.0, 0.0, 0.0) /* optional */), ...]),
 //!     cells: (cell_size: 50.0, min_eye_height: 6.0, max_eye_height: 12.0),
 //!     bake: (image_res: 1024, clustering: true),       // optional, every field optional
-//!     //    quality: (min_psnr_db: 30.0, min_ssim: 0.9) /* opt-in objective selection, issue 16;
-//!     //                                                    `quality: ()` for the defaults */
+//!     //    quality: (min_psnr_db: 30.0, min_ssim: 0.9) /* opt-in objective selection, issue 16:
+//!     //        the floor a cheaper candidate must reach to replace a mesh proxy (not a
+//!     //        guarantee on the mesh proxy); `quality: ()` for the defaults */
 //!     cells_per_job: 4,                                // optional, default 4
 //!     output: "../out/demo",                           // optional, default ../out/<name>
 //! )
@@ -179,9 +180,14 @@ pub struct BakeParams {
     #[serde(skip_serializing_if = "is_default_merge_level")]
     pub merge_level: u32,
     /// Objective selection of representations (paper 004; issue 16; worker
-    /// `select.rs`): the quality floor every proxy must meet on its own pixels from
-    /// every sample viewpoint of its region; the cheapest candidate that does is
-    /// kept. Opt-in: absent = `None` (every outside object a mesh proxy, as in the
+    /// `select.rs`): each outside object gets the cheapest candidate — culled when it
+    /// covers under a pixel from the whole region, a layered impostor, a coarser
+    /// mesh — that reaches this floor on its own pixels from every sample viewpoint
+    /// of its region, or, in a view where the paper's mesh proxy itself falls short
+    /// of the floor, is no worse than that mesh. When no candidate does, the mesh
+    /// proxy is kept whatever its figures: the floor decides what may replace the
+    /// mesh proxy, it is not a quality every proxy is guaranteed to meet (the
+    /// report's worst figures can lie below it). Opt-in: absent = `None` (every outside object a mesh proxy, as in the
     /// paper); `quality: ()` selects with [`QualityFloor::default`]. Not on by default
     /// because it does not pay yet: with impostors and meshes under 2× and 4× the
     /// deviation bound as candidates, two park-4m cells lose 4 % of their proxy
@@ -214,9 +220,12 @@ impl BakeParams {
 }
 
 /// The quality floor of the objective selection (`bake.quality`, paper 004 §3–4):
-/// a candidate representation of an object is acceptable when, in each sample view
-/// of the region, its PSNR on luminance and its SSIM over the object's pixels (where
-/// the object or the candidate is drawn) reach these.
+/// a candidate representation cheaper than an object's mesh proxy is acceptable
+/// when, in each sample view of the region, its PSNR on luminance and its SSIM over
+/// the object's pixels (where the object or the candidate is drawn) reach these, or
+/// the mesh proxy's own figures in that view where those are lower. The mesh proxy
+/// is kept when no candidate is acceptable, whatever its figures: nothing enforces
+/// the floor on it.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct QualityFloor {
@@ -708,32 +717,48 @@ fn check_coordinate(field: &str, v: f32) -> Result<f32, Violation> {
 // ---------------------------------------------------------------------------------
 // Stage 1: the raw mirror of the file.
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 struct RawManifest {
-    #[serde(default)]
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        serialize_with = "bare"
+    )]
     name: Option<String>,
     /// Required, except for a `Tiled` scene (whose ground is its tiles').
-    #[serde(default)]
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        serialize_with = "bare"
+    )]
     ground: Option<RawGround>,
     scene: RawScene,
     cells: RawCells,
     #[serde(default)]
     bake: RawBake,
-    #[serde(default)]
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        serialize_with = "bare"
+    )]
     cells_per_job: Option<u32>,
-    #[serde(default)]
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        serialize_with = "bare"
+    )]
     output: Option<String>,
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 struct RawGround {
     min: [f32; 2],
     max: [f32; 2],
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 enum RawScene {
     Park(RawPark),
     Instances(Vec<RawInstance>),
@@ -742,7 +767,7 @@ enum RawScene {
     Tiled(RawTiled),
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 struct RawTiled {
     manifest: String,
@@ -750,14 +775,14 @@ struct RawTiled {
 }
 
 /// `Gltf("file.glb")` or `Gltf((file: "file.glb", group_by_parent: true))`.
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(untagged)]
 enum RawGltf {
     File(String),
     Spec(RawGltfSpec),
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 struct RawGltfSpec {
     file: String,
@@ -765,7 +790,7 @@ struct RawGltfSpec {
     group_by_parent: bool,
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 struct RawCity {
     seed: u64,
@@ -799,13 +824,13 @@ fn default_variants() -> u32 {
     16
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 enum RawModelSource {
     File(String),
     Procedural(String),
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 struct RawPark {
     seed: u64,
@@ -818,7 +843,7 @@ struct RawPark {
     placed: Vec<RawInstance>,
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 struct RawParkModel {
     model: RawModelSource,
@@ -828,7 +853,7 @@ struct RawParkModel {
     pre_rotation_deg: [f32; 3],
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 struct RawInstance {
     model: RawModelSource,
@@ -843,7 +868,7 @@ struct RawInstance {
     pre_rotation_deg: [f32; 3],
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 struct RawCells {
     cell_size: f32,
@@ -851,7 +876,7 @@ struct RawCells {
     max_eye_height: f32,
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 struct RawBake {
     image_res: u32,
@@ -865,11 +890,12 @@ struct RawBake {
     far_field: bool,
     far_levels: u32,
     merge_level: u32,
+    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "bare")]
     quality: Option<RawQuality>,
     quality_check: bool,
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 struct RawQuality {
     min_psnr_db: f64,
@@ -913,6 +939,143 @@ fn unit_tint() -> [f32; 3] {
 
 fn unit_scale() -> f32 {
     1.0
+}
+
+/// Writes an `Option` field as its bare value: the parser reads with
+/// `implicit_some`, and `skip_serializing_if` leaves out a `None`.
+fn bare<T: Serialize, S: serde::Serializer>(v: &Option<T>, s: S) -> Result<S::Ok, S::Error> {
+    match v {
+        Some(v) => v.serialize(s),
+        None => s.serialize_none(),
+    }
+}
+
+impl From<&BakeParams> for RawBake {
+    /// Every bake parameter (the destructuring names each field, so a new one cannot
+    /// be forgotten by the manifest writer).
+    fn from(b: &BakeParams) -> RawBake {
+        let BakeParams {
+            image_res,
+            self_occluding_tolerance_px,
+            edge_length_tolerance_px,
+            t_c0,
+            t_c1,
+            clustering,
+            occlusion_culling,
+            max_deviation_px,
+            far_field,
+            far_levels,
+            merge_level,
+            quality,
+            quality_check,
+        } = *b;
+        RawBake {
+            image_res,
+            self_occluding_tolerance_px,
+            edge_length_tolerance_px,
+            t_c0,
+            t_c1,
+            clustering,
+            occlusion_culling,
+            max_deviation_px,
+            far_field,
+            far_levels,
+            merge_level,
+            quality: quality.map(
+                |QualityFloor {
+                     min_psnr_db,
+                     min_ssim,
+                 }| RawQuality {
+                    min_psnr_db,
+                    min_ssim,
+                },
+            ),
+            quality_check,
+        }
+    }
+}
+
+/// A path as the manifest writes it: absolute, so the text works wherever it is put.
+fn absolute_text(p: &Path) -> String {
+    std::path::absolute(p)
+        .unwrap_or_else(|_| p.to_path_buf())
+        .display()
+        .to_string()
+}
+
+impl From<&InstanceSpec> for RawInstance {
+    fn from(i: &InstanceSpec) -> RawInstance {
+        let InstanceSpec {
+            model,
+            pre_rotation_deg,
+            target_height,
+            translation,
+            rotation_y_deg,
+            scale,
+            tint,
+        } = i;
+        RawInstance {
+            model: match model {
+                ModelSource::File(p) => RawModelSource::File(absolute_text(p)),
+                ModelSource::Procedural(n) => RawModelSource::Procedural(n.clone()),
+            },
+            target_height: *target_height,
+            translation: *translation,
+            rotation_y_deg: *rotation_y_deg,
+            scale: *scale,
+            tint: *tint,
+            pre_rotation_deg: *pre_rotation_deg,
+        }
+    }
+}
+
+/// The manifest text of `plan` with its scene replaced by `instances` (`pipeline
+/// scene --as-instances`): written by serde from the raw types the parser reads, so
+/// parsing the text gives back every parameter of `plan` — name, ground, cells,
+/// bake (`quality_check` and `quality` included), cells per job, output (absolute)
+/// — and the instances. `comment` becomes the first line(s), each prefixed `// `.
+/// Numbers are written in Rust's shortest round-trip form, paths absolute.
+pub fn write_instances_manifest(plan: &Plan, instances: &[InstanceSpec], comment: &str) -> String {
+    let Plan {
+        manifest_path: _,
+        name,
+        scene: _,
+        ground,
+        cells,
+        bake,
+        cells_per_job,
+        output,
+    } = plan;
+    let CellParams {
+        cell_size,
+        min_eye_height,
+        max_eye_height,
+    } = *cells;
+    let raw = RawManifest {
+        name: Some(name.clone()),
+        ground: Some(RawGround {
+            min: ground.min,
+            max: ground.max,
+        }),
+        scene: RawScene::Instances(instances.iter().map(RawInstance::from).collect()),
+        cells: RawCells {
+            cell_size,
+            min_eye_height,
+            max_eye_height,
+        },
+        bake: RawBake::from(bake),
+        cells_per_job: Some(*cells_per_job),
+        output: Some(absolute_text(output)),
+    };
+    // Depth 2: each instance, and `quality`, on one line; every other field on its own.
+    let config = ron::ser::PrettyConfig::new()
+        .depth_limit(2)
+        .indentor("    ".to_string());
+    let body = ron::ser::to_string_pretty(&raw, config).expect("a manifest serialises");
+    let mut text: String = comment.lines().map(|l| format!("// {l}\n")).collect();
+    text += &body;
+    text.push('\n');
+    text
 }
 
 /// Turns a ron error into a [`ManifestError`] naming the field involved.

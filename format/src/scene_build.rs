@@ -205,92 +205,44 @@ fn build_tiled_scene(plan: &Plan, spec: &crate::manifest::TiledSpec) -> Result<S
 /// parameters and every instance with its model, height, pre-rotation, translation,
 /// yaw and tint, so a generated park becomes an editable list (move one statue and
 /// rebake: only its proxies are derived again, issue 13). Building the written
-/// manifest gives the same models and, for parks, the same instance transforms.
-/// Numbers are written in Rust's shortest round-trip form, paths absolute.
+/// manifest gives the same models and, for parks, the same instance transforms;
+/// parsing it gives every other parameter of `plan` back
+/// ([`crate::manifest::write_instances_manifest`], serde over the parser's types).
 pub fn instances_manifest(plan: &Plan) -> Result<String, SceneError> {
     let (_, placements) = build_with_placements(plan)?;
-    let v3 = |v: [f32; 3]| format!("({:?}, {:?}, {:?})", v[0], v[1], v[2]);
-    let source = |m: &ModelSource| match m {
-        // Absolute, so the list works wherever it is written.
-        ModelSource::File(p) => format!(
-            "File({:?})",
-            std::path::absolute(p)
-                .unwrap_or_else(|_| p.clone())
-                .display()
-                .to_string()
-        ),
-        ModelSource::Procedural(n) => format!("Procedural({n:?})"),
-    };
-    let listed = |i: &InstanceSpec| {
-        format!(
-            "(model: {}, target_height: {:?}, pre_rotation_deg: {}, translation: {}, rotation_y_deg: {:?}, scale: {:?}, tint: {})",
-            source(&i.model),
-            i.target_height,
-            v3(i.pre_rotation_deg),
-            v3(i.translation),
-            i.rotation_y_deg,
-            i.scale,
-            v3(i.tint)
-        )
-    };
-    let mut lines = Vec::new();
-    match (&plan.scene, placements) {
-        (SceneSpec::Park(spec), Some(placements)) => {
-            for p in placements {
+    let instances: Vec<InstanceSpec> = match (&plan.scene, placements) {
+        (SceneSpec::Park(spec), Some(placements)) => placements
+            .iter()
+            .map(|p| {
                 let m = &spec.models[p.model_entry];
-                lines.push(format!(
-                    "(model: {}, target_height: {:?}, pre_rotation_deg: {}, translation: {}, rotation_y_deg: {:?}, tint: {})",
-                    source(&m.model),
-                    m.target_height,
-                    v3(m.pre_rotation_deg),
-                    v3(p.translation),
-                    p.yaw_deg,
-                    v3(p.tint)
-                ));
-            }
-            lines.extend(spec.placed.iter().map(listed));
-        }
-        (SceneSpec::Instances(list), _) => lines.extend(list.iter().map(listed)),
+                InstanceSpec {
+                    model: m.model.clone(),
+                    pre_rotation_deg: m.pre_rotation_deg,
+                    target_height: m.target_height,
+                    translation: p.translation,
+                    rotation_y_deg: p.yaw_deg,
+                    scale: 1.0,
+                    tint: p.tint,
+                }
+            })
+            .chain(spec.placed.iter().cloned())
+            .collect(),
+        (SceneSpec::Instances(list), _) => list.clone(),
         (SceneSpec::Park(_), None) => unreachable!("a park scene has placements"),
         (SceneSpec::City(_), _) | (SceneSpec::Gltf(_), _) | (SceneSpec::Tiled(_), _) => {
             return Err(SceneError::CityAsInstances {
                 manifest: plan.manifest_path.clone(),
             })
         }
-    }
-    let b = &plan.bake;
-    let c = &plan.cells;
-    Ok(format!(
-        "// {name} as an instance list (`pipeline scene {manifest} --as-instances`).\n(\n    name: {name:?},\n    ground: (min: ({:?}, {:?}), max: ({:?}, {:?})),\n    scene: Instances([\n        {}\n    ]),\n    cells: (cell_size: {:?}, min_eye_height: {:?}, max_eye_height: {:?}),\n    bake: (image_res: {}, self_occluding_tolerance_px: {:?}, edge_length_tolerance_px: {:?}, t_c0: {:?}, t_c1: {:?}, clustering: {}, occlusion_culling: {}, max_deviation_px: {:?}, far_field: {}{}),\n    cells_per_job: {},\n    output: {:?},\n)\n",
-        plan.ground.min[0],
-        plan.ground.min[1],
-        plan.ground.max[0],
-        plan.ground.max[1],
-        lines.join(",\n        "),
-        c.cell_size,
-        c.min_eye_height,
-        c.max_eye_height,
-        b.image_res,
-        b.self_occluding_tolerance_px,
-        b.edge_length_tolerance_px,
-        b.t_c0,
-        b.t_c1,
-        b.clustering,
-        b.occlusion_culling,
-        b.max_deviation_px,
-        b.far_field,
-        // Objective selection is opt-in: written only when the manifest has it.
-        b.quality.as_ref().map_or(String::new(), |q| format!(
-            ", quality: (min_psnr_db: {:?}, min_ssim: {:?})",
-            q.min_psnr_db, q.min_ssim
-        )),
-        plan.cells_per_job,
-        std::path::absolute(&plan.output)
-            .unwrap_or_else(|_| plan.output.clone())
-            .display()
-            .to_string(),
-        name = plan.name,
-        manifest = plan.manifest_path.display(),
+    };
+    Ok(crate::manifest::write_instances_manifest(
+        plan,
+        &instances,
+        &format!(
+            "{} as an instance list (`pipeline scene {} --as-instances`).",
+            plan.name,
+            plan.manifest_path.display()
+        ),
     ))
 }
 

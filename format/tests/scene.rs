@@ -390,6 +390,69 @@ fn instance_list_keeps_every_bake_parameter() {
     assert_eq!(listed.cells_per_job, plan.cells_per_job);
 }
 
+/// Every bake and cell parameter at a value other than its default survives
+/// parse → `--as-instances` → parse (issue 28: the hand-written writer dropped
+/// `quality_check`, so the listed manifest turned the check back on), and so do the
+/// name, ground, cells per job, output and every instance field.
+#[test]
+fn instance_list_round_trips_every_non_default_parameter() {
+    let text = r#"(
+        name: "odd",
+        ground: (min: (-10.5, 3.25), max: (190.0, 170.75)),
+        scene: Instances([
+            (model: Procedural("torus"), target_height: 7.5, translation: (20.0, 0.5, 30.0),
+             rotation_y_deg: 33.3, scale: 1.5, tint: (0.5, 0.75, 0.25),
+             pre_rotation_deg: (90.0, 10.0, -5.0)),
+            (model: Procedural("box"), target_height: 3.0, translation: (120.0, 0.0, 90.0),
+             rotation_y_deg: -12.0),
+        ]),
+        cells: (cell_size: 37.5, min_eye_height: 2.5, max_eye_height: 17.25),
+        bake: (image_res: 320, self_occluding_tolerance_px: 3.5,
+               edge_length_tolerance_px: 6.25, t_c0: 0.0005, t_c1: 0.0002,
+               clustering: false, occlusion_culling: true, max_deviation_px: 0.0,
+               far_field: false, quality: (min_psnr_db: 27.5, min_ssim: 0.85),
+               quality_check: false),
+        cells_per_job: 3,
+        output: "/tmp/hexbake-odd-out",
+    )"#;
+    let plan = parse_manifest_str(text, Path::new("odd.ron")).unwrap();
+    let d = format::manifest::BakeParams::default();
+    let b = &plan.bake;
+    // Each field differs from its default, so a writer that drops one fails below.
+    assert_ne!(b.image_res, d.image_res);
+    assert_ne!(b.self_occluding_tolerance_px, d.self_occluding_tolerance_px);
+    assert_ne!(b.edge_length_tolerance_px, d.edge_length_tolerance_px);
+    assert_ne!(b.t_c0, d.t_c0);
+    assert_ne!(b.t_c1, d.t_c1);
+    assert_ne!(b.clustering, d.clustering);
+    assert_ne!(b.occlusion_culling, d.occlusion_culling);
+    assert_ne!(b.max_deviation_px, d.max_deviation_px);
+    assert_ne!(b.far_field, d.far_field);
+    assert_ne!(b.quality, Some(format::manifest::QualityFloor::default()));
+    assert_ne!(b.quality_check, d.quality_check);
+    assert_ne!(plan.cells_per_job, format::manifest::DEFAULT_CELLS_PER_JOB);
+
+    let listed_text = format::scene_build::instances_manifest(&plan).unwrap();
+    let listed = parse_manifest_str(&listed_text, Path::new("odd-instances.ron")).unwrap();
+    assert!(!listed.bake.quality_check, "{listed_text}");
+    assert_eq!(listed.bake, plan.bake, "{listed_text}");
+    assert_eq!(listed.cells, plan.cells);
+    assert_eq!(listed.cells_per_job, plan.cells_per_job);
+    assert_eq!(listed.ground, plan.ground);
+    assert_eq!(listed.name, plan.name);
+    assert_eq!(listed.output, plan.output);
+    assert_eq!(listed.scene, plan.scene);
+
+    // The demo (a park) with the check off keeps it off too.
+    let demo = std::fs::read_to_string(repo_root().join("manifests/demo.ron")).unwrap();
+    let off = demo.replacen("bake: (", "bake: (quality_check: false, ", 1);
+    let plan = parse_manifest_str(&off, &repo_root().join("manifests/demo.ron")).unwrap();
+    assert!(!plan.bake.quality_check);
+    let listed = format::scene_build::instances_manifest(&plan).unwrap();
+    let listed = parse_manifest_str(&listed, Path::new("demo-instances.ron")).unwrap();
+    assert_eq!(listed.bake, plan.bake);
+}
+
 /// A park with `placed` objects (issue 16, the demo's showcase): they come after the
 /// generated instances, which stay exactly where the park alone puts them, and
 /// `--as-instances` lists them with the rest.

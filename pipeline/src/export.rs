@@ -36,7 +36,13 @@
 //!   empty mask, which the player draws with lit vertex colour, are a lit primitive
 //!   with COLOR_0 (albedo × tint). The player's two-view blend and its alpha
 //!   fallback have no glTF equivalent; a glTF viewer shows the texture colour.
-//! - Layered impostors (a reserved kind no bake writes yet) are skipped and counted.
+//! - **Layered impostors** (paper 001; chosen by the objective selection,
+//!   `bake.quality`, as the demo's is): one node per impostor, one primitive per
+//!   layer holding a texel — the player's quad at the layer's depth, cropped to the
+//!   texels of its depth codes, textured with the captured colour and an alpha mask
+//!   of those texels (`alphaMode: MASK`, unlit, double-sided): the player's alpha
+//!   test on depth codes. The quads are perpendicular to the capture axis, where
+//!   projective texturing is affine, so their UVs are exact.
 //!
 //! The document is written with `serde_json` (its structure is small and the Khronos
 //! glTF-Validator checks it in `pipeline/tests/export_gltf.rs`); the binary chunk is
@@ -60,10 +66,12 @@ pub struct ExportSummary {
     pub originals: usize,
     /// Distinct models among the originals (vertex data stored once each).
     pub original_models: usize,
-    /// Proxies exported, by kind name (`SvMesh`, `Cluster`, `MvMesh`).
+    /// Proxies exported, by kind name (`SvMesh`, `Cluster`, `MvMesh`,
+    /// `LayeredImpostor`).
     pub proxies: BTreeMap<String, usize>,
-    /// Layered impostors skipped (no glTF form yet).
-    pub proxies_skipped: usize,
+    /// Layers of the layered impostors exported (one textured quad each; a layer
+    /// with no texel of its depth codes is left out).
+    pub impostor_layers: usize,
     pub triangles_original: u64,
     pub triangles_proxy: u64,
     /// Capture textures embedded (one PNG per view used).
@@ -246,7 +254,7 @@ pub fn cell_glb(
         originals: originals.len(),
         original_models: 0,
         proxies: BTreeMap::new(),
-        proxies_skipped: 0,
+        impostor_layers: 0,
         triangles_original: 0,
         triangles_proxy: 0,
         textures: 0,
@@ -336,13 +344,15 @@ pub fn cell_glb(
     let mut proxy_nodes = Vec::new();
     let mut uv_errors = UvErrors::default();
     for (p, &(source, proxy)) in proxies.iter().enumerate() {
-        if proxy.kind == ProxyKind::LayeredImpostor {
-            summary.proxies_skipped += 1;
-            continue;
-        }
         let name = format!("proxy {p} {}", proxy.kind.name());
-        let parts = proxy_parts(base, proxy)?;
         let mut primitives = Vec::new();
+        let parts = match &proxy.layers {
+            Some(layers) if proxy.kind == ProxyKind::LayeredImpostor => {
+                primitives = impostor_primitives(&mut b, &name, proxy, layers, &mut summary)?;
+                Vec::new()
+            }
+            _ => proxy_parts(base, proxy)?,
+        };
         for (view, part) in parts {
             if part.triangles.is_empty() {
                 continue;
@@ -385,6 +395,9 @@ pub fn cell_glb(
             "extras": { "hexbake": { "representation": proxy.kind.name(), "pack": source,
                                       "proxy": p, "members": members, "views": proxy.views.len() } },
         });
+        if let Some(layers) = &proxy.layers {
+            node["extras"]["hexbake"]["layers"] = json!(layers.layers.len());
+        }
         if !primitives.is_empty() {
             node["mesh"] = json!(b.mesh(&name, primitives));
         }
@@ -612,6 +625,16 @@ impl Builder {
         self.materials.len() - 1
     }
 
+    /// An impostor layer's material: unlit, its texture's alpha a cut-out mask (the
+    /// player's alpha test on depth codes), seen from both sides.
+    fn impostor_layer_material(&mut self, name: &str, png: &[u8]) -> usize {
+        let m = self.unlit_textured_material(name, png);
+        self.materials[m]["alphaMode"] = json!("MASK");
+        self.materials[m]["alphaCutoff"] = json!(0.5);
+        self.materials[m]["doubleSided"] = json!(true);
+        m
+    }
+
     fn mesh(&mut self, name: &str, primitives: Vec<Value>) -> usize {
         self.meshes
             .push(json!({ "name": name, "primitives": primitives }));
@@ -750,6 +773,96 @@ impl Part {
             .collect();
         (uvs, behind)
     }
+}
+
+/// The primitives of a layered impostor (paper 001; format `ImpostorLayers`): per
+/// layer that holds a texel, one textured quad at `eye + depth · ray`, like the
+/// player's (`player/src/bake.rs` `impostor_quads`), cropped to the texels of its
+/// depth codes. Its texture is the view's colour with alpha 255 on those texels and
+/// 0 elsewhere, drawn with `alphaMode: MASK` — the player's alpha test on the depth
+/// code. The quads lie in planes perpendicular to the capture axis, where
+/// projective texturing is affine, so the per-vertex UVs are exact.
+fn impostor_primitives(
+    b: &mut Builder,
+    name: &str,
+    proxy: &Proxy,
+    layers: &format::pack::ImpostorLayers,
+    summary: &mut ExportSummary,
+) -> anyhow::Result<Vec<Value>> {
+    let view = proxy
+        .views
+        .first()
+        .ok_or_else(|| anyhow!("{name}: a layered impostor without its view"))?;
+    let (w, h) = (view.texture.width as usize, view.texture.height as usize);
+    let rgba = view
+        .texture
+        .to_rgba8()
+        .map_err(|e| anyhow!("{name} view 0: {e}"))?;
+    let eye = Vec3::from_array(view.eye);
+    let rays = layers.corner_rays.map(Vec3::from_array);
+    // The ray through texture coordinates (u, v): the corners' bilinear blend (the
+    // texture rectangle at depth 1 is a parallelogram, so this is exact).
+    let ray = |u: f32, v: f32| {
+        (1.0 - u) * (1.0 - v) * rays[0]
+            + u * (1.0 - v) * rays[1]
+            + u * v * rays[2]
+            + (1.0 - u) * v * rays[3]
+    };
+    let axis = (rays[0] + rays[1] + rays[2] + rays[3]).normalize_or_zero();
+    let normal = unit_or_up(-axis);
+    let mut primitives = Vec::new();
+    for (l, layer) in layers.layers.iter().enumerate() {
+        let inside = |x: usize, y: usize| {
+            let code = rgba[4 * (y * w + x) + 3];
+            code != 0 && (layer.code_lo..=layer.code_hi).contains(&code)
+        };
+        // The layer's texels: their bounding rectangle.
+        let (mut x0, mut y0, mut x1, mut y1) = (usize::MAX, usize::MAX, 0, 0);
+        for y in 0..h {
+            for x in 0..w {
+                if inside(x, y) {
+                    (x0, y0, x1, y1) = (x0.min(x), y0.min(y), x1.max(x), y1.max(y));
+                }
+            }
+        }
+        if x0 == usize::MAX {
+            continue;
+        }
+        let (cw, ch) = (x1 + 1 - x0, y1 + 1 - y0);
+        let mut crop = Vec::with_capacity(cw * ch * 4);
+        for y in y0..=y1 {
+            for x in x0..=x1 {
+                let i = 4 * (y * w + x);
+                crop.extend_from_slice(&rgba[i..i + 3]);
+                crop.push(if inside(x, y) { 255 } else { 0 });
+            }
+        }
+        let png = encode_png(cw as u32, ch as u32, &crop)?;
+        summary.textures += 1;
+        summary.texture_png_bytes += png.len() as u64;
+        let (u0, u1) = (x0 as f32 / w as f32, (x1 + 1) as f32 / w as f32);
+        let (v0, v1) = (y0 as f32 / h as f32, (y1 + 1) as f32 / h as f32);
+        let corners = [(u0, v0), (u1, v0), (u1, v1), (u0, v1)];
+        let positions: Vec<[f32; 3]> = corners
+            .iter()
+            .map(|&(u, v)| (eye + layer.depth * ray(u, v)).to_array())
+            .collect();
+        let uvs = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
+        // Counter-clockwise seen from the eye, as the player winds them.
+        let triangles = [[0, 3, 2], [0, 2, 1]];
+        summary.triangles_proxy += 2;
+        summary.impostor_layers += 1;
+        let material = b.impostor_layer_material(&format!("{name} layer {l}"), &png);
+        let prim = Primitive {
+            position: b.floats(positions.as_flattened(), 3, "VEC3", true),
+            normal: b.floats([normal; 4].as_flattened(), 3, "VEC3", false),
+            color: None,
+            texcoord: Some(b.floats(uvs.as_flattened(), 2, "VEC2", false)),
+            indices: b.indices(&triangles),
+        };
+        primitives.push(prim.to_json(material));
+    }
+    Ok(primitives)
 }
 
 /// `(s/q, t/q)` of `M · (p, 1)`; `None` behind the capture (q ≤ 0) or non-finite.

@@ -1,8 +1,9 @@
 //! `report.png`: the hex grid drawn four times as heat maps — polygons per cell
 //! (inside + proxies), pack bytes, bake time, and (issue 16) the quality check's
-//! worst sample view PSNR(Y) per cell ("worst db", drawn negated so that the
-//! worst cells are the hot end; its labels read −dB) — each with a colour bar whose ends are
-//! labelled with the minimum and maximum (a tiny built-in digit font: tiny-skia draws
+//! worst sample view PSNR(Y) per cell in dB ("worst psnr db": low is bad, so its
+//! ramp runs the other way — the lowest PSNR is the hot end, at the bar's right,
+//! labelled with its positive dB value) — each with a colour bar whose ends are
+//! labelled with the values there (a tiny built-in digit font: tiny-skia draws
 //! no text).
 
 use crate::report::CellLine;
@@ -16,8 +17,77 @@ const MARGIN: f32 = 16.0;
 const BAR_H: f32 = 14.0;
 const LABEL_H: f32 = 24.0;
 
-/// A panel: its label and the value it maps per cell.
-type Metric = (&'static str, fn(&CellLine) -> f64);
+/// A panel: its label, the value it maps per cell, whether the lowest value is the
+/// hot end of the ramp (PSNR), and how an end of its colour bar is labelled.
+struct Metric {
+    name: &'static str,
+    value: fn(&CellLine) -> f64,
+    low_is_hot: bool,
+    label: fn(f64) -> String,
+}
+
+impl Metric {
+    /// Where `v` lies on the ramp (0 cold … 1 hot) between the panel's `lo` and `hi`.
+    fn ramp_position(&self, v: f64, lo: f64, hi: f64) -> f32 {
+        let span = if hi > lo { hi - lo } else { 1.0 };
+        let t = ((v - lo) / span) as f32;
+        if self.low_is_hot {
+            1.0 - t
+        } else {
+            t
+        }
+    }
+
+    /// The labels of the colour bar's cold (left) and hot (right) ends for the
+    /// values `lo..=hi`; `-` for none.
+    fn legend(&self, lo: f64, hi: f64) -> (String, String) {
+        if !(lo.is_finite() && hi.is_finite()) {
+            return ("-".to_string(), "-".to_string());
+        }
+        if self.low_is_hot {
+            ((self.label)(hi), (self.label)(lo))
+        } else {
+            ((self.label)(lo), (self.label)(hi))
+        }
+    }
+}
+
+/// The four panels.
+fn metrics() -> [Metric; 4] {
+    [
+        Metric {
+            name: "polygons",
+            value: |l| {
+                l.polygons_inside
+                    + l.sv_polygons
+                    + l.mv_polygons
+                    + l.cluster_polygons
+                    + l.impostor_polygons
+            },
+            low_is_hot: false,
+            label: format_value,
+        },
+        Metric {
+            name: "bytes",
+            value: |l| l.pack_bytes as f64,
+            low_is_hot: false,
+            label: format_value,
+        },
+        Metric {
+            name: "ms",
+            value: |l| l.bake_ms,
+            low_is_hot: false,
+            label: format_value,
+        },
+        // The worst (lowest) PSNR is the hot end; labels are its dB, positive.
+        Metric {
+            name: "worst psnr db",
+            value: |l| l.worst_view_psnr_db,
+            low_is_hot: true,
+            label: |v| format!("{v:.1}"),
+        },
+    ]
+}
 
 /// Renders the three panels; returns PNG bytes.
 pub fn render(grid_params: &GridParams, lines: &[CellLine]) -> anyhow::Result<Vec<u8>> {
@@ -40,30 +110,16 @@ pub fn render(grid_params: &GridParams, lines: &[CellLine]) -> anyhow::Result<Ve
     let height = (panel_h + 2.0 * MARGIN + BAR_H + LABEL_H + 8.0) as u32;
     let mut pm = Pixmap::new(width, height).ok_or_else(|| anyhow::anyhow!("bad image size"))?;
     pm.fill(Color::WHITE);
-    let metrics: [Metric; 4] = [
-        ("polygons", |l| {
-            l.polygons_inside
-                + l.sv_polygons
-                + l.mv_polygons
-                + l.cluster_polygons
-                + l.impostor_polygons
-        }),
-        ("bytes", |l| l.pack_bytes as f64),
-        ("ms", |l| l.bake_ms),
-        // Negated so that the worst (lowest) PSNR is the hot end; labels show -dB.
-        ("worst db", |l| -l.worst_view_psnr_db),
-    ];
-    for (k, (_name, metric)) in metrics.iter().enumerate() {
+    for (k, metric) in metrics().iter().enumerate() {
         let x0 = MARGIN + k as f32 * (PANEL + MARGIN);
-        let values: Vec<f64> = lines.iter().map(metric).collect();
+        let values: Vec<f64> = lines.iter().map(metric.value).collect();
         let lo = values.iter().copied().fold(f64::INFINITY, f64::min);
         let hi = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        let span = if hi > lo { hi - lo } else { 1.0 };
         // Cells without a record stay grey.
         for cell in 0..grid.cell_count() {
             let value = lines.iter().position(|l| l.cell == cell).map(|i| values[i]);
             let colour = match value {
-                Some(v) => ramp(((v - lo) / span) as f32),
+                Some(v) => ramp(metric.ramp_position(v, lo, hi)),
                 None => [200, 200, 200, 255],
             };
             let corners = grid.corners(cell);
@@ -110,14 +166,10 @@ pub fn render(grid_params: &GridParams, lines: &[CellLine]) -> anyhow::Result<Ve
             }
         }
         let label_y = bar_y + BAR_H + 4.0;
-        let (lo_t, hi_t) = if lo.is_finite() {
-            (format_value(lo), format_value(hi))
-        } else {
-            ("-".to_string(), "-".to_string())
-        };
-        draw_text(&mut pm, x0, label_y, &lo_t);
-        draw_text(&mut pm, x0 + PANEL - text_width(&hi_t), label_y, &hi_t);
-        let name = metrics[k].0;
+        let (cold, hot) = metric.legend(lo, hi);
+        draw_text(&mut pm, x0, label_y, &cold);
+        draw_text(&mut pm, x0 + PANEL - text_width(&hot), label_y, &hot);
+        let name = metric.name;
         draw_text(
             &mut pm,
             x0 + PANEL / 2.0 - text_width(name) / 2.0,
@@ -146,4 +198,34 @@ fn text_width(s: &str) -> f32 {
 
 fn draw_text(pm: &mut Pixmap, x: f32, y: f32, s: &str) {
     crate::pixel_font::draw_text(pm, x, y, s, [30, 30, 30], PX);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Issue 28: the worst-PSNR panel's bar reads positive dB, the best cell's at the
+    /// cold (left) end and the worst cell's at the hot (right) end — it read
+    /// "-16 … -12" when the values were negated for the ramp — and the worst cell is
+    /// the hottest.
+    #[test]
+    fn worst_psnr_legend_reads_positive_db_best_to_worst() {
+        let m = metrics();
+        let psnr = m.iter().find(|m| m.name == "worst psnr db").unwrap();
+        let (lo, hi) = (11.8, 16.04);
+        assert_eq!(
+            psnr.legend(lo, hi),
+            ("16.0".to_string(), "11.8".to_string())
+        );
+        assert_eq!(psnr.ramp_position(lo, lo, hi), 1.0, "the worst cell is hot");
+        assert_eq!(psnr.ramp_position(hi, lo, hi), 0.0);
+        // The other panels: low values cold, at the left.
+        let bytes = m.iter().find(|m| m.name == "bytes").unwrap();
+        assert_eq!(
+            bytes.legend(1e3, 2e6),
+            ("1000".to_string(), "2.0m".to_string())
+        );
+        assert_eq!(bytes.ramp_position(2e6, 1e3, 2e6), 1.0);
+        assert_eq!(psnr.legend(f64::INFINITY, f64::NEG_INFINITY).0, "-");
+    }
 }

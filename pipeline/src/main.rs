@@ -85,7 +85,7 @@ enum Command {
         out: Option<PathBuf>,
     },
     /// Write one cell of a bake as glTF 2.0 binary (GLB): its originals and its
-    /// SV / MV / cluster proxies with their capture textures.
+    /// SV / MV / cluster proxies and layered impostors with their capture textures.
     Export {
         /// The bake directory (output of `pipeline run`).
         out: PathBuf,
@@ -295,10 +295,11 @@ fn finish_selected(
     completed(summary, "requested job(s) failed")
 }
 
-/// Success when every job of the run is done, else a failure that counts the jobs
+/// Success when every job of the run is done (or, `--no-wait`/`--hold`, submitted),
+/// else a failure that counts the jobs
 /// (`jobs`: what they are) and points at `pipeline status`.
 fn completed(summary: &pipeline::run::RunSummary, jobs: &str) -> Result<(), Failure> {
-    if summary.complete {
+    if summary.succeeded() {
         return Ok(());
     }
     Err(failed(anyhow::anyhow!(

@@ -389,6 +389,15 @@ pub fn to_markdown(r: &Report) -> String {
     m
 }
 
+/// What a cell's worst figure is, next to it in the report (issue 28): the bake
+/// does not record the worst proxy's size on screen, and the figure is often a
+/// tiny object's.
+pub const WORST_FIGURES_CAVEAT: &str = "A cell's figure is its single worst proxy in \
+    that proxy's worst sample view, whatever its size on screen (the bake does not \
+    record it): worst values can come from objects a few pixels across — on the demo, \
+    its 0.3-unit pebbles — where a few wrong pixels are much of the object, so they say \
+    little about a walk's frames (`player compare` measures those).";
+
 /// Issue 16: representation shares, the quality check's worst cells and the pooled
 /// error histogram.
 fn quality_section(m: &mut String, r: &Report) {
@@ -411,7 +420,8 @@ fn quality_section(m: &mut String, r: &Report) {
         "\n## Quality check (objective selection, issue 16)\n\n{measured:.0} proxies \
          measured from their region's sample viewpoints against the original, on the \
          objects' own pixels (worker `select.rs`). Worst cells by their worst sample \
-         view's PSNR(Y):\n\n| cell | worst view PSNR(Y) dB | worst view SSIM |\n|---|---|---|"
+         view's PSNR(Y). {WORST_FIGURES_CAVEAT}\n\n| cell | worst view PSNR(Y) dB | \
+         worst view SSIM |\n|---|---|---|"
     );
     for (cell, psnr) in &r.worst_cells {
         let ssim = r
@@ -507,7 +517,7 @@ fn time_section(m: &mut String, r: &Report) {
     }
     let _ = writeln!(
         m,
-        "\n![heat maps: polygons, bytes, bake time per cell](report.png)"
+        "\n![heat maps: polygons, bytes, bake time, worst-view PSNR(Y) dB per cell](report.png)"
     );
 }
 

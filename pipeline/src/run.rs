@@ -351,12 +351,61 @@ pub struct RunSummary {
     pub jobs_baked: usize,
     pub jobs_failed: Vec<(u32, String)>,
     pub wall_s: f64,
+    /// Every job is done and the index and report are written.
     pub complete: bool,
+    /// A Slurm run with `--no-wait` or `--hold`: what was submitted. Nothing of it is
+    /// baked yet, and the index and report are the finalize job's to write.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub submitted: Option<Submitted>,
+}
+
+/// Slurm jobs a run submitted and returned without waiting for.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub struct Submitted {
+    /// The array job: one task per missing job.
+    pub array_job: String,
+    /// The finalize job (`--dependency=afterok` on the array): it writes the index
+    /// and the report once every task succeeded.
+    pub finalize_job: String,
+    /// Tasks in the array.
+    pub tasks: usize,
+    /// Submitted held (`--hold`): nothing runs before `scontrol release`.
+    pub held: bool,
 }
 
 impl RunSummary {
+    /// The run did what it was asked: every job done, or (`--no-wait`, `--hold`) the
+    /// missing jobs submitted.
+    pub fn succeeded(&self) -> bool {
+        self.complete || self.submitted.is_some()
+    }
+
     /// One line for people.
     pub fn line(&self) -> String {
+        if let Some(s) = &self.submitted {
+            return format!(
+                "{}: {} cells in {} jobs — {} already done, {} submitted as Slurm array job {}{}, \
+                 not baked yet; finalize job {} writes the index and report once every task \
+                 succeeds; `pipeline status {}` shows progress — {:.1} s",
+                self.out.display(),
+                self.cells,
+                self.jobs,
+                self.jobs_skipped,
+                s.tasks,
+                s.array_job,
+                if s.held {
+                    format!(
+                        " (held: nothing runs until `scontrol release {}`)",
+                        s.array_job
+                    )
+                } else {
+                    String::new()
+                },
+                s.finalize_job,
+                self.out.display(),
+                self.wall_s,
+            );
+        }
         format!(
             "{}: {} cells in {} jobs — {} already done, {} baked, {} failed — {:.1} s{}",
             self.out.display(),
@@ -439,6 +488,7 @@ pub fn run_local(l: &Loaded, force: bool, opts: &LocalOptions) -> Result<RunSumm
         jobs_failed: outcome.failed,
         wall_s: start.elapsed().as_secs_f64(),
         complete,
+        submitted: None,
     })
 }
 
@@ -511,6 +561,7 @@ pub fn run_local_selected(
             jobs_failed: outcome.failed,
             wall_s: start.elapsed().as_secs_f64(),
             complete,
+            submitted: None,
         },
         partial,
     ))

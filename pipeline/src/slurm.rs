@@ -5,7 +5,7 @@
 //! timeout (`sbatch --wait` polls too slowly), unless `--no-wait`.
 
 use crate::lock::queued;
-use crate::run::{missing_jobs, prepare, Loaded, RunError, RunSummary};
+use crate::run::{missing_jobs, prepare, Loaded, RunError, RunSummary, Submitted};
 use format::schema::job::error_path;
 use format::schema::slurm::{submission_path, Submission};
 use std::path::{Path, PathBuf};
@@ -179,16 +179,14 @@ pub fn run_slurm(
         }
         if args.no_wait || args.hold {
             drop(lock);
-            return Ok(RunSummary {
-                out: l.out.clone(),
-                cells: l.build.grid.cell_count() as usize,
-                jobs: l.build.jobs.len(),
-                jobs_skipped: l.build.jobs.len() - missing.len(),
-                jobs_baked: 0,
-                jobs_failed: Vec::new(),
-                wall_s: start.elapsed().as_secs_f64(),
-                complete: true,
-            });
+            return Ok(submitted_summary(
+                l.out.clone(),
+                l.build.grid.cell_count() as usize,
+                l.build.jobs.len(),
+                &submission,
+                args.hold,
+                start.elapsed().as_secs_f64(),
+            ));
         }
 
         // 3. Wait for both (poll squeue).
@@ -239,5 +237,97 @@ pub fn run_slurm(
         jobs_failed,
         wall_s: start.elapsed().as_secs_f64(),
         complete,
+        submitted: None,
     })
+}
+
+/// The summary of a run that submitted `submission` and returned (`--no-wait`,
+/// `held`): not complete — nothing is baked and the index and report are the
+/// finalize job's — but a success (exit 0), with the job ids and how to follow them.
+pub fn submitted_summary(
+    out: PathBuf,
+    cells: usize,
+    jobs: usize,
+    submission: &Submission,
+    held: bool,
+    wall_s: f64,
+) -> RunSummary {
+    RunSummary {
+        out,
+        cells,
+        jobs,
+        jobs_skipped: jobs - submission.jobs.len(),
+        jobs_baked: 0,
+        jobs_failed: Vec::new(),
+        wall_s,
+        complete: false,
+        submitted: Some(Submitted {
+            array_job: submission.array_job.clone(),
+            finalize_job: submission.finalize_job.clone(),
+            tasks: submission.jobs.len(),
+            held,
+        }),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn submission() -> Submission {
+        Submission {
+            array_job: "4711".into(),
+            finalize_job: "4712".into(),
+            jobs: vec![0, 2, 5],
+        }
+    }
+
+    /// `--no-wait` (issue 28): the line names the jobs, says nothing is baked and
+    /// that the finalize job writes index and report, points at `pipeline status`,
+    /// and never claims they are written; the run succeeds but is not complete.
+    #[test]
+    fn no_wait_says_what_was_submitted_not_that_the_index_is_written() {
+        let s = submitted_summary("out/demo".into(), 42, 11, &submission(), false, 0.3);
+        let line = s.line();
+        assert!(!line.contains("written"), "{line}");
+        for want in [
+            "3 submitted as Slurm array job 4711",
+            "8 already done",
+            "not baked yet",
+            "finalize job 4712 writes the index and report",
+            "`pipeline status out/demo`",
+        ] {
+            assert!(line.contains(want), "{want:?} missing from {line}");
+        }
+        assert!(!line.contains("held"), "{line}");
+        assert!(!s.complete && s.succeeded());
+        assert_eq!(s.jobs_baked, 0);
+        let json = serde_json::to_value(&s).unwrap();
+        assert_eq!(json["complete"], false);
+        assert_eq!(json["submitted"]["array_job"], "4711");
+        assert_eq!(json["submitted"]["finalize_job"], "4712");
+    }
+
+    /// `--hold`: the same, and how to release the array.
+    #[test]
+    fn hold_says_how_to_release() {
+        let s = submitted_summary("out/demo".into(), 42, 11, &submission(), true, 0.3);
+        let line = s.line();
+        assert!(!line.contains("written"), "{line}");
+        assert!(
+            line.contains("held: nothing runs until `scontrol release 4711`"),
+            "{line}"
+        );
+        assert!(!s.complete && s.succeeded());
+    }
+
+    /// A finished run still says so (and only then).
+    #[test]
+    fn complete_run_says_index_and_report_written() {
+        let mut s = submitted_summary("o".into(), 42, 11, &submission(), false, 0.0);
+        s.submitted = None;
+        assert!(!s.line().contains("written"));
+        s.complete = true;
+        assert!(s.line().contains("index and report written"));
+    }
 }

@@ -142,6 +142,92 @@ fn exported_demo_cell_passes_the_khronos_gltf_validator() {
     assert_khronos_valid(&glb);
 }
 
+/// Issue 28: the demo bake (objective selection on) writes a layered impostor; the
+/// export of a cell that draws it holds it — one node, one alpha-masked textured
+/// quad per layer with texels, at the layer's depth — instead of dropping it, and
+/// passes the Khronos validator.
+#[test]
+fn exported_demo_cell_holds_its_layered_impostor() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("demo");
+    let out_s = out.to_str().unwrap();
+    let glb = dir.path().join("cell.glb");
+    let o = run_quiet("manifests/demo.ron", &out, &[]);
+    assert!(o.status.success(), "{}", text(&o));
+
+    // A cell whose own pack or far-field group holds a layered impostor.
+    let index = Index::read(&out.join("index.pack")).unwrap();
+    let impostors = |pack: &CellPack| -> Vec<format::pack::Proxy> {
+        pack.proxies
+            .iter()
+            .filter(|p| p.kind == ProxyKind::LayeredImpostor)
+            .cloned()
+            .collect()
+    };
+    let (cell, found) = index
+        .cells
+        .iter()
+        .find_map(|e| {
+            let pack = CellPack::read(&out.join(&e.file)).unwrap();
+            let mut found = impostors(&pack);
+            if let Some(g) = pack.far_group {
+                let f =
+                    format::pack::PackFile::open(&out.join(format!("groups/{g}.pack"))).unwrap();
+                found.extend(impostors(&CellPack::decode_group(&f).unwrap()));
+            }
+            (!found.is_empty()).then_some((e.cell_id, found))
+        })
+        .expect("the demo bake writes a layered impostor");
+
+    let summary = succeeded_json(&export(out_s, cell, &glb, &["--json"]));
+    eprintln!("export of cell {cell}: {summary}");
+    assert_eq!(summary["proxies"]["LayeredImpostor"], found.len());
+    let layers: usize = found
+        .iter()
+        .map(|p| p.layers.as_ref().unwrap().layers.len())
+        .sum();
+    let exported = summary["impostor_layers"].as_u64().unwrap() as usize;
+    assert!(exported > 0 && exported <= layers, "{exported} of {layers}");
+
+    let doc = read_glb(&glb);
+    let nodes: Vec<_> = doc
+        .nodes()
+        .filter(|n| n.name().is_some_and(|s| s.ends_with(" LayeredImpostor")))
+        .collect();
+    assert_eq!(nodes.len(), found.len());
+    let quads: Vec<_> = nodes
+        .iter()
+        .filter_map(|n| n.mesh())
+        .flat_map(|m| m.primitives().collect::<Vec<_>>())
+        .collect();
+    assert_eq!(quads.len(), exported);
+    for q in &quads {
+        let m = q.material();
+        assert_eq!(m.alpha_mode(), gltf::material::AlphaMode::Mask);
+        assert!(m.double_sided());
+        assert!(m.pbr_metallic_roughness().base_color_texture().is_some());
+        assert_eq!(q.indices().unwrap().count(), 6, "a quad");
+    }
+    // The quads stand where the player draws them: in the plane of a layer, at its
+    // depth along the corner rays from the capture eye.
+    let l = found[0].layers.as_ref().unwrap();
+    let eye = glam::Vec3::from_array(found[0].views[0].eye);
+    let r = l.corner_rays.map(glam::Vec3::from_array);
+    let n = (r[1] - r[0]).cross(r[3] - r[0]);
+    let bounds = quads[0].bounding_box();
+    let centre = 0.5 * (glam::Vec3::from(bounds.min) + glam::Vec3::from(bounds.max));
+    let depth = (centre - eye).dot(n) / r[0].dot(n);
+    assert!(
+        l.layers
+            .iter()
+            .any(|x| (x.depth - depth).abs() < 1e-2 * x.depth),
+        "a quad at depth {depth}, layers {:?}",
+        l.layers
+    );
+
+    assert_khronos_valid(&glb);
+}
+
 /// Issue 18: a cell of a textured glTF scene (`format::load::gltf_sample`, read with
 /// `scene: Gltf(..)`) exports its originals with their albedo textures — TEXCOORD_0,
 /// a lit material with `baseColorTexture`, the model's wrap modes in its sampler —

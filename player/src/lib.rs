@@ -36,6 +36,8 @@
 //! [--mode hybrid|full|frustum|lod] [--lod-pixel-error PX] [--png] [--no-prefetch]
 //! [--size WxH]`, `player compare <out> --path <path.ron> [--mode hybrid|lod] [--json]
 //! [--worst DIR] [--worst-count N] [--no-crossings] [--reference-ss N] [--size WxH]`,
+//! `player view <out> [--mode hybrid|full|lod] [--lod-pixel-error PX] ...` (a window;
+//! `--display-hz`, a path's display rate, is `render`'s and `compare`'s only),
 //! `player synth <out>` (a synthetic bake of `manifests/demo.ron`). `view`, `render`
 //! and `compare` also take the draw options ([`DrawOptions`]: `--no-patch-bitfields`,
 //! `--no-backface`, `--no-frustum`, `--tile-triangles N`, `--no-bc`).

@@ -33,12 +33,6 @@ struct StreamArgs {
     /// names the new flag (issue 14, units in names).
     #[arg(long = "upload-budget", hide = true, value_parser = renamed_upload_budget)]
     upload_budget_renamed: Option<u64>,
-    /// `render`/`compare`: the display rate a path stands for. A path frame is
-    /// 1 / frame_rate seconds of walking (0.1 s on the parks' walk), in which a
-    /// player drawing at this rate draws display_hz / frame_rate frames, each with
-    /// its own upload budget: the frames not drawn advance the streaming only.
-    #[arg(long, default_value_t = 60.0, value_parser = parse_hz)]
-    display_hz: f32,
     /// Resident cell data kept before LRU eviction, in MiB.
     #[arg(long, default_value_t = 512)]
     memory_budget_mib: u64,
@@ -51,8 +45,8 @@ struct StreamArgs {
     /// Override the path's resolution, e.g. 256x256.
     #[arg(long, value_parser = parse_size)]
     size: Option<(u32, u32)>,
-    /// `--mode lod`: the projected error, in pixels, below which an instance may use
-    /// a coarser level of its model's LOD chain.
+    /// `lod` mode (`--mode lod`, or M in `view`): the projected error, in pixels,
+    /// below which an instance may use a coarser level of its model's LOD chain.
     #[arg(long, default_value_t = player::lod::DEFAULT_PIXEL_ERROR)]
     lod_pixel_error: f32,
 }
@@ -94,17 +88,33 @@ impl DrawArgs {
     }
 }
 
-impl StreamArgs {
+/// The walk of a camera path (`render`, `compare`): its stream settings and the
+/// display rate it stands for. Not `view`'s: a window draws at its own rate.
+#[derive(clap::Args, Clone)]
+struct PathArgs {
+    #[command(flatten)]
+    stream: StreamArgs,
+    /// The display rate a path stands for. A path frame is 1 / frame_rate seconds
+    /// of walking (0.1 s on the parks' walk), in which a player drawing at this rate
+    /// draws display_hz / frame_rate frames, each with its own upload budget: the
+    /// frames not drawn advance the streaming only.
+    #[arg(long, default_value_t = 60.0, value_parser = parse_hz)]
+    display_hz: f32,
+}
+
+impl PathArgs {
     /// The stream settings for a headless walk of `path`: display_hz / frame_rate
     /// display frames per path frame (rounded, at least one).
     fn path_config(&self, path: &format::path::CameraPath) -> StreamConfig {
         let frames_per_step = (self.display_hz as f64 / path.frame_rate as f64).round();
         StreamConfig {
             display_frames_per_step: frames_per_step.clamp(1.0, 1e4) as u32,
-            ..self.config()
+            ..self.stream.config()
         }
     }
+}
 
+impl StreamArgs {
     fn config(&self) -> StreamConfig {
         StreamConfig {
             prefetch: !self.no_prefetch,
@@ -207,7 +217,7 @@ enum Command {
         #[arg(long)]
         png: bool,
         #[command(flatten)]
-        stream: StreamArgs,
+        walk: PathArgs,
         #[command(flatten)]
         draw: DrawArgs,
     },
@@ -291,7 +301,7 @@ enum Command {
               value_parser = clap::value_parser!(u32).range(1..=100))]
         repeat: u32,
         #[command(flatten)]
-        stream: StreamArgs,
+        walk: PathArgs,
         #[command(flatten)]
         draw: DrawArgs,
     },
@@ -337,7 +347,7 @@ fn main() -> ExitCode {
             frames,
             mode,
             png,
-            stream,
+            walk,
             draw,
         } => format::path::CameraPath::load(&path)
             .map_err(player::run::RunError::from)
@@ -346,9 +356,9 @@ fn main() -> ExitCode {
                     mode,
                     frames_dir: frames.clone(),
                     png,
-                    stream: stream.path_config(&p),
-                    size: stream.size,
-                    lod_pixel_error: stream.lod_pixel_error,
+                    stream: walk.path_config(&p),
+                    size: walk.stream.size,
+                    lod_pixel_error: walk.stream.lod_pixel_error,
                     draw: draw.options(),
                 };
                 render(&out, &p, &opts)
@@ -389,6 +399,7 @@ fn main() -> ExitCode {
             let opts = player::view::ViewOptions {
                 size: stream.size.unwrap_or((1024, 768)),
                 stream: stream.config(),
+                lod_pixel_error: stream.lod_pixel_error,
                 start,
                 yaw_deg,
                 pitch_deg,
@@ -431,7 +442,7 @@ fn main() -> ExitCode {
             no_crossings,
             reference_ss,
             repeat,
-            stream,
+            walk,
             draw,
         } => format::path::CameraPath::load(&path)
             .map_err(player::run::RunError::from)
@@ -442,11 +453,11 @@ fn main() -> ExitCode {
                     &CompareOptions {
                         worst_dir: worst,
                         worst_count,
-                        size: stream.size,
+                        size: walk.stream.size,
                         crossings: !no_crossings,
-                        stream: stream.path_config(&p),
+                        stream: walk.path_config(&p),
                         mode,
-                        lod_pixel_error: stream.lod_pixel_error,
+                        lod_pixel_error: walk.stream.lod_pixel_error,
                         reference_ss,
                         repeat,
                         draw: draw.options(),
@@ -557,14 +568,40 @@ mod tests {
     use super::*;
 
     fn stream_args(args: &[&str]) -> Result<StreamArgs, clap::Error> {
+        Ok(path_args(args)?.stream)
+    }
+
+    fn path_args(args: &[&str]) -> Result<PathArgs, clap::Error> {
         let mut argv = vec![
             "player", "render", "out", "--path", "p.ron", "--frames", "f",
         ];
         argv.extend_from_slice(args);
         match Cli::try_parse_from(argv)?.command {
-            Command::Render { stream, .. } => Ok(stream),
+            Command::Render { walk, .. } => Ok(walk),
             _ => unreachable!("parsed a render command"),
         }
+    }
+
+    /// Issue 28: `view --lod-pixel-error` sets the pixel error of its `lod` mode
+    /// (start mode or M); `--display-hz`, a path's display rate, is not a `view`
+    /// flag (a window draws at its own rate) and is refused, not ignored.
+    #[cfg(feature = "view")]
+    #[test]
+    fn view_takes_the_lod_pixel_error_and_refuses_a_display_rate() {
+        let Command::View { stream, .. } =
+            Cli::try_parse_from(["player", "view", "out", "--lod-pixel-error", "3.5"])
+                .unwrap()
+                .command
+        else {
+            panic!("a view command")
+        };
+        assert_eq!(stream.lod_pixel_error, 3.5);
+        let e = Cli::try_parse_from(["player", "view", "out", "--display-hz", "30"])
+            .err()
+            .expect("--display-hz is refused for view")
+            .to_string();
+        assert!(e.contains("--display-hz"), "{e}");
+        assert!(path_args(&["--display-hz", "30"]).is_ok());
     }
 
     /// Issue 14: `view`'s angles carry their unit; the old flags name the new ones.
@@ -698,14 +735,14 @@ mod tests {
             std::path::Path::new("p.ron"),
         )
         .unwrap();
-        let s = stream_args(&[]).unwrap();
-        assert_eq!(s.config().display_frames_per_step, 1);
+        let s = path_args(&[]).unwrap();
+        assert_eq!(s.stream.config().display_frames_per_step, 1);
         let c = s.path_config(&path);
         assert_eq!(
             (c.display_frames_per_step, c.upload_budget_bytes),
             (6, 4 << 20)
         );
-        let s = stream_args(&["--display-hz", "5"]).unwrap();
+        let s = path_args(&["--display-hz", "5"]).unwrap();
         assert_eq!(
             s.path_config(&path).display_frames_per_step,
             1,
@@ -713,7 +750,7 @@ mod tests {
         );
         for bad in ["0", "-60", "nan", "fast"] {
             let arg = format!("--display-hz={bad}");
-            let e = stream_args(&[&arg]).err().expect("refused");
+            let e = path_args(&[&arg]).err().expect("refused");
             assert!(e.to_string().contains("frames per second"), "{e}");
         }
     }

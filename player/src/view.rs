@@ -42,6 +42,8 @@ pub struct ViewOptions {
     pub pitch_deg: f32,
     /// Start mode: hybrid, full or lod.
     pub mode: Mode,
+    /// The pixel error of `lod` mode (`--lod-pixel-error`).
+    pub lod_pixel_error: f32,
     /// Start with the representation colouring on.
     pub colours: bool,
     /// Start with the overlay shown.
@@ -65,6 +67,7 @@ impl ViewOptions {
             yaw_deg: 0.0,
             pitch_deg: 0.0,
             mode: Mode::Hybrid,
+            lod_pixel_error: crate::lod::DEFAULT_PIXEL_ERROR,
             colours: false,
             overlay: true,
             exit_after: None,
@@ -100,6 +103,7 @@ impl ViewSession {
             0.5 * (g.ground_min[1] + g.ground_max[1]),
         ));
         player.renderer.set_representation_colours(opts.colours);
+        player.lod_pixel_error = opts.lod_pixel_error;
         let mut session = ViewSession {
             player,
             streamer,

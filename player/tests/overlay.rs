@@ -36,11 +36,14 @@ fn view_frame_shows_the_overlay_and_every_drawn_representation_in_its_colour() {
         size,
         colours: true,
         overlay: false,
+        lod_pixel_error: 2.5,
         ..ViewOptions::new(dir.path().to_path_buf())
     };
     let Some(mut s) = open(dir.path(), &opts) else {
         return;
     };
+    // `view --lod-pixel-error` reaches the player's `lod` mode (issue 28).
+    assert_eq!(s.player.lod_pixel_error, 2.5);
     // The synthetic bake's cells hold originals, SvMesh, MvMesh and Cluster proxies;
     // turning around at a cell centre sees them all.
     let g = info.grid;

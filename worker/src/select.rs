@@ -34,8 +34,9 @@
 //!   against object and swamps every other error), and compared over the object's
 //!   own pixels (where either image has a covered sample): PSNR on luminance
 //!   ([`format::metrics`]) and SSIM over the windows centred on those pixels. A
-//!   candidate passes when its PSNR of the squared errors pooled over all K views
-//!   and its mean SSIM reach the thresholds; the worst view's figures are
+//!   measurement's `passed` says whether its PSNR of the squared errors pooled over
+//!   the views and its mean SSIM reach the floor; which candidate is kept is
+//!   decided per view ("Acceptance" below), and the worst view's figures are
 //!   reported.
 //! - **The check of every bake** (issue 16 item 3, [`check_viewpoints`]): without
 //!   `bake.quality`, and for a mesh proxy the selection kept without measuring it
