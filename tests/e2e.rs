@@ -1,6 +1,8 @@
 //! End-to-end tests that run hexbake's binaries, each in its own temp dir
-//! (STYLE.md habit 10). Tests that need the real meshes skip with a note when
-//! `models/` has not been fetched (`scripts/fetch-models.sh`; CI always fetches).
+//! (STYLE.md habit 10). Tests that need the real meshes, Slurm or a wgpu adapter
+//! skip through `testkit::skip` without them (`scripts/fetch-models.sh`,
+//! `scripts/slurm-local.sh`, lavapipe); CI sets `HEXBAKE_REQUIRE_MODELS=1`,
+//! `HEXBAKE_REQUIRE_SLURM=1` and `HEXBAKE_REQUIRE_GPU=1`, which make them fail instead.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -61,10 +63,19 @@ fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
+/// Whether `models/` was fetched (the parks read it); a skip when not.
+#[track_caller]
 fn models_present() -> bool {
-    let ok = repo().join("models/bunny.obj").exists();
+    let dir = repo().join("models");
+    let ok = dir.join("bunny.obj").exists();
     if !ok {
-        eprintln!("SKIP: models/ not fetched (run scripts/fetch-models.sh)");
+        testkit::skip(
+            testkit::Need::Models,
+            format_args!(
+                "{} not fetched (run scripts/fetch-models.sh)",
+                dir.display()
+            ),
+        );
     }
     ok
 }
@@ -475,28 +486,33 @@ fn corrupt_cell_pack_is_rebaked() {
 }
 
 /// The Slurm tests need a running Slurm (`scripts/slurm-local.sh start`, which CI
-/// runs) and SLURM_CONF; they skip otherwise unless HEXBAKE_REQUIRE_SLURM=1.
+/// runs) and SLURM_CONF; they skip otherwise (`testkit::skip`: a failure under
+/// HEXBAKE_REQUIRE_SLURM=1).
+#[track_caller]
 fn slurm_available() -> bool {
-    let ok = std::env::var_os("SLURM_CONF").is_some()
-        && Command::new("sinfo")
-            .arg("-h")
-            .output()
-            .map(|o| o.status.success())
-            .unwrap_or(false);
-    if !ok {
-        assert!(
-            std::env::var_os("HEXBAKE_REQUIRE_SLURM").is_none(),
-            "HEXBAKE_REQUIRE_SLURM is set but Slurm does not answer"
+    let why = if std::env::var_os("SLURM_CONF").is_none() {
+        Some("SLURM_CONF is not set".to_string())
+    } else {
+        match Command::new("sinfo").arg("-h").output() {
+            Ok(o) if o.status.success() => None,
+            Ok(o) => Some(format!("sinfo -h failed: {}", stderr(&o).trim())),
+            Err(e) => Some(format!("cannot run sinfo: {e}")),
+        }
+    };
+    if let Some(why) = &why {
+        testkit::skip(
+            testkit::Need::Slurm,
+            format_args!("no Slurm ({why}; scripts/slurm-local.sh start, export SLURM_CONF=...)"),
         );
-        eprintln!("SKIP: no Slurm (scripts/slurm-local.sh start; export SLURM_CONF=...)");
     }
-    ok
+    why.is_none()
 }
 
 /// Slurm tests share one one-node cluster: run them one at a time.
 static SLURM: std::sync::Mutex<()> = std::sync::Mutex::new(());
 
 /// The one-at-a-time hold on the cluster, or `None` (the test skips) without Slurm.
+#[track_caller]
 fn slurm_turn() -> Option<std::sync::MutexGuard<'static, ()>> {
     slurm_available().then(|| SLURM.lock().unwrap_or_else(|e| e.into_inner()))
 }
@@ -510,6 +526,7 @@ type SlurmSetup = (
     PathBuf,
 );
 
+#[track_caller]
 fn slurm_setup() -> Option<SlurmSetup> {
     let turn = slurm_turn()?;
     let dir = tempfile::tempdir().unwrap();
@@ -607,19 +624,19 @@ fn slurm_resubmits_only_the_cancelled_task() {
 // ---------------------------------------------------------------------------
 // Issue 7: the player — same shading as the CPU rasterizer, compare on a real bake.
 
-/// GPU tests skip without an adapter unless HEXBAKE_REQUIRE_GPU=1 (CI sets it:
-/// Mesa's lavapipe is always there).
+/// GPU tests skip without an adapter (`testkit::skip`: a failure under
+/// HEXBAKE_REQUIRE_GPU=1, which CI sets: Mesa's lavapipe is always there). Any
+/// other error of the player fails the test.
+#[track_caller]
 fn open_player(dir: &Path, size: (u32, u32)) -> Option<player::run::Player> {
+    use player::{gpu::GpuError, run::RunError};
     match player::run::Player::open(dir, size) {
         Ok(p) => Some(p),
-        Err(e) => {
-            assert!(
-                std::env::var_os("HEXBAKE_REQUIRE_GPU").is_none(),
-                "HEXBAKE_REQUIRE_GPU is set but the player cannot start: {e}"
-            );
-            eprintln!("SKIP: no wgpu adapter: {e}");
+        Err(RunError::Gpu(GpuError::NoAdapter(e))) => {
+            testkit::skip(testkit::Need::Gpu, format_args!("no wgpu adapter ({e})"));
             None
         }
+        Err(e) => panic!("the player cannot open {}: {e}", dir.display()),
     }
 }
 
@@ -1063,7 +1080,7 @@ mod random_manifests {
     }
 
     proptest! {
-        #![proptest_config(ProptestConfig { cases: 32, failure_persistence: None, ..ProptestConfig::default() })]
+        #![proptest_config(ProptestConfig::with_cases(32))]
 
         #[test]
         fn random_manifests_succeed_or_exit_2_with_a_position(

@@ -12,11 +12,12 @@ use format::patch_visibility::{direction_count, PatchBounds};
 use glam::Vec3;
 use player::camera::Camera;
 use player::frame::Mode;
-use player::gpu::GpuError;
 use player::metrics::psnr_y;
-use player::run::Player;
 use player::stream::{StreamConfig, Streamer};
 use player::testdata::write_synthetic_bake_with;
+
+mod common;
+use common::open_player;
 
 fn per_triangle_patches(base: &BasePack) -> PatchSet {
     let (level, shells) = (0u32, vec![1.5f32, 64.0]);
@@ -88,14 +89,7 @@ fn per_triangle_patches(base: &BasePack) -> PatchSet {
 /// instance 0 (`close`: 0.6 radii, narrow, off-centre, so part of it is out of
 /// view), with the per-tile frustum test on or off.
 fn frame(dir: &std::path::Path, close: bool, frustum: bool) -> Option<(u64, Vec<u8>, Vec<u8>)> {
-    let mut p = match Player::open(dir, (128, 128)) {
-        Ok(p) => p,
-        Err(player::run::RunError::Gpu(GpuError::NoAdapter(e))) => {
-            eprintln!("SKIP: no graphics adapter ({e})");
-            return None;
-        }
-        Err(e) => panic!("{e}"),
-    };
+    let mut p = open_player(dir, (128, 128))?;
     if let Some(runtime) = p.bake.patches.as_mut() {
         runtime.frustum_test = frustum;
     }
@@ -168,13 +162,8 @@ fn proxy_tile_culling_changes_no_pixel_and_draws_fewer_triangles() {
     use player::stream::PendingDraw;
     let dir = tempfile::tempdir().unwrap();
     write_synthetic_bake_with(dir.path(), false).unwrap();
-    let mut p = match Player::open(dir.path(), (96, 96)) {
-        Ok(p) => p,
-        Err(player::run::RunError::Gpu(GpuError::NoAdapter(e))) => {
-            eprintln!("SKIP: no graphics adapter ({e})");
-            return;
-        }
-        Err(e) => panic!("{e}"),
+    let Some(mut p) = open_player(dir.path(), (96, 96)) else {
+        return;
     };
     // Looking across the park from a corner, with proxies partly out of view.
     let cam = Camera {

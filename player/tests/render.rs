@@ -1,31 +1,19 @@
 //! Headless rendering tests on whatever adapter the environment gives (lavapipe in CI);
-//! every GPU test prints the adapter and skips with a note when there is none.
+//! every GPU test prints the adapter and skips with a note when there is none
+//! (`testkit::skip`: a failure under `HEXBAKE_REQUIRE_GPU=1`; any other renderer
+//! error fails).
 
 mod common;
-use common::{assert_has_keys, demo_walk, COMPARE_KEYS};
+use common::{assert_has_keys, demo_walk, open_player as open, renderer, COMPARE_KEYS};
 use format::pack::{Texture, TextureEncoding};
 use glam::{Vec2, Vec3};
 use player::camera::Camera;
 use player::frame::Mode;
-use player::gpu::{GpuError, Renderer, SKY};
+use player::gpu::SKY;
 use player::metrics::psnr_y;
 use player::run::{compare, render, CompareOptions, Player, RenderOptions, CSV_HEADER};
 use player::stream::{PendingDraw, StreamConfig, Streamer};
 use player::testdata::{capture_camera, quad_in_front, write_quad_bake, write_synthetic_bake};
-
-fn open(dir: &std::path::Path, size: (u32, u32)) -> Option<Player> {
-    match Player::open(dir, size) {
-        Ok(p) => {
-            eprintln!("adapter: {}", p.renderer.adapter());
-            Some(p)
-        }
-        Err(player::run::RunError::Gpu(GpuError::NoAdapter(e))) => {
-            eprintln!("SKIP: no graphics adapter ({e}); install mesa-vulkan-drivers for lavapipe");
-            None
-        }
-        Err(e) => panic!("{e}"),
-    }
-}
 
 fn non_sky(px: &[u8]) -> usize {
     px.chunks_exact(4)
@@ -35,19 +23,14 @@ fn non_sky(px: &[u8]) -> usize {
 
 #[test]
 fn adapter_reports_backend_and_device_type() {
-    match Renderer::new(16, 16) {
-        Ok(r) => {
-            let a = r.adapter();
-            println!(
-                "adapter {:?}, backend {}, device type {}",
-                a.name, a.backend, a.device_type
-            );
-            assert!(!a.backend.is_empty() && !a.device_type.is_empty());
-            assert!(["Vulkan", "Gl", "Metal", "Dx12"].contains(&a.backend.as_str()));
-        }
-        Err(GpuError::NoAdapter(e)) => eprintln!("SKIP: no graphics adapter ({e})"),
-        Err(e) => panic!("{e}"),
-    }
+    let Some(r) = renderer(16, 16) else { return };
+    let a = r.adapter();
+    println!(
+        "adapter {:?}, backend {}, device type {}",
+        a.name, a.backend, a.device_type
+    );
+    assert!(!a.backend.is_empty() && !a.device_type.is_empty());
+    assert!(["Vulkan", "Gl", "Metal", "Dx12"].contains(&a.backend.as_str()));
 }
 
 /// A camera 3 radii south of instance `i`, looking at it.
@@ -261,8 +244,7 @@ fn render_writes_csv_and_compare_reports_quality() {
     write_synthetic_bake(dir.path()).unwrap();
     let path_file = write_path(dir.path(), 64);
     let path = format::path::CameraPath::load(&path_file).unwrap();
-    if Renderer::new(8, 8).is_err() {
-        eprintln!("SKIP: no graphics adapter");
+    if renderer(8, 8).is_none() {
         return;
     }
     let frames_dir = dir.path().join("frames");
@@ -566,8 +548,7 @@ fn compare_of_a_bake_without_proxies_is_perfect() {
     player::testdata::write_synthetic_bake_with(dir.path(), true).unwrap();
     let path_file = write_path(dir.path(), 32);
     let path = format::path::CameraPath::load(&path_file).unwrap();
-    if Renderer::new(8, 8).is_err() {
-        eprintln!("SKIP: no graphics adapter");
+    if renderer(8, 8).is_none() {
         return;
     }
     let report = compare(
@@ -614,8 +595,7 @@ fn holes(reference: &[u8], img: &[u8]) -> usize {
 fn texture_uploads_stay_under_the_budget_at_every_frame() {
     let dir = tempfile::tempdir().unwrap();
     write_synthetic_bake(dir.path()).unwrap();
-    if Renderer::new(8, 8).is_err() {
-        eprintln!("SKIP: no graphics adapter");
+    if renderer(8, 8).is_none() {
         return;
     }
     let path = demo_walk();

@@ -101,7 +101,10 @@ pub fn skip(need: Need, reason: impl Display) {
     if required(need) {
         panic!("{name}: {}=1 but {reason}", need.var());
     }
-    eprintln!("SKIP {name}: {reason} (set {}=1 to fail instead)", need.var());
+    eprintln!(
+        "SKIP {name}: {reason} (set {}=1 to fail instead)",
+        need.var()
+    );
     if let Some(log) = std::env::var_os(SKIP_LOG).filter(|l| !l.is_empty()) {
         // One write per line: tests skip from several threads at once.
         let line = format!("{name}\t{reason}\n");
@@ -111,7 +114,10 @@ pub fn skip(need: Need, reason: impl Display) {
             .open(&log)
             .and_then(|mut f| f.write_all(line.as_bytes()));
         if let Err(e) = written {
-            panic!("{name}: cannot append to {SKIP_LOG}={}: {e}", log.to_string_lossy());
+            panic!(
+                "{name}: cannot append to {SKIP_LOG}={}: {e}",
+                log.to_string_lossy()
+            );
         }
     }
 }
@@ -169,8 +175,14 @@ mod tests {
     #[test]
     fn the_test_name_is_the_file_and_the_thread() {
         let n = test_name();
-        assert!(n.starts_with("tests/testkit/src/lib.rs") || n.contains("lib.rs"), "{n}");
-        assert!(n.ends_with("::tests::the_test_name_is_the_file_and_the_thread"), "{n}");
+        assert!(
+            n.starts_with("tests/testkit/src/lib.rs") || n.contains("lib.rs"),
+            "{n}"
+        );
+        assert!(
+            n.ends_with("::tests::the_test_name_is_the_file_and_the_thread"),
+            "{n}"
+        );
     }
 
     #[test]

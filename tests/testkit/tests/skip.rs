@@ -38,7 +38,9 @@ fn unset_or_0_skips_and_logs_one_line() {
         let err = String::from_utf8_lossy(&o.stderr);
         assert!(o.status.success(), "{require:?}: {err}");
         assert!(
-            err.contains("SKIP tests/testkit/tests/skip.rs::child_that_skips: no adapter here (test)"),
+            err.contains(
+                "SKIP tests/testkit/tests/skip.rs::child_that_skips: no adapter here (test)"
+            ),
             "{err}"
         );
     }
@@ -63,7 +65,10 @@ fn required_fails_the_test_and_logs_nothing() {
         let o = run_child(Some(require), Some(&log));
         let out = String::from_utf8_lossy(&o.stdout) + String::from_utf8_lossy(&o.stderr);
         assert!(!o.status.success(), "{require}: {out}");
-        assert!(out.contains("HEXBAKE_REQUIRE_GPU=1 but no adapter here (test)"), "{out}");
+        assert!(
+            out.contains("HEXBAKE_REQUIRE_GPU=1 but no adapter here (test)"),
+            "{out}"
+        );
     }
     assert!(!log.exists());
     // A value that is neither yes nor no fails too, instead of skipping.
