@@ -236,9 +236,10 @@ proptest! {
     #![proptest_config(ProptestConfig::with_cases(24))]
     /// Random walls and a random target: if the target is culled, no ray from 400
     /// random points of the prism to random points of its box escapes the walls.
-    /// With `blocker`, a 190 × 30 wall at z = 19..21 hides every target (any segment
-    /// from the prism, |x| ≤ 10, y ≤ 3, to the target, |x| ≤ 22, y ≤ 6, z ≥ 28,
-    /// crosses it below y = 6): the target must be culled.
+    /// With `blocker`, a 60 × 30 × 6 wall at z = 17..23 (the bake test's wall) hides
+    /// every target: any segment from the prism (|x| ≤ 10, y ≤ 3) to the target
+    /// (|x| ≤ 22, y ≤ 6, z ≥ 28) crosses it at |x| ≤ 22, y ≤ 6, well inside its
+    /// occluder shrunk by ε = 1.25: the target must be culled.
     #[test]
     fn culled_means_every_sampled_ray_hits_a_wall(
         walls in prop::collection::vec(
@@ -251,7 +252,7 @@ proptest! {
         let mut models = Vec::new();
         let mut instances = Vec::new();
         let mut boxes = Vec::new();
-        let blocker = blocker.then_some((0.0, 20.0, 190.0, 30.0, 2.0, 0.0));
+        let blocker = blocker.then_some((0.0, 20.0, 60.0, 30.0, 6.0, 0.0));
         for (x, z, w, h, d, yaw) in walls.into_iter().chain(blocker) {
             let lo = [-w / 2.0, 0.0, -d / 2.0];
             let hi = [w / 2.0, h, d / 2.0];
