@@ -387,33 +387,78 @@ fn moving_one_instance_rebakes_only_its_proxies_identically() {
     );
 }
 
+/// The finished job records in `out/jobs` (`<id>.json`; temp files start with `.`).
+fn job_records(out: &Path) -> usize {
+    std::fs::read_dir(out.join("jobs")).map_or(0, |d| {
+        d.filter(|e| {
+            let name = e.as_ref().unwrap().file_name();
+            let name = name.to_string_lossy();
+            name.ends_with(".json") && !name.starts_with('.')
+        })
+        .count()
+    })
+}
+
+/// Starts `pipeline run` of the tiny scene into `out` and SIGKILLs it after
+/// `delay_ms`, or as soon as `out` holds more than `records` job records, whichever
+/// comes first. Returns whether the run was still going when killed.
+fn kill_tiny_run(out: &Path, delay_ms: u64, records: usize) -> bool {
+    let mut child = Command::new(bin_dir().join("pipeline"))
+        .args(["run", TINY, "--quiet", "--threads", "2", "--out"])
+        .arg(out)
+        .current_dir(repo())
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let start = std::time::Instant::now();
+    while start.elapsed() < std::time::Duration::from_millis(delay_ms)
+        && job_records(out) <= records
+    {
+        if child.try_wait().unwrap().is_some() {
+            return false; // it finished (or failed) on its own
+        }
+        std::thread::sleep(std::time::Duration::from_millis(2));
+    }
+    let _ = child.kill(); // SIGKILL
+    let _ = child.wait();
+    true
+}
+
 /// SIGKILL at several moments, then a normal run: the output is byte-identical to
-/// an uninterrupted bake.
+/// an uninterrupted bake. The kills land mid-bake for certain: before the resume,
+/// some but not all of the jobs are done. Five runs are killed at random moments
+/// (20 ms to 1.5 s, but as soon as the first job record appears), mostly while
+/// planning or writing the base; the sixth as soon as it has finished a job of its
+/// own, so at least one job is done and, with 2 threads, most are still to do.
 #[test]
 fn killed_runs_resume_to_identical_output() {
     let dir = tempfile::tempdir().unwrap();
     let reference = dir.path().join("ref");
     let o = run_tiny(&reference, &[]);
     assert!(o.status.success(), "{}", stderr(&o));
+    let total = job_records(&reference);
+    assert!(total >= 4, "the tiny bake has {total} jobs");
     let out = dir.path().join("killed");
     let mut seed = 0x9e37_79b9_7f4a_7c15u64;
-    for _ in 0..6 {
+    for _ in 0..5 {
         seed ^= seed << 13;
         seed ^= seed >> 7;
         seed ^= seed << 17;
         let delay_ms = 20 + seed % 1500;
-        let mut child = Command::new(bin_dir().join("pipeline"))
-            .args(["run", TINY, "--quiet", "--threads", "2", "--out"])
-            .arg(&out)
-            .current_dir(repo())
-            .stdout(std::process::Stdio::null())
-            .stderr(std::process::Stdio::null())
-            .spawn()
-            .unwrap();
-        std::thread::sleep(std::time::Duration::from_millis(delay_ms));
-        let _ = child.kill(); // SIGKILL
-        let _ = child.wait();
+        kill_tiny_run(&out, delay_ms, 0);
     }
+    let before = job_records(&out);
+    assert!(
+        kill_tiny_run(&out, 120_000, before),
+        "the run finished before it could be killed"
+    );
+    let done = job_records(&out);
+    assert!(
+        done > before && done < total,
+        "the kill did not land mid-bake: {done} of {total} jobs done ({before} before the last run)"
+    );
+    eprintln!("killed mid-bake: {done} of {total} jobs done before the resume");
     // A kill between a pack's temp file and its rename leaves the temp file (the
     // delays above hit that window only sometimes): plant one for certain.
     let cells = out.join("cells");
@@ -939,7 +984,7 @@ fn demo_bake_holds_every_representation_and_the_player_draws_each() {
 }
 
 /// `player compare` on the demo bake along demo-walk.ron (≥ 3 cell crossings):
-/// the JSON contract and PSNR floors (measured 47.5 dB mean on lavapipe; 26.7 dB over
+/// the JSON contract and PSNR floors (measured 46.5 dB mean on lavapipe; 26.7 dB over
 /// object pixels).
 #[test]
 fn player_compare_on_the_demo_bake() {
@@ -967,8 +1012,11 @@ fn player_compare_on_the_demo_bake() {
     for key in format::schema::compare::REQUIRED_KEYS {
         assert!(v.get(key).is_some(), "missing {key}: {v}");
     }
+    // Measured 46.5 dB on lavapipe (47.5 dB before); floor 44 dB (a 2.5 dB margin for
+    // other adapters).
     let mean = v["mean_psnr_y"].as_f64().unwrap();
-    assert!(mean >= 35.0, "mean PSNR(Y) {mean}");
+    eprintln!("player compare on the demo bake: mean PSNR(Y) {mean:.2} dB");
+    assert!(mean >= 44.0, "mean PSNR(Y) {mean}");
     assert!(v["mean_ssim"].as_f64().unwrap() > 0.9, "{v}");
     assert!(
         v["mean_triangles"].as_f64().unwrap() < 0.25 * v["reference_triangles"].as_f64().unwrap(),

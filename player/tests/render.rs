@@ -286,7 +286,13 @@ fn render_writes_csv_and_compare_reports_quality() {
         report.reference_triangles
     );
     assert_eq!(report.frames, records.len());
-    assert!(report.mean_psnr_y.is_finite() && report.mean_psnr_y > 5.0);
+    // Measured 40.8 dB mean PSNR-Y (min 30.2) on lavapipe; floor 38 dB (a 2.8 dB
+    // margin for other adapters' rasterization).
+    assert!(
+        report.mean_psnr_y.is_finite() && report.mean_psnr_y >= 38.0,
+        "mean PSNR-Y {:.2} dB",
+        report.mean_psnr_y
+    );
     assert!(report.mean_ssim > 0.0 && report.mean_ssim <= 1.0);
     assert!(report.mean_triangles <= report.reference_triangles);
     let json = serde_json::to_value(&report).unwrap();
@@ -322,8 +328,19 @@ fn render_writes_csv_and_compare_reports_quality() {
             );
         }
     }
+    // Against the 4 × 4 reference, object pixels: measured 20.0 dB (compared frames)
+    // and 19.5 dB (full geometry) on lavapipe; floor 17 dB (a 2.5 dB margin).
     for q in [&aa.compared, &aa.full] {
-        assert!(q.object.object_psnr_y_db > 5.0 && q.object.object_psnr_y_db <= q.mean_psnr_y_db);
+        println!(
+            "aa reference: mean {:.2} dB, object {:.2} dB",
+            q.mean_psnr_y_db, q.object.object_psnr_y_db
+        );
+        assert!(
+            q.object.object_psnr_y_db >= 17.0 && q.object.object_psnr_y_db <= q.mean_psnr_y_db,
+            "object PSNR-Y {:.2} dB (mean {:.2} dB)",
+            q.object.object_psnr_y_db,
+            q.mean_psnr_y_db
+        );
         assert!(q.object.mean_object_ssim > 0.0 && q.object.mean_object_ssim <= 1.0);
     }
     // One sample per pixel is not the anti-aliased image: the aliased full-geometry
