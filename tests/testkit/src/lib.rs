@@ -99,7 +99,8 @@ pub fn skip(need: Need, reason: impl Display) {
     // One line in the log, whatever the reason says.
     let reason = reason.to_string().replace(['\t', '\n', '\r'], " ");
     if required(need) {
-        panic!("{name}: {}=1 but {reason}", need.var());
+        let value = std::env::var(need.var()).unwrap_or_default();
+        panic!("{name}: {}={value} but {reason}", need.var());
     }
     eprintln!(
         "SKIP {name}: {reason} (set {}=1 to fail instead)",

@@ -66,7 +66,9 @@ fn required_fails_the_test_and_logs_nothing() {
         let out = String::from_utf8_lossy(&o.stdout) + String::from_utf8_lossy(&o.stderr);
         assert!(!o.status.success(), "{require}: {out}");
         assert!(
-            out.contains("HEXBAKE_REQUIRE_GPU=1 but no adapter here (test)"),
+            out.contains(&format!(
+                "HEXBAKE_REQUIRE_GPU={require} but no adapter here (test)"
+            )),
             "{out}"
         );
     }
