@@ -1,6 +1,8 @@
 //! End-to-end tests that run hexbake's binaries, each in its own temp dir
-//! (STYLE.md habit 10). Tests that need the real meshes skip with a note when
-//! `models/` has not been fetched (`scripts/fetch-models.sh`; CI always fetches).
+//! (STYLE.md habit 10). Tests that need the real meshes, Slurm or a wgpu adapter
+//! skip through `testkit::skip` without them (`scripts/fetch-models.sh`,
+//! `scripts/slurm-local.sh`, lavapipe); CI sets `HEXBAKE_REQUIRE_MODELS=1`,
+//! `HEXBAKE_REQUIRE_SLURM=1` and `HEXBAKE_REQUIRE_GPU=1`, which make them fail instead.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -61,10 +63,19 @@ fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
+/// Whether `models/` was fetched (the parks read it); a skip when not.
+#[track_caller]
 fn models_present() -> bool {
-    let ok = repo().join("models/bunny.obj").exists();
+    let dir = repo().join("models");
+    let ok = dir.join("bunny.obj").exists();
     if !ok {
-        eprintln!("SKIP: models/ not fetched (run scripts/fetch-models.sh)");
+        testkit::skip(
+            testkit::Need::Models,
+            format_args!(
+                "{} not fetched (run scripts/fetch-models.sh)",
+                dir.display()
+            ),
+        );
     }
     ok
 }
@@ -376,33 +387,78 @@ fn moving_one_instance_rebakes_only_its_proxies_identically() {
     );
 }
 
+/// The finished job records in `out/jobs` (`<id>.json`; temp files start with `.`).
+fn job_records(out: &Path) -> usize {
+    std::fs::read_dir(out.join("jobs")).map_or(0, |d| {
+        d.filter(|e| {
+            let name = e.as_ref().unwrap().file_name();
+            let name = name.to_string_lossy();
+            name.ends_with(".json") && !name.starts_with('.')
+        })
+        .count()
+    })
+}
+
+/// Starts `pipeline run` of the tiny scene into `out` and SIGKILLs it after
+/// `delay_ms`, or as soon as `out` holds more than `records` job records, whichever
+/// comes first. Returns whether the run was still going when killed.
+fn kill_tiny_run(out: &Path, delay_ms: u64, records: usize) -> bool {
+    let mut child = Command::new(bin_dir().join("pipeline"))
+        .args(["run", TINY, "--quiet", "--threads", "2", "--out"])
+        .arg(out)
+        .current_dir(repo())
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let start = std::time::Instant::now();
+    while start.elapsed() < std::time::Duration::from_millis(delay_ms)
+        && job_records(out) <= records
+    {
+        if child.try_wait().unwrap().is_some() {
+            return false; // it finished (or failed) on its own
+        }
+        std::thread::sleep(std::time::Duration::from_millis(2));
+    }
+    let _ = child.kill(); // SIGKILL
+    let _ = child.wait();
+    true
+}
+
 /// SIGKILL at several moments, then a normal run: the output is byte-identical to
-/// an uninterrupted bake.
+/// an uninterrupted bake. The kills land mid-bake for certain: before the resume,
+/// some but not all of the jobs are done. Five runs are killed at random moments
+/// (20 ms to 1.5 s, but as soon as the first job record appears), mostly while
+/// planning or writing the base; the sixth as soon as it has finished a job of its
+/// own, so at least one job is done and, with 2 threads, most are still to do.
 #[test]
 fn killed_runs_resume_to_identical_output() {
     let dir = tempfile::tempdir().unwrap();
     let reference = dir.path().join("ref");
     let o = run_tiny(&reference, &[]);
     assert!(o.status.success(), "{}", stderr(&o));
+    let total = job_records(&reference);
+    assert!(total >= 4, "the tiny bake has {total} jobs");
     let out = dir.path().join("killed");
     let mut seed = 0x9e37_79b9_7f4a_7c15u64;
-    for _ in 0..6 {
+    for _ in 0..5 {
         seed ^= seed << 13;
         seed ^= seed >> 7;
         seed ^= seed << 17;
         let delay_ms = 20 + seed % 1500;
-        let mut child = Command::new(bin_dir().join("pipeline"))
-            .args(["run", TINY, "--quiet", "--threads", "2", "--out"])
-            .arg(&out)
-            .current_dir(repo())
-            .stdout(std::process::Stdio::null())
-            .stderr(std::process::Stdio::null())
-            .spawn()
-            .unwrap();
-        std::thread::sleep(std::time::Duration::from_millis(delay_ms));
-        let _ = child.kill(); // SIGKILL
-        let _ = child.wait();
+        kill_tiny_run(&out, delay_ms, 0);
     }
+    let before = job_records(&out);
+    assert!(
+        kill_tiny_run(&out, 120_000, before),
+        "the run finished before it could be killed"
+    );
+    let done = job_records(&out);
+    assert!(
+        done > before && done < total,
+        "the kill did not land mid-bake: {done} of {total} jobs done ({before} before the last run)"
+    );
+    eprintln!("killed mid-bake: {done} of {total} jobs done before the resume");
     // A kill between a pack's temp file and its rename leaves the temp file (the
     // delays above hit that window only sometimes): plant one for certain.
     let cells = out.join("cells");
@@ -475,28 +531,33 @@ fn corrupt_cell_pack_is_rebaked() {
 }
 
 /// The Slurm tests need a running Slurm (`scripts/slurm-local.sh start`, which CI
-/// runs) and SLURM_CONF; they skip otherwise unless HEXBAKE_REQUIRE_SLURM=1.
+/// runs) and SLURM_CONF; they skip otherwise (`testkit::skip`: a failure under
+/// HEXBAKE_REQUIRE_SLURM=1).
+#[track_caller]
 fn slurm_available() -> bool {
-    let ok = std::env::var_os("SLURM_CONF").is_some()
-        && Command::new("sinfo")
-            .arg("-h")
-            .output()
-            .map(|o| o.status.success())
-            .unwrap_or(false);
-    if !ok {
-        assert!(
-            std::env::var_os("HEXBAKE_REQUIRE_SLURM").is_none(),
-            "HEXBAKE_REQUIRE_SLURM is set but Slurm does not answer"
+    let why = if std::env::var_os("SLURM_CONF").is_none() {
+        Some("SLURM_CONF is not set".to_string())
+    } else {
+        match Command::new("sinfo").arg("-h").output() {
+            Ok(o) if o.status.success() => None,
+            Ok(o) => Some(format!("sinfo -h failed: {}", stderr(&o).trim())),
+            Err(e) => Some(format!("cannot run sinfo: {e}")),
+        }
+    };
+    if let Some(why) = &why {
+        testkit::skip(
+            testkit::Need::Slurm,
+            format_args!("no Slurm ({why}; scripts/slurm-local.sh start, export SLURM_CONF=...)"),
         );
-        eprintln!("SKIP: no Slurm (scripts/slurm-local.sh start; export SLURM_CONF=...)");
     }
-    ok
+    why.is_none()
 }
 
 /// Slurm tests share one one-node cluster: run them one at a time.
 static SLURM: std::sync::Mutex<()> = std::sync::Mutex::new(());
 
 /// The one-at-a-time hold on the cluster, or `None` (the test skips) without Slurm.
+#[track_caller]
 fn slurm_turn() -> Option<std::sync::MutexGuard<'static, ()>> {
     slurm_available().then(|| SLURM.lock().unwrap_or_else(|e| e.into_inner()))
 }
@@ -510,6 +571,7 @@ type SlurmSetup = (
     PathBuf,
 );
 
+#[track_caller]
 fn slurm_setup() -> Option<SlurmSetup> {
     let turn = slurm_turn()?;
     let dir = tempfile::tempdir().unwrap();
@@ -607,19 +669,19 @@ fn slurm_resubmits_only_the_cancelled_task() {
 // ---------------------------------------------------------------------------
 // Issue 7: the player — same shading as the CPU rasterizer, compare on a real bake.
 
-/// GPU tests skip without an adapter unless HEXBAKE_REQUIRE_GPU=1 (CI sets it:
-/// Mesa's lavapipe is always there).
+/// GPU tests skip without an adapter (`testkit::skip`: a failure under
+/// HEXBAKE_REQUIRE_GPU=1, which CI sets: Mesa's lavapipe is always there). Any
+/// other error of the player fails the test.
+#[track_caller]
 fn open_player(dir: &Path, size: (u32, u32)) -> Option<player::run::Player> {
+    use player::{gpu::GpuError, run::RunError};
     match player::run::Player::open(dir, size, &player::DrawOptions::default()) {
         Ok(p) => Some(p),
-        Err(e) => {
-            assert!(
-                std::env::var_os("HEXBAKE_REQUIRE_GPU").is_none(),
-                "HEXBAKE_REQUIRE_GPU is set but the player cannot start: {e}"
-            );
-            eprintln!("SKIP: no wgpu adapter: {e}");
+        Err(RunError::Gpu(GpuError::NoAdapter(e))) => {
+            testkit::skip(testkit::Need::Gpu, format_args!("no wgpu adapter ({e})"));
             None
         }
+        Err(e) => panic!("the player cannot open {}: {e}", dir.display()),
     }
 }
 
@@ -927,7 +989,7 @@ fn demo_bake_holds_every_representation_and_the_player_draws_each() {
 }
 
 /// `player compare` on the demo bake along demo-walk.ron (≥ 3 cell crossings):
-/// the JSON contract and PSNR floors (measured 47.5 dB mean on lavapipe; 26.7 dB over
+/// the JSON contract and PSNR floors (measured 46.5 dB mean on lavapipe; 26.7 dB over
 /// object pixels).
 #[test]
 fn player_compare_on_the_demo_bake() {
@@ -955,8 +1017,11 @@ fn player_compare_on_the_demo_bake() {
     for key in format::schema::compare::REQUIRED_KEYS {
         assert!(v.get(key).is_some(), "missing {key}: {v}");
     }
+    // Measured 46.5 dB on lavapipe (47.5 dB before); floor 44 dB (a 2.5 dB margin for
+    // other adapters).
     let mean = v["mean_psnr_y"].as_f64().unwrap();
-    assert!(mean >= 35.0, "mean PSNR(Y) {mean}");
+    eprintln!("player compare on the demo bake: mean PSNR(Y) {mean:.2} dB");
+    assert!(mean >= 44.0, "mean PSNR(Y) {mean}");
     assert!(v["mean_ssim"].as_f64().unwrap() > 0.9, "{v}");
     assert!(
         v["mean_triangles"].as_f64().unwrap() < 0.25 * v["reference_triangles"].as_f64().unwrap(),
@@ -1068,7 +1133,7 @@ mod random_manifests {
     }
 
     proptest! {
-        #![proptest_config(ProptestConfig { cases: 32, failure_persistence: None, ..ProptestConfig::default() })]
+        #![proptest_config(ProptestConfig::with_cases(32))]
 
         #[test]
         fn random_manifests_succeed_or_exit_2_with_a_position(

@@ -1,5 +1,6 @@
 //! Loaders on real files of every format (fetched by `scripts/fetch-models.sh`; the
-//! tests that need them skip with a note when they are absent), on hand-made files
+//! tests that need them skip through `testkit::skip` when they are absent, or fail
+//! under `HEXBAKE_REQUIRE_MODELS=1`), on hand-made files
 //! with exactly known contents, and on broken files — truncated, NaN/inf, bad
 //! indices — which must give errors naming the problem, never panics
 //! (STYLE.md habit 5).
@@ -8,35 +9,13 @@ use format::load::{load_model, load_model_with_stats, LoadError, Location};
 use format::Mesh;
 use std::path::{Path, PathBuf};
 
-/// `$HEXBAKE_MODELS`, else `<repo>/models`; `None` (with a note) when absent.
-fn models_dir() -> Option<PathBuf> {
-    let dir = std::env::var_os("HEXBAKE_MODELS")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../models"));
-    if dir.is_dir() {
-        Some(dir)
-    } else {
-        eprintln!(
-            "SKIP: no models at {} (run scripts/fetch-models.sh or set HEXBAKE_MODELS)",
-            dir.display()
-        );
-        None
-    }
-}
-
-/// A real model file, or `None` (with a note) when it was not fetched.
-fn model(name: &str) -> Option<PathBuf> {
-    let path = models_dir()?.join(name);
-    if path.is_file() {
-        Some(path)
-    } else {
-        eprintln!("SKIP: {} not fetched", path.display());
-        None
-    }
-}
+// `model(name)`: a real model file (`$HEXBAKE_MODELS`, else `<repo>/models`), or
+// `None` after a skip (a failure under HEXBAKE_REQUIRE_MODELS=1) when not fetched.
+use testkit::model;
 
 /// A real model file loaded with [`load_ok`]: its path, mesh and statistics, or
-/// `None` (with a note) when it was not fetched.
+/// `None` (after a skip) when it was not fetched.
+#[track_caller]
 fn load_fetched(name: &str) -> Option<(PathBuf, Mesh, format::load::LoadStats)> {
     let path = model(name)?;
     let (mesh, stats) = load_ok(&path);

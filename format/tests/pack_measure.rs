@@ -1,20 +1,12 @@
 //! Measurements behind the codec choices of format/README.md ("Codecs", "Textures"),
-//! on real meshes (bunny, elephant, armadillo; skipped with a note when the models
-//! are absent) and a capture-like rendering of the bunny. Run with `--nocapture` to
+//! on real meshes (bunny, elephant, armadillo; skipped through `testkit::skip` when
+//! the models are absent, a failure under `HEXBAKE_REQUIRE_MODELS=1`) and a capture-like rendering of the bunny. Run with `--nocapture` to
 //! see the tables. The assertions keep the README honest: if a choice stops paying,
 //! these fail.
 
 use format::pack::codec::{encode_best, precode_delta_u32, push_leb128, zigzag, ZSTD_LEVEL};
 use format::pack::layout::Codec;
 use format::pack::{Texture, TextureEncoding};
-use std::path::PathBuf;
-
-fn models_dir() -> Option<PathBuf> {
-    let dir = std::env::var_os("HEXBAKE_MODELS")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../models"));
-    dir.join("bunny.obj").exists().then_some(dir)
-}
 
 /// Tiny OBJ/OFF readers (positions + triangles) until the real loaders land.
 fn load(path: &std::path::Path) -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
@@ -93,17 +85,12 @@ fn delta_varint(bytes: &[u8]) -> Vec<u8> {
 
 #[test]
 fn index_buffer_precoding() {
-    let Some(dir) = models_dir() else {
-        eprintln!("SKIP index_buffer_precoding: no models (set HEXBAKE_MODELS or run scripts/fetch-models.sh)");
-        return;
-    };
     println!("| mesh | triangles | raw | zstd-{ZSTD_LEVEL} | delta+zstd | delta+varint+zstd | delta+planes+zstd (codec 2) |");
     println!("|---|---|---|---|---|---|---|");
     for name in ["bunny.obj", "refined_elephant.off", "armadillo.off"] {
-        let path = dir.join(name);
-        if !path.exists() {
+        let Some(path) = testkit::model(name) else {
             continue;
-        }
+        };
         let (_, tris) = load(&path);
         // The whole mesh, and a proxy-like subset (runs of 7 triangles kept, 7 dropped).
         let subset = format::pack::sample::proxy_like_subset(&tris);
@@ -162,9 +149,9 @@ fn index_buffer_precoding() {
 /// Renders the bunny as a capture would look (DESIGN.md "Shading": Lambert, ambient
 /// 0.3, L = normalize(0.4, 1, 0.3), procedural albedo, sky background), orthographic,
 /// z-buffered, `side`² pixels, sRGB8 RGBA.
+#[track_caller]
 fn render_bunny(side: usize) -> Option<Vec<u8>> {
-    let dir = models_dir()?;
-    let (v, f) = load(&dir.join("bunny.obj"));
+    let (v, f) = load(&testkit::model("bunny.obj")?);
     let (mut lo, mut hi) = ([f32::MAX; 3], [f32::MIN; 3]);
     for p in &v {
         for k in 0..3 {
@@ -327,9 +314,9 @@ fn texture_encodings() {
             format::pack::sample::capture_like_rgba(256, 256, 4),
         ),
     ];
-    match render_bunny(256) {
-        Some(img) => images.push(("bunny render 256²".into(), 256, img)),
-        None => eprintln!("SKIP bunny render: no models"),
+    // Without the bunny (a skip) the synthetic images are measured alone.
+    if let Some(img) = render_bunny(256) {
+        images.push(("bunny render 256²".into(), 256, img));
     }
     println!("| image | rgba8+zstd | rgba8-left+zstd | BC1 | BC1+zstd | BC1 PSNR-Y |");
     println!("|---|---|---|---|---|---|");

@@ -9,9 +9,10 @@
 //! The validator is the npm package `gltf-validator`, installed into
 //! `tools/node_modules` by `scripts/install-gltf-validator.sh` and run by
 //! `tools/gltf-validate.mjs`. Without node or the package the validator step is
-//! skipped with a message, unless `HEXBAKE_REQUIRE_GLTF_VALIDATOR=1` (CI), which makes
-//! it a failure. Everything else (bad input, the file's structure as the `gltf`
-//! crate reads it) always runs.
+//! skipped through `testkit::skip`, unless `HEXBAKE_REQUIRE_GLTF_VALIDATOR=1` (CI),
+//! which makes it a failure. Everything else (bad input, the file's structure as the
+//! `gltf` crate reads it) always runs. The textured plaza needs the fetched models
+//! (`HEXBAKE_REQUIRE_MODELS=1` makes their absence a failure).
 
 mod common;
 use common::*;
@@ -284,20 +285,19 @@ fn exported_cell_of_a_textured_gltf_scene_carries_the_model_textures() {
 /// box from `models/textured-plaza/`, which `scripts/fetch-models.sh` builds with
 /// `scripts/build-textured-scene.sh`), baked at `image_res` 64 to stay fast, and the
 /// export of its cell 5 (textured originals, SV, MV and cluster proxies) has 0
-/// validator errors. Skipped with a message when the scene is not built, unless
-/// `HEXBAKE_REQUIRE_GLTF_VALIDATOR=1` (CI, where `scripts/test.sh` builds it).
+/// validator errors. Skipped through `testkit::skip` when the scene is not built,
+/// unless `HEXBAKE_REQUIRE_MODELS=1` (CI, where `scripts/test.sh` builds it).
 #[test]
 fn exported_cell_of_the_textured_plaza_passes_the_khronos_gltf_validator() {
     let scene = repo().join("models/textured-plaza/textured-plaza.gltf");
     if !scene.is_file() {
-        let why = format!(
-            "{} is missing (scripts/build-textured-scene.sh, run by scripts/fetch-models.sh)",
-            scene.display()
+        testkit::skip(
+            testkit::Need::Models,
+            format_args!(
+                "{} is missing (scripts/build-textured-scene.sh, run by scripts/fetch-models.sh)",
+                scene.display()
+            ),
         );
-        if std::env::var("HEXBAKE_REQUIRE_GLTF_VALIDATOR").as_deref() == Ok("1") {
-            panic!("HEXBAKE_REQUIRE_GLTF_VALIDATOR=1 but {why}");
-        }
-        eprintln!("SKIPPED the textured plaza export: {why}");
         return;
     }
     let dir = tempfile::tempdir().unwrap();
@@ -339,16 +339,18 @@ fn exported_cell_of_the_textured_plaza_passes_the_khronos_gltf_validator() {
     assert_khronos_valid(&glb);
 }
 
-/// The Khronos glTF-Validator reports 0 errors on `glb` (skipped with a message
-/// when it cannot run, unless `HEXBAKE_REQUIRE_GLTF_VALIDATOR=1`).
+/// The Khronos glTF-Validator reports 0 errors on `glb` (the step is skipped through
+/// `testkit::skip` when the validator cannot run: a failure under
+/// `HEXBAKE_REQUIRE_GLTF_VALIDATOR=1`).
+#[track_caller]
 fn assert_khronos_valid(glb: &Path) {
     let script = match validator() {
         Ok(s) => s,
-        Err(why) if std::env::var("HEXBAKE_REQUIRE_GLTF_VALIDATOR").as_deref() == Ok("1") => {
-            panic!("HEXBAKE_REQUIRE_GLTF_VALIDATOR=1 but the validator cannot run: {why}")
-        }
         Err(why) => {
-            eprintln!("SKIPPED the glTF-Validator step: {why}");
+            testkit::skip(
+                testkit::Need::GltfValidator,
+                format_args!("the glTF-Validator step: the validator cannot run: {why}"),
+            );
             return;
         }
     };

@@ -7,10 +7,10 @@ use format::pack::{ImpostorLayer, ImpostorLayers, Texture, TextureEncoding};
 use glam::Vec3;
 use player::camera::Camera;
 use player::frame::Mode;
-use player::gpu::GpuError;
-use player::run::Player;
 use player::stream::{StreamConfig, Streamer};
 use player::testdata::write_impostor_bake;
+
+mod common;
 
 /// A 64 × 64 capture: an orange disc whose texels carry depth code 128, background
 /// code 0 (nothing captured).
@@ -49,14 +49,7 @@ fn draw(lo: u8, hi: u8) -> Option<Vec<(u64, usize)>> {
         }],
     };
     write_impostor_bake(dir.path(), &capture, tex, layers).unwrap();
-    let mut p = match Player::open(dir.path(), (96, 96), &player::DrawOptions::default()) {
-        Ok(p) => p,
-        Err(player::run::RunError::Gpu(GpuError::NoAdapter(e))) => {
-            eprintln!("SKIP: no graphics adapter ({e})");
-            return None;
-        }
-        Err(e) => panic!("{e}"),
-    };
+    let mut p = common::open_player(dir.path(), (96, 96), &player::DrawOptions::default())?;
     let mut s = Streamer::new(&p.bake, StreamConfig::default());
     let mut out = Vec::new();
     for dx in [0.0f32, 2.0] {

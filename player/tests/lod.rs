@@ -4,14 +4,12 @@
 //! scene stays close to full geometry.
 
 mod common;
-use common::{assert_has_keys, demo_walk, repo, COMPARE_KEYS};
+use common::{assert_has_keys, demo_walk, renderer, COMPARE_KEYS};
 use player::bake::Bake;
 use player::frame::Mode;
-use player::gpu::{GpuError, Renderer};
 use player::lod::{build_chain, lod_groups, lod_triangles, LodChain, LodSet};
 use player::run::{camera_for, compare, CompareOptions};
 use player::testdata::write_synthetic_bake;
-use std::path::PathBuf;
 
 /// A chain's figures level by level: `triangles [..], errors [..]`.
 fn levels_line(chain: &LodChain) -> String {
@@ -104,14 +102,9 @@ fn demo_chains_are_monotone_deterministic_and_index_the_original_vertices() {
 
 #[test]
 fn bunny_chain_is_monotone() {
-    let dir = std::env::var_os("HEXBAKE_MODELS")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| repo().join("models"));
-    let path = dir.join("bunny.obj");
-    if !path.exists() {
-        eprintln!("SKIP: {} not found (set HEXBAKE_MODELS)", path.display());
+    let Some(path) = testkit::model("bunny.obj") else {
         return;
-    }
+    };
     let mesh = format::load::load_model(&path).unwrap();
     let chain = build_chain(&mesh);
     println!("bunny: {}", levels_line(&chain));
@@ -163,13 +156,8 @@ fn a_bigger_pixel_error_never_adds_triangles_along_demo_walk() {
 fn lod_walk_of_the_demo_scene_stays_close_to_full_geometry() {
     let dir = tempfile::tempdir().unwrap();
     write_synthetic_bake(dir.path()).unwrap();
-    match Renderer::new(8, 8, &player::DrawOptions::default()) {
-        Ok(_) => {}
-        Err(GpuError::NoAdapter(e)) => {
-            eprintln!("SKIP: no graphics adapter ({e})");
-            return;
-        }
-        Err(e) => panic!("{e}"),
+    if renderer(8, 8).is_none() {
+        return;
     }
     let path = demo_walk();
     let run = |px: f32| {

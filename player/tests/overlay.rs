@@ -1,30 +1,19 @@
 //! `player view`'s overlay and representation colouring (issue 18 item 4), drawn
 //! headless through [`ViewSession`] on whatever adapter the environment gives
-//! (lavapipe in CI; skipped with a note without one, unless HEXBAKE_REQUIRE_GPU=1).
+//! (lavapipe in CI; skipped through `testkit::skip` without one, a failure under
+//! HEXBAKE_REQUIRE_GPU=1).
 
 use glam::Vec3;
 use player::frame::Mode;
-use player::gpu::GpuError;
 use player::overlay::{Representation, TEXT};
-use player::run::{Player, RunError};
 use player::testdata::write_synthetic_bake;
 use player::view::{ViewOptions, ViewSession};
 
+mod common;
+
+#[track_caller]
 fn open(dir: &std::path::Path, opts: &ViewOptions) -> Option<ViewSession> {
-    match Player::open(dir, opts.size, &opts.draw) {
-        Ok(p) => {
-            eprintln!("adapter: {}", p.renderer.adapter());
-            Some(ViewSession::new(p, opts))
-        }
-        Err(RunError::Gpu(GpuError::NoAdapter(e))) => {
-            if std::env::var("HEXBAKE_REQUIRE_GPU").as_deref() == Ok("1") {
-                panic!("HEXBAKE_REQUIRE_GPU=1 but no adapter: {e}");
-            }
-            eprintln!("SKIP: no graphics adapter ({e}); install mesa-vulkan-drivers for lavapipe");
-            None
-        }
-        Err(e) => panic!("{e}"),
-    }
+    common::open_player(dir, opts.size, &opts.draw).map(|p| ViewSession::new(p, opts))
 }
 
 #[test]

@@ -12,12 +12,13 @@ use format::patch_visibility::{direction_count, PatchBounds};
 use glam::Vec3;
 use player::camera::Camera;
 use player::frame::Mode;
-use player::gpu::GpuError;
 use player::metrics::psnr_y;
-use player::run::Player;
 use player::stream::{StreamConfig, Streamer};
 use player::testdata::write_synthetic_bake_with;
 use player::DrawOptions;
+
+mod common;
+use common::open_player;
 
 fn per_triangle_patches(base: &BasePack) -> PatchSet {
     let (level, shells) = (0u32, vec![1.5f32, 64.0]);
@@ -93,14 +94,7 @@ fn frame(dir: &std::path::Path, close: bool, frustum: bool) -> Option<(u64, Vec<
         frustum,
         ..Default::default()
     };
-    let mut p = match Player::open(dir, (128, 128), &options) {
-        Ok(p) => p,
-        Err(player::run::RunError::Gpu(GpuError::NoAdapter(e))) => {
-            eprintln!("SKIP: no graphics adapter ({e})");
-            return None;
-        }
-        Err(e) => panic!("{e}"),
-    };
+    let mut p = open_player(dir, (128, 128), &options)?;
     let b = p.bake.instance_bounds[0];
     let r = (b.max - b.min).length() * 0.5;
     let (offset, fov_y_deg) = if close {
@@ -170,13 +164,8 @@ fn proxy_tile_culling_changes_no_pixel_and_draws_fewer_triangles() {
     use player::stream::PendingDraw;
     let dir = tempfile::tempdir().unwrap();
     write_synthetic_bake_with(dir.path(), false).unwrap();
-    let mut p = match Player::open(dir.path(), (96, 96), &DrawOptions::default()) {
-        Ok(p) => p,
-        Err(player::run::RunError::Gpu(GpuError::NoAdapter(e))) => {
-            eprintln!("SKIP: no graphics adapter ({e})");
-            return;
-        }
-        Err(e) => panic!("{e}"),
+    let Some(mut p) = open_player(dir.path(), (96, 96), &DrawOptions::default()) else {
+        return;
     };
     // Looking across the park from a corner, with proxies partly out of view.
     let cam = Camera {
@@ -231,7 +220,8 @@ fn proxy_tile_culling_changes_no_pixel_and_draws_fewer_triangles() {
     // every proxy triangle (as `cull: None` does) and the same pixels; with tiles of
     // one triangle the tests cull at least as much, with the same pixels.
     let draw_with = |options: DrawOptions| {
-        let mut q = Player::open(dir.path(), (96, 96), &options).unwrap();
+        let mut q = open_player(dir.path(), (96, 96), &options)
+            .expect("an adapter (the first open found one)");
         q.warm_up(&cam);
         q.renderer.set_coverage_alpha(true);
         let mut s = Streamer::new(

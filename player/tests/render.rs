@@ -1,32 +1,20 @@
 //! Headless rendering tests on whatever adapter the environment gives (lavapipe in CI);
-//! every GPU test prints the adapter and skips with a note when there is none.
+//! every GPU test prints the adapter and skips with a note when there is none
+//! (`testkit::skip`: a failure under `HEXBAKE_REQUIRE_GPU=1`; any other renderer
+//! error fails).
 
 mod common;
-use common::{assert_has_keys, demo_walk, COMPARE_KEYS};
+use common::{assert_has_keys, demo_walk, open_player as open, renderer, COMPARE_KEYS};
 use format::pack::{Texture, TextureEncoding};
 use glam::{Vec2, Vec3};
 use player::camera::Camera;
 use player::frame::Mode;
-use player::gpu::{GpuError, Renderer, SKY};
+use player::gpu::SKY;
 use player::metrics::psnr_y;
 use player::run::{compare, render, CompareOptions, Player, RenderOptions, FRAMES_CSV_HEADER};
 use player::stream::{PendingDraw, StreamConfig, Streamer};
 use player::testdata::{capture_camera, quad_in_front, write_quad_bake, write_synthetic_bake};
 use player::DrawOptions;
-
-fn open(dir: &std::path::Path, size: (u32, u32)) -> Option<Player> {
-    match Player::open(dir, size, &DrawOptions::default()) {
-        Ok(p) => {
-            eprintln!("adapter: {}", p.renderer.adapter());
-            Some(p)
-        }
-        Err(player::run::RunError::Gpu(GpuError::NoAdapter(e))) => {
-            eprintln!("SKIP: no graphics adapter ({e}); install mesa-vulkan-drivers for lavapipe");
-            None
-        }
-        Err(e) => panic!("{e}"),
-    }
-}
 
 fn non_sky(px: &[u8]) -> usize {
     px.chunks_exact(4)
@@ -36,19 +24,14 @@ fn non_sky(px: &[u8]) -> usize {
 
 #[test]
 fn adapter_reports_backend_and_device_type() {
-    match Renderer::new(16, 16, &DrawOptions::default()) {
-        Ok(r) => {
-            let a = r.adapter();
-            println!(
-                "adapter {:?}, backend {}, device type {}",
-                a.name, a.backend, a.device_type
-            );
-            assert!(!a.backend.is_empty() && !a.device_type.is_empty());
-            assert!(["Vulkan", "Gl", "Metal", "Dx12"].contains(&a.backend.as_str()));
-        }
-        Err(GpuError::NoAdapter(e)) => eprintln!("SKIP: no graphics adapter ({e})"),
-        Err(e) => panic!("{e}"),
-    }
+    let Some(r) = renderer(16, 16) else { return };
+    let a = r.adapter();
+    println!(
+        "adapter {:?}, backend {}, device type {}",
+        a.name, a.backend, a.device_type
+    );
+    assert!(!a.backend.is_empty() && !a.device_type.is_empty());
+    assert!(["Vulkan", "Gl", "Metal", "Dx12"].contains(&a.backend.as_str()));
 }
 
 /// A camera 3 radii south of instance `i`, looking at it.
@@ -72,7 +55,7 @@ fn every_mode_draws_objects_and_frustum_culling_changes_no_pixel() {
     let dir = tempfile::tempdir().unwrap();
     let info = write_synthetic_bake(dir.path()).unwrap();
     assert_eq!(info.cells, 16);
-    let Some(mut p) = open(dir.path(), (128, 128)) else {
+    let Some(mut p) = open(dir.path(), (128, 128), &DrawOptions::default()) else {
         return;
     };
     let cam = camera_at_instance(&p, 0, 128);
@@ -118,7 +101,7 @@ fn projective_texture_shows_the_capture_with_u_right_and_v_down() {
         .collect();
     let tex = Texture::from_rgba8(64, 64, &rgba, TextureEncoding::Rgba8Left).unwrap();
     write_quad_bake(dir.path(), centre, &capture, tex).unwrap();
-    let Some(mut p) = open(dir.path(), (64, 64)) else {
+    let Some(mut p) = open(dir.path(), (64, 64), &DrawOptions::default()) else {
         return;
     };
     let mut s = Streamer::new(&p.bake, StreamConfig::default());
@@ -181,7 +164,7 @@ fn lit_shading_matches_the_design_formula() {
     );
     let tex = Texture::from_rgba8(1, 1, &[0, 0, 0, 0], TextureEncoding::Rgba8).unwrap();
     write_quad_bake(dir.path(), centre, &capture, tex).unwrap();
-    let Some(mut p) = open(dir.path(), (32, 32)) else {
+    let Some(mut p) = open(dir.path(), (32, 32), &DrawOptions::default()) else {
         return;
     };
     let cam = Camera {
@@ -263,8 +246,7 @@ fn render_writes_csv_and_compare_reports_quality() {
     write_synthetic_bake(dir.path()).unwrap();
     let path_file = write_path(dir.path(), 64);
     let path = format::path::CameraPath::load(&path_file).unwrap();
-    if Renderer::new(8, 8, &DrawOptions::default()).is_err() {
-        eprintln!("SKIP: no graphics adapter");
+    if renderer(8, 8).is_none() {
         return;
     }
     let frames_dir = dir.path().join("frames");
@@ -327,7 +309,13 @@ fn render_writes_csv_and_compare_reports_quality() {
     assert_eq!(report.frames, records.len());
     // Issue 28: the report says what its frames were drawn with.
     assert_eq!(report.draw_options, rows[0].draw_options);
-    assert!(report.mean_psnr_y.is_finite() && report.mean_psnr_y > 5.0);
+    // Measured 40.8 dB mean PSNR-Y (min 30.2) on lavapipe; floor 38 dB (a 2.8 dB
+    // margin for other adapters' rasterization).
+    assert!(
+        report.mean_psnr_y.is_finite() && report.mean_psnr_y >= 38.0,
+        "mean PSNR-Y {:.2} dB",
+        report.mean_psnr_y
+    );
     assert!(report.mean_ssim > 0.0 && report.mean_ssim <= 1.0);
     assert!(report.mean_triangles <= report.reference_triangles);
     let json = serde_json::to_value(&report).unwrap();
@@ -363,8 +351,19 @@ fn render_writes_csv_and_compare_reports_quality() {
             );
         }
     }
+    // Against the 4 × 4 reference, object pixels: measured 20.0 dB (compared frames)
+    // and 19.5 dB (full geometry) on lavapipe; floor 17 dB (a 2.5 dB margin).
     for q in [&aa.compared, &aa.full] {
-        assert!(q.object.object_psnr_y_db > 5.0 && q.object.object_psnr_y_db <= q.mean_psnr_y_db);
+        println!(
+            "aa reference: mean {:.2} dB, object {:.2} dB",
+            q.mean_psnr_y_db, q.object.object_psnr_y_db
+        );
+        assert!(
+            q.object.object_psnr_y_db >= 17.0 && q.object.object_psnr_y_db <= q.mean_psnr_y_db,
+            "object PSNR-Y {:.2} dB (mean {:.2} dB)",
+            q.object.object_psnr_y_db,
+            q.mean_psnr_y_db
+        );
         assert!(q.object.mean_object_ssim > 0.0 && q.object.mean_object_ssim <= 1.0);
     }
     // One sample per pixel is not the anti-aliased image: the aliased full-geometry
@@ -426,7 +425,7 @@ fn assert_object_figures_are_sane(report: &player::run::CompareReport) {
 fn synthetic_at_instance_0() -> Option<(tempfile::TempDir, Player, Camera, u32)> {
     let dir = tempfile::tempdir().unwrap();
     write_synthetic_bake(dir.path()).unwrap();
-    let p = open(dir.path(), (64, 64))?;
+    let p = open(dir.path(), (64, 64), &DrawOptions::default())?;
     let cam = camera_at_instance(&p, 0, 64);
     let cell = p
         .bake
@@ -504,7 +503,7 @@ fn mv_mesh_blends_the_two_views_closest_to_the_viewer_direction() {
         vec![0b111, 0],
     )
     .unwrap();
-    let Some(mut p) = open(dir.path(), (64, 64)) else {
+    let Some(mut p) = open(dir.path(), (64, 64), &DrawOptions::default()) else {
         return;
     };
     let mut s = Streamer::new(&p.bake, StreamConfig::default());
@@ -589,8 +588,7 @@ fn compare_of_a_bake_without_proxies_is_perfect() {
     player::testdata::write_synthetic_bake_with(dir.path(), true).unwrap();
     let path_file = write_path(dir.path(), 32);
     let path = format::path::CameraPath::load(&path_file).unwrap();
-    if Renderer::new(8, 8, &DrawOptions::default()).is_err() {
-        eprintln!("SKIP: no graphics adapter");
+    if renderer(8, 8).is_none() {
         return;
     }
     let report = compare(
@@ -637,8 +635,7 @@ fn holes(reference: &[u8], img: &[u8]) -> usize {
 fn texture_uploads_stay_under_the_budget_at_every_frame() {
     let dir = tempfile::tempdir().unwrap();
     write_synthetic_bake(dir.path()).unwrap();
-    if Renderer::new(8, 8, &DrawOptions::default()).is_err() {
-        eprintln!("SKIP: no graphics adapter");
+    if renderer(8, 8).is_none() {
         return;
     }
     let path = demo_walk();
@@ -709,7 +706,7 @@ fn texture_uploads_stay_under_the_budget_at_every_frame() {
 fn proxies_waiting_for_textures_are_drawn_as_originals() {
     let dir = tempfile::tempdir().unwrap();
     write_synthetic_bake(dir.path()).unwrap();
-    let Some(mut p) = open(dir.path(), (96, 96)) else {
+    let Some(mut p) = open(dir.path(), (96, 96), &DrawOptions::default()) else {
         return;
     };
     // Looking across the park from a corner: many outside objects (proxies) in view.
@@ -948,7 +945,7 @@ fn a_cells_far_field_group_is_drawn_with_it() {
     index.groups =
         vec![IndexEntry::for_file(dir.path(), "groups/0.pack", 0, Vec::new(), fp).unwrap()];
     index.write(&index_path).unwrap();
-    let mut p = open(dir.path(), (64, 64)).unwrap();
+    let mut p = open(dir.path(), (64, 64), &DrawOptions::default()).unwrap();
     let mut s = Streamer::new(&p.bake, no_prefetch());
     let (_, tris_far, _, _) = p.draw(&cam, Mode::Hybrid, Some(&mut s));
     let after = p.renderer.read_pixels().unwrap();

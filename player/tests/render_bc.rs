@@ -7,22 +7,12 @@ use format::pack::{Texture, TextureEncoding};
 use glam::Vec3;
 use player::camera::Camera;
 use player::frame::Mode;
-use player::gpu::GpuError;
-use player::run::Player;
 use player::stream::{StreamConfig, Streamer};
 use player::testdata::{quad_in_front, write_quad_bake};
 use player::DrawOptions;
 
-fn open(dir: &std::path::Path, size: (u32, u32), options: &DrawOptions) -> Option<Player> {
-    match Player::open(dir, size, options) {
-        Ok(p) => Some(p),
-        Err(player::run::RunError::Gpu(GpuError::NoAdapter(e))) => {
-            eprintln!("SKIP: no graphics adapter ({e}); install mesa-vulkan-drivers for lavapipe");
-            None
-        }
-        Err(e) => panic!("{e}"),
-    }
-}
+mod common;
+use common::open_player as open;
 
 /// A capture-like 64 × 64 image: a shaded, striped disc covered (alpha 255) on a
 /// background of its edge colour (alpha 0).

@@ -9,26 +9,18 @@
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use glam::{Mat4, Vec3};
 use std::hint::black_box;
-use std::path::PathBuf;
 use worker::backface::regional_backface_cull;
 use worker::classify::{classify, DEFAULT_T_C0, DEFAULT_T_C1};
 use worker::raster::{CullMode, DrawItem, View};
 use worker::visibility::{ray_cast_capture, visible_by_rays, DepthTolerance};
 use worker::weights::vertex_weights;
 
-/// The model as the bake sees it (format's loader: welded, smooth normals, albedo).
-fn load_obj(path: &std::path::Path) -> Option<format::Mesh> {
-    format::load::load_model(path).ok()
-}
-
 fn analysis(c: &mut Criterion) {
-    let dir = std::env::var_os("HEXBAKE_MODELS")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../models"));
-    let Some(mesh) = load_obj(&dir.join("bunny.obj")) else {
-        eprintln!("SKIP: bunny.obj not found under {}", dir.display());
+    // The model as the bake sees it (format's loader: welded, smooth normals, albedo).
+    let Some(path) = testkit::model("bunny.obj") else {
         return;
     };
+    let mesh = format::load::load_model(&path).unwrap();
     // The paper's bunny: 43.2 units tall, base on y = 0; eye 250 units away at 1.7,
     // a 1024² square view just around its bounding sphere.
     let (lo, hi) = mesh.bounds().unwrap();

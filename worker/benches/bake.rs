@@ -5,7 +5,7 @@
 //! PNG (reference | hybrid | difference) to the temp dir.
 //!
 //! `cargo bench -p worker --bench bake` (models from `HEXBAKE_MODELS` or
-//! `<repo>/models`; skipped with a note when absent). `HEXBAKE_BENCH_CELLS=a,b,...`
+//! `<repo>/models`; skipped through `testkit::skip` when absent). `HEXBAKE_BENCH_CELLS=a,b,...`
 //! picks other cells, `HEXBAKE_BENCH_VIEWS` / `HEXBAKE_BENCH_RES` the check size,
 //! `HEXBAKE_BENCH_TL` another edge-length tolerance T_l than the manifest's 4.5;
 //! `HEXBAKE_BENCH_CHAINS=1` bakes as `pipeline run` does, every collapse starting
@@ -22,11 +22,7 @@ use worker::lod_chain::LodChains;
 
 fn main() {
     let repo = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..");
-    let models = std::env::var_os("HEXBAKE_MODELS")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| repo.join("models"));
-    if !models.join("bunny.obj").is_file() {
-        eprintln!("SKIP: models not found in {}", models.display());
+    if testkit::model("bunny.obj").is_none() {
         return;
     }
     let mut plan = parse_manifest(&repo.join("manifests/park-2m.ron")).expect("manifest");

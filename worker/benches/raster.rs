@@ -7,23 +7,19 @@
 //! pixel count of each case is printed once so pixels/s = covered × renders/s.
 //!
 //! `cargo bench -p worker --bench raster -- --warm-up-time 1 --measurement-time 3`
-//! Models come from `HEXBAKE_MODELS` or `<repo>/models`; absent models are skipped.
+//! Models come from `HEXBAKE_MODELS` or `<repo>/models`; absent models are skipped
+//! (`testkit::skip`).
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use format::Mesh;
 use glam::{Mat4, Vec3};
-use std::path::{Path, PathBuf};
 use worker::raster::{render, render_into, CullMode, DrawItem, Shading, View};
 
-fn models_dir() -> PathBuf {
-    std::env::var_os("HEXBAKE_MODELS")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../models"))
-}
-
-/// The model as the bake sees it (format's loader: welded, smooth normals, albedo).
-fn load(path: &Path) -> Option<Mesh> {
-    format::load::load_model(path).ok()
+/// The fetched model `name` as the bake sees it (format's loader: welded, smooth
+/// normals, albedo); `None` after a skip when it was not fetched.
+fn load(name: &str) -> Option<Mesh> {
+    let path = testkit::model(name)?;
+    Some(format::load::load_model(&path).unwrap())
 }
 
 fn in_pool<T: Send>(threads: Option<usize>, f: impl FnOnce() -> T + Send) -> T {
@@ -74,11 +70,9 @@ fn cpu_time_per_render(view: &View, items: &[DrawItem], budget_s: f64, reuse: bo
 }
 
 fn bench_raster(c: &mut Criterion) {
-    let dir = models_dir();
     let mut group = c.benchmark_group("raster");
     for name in ["bunny.obj", "refined_elephant.off"] {
-        let Some(mesh) = load(&dir.join(name)) else {
-            eprintln!("SKIP {name}: not found under {}", dir.display());
+        let Some(mesh) = load(name) else {
             continue;
         };
         let (lo, hi) = mesh.bounds().unwrap();

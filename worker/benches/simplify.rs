@@ -9,13 +9,12 @@
 //! - `sv_whole_7cells`: the whole 69,666-triangle mesh from 7 cells.
 //!
 //! `cargo bench -p worker --bench simplify -- --warm-up-time 1 --measurement-time 3`
-//! (the bunny comes from `HEXBAKE_MODELS` or `<repo>/models`; skipped when absent).
+//! (the bunny comes from `HEXBAKE_MODELS` or `<repo>/models`; skipped through `testkit::skip` when absent).
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use glam::Vec3;
 use std::f32::consts::PI;
 use std::hint::black_box;
-use std::path::PathBuf;
 use worker::simplify::{
     pixels_per_radian, simplify, ProjectedLength, SimplifyInput, SimplifyParams,
 };
@@ -30,11 +29,9 @@ struct Bunny {
 
 /// The bunny as the bake sees it (format's loader), scaled to the paper's 43 units.
 fn load_bunny() -> Option<Bunny> {
-    let dir = std::env::var_os("HEXBAKE_MODELS")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../models"));
-    let mut mesh = format::load::load_model(&dir.join("bunny.obj")).ok()?;
-    format::scene_build::normalise(&mut mesh, [0.0; 3], 43.0).ok()?;
+    let path = testkit::model("bunny.obj")?;
+    let mut mesh = format::load::load_model(&path).unwrap();
+    format::scene_build::normalise(&mut mesh, [0.0; 3], 43.0).unwrap();
     Some(Bunny {
         positions: mesh.positions.iter().map(|&p| Vec3::from(p)).collect(),
         normals: mesh.normals.iter().map(|&n| Vec3::from(n)).collect(),
@@ -53,7 +50,6 @@ fn cell_centre(k: u32) -> Vec3 {
 
 fn bench_simplify(c: &mut Criterion) {
     let Some(bunny) = load_bunny() else {
-        eprintln!("SKIP: bunny.obj not found (set HEXBAKE_MODELS)");
         return;
     };
     let n = bunny.positions.len();

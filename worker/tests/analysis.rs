@@ -6,7 +6,8 @@
 //! ray cast exactly per pixel centre by [`analytic_capture`], meshes through obvhs by
 //! `worker::visibility::ray_cast_capture`. Both follow the `raster::View` pixel
 //! convention. Tests that need the bunny read it from `$HEXBAKE_MODELS` or
-//! `<repo>/models` and skip with a note when it is absent. Set `HEXBAKE_PICTURES=<dir>`
+//! `<repo>/models` and skip through `testkit::skip` when it is absent (a failure under
+//! `HEXBAKE_REQUIRE_MODELS=1`). Set `HEXBAKE_PICTURES=<dir>`
 //! to get the bunny's class maps as PNGs.
 
 mod common;

@@ -524,7 +524,10 @@ fn projective_texturing_from_the_capture_eye_reproduces_the_lit_render() {
         Shading::Projective(&textures),
     );
     let psnr = psnr_y(&lit.color, &textured.color);
-    assert!(psnr > 35.0, "{psnr}");
+    // Measured 57.4 dB (CPU rasterizer, deterministic); floor 55 dB (a 2.4 dB margin
+    // for changes of the rasterizer's rounding, not of the method).
+    println!("projective texturing vs lit render: {psnr:.2} dB");
+    assert!(psnr >= 55.0, "{psnr}");
     assert!(psnr < 100.0, "textured render is not the lit one");
     // An object without a surface in the table stays lit.
     let other = ProjectiveTextures {

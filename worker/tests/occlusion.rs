@@ -9,7 +9,11 @@
 //!   on a wall between the cell and a statue culls the statue; off, it gets a proxy.
 //!   Fails if occlusion culling stops culling.
 //! - a property test: random box walls and targets; whatever is culled is hidden
-//!   from random points of the prism by ray casting against the walls.
+//!   from random points of the prism by ray casting against the walls. In about half
+//!   the cases a wide, tall blocker wall stands between the prism and the target:
+//!   there the target must be culled, so the ray check always has culled targets to
+//!   check (without the blocker, random walls rarely hide a target and the property
+//!   could pass without checking anything).
 
 use format::manifest::{parse_manifest_str, BakeParams, CellParams};
 use format::park::SplitMix64;
@@ -232,18 +236,24 @@ proptest! {
     #![proptest_config(ProptestConfig::with_cases(24))]
     /// Random walls and a random target: if the target is culled, no ray from 400
     /// random points of the prism to random points of its box escapes the walls.
+    /// With `blocker`, a 60 × 30 × 6 wall at z = 17..23 (the bake test's wall) hides
+    /// every target: any segment from the prism (|x| ≤ 10, y ≤ 3) to the target
+    /// (|x| ≤ 22, y ≤ 6, z ≥ 28) crosses it at |x| ≤ 22, y ≤ 6, well inside its
+    /// occluder shrunk by ε = 1.25: the target must be culled.
     #[test]
     fn culled_means_every_sampled_ray_hits_a_wall(
         walls in prop::collection::vec(
             (-40.0f32..40.0, 12.0f32..40.0, 2.0f32..30.0, 4.0f32..20.0, 1.0f32..12.0, 0.0f32..1.0),
             1..5),
+        blocker in any::<bool>(),
         target in (-20.0f32..20.0, 30.0f32..60.0, 0.5f32..4.0, 0.5f32..6.0),
         seed in 0u64..1000,
     ) {
         let mut models = Vec::new();
         let mut instances = Vec::new();
         let mut boxes = Vec::new();
-        for (x, z, w, h, d, yaw) in walls {
+        let blocker = blocker.then_some((0.0, 20.0, 60.0, 30.0, 6.0, 0.0));
+        for (x, z, w, h, d, yaw) in walls.into_iter().chain(blocker) {
             let lo = [-w / 2.0, 0.0, -d / 2.0];
             let hi = [w / 2.0, h, d / 2.0];
             let transform = Mat4::from_translation(Vec3::new(x, 0.0, z))
@@ -267,6 +277,9 @@ proptest! {
             return Ok(());
         }
         let hidden = occluded_instances(&scene, &prism, &[target_id], &OcclusionSettings::for_prism(&prism));
+        if blocker.is_some() {
+            prop_assert!(hidden[0], "the blocker wall hides the target, but it is not culled");
+        }
         if hidden[0] {
             let (lo, hi) = scene.instance_bounds(target_id as usize);
             let mut rng = Rng::new(seed);

@@ -183,16 +183,15 @@ fn error_and_savings_from_random_views() {
     }
 }
 
-/// The same measurement on real meshes from `models/` (skipped when
-/// `scripts/fetch-models.sh` has not fetched them): 100 views each.
+/// The same measurement on real meshes from `models/` (each skipped through
+/// `testkit::skip` when `scripts/fetch-models.sh` has not fetched it): 100 views each.
 #[test]
 fn error_and_savings_on_real_meshes() {
-    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../models");
     for name in ["bunny.obj", "armadillo.off"] {
-        let Ok(mesh) = format::load::load_model(&dir.join(name)) else {
-            eprintln!("{name}: not fetched, skipped");
+        let Some(path) = testkit::model(name) else {
             continue;
         };
+        let mesh = format::load::load_model(&path).unwrap();
         let set = bake_patch_set(&[&mesh], &small_preset());
         let model = &set.models[0];
         for tests in [

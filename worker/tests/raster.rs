@@ -211,11 +211,6 @@ fn golden_view() -> View {
     .unwrap()
 }
 
-fn models_dir() -> Option<PathBuf> {
-    let dir = common::models_dir();
-    dir.is_dir().then_some(dir)
-}
-
 // ---------------------------------------------------------------- coverage
 
 /// Counts pixels covered by each triangle of `mesh` rendered alone.
@@ -728,15 +723,9 @@ fn output_is_identical_for_any_thread_count() {
 
 #[test]
 fn real_bunny_renders_deterministically() {
-    let Some(dir) = models_dir() else {
-        eprintln!("SKIP: no models dir (set HEXBAKE_MODELS or run scripts/fetch-models.sh)");
+    let Some(path) = common::fetched_model("bunny.obj") else {
         return;
     };
-    let path = dir.join("bunny.obj");
-    if !path.exists() {
-        eprintln!("SKIP: {} missing", path.display());
-        return;
-    }
     let bunny = format::load::load_model(&path).unwrap();
     assert_eq!(bunny.triangles.len(), 69_666);
     let (lo, hi) = bunny.bounds().unwrap();

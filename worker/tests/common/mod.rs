@@ -11,26 +11,10 @@ pub fn repo() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..")
 }
 
-/// The downloaded models (`scripts/fetch-models.sh`): `$HEXBAKE_MODELS`, else
-/// `models/` in the repository.
-pub fn models_dir() -> PathBuf {
-    std::env::var_os("HEXBAKE_MODELS")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| repo().join("models"))
-}
-
-/// A model file in [`models_dir`]; `None` (and a note) when it was not fetched.
-pub fn fetched_model(name: &str) -> Option<PathBuf> {
-    let path = models_dir().join(name);
-    if !path.is_file() {
-        eprintln!(
-            "SKIP: {} not found (set HEXBAKE_MODELS or run scripts/fetch-models.sh)",
-            path.display()
-        );
-        return None;
-    }
-    Some(path)
-}
+/// `fetched_model(name)`: a downloaded model file (`scripts/fetch-models.sh`;
+/// `$HEXBAKE_MODELS`, else `models/` in the repository), or `None` after a skip
+/// (`testkit::skip`: a failure under HEXBAKE_REQUIRE_MODELS=1).
+pub use testkit::model as fetched_model;
 
 /// Runs `f` in a rayon pool of `threads` threads (determinism across thread counts).
 pub fn in_pool<T: Send>(threads: usize, f: impl FnOnce() -> T + Send) -> T {
@@ -103,22 +87,14 @@ pub fn look_at(eye: Vec3, target: Vec3, fov_y: f32, width: u32, height: u32, nea
     }
 }
 
-/// The model as the bake sees it (format's loader: welded, smooth normals, albedo).
-pub fn load_obj(path: &std::path::Path) -> Option<format::Mesh> {
-    format::load::load_model(path).ok()
-}
-
 /// The bunny placed like the paper's (000 Table 2: 43.2 units tall), base on y = 0,
-/// centred in x–z; `None` (with a note) when the model is not fetched.
+/// centred in x–z; `None` (after a skip) when the model is not fetched. A fetched
+/// bunny that does not load fails the test.
+#[track_caller]
 pub fn bunny() -> Option<(format::Mesh, Mat4)> {
-    let path = models_dir().join("bunny.obj");
-    let Some(mesh) = load_obj(&path) else {
-        eprintln!(
-            "SKIP: {} not found (run scripts/fetch-models.sh or set HEXBAKE_MODELS)",
-            path.display()
-        );
-        return None;
-    };
+    let path = fetched_model("bunny.obj")?;
+    let mesh =
+        format::load::load_model(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     let (lo, hi) = mesh.bounds().unwrap();
     let (lo, hi) = (Vec3::from(lo), Vec3::from(hi));
     let scale = 43.2 / (hi.y - lo.y);
