@@ -195,36 +195,38 @@ pub fn export_cell(out: &Path, cell_id: u32, dest: &Path) -> Result<ExportSummar
         )));
     }
 
-    // The cell's far-field group (format version 2): its proxies are drawn with the
+    // The cell's far-field groups (format version 2), every level of its chain
+    // (version 5: each group names its parent): their proxies are drawn with the
     // cell's own.
-    let group = match entry.group {
-        None => None,
-        Some(g) => {
-            let ge = index.group(g).ok_or_else(|| {
-                failed(anyhow!(
-                    "index.pack: cell {cell_id}'s group {g} has no entry"
-                ))
-            })?;
-            ge.verify(out).map_err(|e| failed(e.into()))?;
-            let path = out.join(&ge.file);
-            let pack = format::pack::PackFile::open(&path)
-                .and_then(|f| CellPack::decode_group(&f))
-                .with_context(|| path.display().to_string())
-                .map_err(failed)?;
-            pack.check_against(&base)
-                .with_context(|| path.display().to_string())
-                .map_err(failed)?;
-            Some((ge.file.clone(), pack))
-        }
-    };
+    let mut groups: Vec<(String, CellPack)> = Vec::new();
+    let mut next = entry.group;
+    while let Some(g) = next {
+        let ge = index.group(g).ok_or_else(|| {
+            failed(anyhow!(
+                "index.pack: group {g} of cell {cell_id}'s chain has no entry"
+            ))
+        })?;
+        ge.verify(out).map_err(|e| failed(e.into()))?;
+        let path = out.join(&ge.file);
+        let pack = format::pack::PackFile::open(&path)
+            .and_then(|f| CellPack::decode_group(&f))
+            .with_context(|| path.display().to_string())
+            .map_err(failed)?;
+        pack.check_against(&base)
+            .with_context(|| path.display().to_string())
+            .map_err(failed)?;
+        // Parents have larger ids (the index checks it), so the walk ends.
+        next = ge.group.filter(|&p| p > g);
+        groups.push((ge.file.clone(), pack));
+    }
 
-    // 4. Build and write: the cell's proxies, then its group's.
+    // 4. Build and write: the cell's proxies, then its groups', level 1 first.
     let proxies: Vec<(&str, &Proxy)> = cell
         .proxies
         .iter()
         .map(|p| (entry.file.as_str(), p))
         .chain(
-            group
+            groups
                 .iter()
                 .flat_map(|(file, pack)| pack.proxies.iter().map(move |p| (file.as_str(), p))),
         )

@@ -57,9 +57,9 @@ fn cells_bakes_only_their_jobs_then_a_full_run_completes_identically() {
     let (o, v) = run_json(&part, &["--cells", "3,at:1:1"]);
     assert!(o.status.success(), "{}", text(&o));
     // The cell at (1, 1) is cell 0: job (0, 1) is new, job (3, 4) is done, and so
-    // are the far-field jobs of their cells' groups (both, baked in step 1).
-    assert_eq!(v["jobs"], 4, "{v}");
-    assert_eq!(v["jobs_skipped"], 3, "{v}");
+    // are the far-field jobs of their cells' groups at both levels (baked in step 1).
+    assert_eq!(v["jobs"], 5, "{v}");
+    assert_eq!(v["jobs_skipped"], 4, "{v}");
     assert_eq!(v["jobs_baked"], 1, "{v}");
     assert_eq!(v["partial"]["baked_cells"], 4, "{v}");
     assert_eq!(indexed_cells(&part), vec![0, 1, 3, 4]);
@@ -68,8 +68,8 @@ fn cells_bakes_only_their_jobs_then_a_full_run_completes_identically() {
     //    bake that never was partial.
     let (o, v) = run_json(&part, &[]);
     assert!(o.status.success(), "{}", text(&o));
-    // The two cell jobs and two far-field jobs of steps 1–2 are done.
-    assert_eq!(v["jobs_skipped"], 4, "{v}");
+    // The two cell jobs and three far-field jobs (two levels) of steps 1–2 are done.
+    assert_eq!(v["jobs_skipped"], 5, "{v}");
     assert!(!part.join("partial.json").exists());
     let report: serde_json::Value =
         serde_json::from_slice(&std::fs::read(part.join("report.json")).unwrap()).unwrap();
@@ -108,10 +108,10 @@ fn set_overrides_make_a_different_bake() {
     let out = tmp.path().join("o");
     let (o, v) = run_json(&out, &["--cells", "0", "--set", "cells_per_job=1"]);
     assert!(o.status.success(), "{}", text(&o));
-    // The cell's job and the far-field job of its group.
+    // The cell's job and the far-field jobs of its groups (two levels on 3 × 3 cells).
     assert_eq!(
         (v["jobs"].as_u64(), v["cells"].as_u64()),
-        (Some(2), Some(1)),
+        (Some(3), Some(1)),
         "{v}"
     );
     let plan: serde_json::Value =
@@ -132,7 +132,7 @@ fn set_overrides_make_a_different_bake() {
         ],
     );
     assert!(o.status.success(), "{}", text(&o));
-    assert_eq!(v["jobs_baked"], 2, "{v}");
+    assert_eq!(v["jobs_baked"], 3, "{v}");
     let report: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out.join("report.json")).unwrap()).unwrap();
     assert_eq!(report["bake"]["edge_length_tolerance_px"], 6.0);
