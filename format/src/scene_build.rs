@@ -189,7 +189,7 @@ fn build_tiled_scene(plan: &Plan, spec: &crate::manifest::TiledSpec) -> Result<S
             let t = glam::Mat4::from_translation(shift);
             instances.extend(base.instances.iter().map(|inst| crate::Instance {
                 transform: t * inst.transform,
-                ..inst.clone()
+                ..*inst
             }));
         }
     }

@@ -451,7 +451,7 @@ impl Streamer {
         let clock = self.clock;
         self.stats.pending_proxies = 0;
         for k in cell.iter().chain(&self.current_groups) {
-            if let Some(c) = self.cells.get_mut(&k) {
+            if let Some(c) = self.cells.get_mut(k) {
                 c.last_used = clock;
                 self.stats.pending_proxies += c.pending_proxies();
             }
