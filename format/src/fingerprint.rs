@@ -217,7 +217,7 @@ mod tests {
             |b, _| b.max_deviation_px = 0.0,
             |b, _| b.far_field = false,
             |b, _| b.far_levels = 1,
-            |b, _| b.merge_level = 1,
+            |b, _| b.merge_level = 2,
             |b, _| b.quality = Some(Default::default()),
             |b, _| {
                 b.quality = Some(crate::manifest::QualityFloor {

@@ -128,6 +128,33 @@ pub struct BakedProxy {
 }
 
 impl BakedProxy {
+    /// A layered impostor of `members` (their meshes are not drawn: no triangles).
+    pub fn impostor(
+        members: &[u32],
+        imp: LayeredImpostor,
+        key: ProxyKey,
+        quality: Option<Measured>,
+    ) -> BakedProxy {
+        BakedProxy {
+            kind: ProxyKind::LayeredImpostor,
+            members: members
+                .iter()
+                .map(|&instance| BakedMember {
+                    instance,
+                    input_triangles: Vec::new(),
+                    triangles: Vec::new(),
+                    view_masks: Vec::new(),
+                    vertex_view_sets: Vec::new(),
+                })
+                .collect(),
+            views: vec![imp.texture.clone()],
+            key,
+            packed: None,
+            impostor: Some(imp),
+            quality,
+        }
+    }
+
     /// Triangles drawn: the members' (mesh proxies) or two per layer (impostors).
     pub fn triangle_count(&self) -> u64 {
         let layers = match (&self.impostor, &self.packed) {
@@ -892,24 +919,12 @@ fn select_region(
             );
             drop(drawn);
             match winner.map(|(i, m)| (candidates.swap_remove(i).1, m)) {
-                Some((Cheaper::Impostor(imp), m)) => Ok(Some(BakedProxy {
-                    kind: ProxyKind::LayeredImpostor,
-                    members: members
-                        .iter()
-                        .map(|&instance| BakedMember {
-                            instance,
-                            input_triangles: Vec::new(),
-                            triangles: Vec::new(),
-                            view_masks: Vec::new(),
-                            vertex_view_sets: Vec::new(),
-                        })
-                        .collect(),
-                    views: vec![imp.texture.clone()],
-                    key: proxy.key,
-                    packed: None,
-                    impostor: Some(imp),
-                    quality: Some(m),
-                })),
+                Some((Cheaper::Impostor(imp), m)) => Ok(Some(BakedProxy::impostor(
+                    &members,
+                    imp,
+                    proxy.key,
+                    Some(m),
+                ))),
                 Some((Cheaper::Coarser(k), m)) => {
                     let mut chosen = coarser.swap_remove(k);
                     chosen.quality = Some(m);

@@ -42,12 +42,11 @@
 //! whole region are dropped ([`crate::select::subpixel_from_region`]), the one
 //! object-dropping rule of every level; nothing is clipped by distance.
 
-use crate::bake::{BakedMember, BakedProxy};
+use crate::bake::BakedProxy;
 use crate::grid::Prism;
 use crate::impostor::build_layered_impostor_up_to;
 use crate::raster::DrawItem;
 use crate::select::subpixel_from_region;
-use format::pack::ProxyKind;
 use format::Scene;
 use glam::Vec3;
 
@@ -184,25 +183,7 @@ pub fn merged_impostor(
         max_offset(prism),
         MERGED_MAX_LAYERS,
     )?;
-    Ok(built.map(|imp| BakedProxy {
-        kind: ProxyKind::LayeredImpostor,
-        members: band
-            .members
-            .iter()
-            .map(|&instance| BakedMember {
-                instance,
-                input_triangles: Vec::new(),
-                triangles: Vec::new(),
-                view_masks: Vec::new(),
-                vertex_view_sets: Vec::new(),
-            })
-            .collect(),
-        views: vec![imp.texture.clone()],
-        key,
-        packed: None,
-        impostor: Some(imp),
-        quality: None,
-    }))
+    Ok(built.map(|imp| BakedProxy::impostor(&band.members, imp, key, None)))
 }
 
 #[cfg(test)]
