@@ -305,31 +305,74 @@ impl CellGroups {
     }
 }
 
+/// The far test of one group for one instance (module docs): outside the group
+/// prism, a single-view object for it, at a merged level no nearer than
+/// [`merged_min_distance`], and not regionally back-facing to it. The cheap tests
+/// run first: the back-face test reads every triangle.
+struct FarTest {
+    prism: Prism,
+    corners: [glam::Vec3; 12],
+    eye: glam::Vec3,
+    /// At a merged level: [`merged_min_distance`].
+    min_distance: Option<f32>,
+}
+
+impl FarTest {
+    fn new(prism: Prism, merged: bool, params: &BakeParams) -> FarTest {
+        FarTest {
+            corners: prism.corners(),
+            eye: prism.centre3(),
+            min_distance: merged.then(|| merged_min_distance(&prism, params.image_res)),
+            prism,
+        }
+    }
+
+    fn of_group(
+        grid: &HexGrid,
+        groups: &CellGroups,
+        group: u32,
+        cells: &CellParams,
+        params: &BakeParams,
+    ) -> FarTest {
+        let merged = groups.level(group) >= params.merge_level;
+        FarTest::new(groups.prism(grid, group, cells), merged, params)
+    }
+
+    fn far(&self, scene: &Scene, i: usize, params: &BakeParams) -> bool {
+        let inst = &scene.instances[i];
+        let Some(model) = scene.models.get(inst.model as usize) else {
+            return false;
+        };
+        if model.mesh.triangles.is_empty() {
+            return false;
+        }
+        let (lo, hi) = scene.instance_bounds(i);
+        if self.prism.intersects_aabb(lo, hi) {
+            return false;
+        }
+        let error =
+            object_self_occluding_error(self.prism.cell_size, params.image_res, self.eye, lo, hi);
+        if choose_representation(error, params.self_occluding_tolerance_px) != Representation::Sv {
+            return false;
+        }
+        if self
+            .min_distance
+            .is_some_and(|min| self.eye.clamp(lo, hi).distance(self.eye) < min)
+        {
+            return false;
+        }
+        !all_culled(&model.mesh, inst.transform, &self.corners)
+    }
+}
+
 /// The far objects of a group: per instance, whether it is outside the group prism,
 /// not regionally back-facing to it, and a single-view object for it (module docs).
 /// Deterministic and independent of the thread count.
 pub fn far_instances(scene: &Scene, prism: &Prism, params: &BakeParams) -> Vec<bool> {
-    let corners = prism.corners();
-    let eye = prism.centre3();
+    let test = FarTest::new(*prism, false, params);
     (0..scene.instances.len())
         .into_par_iter()
-        .map(|i| {
-            let inst = &scene.instances[i];
-            let Some(model) = scene.models.get(inst.model as usize) else {
-                return false;
-            };
-            if model.mesh.triangles.is_empty() {
-                return false;
-            }
-            let (lo, hi) = scene.instance_bounds(i);
-            if prism.intersects_aabb(lo, hi) {
-                return false;
-            }
-            // The cheap test first: the back-face test reads every triangle.
-            let error = object_self_occluding_error(prism.cell_size, params.image_res, eye, lo, hi);
-            choose_representation(error, params.self_occluding_tolerance_px) == Representation::Sv
-                && !all_culled(&model.mesh, inst.transform, &corners)
-        })
+        .map(|i| test.far(scene, i, params))
         .collect()
 }
 
@@ -357,23 +400,16 @@ pub fn group_far(
     cells: &CellParams,
     params: &BakeParams,
 ) -> Vec<bool> {
-    let prism = groups.prism(grid, group, cells);
-    let mut far = far_instances(scene, &prism, params);
-    if groups.level(group) >= params.merge_level {
-        let min = merged_min_distance(&prism, params.image_res);
-        let eye = prism.centre3();
-        for (i, f) in far.iter_mut().enumerate() {
-            if *f {
-                let (lo, hi) = scene.instance_bounds(i);
-                *f = eye.clamp(lo, hi).distance(eye) >= min;
-            }
-        }
-    }
-    far
+    let test = FarTest::of_group(grid, groups, group, cells, params);
+    (0..scene.instances.len())
+        .into_par_iter()
+        .map(|i| test.far(scene, i, params))
+        .collect()
 }
 
 /// What group `group` serves (module docs, "Levels"): its far objects that are far
-/// for none of its ancestors (those draw them).
+/// for none of its ancestors (those draw them). Each instance's tests stop at the
+/// first answer.
 pub fn served_instances(
     scene: &Scene,
     grid: &HexGrid,
@@ -382,15 +418,17 @@ pub fn served_instances(
     cells: &CellParams,
     params: &BakeParams,
 ) -> Vec<bool> {
-    let chain = groups.ancestors_and_self(group);
-    let mut served = group_far(scene, grid, groups, group, cells, params);
-    for &a in &chain[1..] {
-        let far = group_far(scene, grid, groups, a, cells, params);
-        for (s, f) in served.iter_mut().zip(far) {
-            *s &= !f;
-        }
-    }
-    served
+    let tests: Vec<FarTest> = groups
+        .ancestors_and_self(group)
+        .into_iter()
+        .map(|g| FarTest::of_group(grid, groups, g, cells, params))
+        .collect();
+    (0..scene.instances.len())
+        .into_par_iter()
+        .map(|i| {
+            tests[0].far(scene, i, params) && !tests[1..].iter().any(|t| t.far(scene, i, params))
+        })
+        .collect()
 }
 
 /// What a cell's bake needs to know of its groups' far field.
@@ -405,6 +443,9 @@ pub struct FarField {
 
 impl FarField {
     /// The far field of `cell`'s groups, or `None` when `params.far_field` is off.
+    /// An instance's tests run from the top level down and stop at the first group
+    /// it is far for (the distant objects of a large world are far for several
+    /// levels; the back-face test then reads their triangles once, not per level).
     pub fn of_cell(
         scene: &Scene,
         grid: &HexGrid,
@@ -417,13 +458,16 @@ impl FarField {
             return None;
         }
         let group = groups.group_of(cell);
-        let mut instances = vec![false; scene.instances.len()];
-        for g in groups.chain(cell) {
-            let far = group_far(scene, grid, groups, g, cells, params);
-            for (s, f) in instances.iter_mut().zip(far) {
-                *s |= f;
-            }
-        }
+        let tests: Vec<FarTest> = groups
+            .chain(cell)
+            .into_iter()
+            .rev()
+            .map(|g| FarTest::of_group(grid, groups, g, cells, params))
+            .collect();
+        let instances = (0..scene.instances.len())
+            .into_par_iter()
+            .map(|i| tests.iter().any(|t| t.far(scene, i, params)))
+            .collect();
         Some(FarField { group, instances })
     }
 }
