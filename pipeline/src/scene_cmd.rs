@@ -31,6 +31,20 @@ pub struct SceneSummary {
     pub cell_size: f32,
     pub ground_min: [f32; 2],
     pub ground_max: [f32; 2],
+    /// Far-field groups per level (issue 27; empty with `bake.far_field` off):
+    /// `levels[k]` is the number of groups of level k + 1.
+    pub far_levels: Vec<u32>,
+    /// A `Tiled` scene: tiles per side, the base manifest and the grid period.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tiled: Option<TiledSummary>,
+}
+
+#[derive(Serialize)]
+pub struct TiledSummary {
+    pub tiles: u32,
+    pub manifest: String,
+    /// Columns and rows between tiles.
+    pub period: [u32; 2],
 }
 
 pub fn summarize(plan: &Plan, scene: &Scene) -> SceneSummary {
@@ -56,7 +70,26 @@ pub fn summarize(plan: &Plan, scene: &Scene) -> SceneSummary {
             }
         })
         .collect();
+    let groups = worker::far_field::CellGroups::for_params(&grid, &plan.bake);
+    let mut far_levels = Vec::new();
+    if plan.bake.far_field {
+        for g in 0..groups.len() {
+            let l = groups.level(g) as usize;
+            far_levels.resize(far_levels.len().max(l), 0);
+            far_levels[l - 1] += 1;
+        }
+    }
+    let tiled = match &plan.scene {
+        format::manifest::SceneSpec::Tiled(t) => Some(TiledSummary {
+            tiles: t.tiles,
+            manifest: t.manifest.display().to_string(),
+            period: t.period,
+        }),
+        _ => None,
+    };
     SceneSummary {
+        far_levels,
+        tiled,
         name: plan.name.clone(),
         instances: scene.instances.len(),
         triangles: scene.triangle_count(),
@@ -105,5 +138,21 @@ pub fn render_text(s: &SceneSummary) -> String {
         "grid       {} × {} cells of size {} ({} cells)",
         s.grid[0], s.grid[1], s.cell_size, s.cells
     );
+    if !s.far_levels.is_empty() {
+        let per: Vec<String> = s.far_levels.iter().map(|n| n.to_string()).collect();
+        let _ = writeln!(
+            out,
+            "far field  {} levels of groups (7, 49, 343 … cells): {} groups",
+            s.far_levels.len(),
+            per.join(" / ")
+        );
+    }
+    if let Some(t) = &s.tiled {
+        let _ = writeln!(
+            out,
+            "tiled      {} × {} tiles of {}, {} columns × {} rows apart",
+            t.tiles, t.tiles, t.manifest, t.period[0], t.period[1]
+        );
+    }
     out
 }
