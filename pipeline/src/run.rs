@@ -19,7 +19,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
-use worker::job::{bake_cell_pack, done_record, plan_jobs, run_job, BuildPlan, Job, JobRecord};
+use worker::job::{done_record, plan_jobs, BuildPlan, Job, JobRecord};
 use worker::lod_chain::LodChains;
 
 #[derive(Debug, thiserror::Error)]
@@ -196,24 +196,20 @@ pub fn bake_local(l: &Loaded, jobs: &[Job], opts: &LocalOptions) -> Result<BakeO
     bar.set_message("baking");
     pool.install(|| {
         jobs.par_iter().for_each(|job| {
-            let _ = std::fs::remove_file(error_path(&l.out, job.id));
-            // Proxies of the job's earlier bake whose keys still match are reused.
-            let reuse = worker::job::previous_proxies(&l.out, job);
-            let none = worker::bake::ProxyReuse::new();
-            let result = run_job(&l.out, job, shared_process, |unit, fp| {
-                let reuse = reuse.get(&unit).unwrap_or(&none);
-                let r = bake_cell_pack(&l.plan, &l.scene, &chains, reuse, &l.build, unit, fp);
-                bar.inc(1);
-                r
-            });
+            let result = worker::job::bake_job(
+                &l.out,
+                &l.plan,
+                &l.scene,
+                &chains,
+                &l.build,
+                job,
+                shared_process,
+                || bar.inc(1),
+            );
             let mut o = outcome.lock().expect("no panics while locked");
             match result {
                 Ok(record) => o.done.push(record),
-                Err(e) => {
-                    let message = format!("job {}: {e}", job.id);
-                    let _ = std::fs::write(error_path(&l.out, job.id), format!("{message}\n"));
-                    o.failed.push((job.id, message));
-                }
+                Err(message) => o.failed.push((job.id, message)),
             }
         })
     });

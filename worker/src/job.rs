@@ -152,6 +152,41 @@ fn recorded_pack(out: &Path, c: &CellRecord) -> Option<Vec<u8>> {
         .then_some(bytes)
 }
 
+/// Bakes job `job` of `plan` into `out` — the one way both executors bake a job
+/// (`pipeline run`'s local pool and the `worker job` a Slurm task runs): its stale
+/// error file goes, proxies of its earlier bake whose keys still match are reused
+/// ([`previous_proxies`]), every cell and group is baked ([`bake_cell_pack`]) and
+/// written with the record last ([`run_job`]); `after_unit` runs after each unit
+/// (a progress bar). On failure the message, naming the job, is also written to
+/// `jobs/<id>.error` for `pipeline status`.
+#[allow(clippy::too_many_arguments)]
+pub fn bake_job(
+    out: &Path,
+    plan: &Plan,
+    scene: &Scene,
+    chains: &LodChains,
+    build: &BuildPlan,
+    job: &Job,
+    shared_process: bool,
+    after_unit: impl Fn(),
+) -> Result<JobRecord, String> {
+    let _ = std::fs::remove_file(error_path(out, job.id));
+    let reuse = previous_proxies(out, job);
+    let none = ProxyReuse::new();
+    run_job(out, job, shared_process, |unit, fp| {
+        let reuse = reuse.get(&unit).unwrap_or(&none);
+        let r = bake_cell_pack(plan, scene, chains, reuse, build, unit, fp);
+        after_unit();
+        r
+    })
+    .map_err(|e| {
+        let message = format!("job {}: {e}", job.id);
+        let _ = std::fs::create_dir_all(out.join("jobs"));
+        let _ = std::fs::write(error_path(out, job.id), format!("{message}\n"));
+        message
+    })
+}
+
 /// Runs one job: bakes each cell or group with `bake` (which returns its pack
 /// content and its report), writes the packs atomically, then the record. Stops at
 /// the first failing unit, naming it. `shared_process`: other jobs run in this

@@ -164,24 +164,14 @@ fn run(cli: Cli) -> Result<(), Failure> {
                 .num_threads(threads.unwrap_or(0))
                 .build()
                 .map_err(failed)?;
-            let error_file = out.join("jobs").join(format!("{id}.error"));
-            let _ = std::fs::remove_file(&error_file);
             let result = pool.install(|| {
                 // The chains `pipeline run` prepared (or this task builds and caches).
                 let (chains, _) = worker::lod_chain::LodChains::prepare(
                     &scene,
                     Some(&worker::job::lod_dir(&out)),
                 )
-                .map_err(|e| worker::job::JobError::Io {
-                    path: worker::job::lod_dir(&out),
-                    message: e.to_string(),
-                })?;
-                let reuse = worker::job::previous_proxies(&out, job);
-                let none = worker::bake::ProxyReuse::new();
-                worker::job::run_job(&out, job, false, |unit, fp| {
-                    let reuse = reuse.get(&unit).unwrap_or(&none);
-                    worker::job::bake_cell_pack(&plan, &scene, &chains, reuse, &build, unit, fp)
-                })
+                .map_err(|e| format!("job {id}: {}: {e}", worker::job::lod_dir(&out).display()))?;
+                worker::job::bake_job(&out, &plan, &scene, &chains, &build, job, false, || {})
             });
             match result {
                 Ok(record) => {
@@ -192,10 +182,11 @@ fn run(cli: Cli) -> Result<(), Failure> {
                     );
                     Ok(())
                 }
-                Err(e) => {
-                    let message = format!("job {id}: {e}");
+                Err(message) => {
+                    // bake_job wrote it for a bake error; the chains' own error too.
                     let _ = std::fs::create_dir_all(out.join("jobs"));
-                    let _ = std::fs::write(&error_file, format!("{message}\n"));
+                    let _ =
+                        std::fs::write(worker::job::error_path(&out, id), format!("{message}\n"));
                     Err(failed(anyhow::anyhow!(message)))
                 }
             }
