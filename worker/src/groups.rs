@@ -54,7 +54,13 @@ pub fn bake_group(
         let (proxies, dropped) = merged_level(
             scene, reuse, group, &prism, &served, cells, params, &mut times,
         )?;
-        (proxies, StageTimes::default(), dropped)
+        // The impostors' captures are the level's capture stage (`finish` takes
+        // the capture time from the stage times).
+        let stage = StageTimes {
+            capture_ms: times.capture_ms,
+            ..StageTimes::default()
+        };
+        (proxies, stage, dropped)
     } else {
         // Step 2b on the group's prism: far objects under a pixel from all of it.
         let (sv, small): (Vec<u32>, Vec<u32>) = served.iter().partition(|&&i| {
