@@ -189,6 +189,88 @@ pub fn merged_impostor(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use format::{Ground, Instance, Mesh, Model};
+    use glam::{Mat4, Vec2};
+    use proptest::prelude::*;
+
+    fn prism(size: f32) -> Prism {
+        Prism {
+            centre: Vec2::new(0.0, 0.0),
+            cell_size: size,
+            min_y: 2.0,
+            max_y: 6.0,
+        }
+    }
+
+    /// Unit cuboids (2 × 4 × 2) at the given (x, z).
+    fn scene_at(points: &[(f32, f32)]) -> Scene {
+        let model = Model::new(
+            "c".into(),
+            "test".into(),
+            Mesh::cuboid([-1.0, 0.0, -1.0], [1.0, 4.0, 1.0], [200, 200, 200, 255]),
+            None,
+        );
+        Scene {
+            models: vec![model],
+            instances: points
+                .iter()
+                .map(|&(x, z)| Instance {
+                    model: 0,
+                    transform: Mat4::from_translation(Vec3::new(x, 0.0, z)),
+                    tint: Vec3::ONE,
+                })
+                .collect(),
+            ground: Ground {
+                min: [-1e6, -1e6],
+                max: [1e6, 1e6],
+            },
+            model_bounds: Default::default(),
+        }
+    }
+
+    proptest! {
+        /// Objects at least `merged_min_distance` from the centre (what a merged
+        /// level serves) fall into at most MAX_BANDS + 1 bands per sector (one more
+        /// for the boxes' extent), every object in exactly one band of its own
+        /// sector, members ascending; the split is deterministic.
+        #[test]
+        fn far_objects_make_few_bands_per_sector(
+            size in 100.0f32..3000.0,
+            polar in proptest::collection::vec((0.0f32..1.0, 1.0f32..40.0), 1..60),
+        ) {
+            let p = prism(size);
+            let image_res = 1024;
+            let min = crate::far_field::merged_min_distance(&p, image_res);
+            let points: Vec<(f32, f32)> = polar
+                .iter()
+                .map(|&(turn, scale)| {
+                    let a = turn * std::f32::consts::TAU;
+                    let d = min * scale + 2.0;
+                    (d * a.cos(), d * a.sin())
+                })
+                .collect();
+            let scene = scene_at(&points);
+            let served: Vec<u32> = (0..points.len() as u32).collect();
+            let (bands_a, dropped) = bands(&scene, &p, &served, image_res);
+            let (bands_b, _) = bands(&scene, &p, &served, image_res);
+            prop_assert_eq!(&bands_a, &bands_b);
+            let mut seen = vec![0u32; points.len()];
+            for b in &bands_a {
+                prop_assert!(b.members.windows(2).all(|w| w[0] < w[1]));
+                for &m in &b.members {
+                    seen[m as usize] += 1;
+                }
+            }
+            for &d in &dropped {
+                seen[d as usize] += 1;
+            }
+            prop_assert!(seen.iter().all(|&n| n == 1));
+            for sector in 0..SECTORS {
+                let n = bands_a.iter().filter(|b| b.sector == sector).count();
+                prop_assert!(n <= MAX_BANDS + 1, "sector {} has {} bands", sector, n);
+            }
+        }
+    }
 
     #[test]
     fn layer_need_shrinks_with_distance_and_grows_with_offset() {
