@@ -826,11 +826,7 @@ fn select_region(
     let centre = region.eyes[0];
     let eyes = sample_viewpoints(&prism);
     let check_eyes = select::check_viewpoints(&prism, centre);
-    let max_offset = prism
-        .corners()
-        .iter()
-        .map(|c| c.distance(centre))
-        .fold(0.0f32, f32::max);
+    let max_offset = crate::impostor::max_offset(&prism, centre);
     let chosen: Vec<Result<Option<BakedProxy>, BakeError>> = proxies
         .into_par_iter()
         .zip(coarser)

@@ -365,17 +365,6 @@ impl FarTest {
     }
 }
 
-/// The far objects of a group: per instance, whether it is outside the group prism,
-/// not regionally back-facing to it, and a single-view object for it (module docs).
-/// Deterministic and independent of the thread count.
-pub fn far_instances(scene: &Scene, prism: &Prism, params: &BakeParams) -> Vec<bool> {
-    let test = FarTest::new(*prism, false, params);
-    (0..scene.instances.len())
-        .into_par_iter()
-        .map(|i| test.far(scene, i, params))
-        .collect()
-}
-
 /// The nearest an object may be to the centre of a group of a merged level
 /// (`bake.merge_level`, [`crate::levels`]) to be far for it: `e / (2θ · L · B)`
 /// for the prism's largest viewer offset `e`, one output pixel θ, `L` =
@@ -388,23 +377,6 @@ pub fn merged_min_distance(prism: &Prism, image_res: u32) -> f32 {
     let theta = std::f64::consts::FRAC_PI_3 / f64::from(image_res.max(1));
     let bands = crate::levels::BAND_LAYERS * crate::levels::MAX_BANDS as f64;
     (f64::from(crate::levels::max_offset(prism)) / (2.0 * theta * bands)) as f32
-}
-
-/// The far objects of group `group` ([`far_instances`]); at a merged level, only
-/// those at least [`merged_min_distance`] from its centre.
-pub fn group_far(
-    scene: &Scene,
-    grid: &HexGrid,
-    groups: &CellGroups,
-    group: u32,
-    cells: &CellParams,
-    params: &BakeParams,
-) -> Vec<bool> {
-    let test = FarTest::of_group(grid, groups, group, cells, params);
-    (0..scene.instances.len())
-        .into_par_iter()
-        .map(|i| test.far(scene, i, params))
-        .collect()
 }
 
 /// What group `group` serves (module docs, "Levels"): its far objects that are far

@@ -60,6 +60,16 @@ impl LayeredImpostor {
     }
 }
 
+/// 001's viewer offset `e` for a region: the largest distance from the capture eye
+/// to the prism's 12 corners.
+pub fn max_offset(prism: &crate::grid::Prism, eye: Vec3) -> f32 {
+    prism
+        .corners()
+        .iter()
+        .map(|c| c.distance(eye))
+        .fold(0.0f32, f32::max)
+}
+
 /// 001 §3.3's layer count for an object whose depths from the capture eye span
 /// `near..far`, served to viewers up to `max_offset` from the eye, with one pixel
 /// of `image_res` per 60° as the tolerable error angle (module docs).

@@ -48,7 +48,6 @@ use crate::impostor::build_layered_impostor_up_to;
 use crate::raster::DrawItem;
 use crate::select::subpixel_from_region;
 use format::Scene;
-use glam::Vec3;
 
 /// Azimuth sectors of a merged level (60° each).
 pub const SECTORS: usize = 6;
@@ -72,15 +71,10 @@ pub struct Band {
     pub members: Vec<u32>,
 }
 
-/// The largest distance from the capture eye to the prism's corners: 001's viewer
-/// offset `e`.
+/// 001's viewer offset `e` of a group: from its centre, the capture eye, to its
+/// prism's farthest corner.
 pub fn max_offset(prism: &Prism) -> f32 {
-    let eye = prism.centre3();
-    prism
-        .corners()
-        .iter()
-        .map(|c| c.distance(eye))
-        .fold(0.0f32, f32::max)
+    crate::impostor::max_offset(prism, prism.centre3())
 }
 
 /// 001 §3.3's layer count, unclamped, for depths `near..far` (module docs).
@@ -113,22 +107,9 @@ pub fn bands(
         let mid = 0.5 * (lo + hi) - eye;
         let turn = mid.z.atan2(mid.x).rem_euclid(std::f32::consts::TAU);
         let sector = ((turn / std::f32::consts::TAU * SECTORS as f32) as usize).min(SECTORS - 1);
-        let near = Vec3::new(
-            eye.x.clamp(lo.x, hi.x),
-            eye.y.clamp(lo.y, hi.y),
-            eye.z.clamp(lo.z, hi.z),
-        )
-        .distance(eye);
-        let far = (0..8)
-            .map(|k| {
-                let c = Vec3::new(
-                    if k & 1 == 0 { lo.x } else { hi.x },
-                    if k & 2 == 0 { lo.y } else { hi.y },
-                    if k & 4 == 0 { lo.z } else { hi.z },
-                );
-                c.distance(eye)
-            })
-            .fold(0.0f32, f32::max);
+        // Nearest point of the box, and its farthest corner.
+        let near = eye.clamp(lo, hi).distance(eye);
+        let far = (eye - lo).abs().max((hi - eye).abs()).length();
         sectors[sector].push((near, far, i));
     }
     let mut out = Vec::new();
@@ -190,7 +171,7 @@ pub fn merged_impostor(
 mod tests {
     use super::*;
     use format::{Ground, Instance, Mesh, Model};
-    use glam::{Mat4, Vec2};
+    use glam::{Mat4, Vec2, Vec3};
     use proptest::prelude::*;
 
     fn prism(size: f32) -> Prism {
