@@ -1,7 +1,7 @@
 //! The one place where a hexbake test decides to skip (issue 28, item 5).
 //!
 //! A test that needs something the machine may lack — a wgpu adapter, the fetched
-//! models, a running Slurm, the Khronos glTF-Validator — calls [`skip`] when it is
+//! models, a running Slurm, the Khronos glTF-Validator, valgrind — calls [`skip`] when it is
 //! missing and returns. What happens then depends on `HEXBAKE_REQUIRE_<X>`:
 //!
 //! - `1`, `true` or `yes` (any case): the resource is required, and [`skip`]
@@ -36,11 +36,20 @@ pub enum Need {
     /// The Khronos glTF-Validator (`HEXBAKE_REQUIRE_GLTF_VALIDATOR`;
     /// `scripts/install-gltf-validator.sh`).
     GltfValidator,
+    /// valgrind's cachegrind, which counts the guard sample's instructions
+    /// (`HEXBAKE_REQUIRE_VALGRIND`; the Debian package `valgrind`).
+    Valgrind,
 }
 
 impl Need {
     /// Every need, in the order the docs list them.
-    pub const ALL: [Need; 4] = [Need::Gpu, Need::Models, Need::Slurm, Need::GltfValidator];
+    pub const ALL: [Need; 5] = [
+        Need::Gpu,
+        Need::Models,
+        Need::Slurm,
+        Need::GltfValidator,
+        Need::Valgrind,
+    ];
 
     /// The variable that makes this need required.
     pub fn var(self) -> &'static str {
@@ -49,6 +58,7 @@ impl Need {
             Need::Models => "HEXBAKE_REQUIRE_MODELS",
             Need::Slurm => "HEXBAKE_REQUIRE_SLURM",
             Need::GltfValidator => "HEXBAKE_REQUIRE_GLTF_VALIDATOR",
+            Need::Valgrind => "HEXBAKE_REQUIRE_VALGRIND",
         }
     }
 }
