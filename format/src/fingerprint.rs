@@ -44,8 +44,10 @@ pub type Fingerprint = [u8; 32];
 /// the captured (full) mesh's triangle under the pixel, and a vertex on the tight
 /// capture's border is in the image (worker `visibility.rs`);
 /// 15 — levels of far-field groups, merged layered impostors beyond the first level
-/// (issue 27, `bake.far_levels`, worker `far_field.rs`).
-pub const BAKE_REVISION: u32 = 15;
+/// (issue 27, `bake.far_levels`, worker `far_field.rs`);
+/// 16 — the quality measurement frames hold at most one 1024² screen of output
+/// pixels (worker `select::MAX_MEASURED_PIXELS`): what `bake.quality` keeps can change.
+pub const BAKE_REVISION: u32 = 16;
 
 /// Hex form for file names, logs and reports.
 pub fn to_hex(f: &Fingerprint) -> String {

@@ -34,6 +34,12 @@
 //!   against object and swamps every other error), and compared over the object's
 //!   own pixels (where either image has a covered sample): PSNR on luminance
 //!   ([`format::metrics`]) and SSIM over the windows centred on those pixels. A
+//!   frame holds at most [`MAX_MEASURED_PIXELS`] output pixels (one 1024² screen):
+//!   an object that would cover more from a viewpoint (a near one, seen from the
+//!   region's corner) is measured at the resolution that frames it in one screen,
+//!   which is as many pixels as a viewer can see of it at once. Before, such a
+//!   frame took up to 4096² samples × 16 bytes for the original and as much for
+//!   the candidate, per thread: the check was most of a park bake's peak memory. A
 //!   measurement's `passed` says whether its PSNR of the squared errors pooled over
 //!   the views and its mean SSIM reach the floor; which candidate is kept is
 //!   decided per view ("Acceptance" below), and the worst view's figures are
@@ -80,6 +86,12 @@ pub const DRAW_CALL_COST: u64 = 16;
 /// output resolution and box-filtered in linear light before comparing
 /// (DESIGN.md "Measuring quality honestly": against anti-aliased references).
 pub const SUPERSAMPLE: u32 = 2;
+
+/// Largest measurement frame in output pixels (before [`SUPERSAMPLE`]): one
+/// 1024 × 1024 screen. An object that would cover more from a sample viewpoint
+/// is measured at the resolution that frames it in that many pixels (module docs,
+/// "Metric").
+pub const MAX_MEASURED_PIXELS: u64 = 1024 * 1024;
 
 /// A candidate's cost in triangle equivalents (module docs).
 pub fn cost(triangles: u64, texels: u64, draw_calls: u64) -> u64 {
@@ -186,7 +198,7 @@ pub fn references(
     eyes: &[Vec3],
     capture_eye: Vec3,
     image_res: u32,
-) -> Vec<(Vec3, Capture)> {
+) -> Vec<(Vec3, Reference)> {
     let Some((lo, hi)) = items_aabb(originals) else {
         return Vec::new();
     };
@@ -194,9 +206,43 @@ pub fn references(
         .into_iter()
         .filter_map(|k| {
             let view = sample_view(eyes[k], lo, hi, image_res)?;
-            Some((eyes[k], render(&view, originals, CullMode::Back)))
+            let image = Filtered::of(&render(&view, originals, CullMode::Back));
+            Some((eyes[k], Reference { view, image }))
         })
         .collect()
+}
+
+/// The original drawn from one sample viewpoint: the supersampled view it was
+/// drawn through and its box-filtered image (the full-resolution capture is not
+/// kept: at most one is alive per thread).
+#[derive(Clone, Debug)]
+pub struct Reference {
+    pub view: View,
+    pub image: Filtered,
+}
+
+/// A capture box-filtered [`SUPERSAMPLE`]² in linear light ([`box_filter`]): the
+/// output-resolution image a measurement compares.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Filtered {
+    pub width: usize,
+    pub height: usize,
+    /// sRGB8 pixels.
+    pub pixels: Vec<[u8; 4]>,
+    /// Whether any sample of the pixel was covered by an object.
+    pub covered: Vec<bool>,
+}
+
+impl Filtered {
+    pub fn of(c: &Capture) -> Filtered {
+        let (width, height, pixels, covered) = box_filter(c, SUPERSAMPLE);
+        Filtered {
+            width,
+            height,
+            pixels,
+            covered,
+        }
+    }
 }
 
 /// The indices of `eyes`, farthest from `capture_eye` first (ties by index:
@@ -213,11 +259,22 @@ fn farthest_first(eyes: &[Vec3], capture_eye: Vec3) -> Vec<usize> {
     order
 }
 
-/// The supersampled view from `eye` framing the box `lo`..`hi`; `None` when it
-/// cannot be framed (the eye inside it) or would be over 4096² pixels.
-fn sample_view(eye: Vec3, lo: Vec3, hi: Vec3, image_res: u32) -> Option<View> {
-    let view = View::tight_around(eye, lo, hi, image_res * SUPERSAMPLE).ok()?;
-    (view.width as u64 * view.height as u64 <= 4096 * 4096).then_some(view)
+/// The supersampled view from `eye` framing the box `lo`..`hi`, at most
+/// [`MAX_MEASURED_PIXELS`] output pixels (module docs, "Metric"); `None` when it
+/// cannot be framed (the eye inside it).
+pub fn sample_view(eye: Vec3, lo: Vec3, hi: Vec3, image_res: u32) -> Option<View> {
+    let cap = MAX_MEASURED_PIXELS * u64::from(SUPERSAMPLE * SUPERSAMPLE);
+    let mut res = image_res.max(1);
+    loop {
+        let view = View::tight_around(eye, lo, hi, res * SUPERSAMPLE).ok()?;
+        let samples = view.width as u64 * view.height as u64;
+        if samples <= cap || res == 1 {
+            return Some(view);
+        }
+        // The side scales with the resolution (plus one for the rounding up).
+        let scale = (cap as f64 / samples as f64).sqrt();
+        res = ((f64::from(res) * scale).floor() as u32).clamp(1, res - 1);
+    }
 }
 
 /// The thresholds a candidate must reach in every view (PSNR dB, SSIM).
@@ -241,15 +298,15 @@ impl Thresholds {
 /// Measures `candidate` against the original's `references` in every view; it
 /// passes when its pooled PSNR and mean SSIM reach `thresholds` (module docs).
 pub fn measure_against(
-    references: &[(Vec3, Capture)],
+    references: &[(Vec3, Reference)],
     candidate: &Candidate,
     thresholds: &Thresholds,
 ) -> Measured {
     let mut m = Measured::unmeasured();
     let (mut sse, mut pixels, mut ssim_sum) = (0.0f64, 0usize, 0.0f64);
     for (eye, reference) in references {
-        let frame = draw_candidate(&reference.view, candidate, *eye);
-        let c = compare(reference, &frame, &mut m.error_histogram);
+        let frame = Filtered::of(&draw_candidate(&reference.view, candidate, *eye));
+        let c = compare_filtered(&reference.image, &frame, &mut m.error_histogram);
         add_view(&mut m, &c, (&mut sse, &mut pixels, &mut ssim_sum));
     }
     m.passed = m.pooled_psnr_db >= thresholds.psnr_db && m.mean_ssim >= thresholds.ssim;
@@ -310,9 +367,9 @@ pub fn select_among(
         let Some(view) = sample_view(eyes[k], lo, hi, image_res) else {
             continue;
         };
-        let reference = render(&view, originals, CullMode::Back);
-        let frame = draw_candidate(&view, mesh, eyes[k]);
-        let c = compare(&reference, &frame, &mut mesh_m.error_histogram);
+        let reference = Filtered::of(&render(&view, originals, CullMode::Back));
+        let frame = Filtered::of(&draw_candidate(&view, mesh, eyes[k]));
+        let c = compare_filtered(&reference, &frame, &mut mesh_m.error_histogram);
         add_view(&mut mesh_m, &c, (&mut m_sse, &mut m_px, &mut m_ssim));
         let psnr_needed = floor.min_psnr_db.min(c.psnr_db);
         let ssim_needed = floor.min_ssim.min(c.ssim);
@@ -320,8 +377,8 @@ pub fn select_among(
             let Some((m, sse, px, ssim_sum)) = slot else {
                 continue;
             };
-            let f = draw_candidate(&view, cand, eyes[k]);
-            let cc = compare(&reference, &f, &mut m.error_histogram);
+            let f = Filtered::of(&draw_candidate(&view, cand, eyes[k]));
+            let cc = compare_filtered(&reference, &f, &mut m.error_histogram);
             add_view(m, &cc, (sse, px, ssim_sum));
             if cc.psnr_db < psnr_needed || cc.ssim < ssim_needed {
                 *slot = None;
@@ -390,15 +447,25 @@ pub struct Compared {
 /// either is not background); identical or empty → the caps. Adds |ΔY| of those
 /// pixels to `histogram`.
 pub fn compare(reference: &Capture, frame: &Capture, histogram: &mut [u64; 8]) -> Compared {
-    let (w, h, ref_px, ref_cov) = box_filter(reference, SUPERSAMPLE);
-    let (_, _, frame_px, frame_cov) = box_filter(frame, SUPERSAMPLE);
-    let mask: Vec<bool> = ref_cov
+    compare_filtered(&Filtered::of(reference), &Filtered::of(frame), histogram)
+}
+
+/// [`compare`] of two images already box-filtered (of the same view).
+pub fn compare_filtered(
+    reference: &Filtered,
+    frame: &Filtered,
+    histogram: &mut [u64; 8],
+) -> Compared {
+    let (w, h) = (reference.width, reference.height);
+    let (ref_px, frame_px) = (&reference.pixels, &frame.pixels);
+    let mask: Vec<bool> = reference
+        .covered
         .iter()
-        .zip(&frame_cov)
+        .zip(&frame.covered)
         .map(|(&a, &b)| a || b)
         .collect();
     let (mut sum, mut n) = (0.0f64, 0usize);
-    for ((a, b), &m) in ref_px.iter().zip(&frame_px).zip(&mask) {
+    for ((a, b), &m) in ref_px.iter().zip(frame_px.iter()).zip(&mask) {
         if m {
             let d = luminance(*a) - luminance(*b);
             sum += d * d;
@@ -416,7 +483,7 @@ pub fn compare(reference: &Capture, frame: &Capture, histogram: &mut [u64; 8]) -
     }
     let psnr = capped_psnr_of_mse(sum / n as f64);
     let flat = |c: &[[u8; 4]]| -> Vec<u8> { c.iter().flatten().copied().collect() };
-    let ssim = masked_ssim_y(&flat(&ref_px), &flat(&frame_px), w, h, &mask).unwrap_or(1.0);
+    let ssim = masked_ssim_y(&flat(ref_px), &flat(frame_px), w, h, &mask).unwrap_or(1.0);
     Compared {
         psnr_db: psnr,
         ssim,
