@@ -954,6 +954,7 @@ fn player_compare_on_the_demo_bake() {
             "--path",
             "manifests/paths/demo-walk.ron",
             "--json",
+            "--pops",
             "--worst",
             worst.to_str().unwrap(),
         ],
@@ -1007,6 +1008,53 @@ fn player_compare_on_the_demo_bake() {
         std::fs::read_dir(&worst).unwrap().count() >= 4,
         "worst frames written (reference, hybrid, difference, anti-aliased reference)"
     );
+    // Issue 31: a pop per crossing (a frame whose cell differs from the previous
+    // frame's), each a real image change below the cap, and the worst pair written.
+    let cells: Vec<Option<u64>> = v["per_frame"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|fr| fr["cell"].as_u64())
+        .collect();
+    let crossings: Vec<usize> = (1..cells.len())
+        .filter(|&i| cells[i - 1].is_some() && cells[i].is_some() && cells[i - 1] != cells[i])
+        .collect();
+    assert!(
+        crossings.len() >= 3,
+        "demo-walk crosses at least 3 cells: {cells:?}"
+    );
+    let pops = &v["pops"];
+    let measured: Vec<usize> = pops["crossings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| c["frame"].as_u64().unwrap() as usize)
+        .collect();
+    assert_eq!(measured, crossings, "{pops}");
+    for c in pops["crossings"].as_array().unwrap() {
+        assert_ne!(c["from_cell"], c["to_cell"], "{c}");
+        let (pop, shift) = (
+            f(&c["pop_object_psnr_y_db"]),
+            f(&c["shift_object_psnr_y_db"]),
+        );
+        assert!(
+            pop > 5.0 && pop < 100.0,
+            "the two cells draw different proxies: {c}"
+        );
+        assert!(
+            shift > 5.0 && shift < 100.0,
+            "a one-pixel turn moves every edge: {c}"
+        );
+    }
+    assert!(
+        f(&pops["worst_pop_psnr_y_db"]) <= f(&pops["mean_pop_psnr_y_db"]),
+        "{pops}"
+    );
+    let worst_frame = pops["worst_frame"].as_u64().unwrap();
+    for part in ["from", "to", "diff"] {
+        let png = worst.join(format!("{worst_frame:05}-pop-{part}.png"));
+        assert!(png.exists(), "{} written", png.display());
+    }
 }
 
 mod random_manifests {

@@ -289,6 +289,12 @@ enum Command {
         /// Skip the extra no-prefetch pass (crossing frame times).
         #[arg(long)]
         no_crossings: bool,
+        /// Measure the pop at each cell crossing: the crossing pose drawn with the
+        /// outgoing and with the incoming cell, compared over object pixels, beside
+        /// the change a one-pixel camera turn makes (issue 31); with --worst, the
+        /// worst crossing's pair as PNGs.
+        #[arg(long)]
+        pops: bool,
         /// Supersampling per axis of the anti-aliased reference (full geometry
         /// rendered N times wider and higher, box-filtered in linear light); 1 = none.
         #[arg(long, default_value_t = player::run::DEFAULT_REFERENCE_SS,
@@ -440,6 +446,7 @@ fn main() -> ExitCode {
             worst,
             worst_count,
             no_crossings,
+            pops,
             reference_ss,
             repeat,
             walk,
@@ -455,6 +462,7 @@ fn main() -> ExitCode {
                         worst_count,
                         size: walk.stream.size,
                         crossings: !no_crossings,
+                        pops,
                         stream: walk.path_config(&p),
                         mode,
                         lod_pixel_error: walk.stream.lod_pixel_error,
@@ -528,6 +536,17 @@ fn main() -> ExitCode {
                                 object(&q.object)
                             );
                         }
+                    }
+                    if let Some(p) = &r.pops {
+                        println!(
+                            "pops at {} crossings: object-pixel PSNR(Y) of outgoing vs incoming cell mean {:.2} dB, worst {:.2} dB (frame {}); a one-pixel turn: mean {:.2} dB; {} crossings no larger than the turn",
+                            p.crossings.len(),
+                            p.mean_pop_psnr_y_db,
+                            p.worst_pop_psnr_y_db,
+                            p.worst_frame.map_or("-".to_string(), |f| f.to_string()),
+                            p.mean_shift_psnr_y_db,
+                            p.below_shift
+                        );
                     }
                     for (name, c) in [
                         ("prefetch on", &r.crossing_prefetch),

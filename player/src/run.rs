@@ -14,7 +14,8 @@ use format::path::{CameraPath, PathFrame};
 // The `--json` report: its schema lives in format (issue 14 item 2), read by the
 // benchmark tool.
 pub use format::schema::compare::{
-    AaFrame, AaQuality, AaReference, CompareFrame, CompareReport, CrossingStats,
+    AaFrame, AaQuality, AaReference, CompareFrame, CompareReport, CrossingPop, CrossingStats,
+    PopReport,
 };
 // `frames.csv`: one row type, also read by the benchmark tool (issue 28).
 pub use format::schema::frames::{FrameRow, FRAMES_CSV_HEADER};
@@ -397,6 +398,8 @@ pub struct CompareOptions {
     pub size: Option<(u32, u32)>,
     /// Also run the hybrid with prefetching off (Fig. 14 comparison).
     pub crossings: bool,
+    /// `--pops`: measure the image jump at each cell crossing ([`measure_pops`]).
+    pub pops: bool,
     pub stream: StreamConfig,
     /// What is compared with the full-geometry reference: `hybrid` (default) or
     /// `lod` (the distance-LOD baseline); `full`/`frustum` work too.
@@ -421,6 +424,7 @@ impl Default for CompareOptions {
             worst_count: 0,
             size: None,
             crossings: false,
+            pops: false,
             stream: StreamConfig::default(),
             mode: Mode::Hybrid,
             lod_pixel_error: crate::lod::DEFAULT_PIXEL_ERROR,
@@ -429,6 +433,90 @@ impl Default for CompareOptions {
             draw: crate::DrawOptions::default(),
         }
     }
+}
+
+/// The crossing frame, its outgoing and its incoming frame (RGBA8) of the worst pop.
+type PopPair = (usize, Vec<u8>, Vec<u8>);
+
+/// Issue 31 item 1, the pop metric: at each frame whose cell differs from the
+/// previous frame's (`cells`, one per frame), the frame's pose is drawn with the
+/// outgoing cell's packs and with the incoming cell's, each settled
+/// ([`Streamer::settled`]: all textures uploaded, no stand-ins, so that streaming
+/// does not blur what the swap itself changes), and the two frames are compared
+/// over object pixels. Beside each, the full-geometry frame at the pose against the
+/// same pose turned by one pixel (the camera yawed by `fov_y / height`): a change
+/// a viewer does not notice. Returns the report and the worst pop's pair.
+fn measure_pops(
+    player: &mut Player,
+    path: &CameraPath,
+    frames: &[PathFrame],
+    cells: &[Option<u32>],
+    size: (u32, u32),
+    opts: &CompareOptions,
+) -> Result<(PopReport, Option<PopPair>), RunError> {
+    let far = player.bake.extent;
+    let (w, h) = (size.0 as usize, size.1 as usize);
+    let mut streamer = Streamer::new(
+        &player.bake,
+        StreamConfig {
+            prefetch: false,
+            ..opts.stream.clone()
+        },
+    );
+    let mut crossings = Vec::new();
+    let mut worst: Option<(f64, PopPair)> = None;
+    for i in 1..frames.len().min(cells.len()) {
+        let (Some(from), Some(to)) = (cells[i - 1], cells[i]) else {
+            continue;
+        };
+        if from == to {
+            continue;
+        }
+        let cam = camera_for(&frames[i], path, size, far);
+        let mut drawn = Vec::with_capacity(2);
+        for cell in [from, to] {
+            let Some(current) = streamer.settled(&player.renderer, &player.bake, cell) else {
+                break;
+            };
+            let list = hybrid_list(
+                &player.bake,
+                &cam,
+                &current,
+                crate::stream::PendingDraw::StandIns,
+            );
+            player.renderer.render(&cam, &player.models, &list);
+            drawn.push(player.renderer.read_pixels()?);
+        }
+        let [a, b] = &drawn[..] else {
+            continue; // a pack that cannot be loaded: no pop to measure
+        };
+        let pop = measure_frame(a, b, w, h);
+        let full = originals_list(&player.bake, &cam, false);
+        player.renderer.render(&cam, &player.models, &full);
+        let r0 = player.renderer.read_pixels()?;
+        let turned = Camera {
+            dir: glam::Quat::from_rotation_y(cam.fov_y_deg.to_radians() / size.1 as f32) * cam.dir,
+            ..cam
+        };
+        let full = originals_list(&player.bake, &turned, false);
+        player.renderer.render(&turned, &player.models, &full);
+        let r1 = player.renderer.read_pixels()?;
+        let shift = measure_frame(&r0, &r1, w, h);
+        let pop_psnr = pop.object_psnr_y_db.unwrap_or(PSNR_CAP);
+        crossings.push(CrossingPop {
+            frame: i,
+            from_cell: from,
+            to_cell: to,
+            pop_object_psnr_y_db: pop_psnr,
+            pop_object_ssim: pop.object_ssim.unwrap_or(1.0),
+            shift_object_psnr_y_db: shift.object_psnr_y_db.unwrap_or(PSNR_CAP),
+            shift_object_ssim: shift.object_ssim.unwrap_or(1.0),
+        });
+        if worst.as_ref().is_none_or(|(p, _)| pop_psnr < *p) {
+            worst = Some((pop_psnr, (i, a.clone(), b.clone())));
+        }
+    }
+    Ok((PopReport::of(crossings), worst.map(|(_, pair)| pair)))
 }
 
 fn mean(v: impl Iterator<Item = f64>) -> f64 {
@@ -566,6 +654,34 @@ pub fn compare(
     } else {
         None
     };
+    let pops = if opts.pops && opts.mode == Mode::Hybrid {
+        let cells: Vec<Option<u32>> = per_frame.iter().map(|f| f.cell).collect();
+        let (report, worst_pair) = measure_pops(&mut player, path, &frames, &cells, size, opts)?;
+        if let (Some(dir), Some((i, from, to))) = (&opts.worst_dir, worst_pair) {
+            std::fs::create_dir_all(dir).map_err(|e| write_err(dir, e))?;
+            write_png(
+                &dir.join(format!("{i:05}-pop-from.png")),
+                size.0,
+                size.1,
+                &opaque(&from),
+            )?;
+            write_png(
+                &dir.join(format!("{i:05}-pop-to.png")),
+                size.0,
+                size.1,
+                &opaque(&to),
+            )?;
+            write_png(
+                &dir.join(format!("{i:05}-pop-diff.png")),
+                size.0,
+                size.1,
+                &diff_image(&from, &to),
+            )?;
+        }
+        Some(report)
+    } else {
+        None
+    };
     if let Some(dir) = &opts.worst_dir {
         std::fs::create_dir_all(dir).map_err(|e| write_err(dir, e))?;
         for (_, i, r, h, aa) in &worst {
@@ -637,6 +753,7 @@ pub fn compare(
         draw_options: Some(options),
         crossing_prefetch: Some(crossing_stats(&hybrid_records)),
         crossing_no_prefetch,
+        pops,
         per_frame,
     })
 }

@@ -503,6 +503,40 @@ impl Streamer {
         }
     }
 
+    /// `cell`'s packs as a viewer settled in it would draw them, whatever the
+    /// camera: the cell and its whole chain of far-field groups resident with every
+    /// texture uploaded (outside any budget), no stand-ins. The crossing pop metric
+    /// (issue 31, `run::compare`) draws one pose with the outgoing and the incoming
+    /// cell this way. `None` when the cell's pack cannot be loaded.
+    pub fn settled(
+        &mut self,
+        renderer: &Renderer,
+        bake: &Bake,
+        cell: u32,
+    ) -> Option<CurrentCell<'_>> {
+        let groups = group_keys_of(bake, cell);
+        for key in std::iter::once(cell).chain(groups.iter().copied()) {
+            self.load_now(renderer, bake, key);
+            let pending: Vec<(usize, usize)> = self
+                .cells
+                .get(&key)
+                .map(|c| c.pending.keys().copied().collect())
+                .unwrap_or_default();
+            for (pi, vi) in pending {
+                self.upload_one(renderer, key, pi, vi);
+            }
+            self.uploads.retain(|e| e.0 != key);
+        }
+        let c = self.cells.get(&cell)?;
+        let packs: Option<Vec<&ResidentCell>> = groups.iter().map(|k| self.cells.get(k)).collect();
+        let far = match packs {
+            _ if groups.is_empty() => Far::None,
+            Some(p) => Far::Packs(p),
+            None => Far::Unavailable,
+        };
+        Some(CurrentCell::Pack(c, far, Vec::new()))
+    }
+
     /// Loads `key`'s pack on the render thread (a demand load) unless it is
     /// resident or known to fail.
     fn load_now(&mut self, renderer: &Renderer, bake: &Bake, key: u32) {

@@ -223,7 +223,77 @@ pub struct CompareReport {
     pub draw_options: Option<DrawOptions>,
     pub crossing_prefetch: Option<CrossingStats>,
     pub crossing_no_prefetch: Option<CrossingStats>,
+    /// The image jump at each cell crossing of the walk (issue 31, `player compare
+    /// --pops`); `None` when not measured.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pops: Option<PopReport>,
     pub per_frame: Vec<CompareFrame>,
+}
+
+/// The pop at one cell crossing (issue 31 item 1): the crossing frame's pose drawn
+/// with the outgoing cell's packs and with the incoming cell's (each settled: every
+/// texture uploaded, no stand-ins), compared over object pixels; beside it, the
+/// change a one-pixel camera turn makes in the full-geometry frame at that pose,
+/// the threshold a viewer would not notice.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CrossingPop {
+    pub frame: usize,
+    pub from_cell: u32,
+    pub to_cell: u32,
+    /// Outgoing against incoming, object pixels (capped at the PSNR cap).
+    #[serde(deserialize_with = "nan_if_null")]
+    pub pop_object_psnr_y_db: f64,
+    #[serde(deserialize_with = "nan_if_null")]
+    pub pop_object_ssim: f64,
+    /// Full geometry at the pose against full geometry turned by one pixel.
+    #[serde(deserialize_with = "nan_if_null")]
+    pub shift_object_psnr_y_db: f64,
+    #[serde(deserialize_with = "nan_if_null")]
+    pub shift_object_ssim: f64,
+}
+
+/// Every crossing's pop and their summary: PSNRs pooled as the mean of the
+/// per-crossing dB figures, the worst (lowest) pop, and the crossing it is at.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PopReport {
+    pub crossings: Vec<CrossingPop>,
+    #[serde(deserialize_with = "nan_if_null")]
+    pub mean_pop_psnr_y_db: f64,
+    #[serde(deserialize_with = "nan_if_null")]
+    pub worst_pop_psnr_y_db: f64,
+    pub worst_frame: Option<usize>,
+    #[serde(deserialize_with = "nan_if_null")]
+    pub mean_shift_psnr_y_db: f64,
+    /// Crossings whose pop is no larger than the one-pixel turn (pop PSNR ≥ shift
+    /// PSNR).
+    pub below_shift: usize,
+}
+
+impl PopReport {
+    pub fn of(crossings: Vec<CrossingPop>) -> PopReport {
+        let n = crossings.len();
+        let mean = |f: fn(&CrossingPop) -> f64| {
+            if n == 0 {
+                f64::NAN
+            } else {
+                crossings.iter().map(f).sum::<f64>() / n as f64
+            }
+        };
+        let worst = crossings
+            .iter()
+            .min_by(|a, b| a.pop_object_psnr_y_db.total_cmp(&b.pop_object_psnr_y_db));
+        PopReport {
+            mean_pop_psnr_y_db: mean(|c| c.pop_object_psnr_y_db),
+            worst_pop_psnr_y_db: worst.map_or(f64::NAN, |c| c.pop_object_psnr_y_db),
+            worst_frame: worst.map(|c| c.frame),
+            mean_shift_psnr_y_db: mean(|c| c.shift_object_psnr_y_db),
+            below_shift: crossings
+                .iter()
+                .filter(|c| c.pop_object_psnr_y_db >= c.shift_object_psnr_y_db)
+                .count(),
+            crossings,
+        }
+    }
 }
 
 /// serde_json writes a non-finite f64 as `null`: read it back as NaN.
@@ -259,6 +329,30 @@ mod tests {
     }
 
     #[test]
+    fn pop_report_summarises_its_crossings() {
+        let pop = |frame, p, s| CrossingPop {
+            frame,
+            from_cell: 1,
+            to_cell: 2,
+            pop_object_psnr_y_db: p,
+            pop_object_ssim: 0.9,
+            shift_object_psnr_y_db: s,
+            shift_object_ssim: 0.8,
+        };
+        let r = PopReport::of(vec![pop(3, 30.0, 20.0), pop(9, 18.0, 22.0)]);
+        assert_eq!(r.mean_pop_psnr_y_db, 24.0);
+        assert_eq!(r.worst_pop_psnr_y_db, 18.0);
+        assert_eq!(r.worst_frame, Some(9));
+        assert_eq!(r.mean_shift_psnr_y_db, 21.0);
+        assert_eq!(r.below_shift, 1);
+        let empty = PopReport::of(Vec::new());
+        assert!(empty.mean_pop_psnr_y_db.is_nan() && empty.worst_frame.is_none());
+        let json = serde_json::to_string(&empty).unwrap();
+        let back: PopReport = serde_json::from_str(&json).unwrap();
+        assert!(back.worst_pop_psnr_y_db.is_nan());
+    }
+
+    #[test]
     fn a_report_of_an_older_player_reads_with_defaults() {
         // Before object pixels and the anti-aliased reference (run files up to
         // 2026-11-21), with a key this schema does not know.
@@ -273,6 +367,7 @@ mod tests {
         assert_eq!(r.frames, 1);
         assert_eq!(r.mode, "");
         assert_eq!(r.object, ObjectQuality::default());
+        assert!(r.pops.is_none());
         assert!(r.aa_reference.is_none() && r.per_frame[0].aa_reference.is_none());
         assert_eq!(r.per_frame[0].object_psnr_y_db, None);
         assert_eq!((r.mean_draw_calls, r.per_frame[0].draw_calls), (0.0, 0));
