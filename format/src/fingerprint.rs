@@ -44,8 +44,12 @@ pub type Fingerprint = [u8; 32];
 /// the captured (full) mesh's triangle under the pixel, and a vertex on the tight
 /// capture's border is in the image (worker `visibility.rs`);
 /// 15 — levels of far-field groups, merged layered impostors beyond the first level
-/// (issue 27, `bake.far_levels`, worker `far_field.rs`).
-pub const BAKE_REVISION: u32 = 15;
+/// (issue 27, `bake.far_levels`, worker `far_field.rs`);
+/// 16 — an object whose footprint overlaps a cell's (or group's) hexagon is drawn as
+/// an original whatever its height, and captures of boxes beside the eye turn
+/// towards their nearest point (issue 29, worker `bake::draws_as_original`,
+/// `view.rs`).
+pub const BAKE_REVISION: u32 = 16;
 
 /// Hex form for file names, logs and reports.
 pub fn to_hex(f: &Fingerprint) -> String {

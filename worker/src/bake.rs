@@ -3,8 +3,19 @@
 //!
 //! Steps:
 //!
-//! 1. **Split.** An instance whose world box intersects the cell's prism is inside:
-//!    Original. Every other instance is outside and gets a proxy or is Culled.
+//! 1. **Split** ([`draws_as_original`], issue 29). An instance whose world box's
+//!    footprint (its x–z rectangle) overlaps the cell's hexagon is inside:
+//!    Original — whatever its height, so an object under the viewer's region
+//!    (terrain, a ground mesh, a road), over it (a bridge, an arcade's roof) or
+//!    enclosing part of it is drawn as it is, never captured from a point inside,
+//!    above or below it. Every other instance is outside and gets a proxy or is
+//!    Culled. The paper's view cells are regions of the ground (000 §3.1.1), and its
+//!    inside objects those standing in them: this is that rule for objects of any
+//!    height, of which the box–prism intersection (the rule until issue 29) is the
+//!    special case of objects reaching the eye heights. An outside object's box
+//!    misses the vertical column over the hexagon, so the cell centre lies outside
+//!    it and a capture from there sees all of it in front of the eye
+//!    ([`crate::view`]).
 //! 2. **Regional back-face culling** (§3.1.5): an outside instance all of whose
 //!    triangles face away from the whole prism is Culled (an instance without
 //!    triangles too).
@@ -391,6 +402,17 @@ enum Job {
     Mv(u32),
 }
 
+/// The split's rule (module docs, step 1; issue 29): an object whose world box
+/// `[lo, hi]` has a footprint overlapping the region's hexagon is drawn by the
+/// region as an original — it stands in, lies under, spans over or encloses part of
+/// the region's prism. Everything else is outside: its box misses the column over
+/// the hexagon, so the region's centre (the capture eye) is outside the box. The far
+/// field's groups ([`crate::far_field`]) apply the same rule to their prisms, so an
+/// object is never far for a group whose region it overlaps either.
+pub fn draws_as_original(prism: &Prism, lo: Vec3, hi: Vec3) -> bool {
+    prism.footprint_overlaps_aabb(lo, hi)
+}
+
 /// Bakes one cell (module docs) with every collapse starting from the full meshes
 /// (the paper as written; [`bake_cell_with`] starts from the models' LOD chains).
 pub fn bake_cell(
@@ -458,7 +480,7 @@ pub fn bake_cell_with(
                 return (None, Assignment::Far, false);
             }
             let (lo, hi) = scene.instance_bounds(i);
-            if prism.intersects_aabb(lo, hi) {
+            if draws_as_original(&prism, lo, hi) {
                 return (None, Assignment::Original, false);
             }
             // Culled by size (004, issue 16): with objective selection, an object
