@@ -164,3 +164,52 @@ fn issue29_a_ground_mesh_under_every_cell_bakes_and_every_cell_draws_it() {
         assert!(ba == bb, "{fa} differs between 1 and 2 threads");
     }
 }
+
+/// Issue 29 item 4: a job that fails names what failed in the user's terms — the
+/// job, the cell, the instance's manifest entry and model — and what to change,
+/// and exits 1 without a panic. A 600-unit wall beside a cell, captured at 8192 px
+/// per 60°, needs a capture wider than the largest side.
+#[test]
+fn issue29_a_failing_job_names_the_cell_the_object_and_what_to_change() {
+    let tmp = tempfile::tempdir().unwrap();
+    std::fs::write(tmp.path().join("wall.obj"), box_obj(600.0, 8.0, 1.0)).unwrap();
+    let manifest = tmp.path().join("wall.ron");
+    std::fs::write(
+        &manifest,
+        r#"(
+    ground: (min: (0.0, 0.0), max: (600.0, 300.0)),
+    scene: Instances([
+        (model: File("wall.obj"), target_height: 8.0, translation: (300.0, 0.0, 130.5), rotation_y_deg: 0.0),
+    ]),
+    cells: (cell_size: 50.0, min_eye_height: 2.0, max_eye_height: 6.0),
+    bake: (image_res: 8192),
+    cells_per_job: 1,
+)"#,
+    )
+    .unwrap();
+    let out = tmp.path().join("out");
+    let o = run_quiet(
+        manifest.to_str().unwrap(),
+        &out,
+        &["--cells", "at:150:86.6"],
+    );
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+    assert!(!err.contains("panicked"), "{err}");
+    for says in [
+        "failed: job 10: cell 10: capture of instance 0",
+        "manifest `scene` entry 0, model `wall`",
+        "exceeds the maximum side",
+        "to change: lower `bake.image_res`, or split it into parts no wider than a cell",
+    ] {
+        assert!(err.contains(says), "expected {says:?} in: {err}");
+    }
+    // `pipeline status` gives the same message, naming its job once.
+    let status = pipeline(&["status", out.to_str().unwrap()]);
+    let listed = String::from_utf8_lossy(&status.stdout);
+    assert!(
+        listed.contains("  job 10: cell 10: capture of instance 0"),
+        "{listed}"
+    );
+    assert!(!listed.contains("job 10: job 10"), "{listed}");
+}

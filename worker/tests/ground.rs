@@ -93,6 +93,7 @@ fn ground_scene() -> Scene {
         ],
         ground: GROUND,
         model_bounds: Default::default(),
+        instance_labels: Default::default(),
     }
 }
 

@@ -91,6 +91,9 @@ pub struct GltfScene {
     pub instances: Vec<GltfInstance>,
     /// What was ignored, one line each (`KHR_texture_transform is not read`, ...).
     pub notes: Vec<String>,
+    /// Per node of the document (by index), its name where it has a non-empty one
+    /// (for messages that name an instance's node).
+    pub node_names: Vec<Option<String>>,
 }
 
 /// A node met in the walk (step 2a): its world transform and its parent's index and
@@ -350,10 +353,15 @@ fn parse_scene(path: &Path, bytes: &[u8], options: GltfOptions) -> Result<GltfSc
             Location::Unknown,
         ));
     }
+    let node_names = document
+        .nodes()
+        .map(|n| n.name().filter(|n| !n.is_empty()).map(str::to_string))
+        .collect();
     Ok(GltfScene {
         models,
         instances,
         notes,
+        node_names,
     })
 }
 
