@@ -502,7 +502,8 @@ static GLTF_NOTES_SHOWN: std::sync::Mutex<std::collections::BTreeSet<PathBuf>> =
 fn build_gltf_scene(plan: &Plan, spec: &crate::manifest::GltfSpec) -> Result<Scene, SceneError> {
     let file = spec.file.as_path();
     let options = crate::load::GltfOptions {
-        group_by_parent: spec.group_by_parent,
+        objects: spec.objects,
+        max_object_extent: plan.cells.cell_size,
     };
     let gltf = crate::load::load_gltf_scene_with(file, options)?;
     if !gltf.notes.is_empty() {
