@@ -48,7 +48,8 @@ pub type Fingerprint = [u8; 32];
 /// 16 — an object whose footprint overlaps a cell's (or group's) hexagon is drawn as
 /// an original whatever its height, and captures of boxes beside the eye turn
 /// towards their nearest point (issue 29, worker `bake::draws_as_original`,
-/// `view.rs`).
+/// `view.rs`); glTF scenes keep uniform scales in the instances and group nodes by
+/// hierarchy (`load::GltfObjects`).
 pub const BAKE_REVISION: u32 = 16;
 
 /// Hex form for file names, logs and reports.
