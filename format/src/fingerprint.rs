@@ -46,8 +46,13 @@ pub type Fingerprint = [u8; 32];
 /// 15 — levels of far-field groups, merged layered impostors beyond the first level
 /// (issue 27, `bake.far_levels`, worker `far_field.rs`);
 /// 16 — the quality measurement frames hold at most one 1024² screen of output
-/// pixels (worker `select::MAX_MEASURED_PIXELS`): what `bake.quality` keeps can change.
-pub const BAKE_REVISION: u32 = 16;
+/// pixels (worker `select::MAX_MEASURED_PIXELS`): what `bake.quality` keeps can change;
+/// 17 — an object whose footprint overlaps a cell's (or group's) hexagon is drawn as
+/// an original whatever its height, and captures of boxes beside the eye turn
+/// towards their nearest point (issue 29, worker `bake::draws_as_original`,
+/// `view.rs`); glTF scenes keep uniform scales in the instances and group nodes by
+/// hierarchy (`load::GltfObjects`).
+pub const BAKE_REVISION: u32 = 17;
 
 /// Hex form for file names, logs and reports.
 pub fn to_hex(f: &Fingerprint) -> String {

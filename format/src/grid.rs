@@ -477,11 +477,21 @@ impl Prism {
     /// tolerance of 1e-5·c, which it errs on the side of "intersects", so it is
     /// conservative.
     pub fn intersects_aabb(&self, min: Vec3, max: Vec3) -> bool {
-        let c = self.cell_size;
-        let tol = 1e-5 * c;
+        let tol = 1e-5 * self.cell_size;
         if max.y < self.min_y - tol || min.y > self.max_y + tol {
             return false;
         }
+        self.footprint_overlaps_aabb(min, max)
+    }
+
+    /// Whether the x–z footprint of the box `[min, max]` (its rectangle seen from
+    /// above) overlaps the (closed) hexagon, whatever their heights: the box lies
+    /// under, over, across or around part of the prism. The separating-axis test of
+    /// [`Prism::intersects_aabb`] without its y-interval test, with the same
+    /// tolerance towards "overlaps".
+    pub fn footprint_overlaps_aabb(&self, min: Vec3, max: Vec3) -> bool {
+        let c = self.cell_size;
+        let tol = 1e-5 * c;
         let hex = self.hexagon();
         let rect = [
             Vec2::new(min.x, min.z),

@@ -40,5 +40,5 @@ pub mod shading;
 pub mod srgb;
 
 pub use mesh::Mesh;
-pub use scene::{Ground, Instance, Model, Scene};
+pub use scene::{Ground, Instance, InstanceLabels, Model, Scene};
 pub use scene_build::{build_scene, SceneError};

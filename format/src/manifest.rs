@@ -39,9 +39,11 @@
 //!     // or: scene: Gltf("scene.glb")  (a .gltf or .glb read as a whole scene: every
 //!     //        node with a mesh placed with its composed transform, in the file's
 //!     //        units; base-colour textures read; `load::load_gltf_scene`)
-//!     // or: scene: Gltf((file: "scene.glb", group_by_parent: true))  (the same, with
-//!     //        the mesh nodes under one parent node merged into one object: a
-//!     //        building of 40 nodes is one object of the bake; default false)
+//!     // or: scene: Gltf((file: "scene.glb", objects: Hierarchy))  (the same; which
+//!     //        mesh nodes form one object: `Hierarchy` (default) each top-level
+//!     //        node with its subtree, when no wider than a cell — a truck and its
+//!     //        wheels; `Parents` the mesh children of one node (also written
+//!     //        `group_by_parent: true`); `Nodes` every mesh node; `load::GltfObjects`)
 //!     // or: scene: Instances([(model: File("a.obj"), target_height: 10.0,
 //!     //        translation: (5.0, 0.0, 7.0), rotation_y_deg: 30.0,
 //!     //        scale: 1.0 /* optional */, tint: (1.0, 0.9, 0.8) /* optional */,
@@ -364,10 +366,10 @@ pub const MAX_TILES: u32 = 15;
 pub struct GltfSpec {
     /// The `.gltf` or `.glb` file, resolved against the manifest's folder.
     pub file: PathBuf,
-    /// The mesh nodes under one parent node are one object (one model per texture,
-    /// one instance): `load::GltfOptions::group_by_parent`.
+    /// Which mesh nodes form one object of the bake (`load::GltfObjects`; default
+    /// `Hierarchy`: each top-level node's subtree, when no wider than a cell).
     #[serde(default)]
-    pub group_by_parent: bool,
+    pub objects: crate::load::GltfObjects,
 }
 
 /// A generated city (`city.rs`): blocks of buildings, streets, props on the pavements.
@@ -774,20 +776,46 @@ struct RawTiled {
     tiles: u32,
 }
 
-/// `Gltf("file.glb")` or `Gltf((file: "file.glb", group_by_parent: true))`.
-#[derive(Deserialize, Serialize)]
+/// `Gltf("file.glb")` or `Gltf((file: "file.glb", objects: Parents))`.
+#[derive(Serialize)]
 #[serde(untagged)]
 enum RawGltf {
     File(String),
     Spec(RawGltfSpec),
 }
 
+/// A string is a file, a struct a [`RawGltfSpec`]. Written out rather than
+/// `#[serde(untagged)]`: an untagged enum buffers its input, and a buffered RON
+/// enum variant (`objects: Nodes`) reads as a unit, i.e. as no value at all.
+impl<'de> Deserialize<'de> for RawGltf {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct Either;
+        impl<'de> serde::de::Visitor<'de> for Either {
+            type Value = RawGltf;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a glTF file name, or (file: \"…\", objects: …)")
+            }
+            fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<RawGltf, E> {
+                Ok(RawGltf::File(v.to_string()))
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(self, map: A) -> Result<RawGltf, A::Error> {
+                RawGltfSpec::deserialize(serde::de::value::MapAccessDeserializer::new(map))
+                    .map(RawGltf::Spec)
+            }
+        }
+        d.deserialize_any(Either)
+    }
+}
+
 #[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 struct RawGltfSpec {
     file: String,
-    #[serde(default)]
+    /// Kept for issue 18's manifests: `true` is `objects: Parents`.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     group_by_parent: bool,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    objects: Option<crate::load::GltfObjects>,
 }
 
 #[derive(Deserialize, Serialize)]
@@ -1382,7 +1410,26 @@ impl Validator<'_> {
     }
 
     /// A glTF scene file: a `.gltf` or `.glb` that exists.
-    fn gltf(&self, file: String, group_by_parent: bool) -> Result<SceneSpec, ManifestError> {
+    fn gltf(
+        &self,
+        file: String,
+        group_by_parent: bool,
+        objects: Option<crate::load::GltfObjects>,
+    ) -> Result<SceneSpec, ManifestError> {
+        use crate::load::GltfObjects;
+        let objects = match (group_by_parent, objects) {
+            (false, objects) => objects.unwrap_or_default(),
+            (true, None | Some(GltfObjects::Parents)) => GltfObjects::Parents,
+            (true, Some(other)) => {
+                return Err(self.error(
+                    "scene",
+                    format!(
+                        "says both `group_by_parent: true` and `objects: {other:?}`; \
+                         `group_by_parent: true` is `objects: Parents`: keep one"
+                    ),
+                ))
+            }
+        };
         if file.is_empty() {
             return Err(self.error("scene", "names an empty file path".into()));
         }
@@ -1404,7 +1451,7 @@ impl Validator<'_> {
         }
         Ok(SceneSpec::Gltf(GltfSpec {
             file: resolved,
-            group_by_parent,
+            objects,
         }))
     }
 
@@ -1638,8 +1685,10 @@ impl Validator<'_> {
                 })
             }
             RawScene::City(city) => self.city(city)?,
-            RawScene::Gltf(RawGltf::File(file)) => self.gltf(file, false)?,
-            RawScene::Gltf(RawGltf::Spec(spec)) => self.gltf(spec.file, spec.group_by_parent)?,
+            RawScene::Gltf(RawGltf::File(file)) => self.gltf(file, false, None)?,
+            RawScene::Gltf(RawGltf::Spec(spec)) => {
+                self.gltf(spec.file, spec.group_by_parent, spec.objects)?
+            }
             RawScene::Tiled(_) => {
                 let (spec, _) = tiled.expect("parsed above");
                 SceneSpec::Tiled(spec)

@@ -117,6 +117,37 @@ pub struct Scene {
     /// equality.
     #[serde(skip)]
     pub model_bounds: ModelBoundsCache,
+    /// Per instance, where it comes from in the user's terms (issue 29 item 4): a
+    /// glTF scene's node (its index and name), a manifest's `Instances` entry or a
+    /// park's `placed` entry; empty where nothing names it (generated placements, a
+    /// scene built in code). Read by [`Scene::describe_instance`] for messages only:
+    /// never hashed, never part of equality.
+    #[serde(default, skip_serializing_if = "InstanceLabels::is_empty")]
+    pub instance_labels: InstanceLabels,
+}
+
+/// Where each instance of a [`Scene`] comes from (see `instance_labels`): one label
+/// per instance, or none at all. Two scenes are equal whatever their labels.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+#[serde(transparent)]
+pub struct InstanceLabels(pub Vec<String>);
+
+impl InstanceLabels {
+    pub fn is_empty(&self) -> bool {
+        self.0.is_empty()
+    }
+
+    /// The label of instance `i`, if it has a non-empty one.
+    pub fn get(&self, i: usize) -> Option<&str> {
+        self.0.get(i).map(String::as_str).filter(|l| !l.is_empty())
+    }
+}
+
+impl PartialEq for InstanceLabels {
+    /// Labels are for messages: two scenes are equal whatever their labels.
+    fn eq(&self, _: &Self) -> bool {
+        true
+    }
 }
 
 /// The lazily computed per-model bounds of a [`Scene`] (see `model_bounds`).
@@ -136,6 +167,28 @@ impl Scene {
             .iter()
             .map(|i| self.models[i.model as usize].mesh.triangle_count() as u64)
             .sum()
+    }
+
+    /// Instance `i` in the user's terms, for messages (issue 29 item 4): its label
+    /// (`instance_labels`) and its model's name, else its model's name and source —
+    /// e.g. ``instance 0 (glTF node 2 `Ground`, model `Ground-mesh`)``.
+    pub fn describe_instance(&self, i: usize) -> String {
+        let Some(inst) = self.instances.get(i) else {
+            return format!("instance {i} (not in the scene)");
+        };
+        let model = match self.models.get(inst.model as usize) {
+            Some(m) => format!("model `{}`", m.name),
+            None => format!("model {} (missing)", inst.model),
+        };
+        match self.instance_labels.get(i) {
+            Some(label) => format!("instance {i} ({label}, {model})"),
+            None => match self.models.get(inst.model as usize) {
+                Some(m) if m.source != m.name => {
+                    format!("instance {i} ({model} from {})", m.source)
+                }
+                _ => format!("instance {i} ({model})"),
+            },
+        }
     }
 
     /// World-space axis-aligned bounds of one instance.

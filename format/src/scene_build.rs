@@ -179,6 +179,7 @@ fn build_tiled_scene(plan: &Plan, spec: &crate::manifest::TiledSpec) -> Result<S
     let base = build_scene(&base_plan)?;
     let c = f64::from(plan.cells.cell_size);
     let mut instances = Vec::with_capacity(base.instances.len() * (spec.tiles as usize).pow(2));
+    let mut labels = Vec::new();
     for j in 0..spec.tiles {
         for i in 0..spec.tiles {
             let shift = glam::Vec3::new(
@@ -191,6 +192,14 @@ fn build_tiled_scene(plan: &Plan, spec: &crate::manifest::TiledSpec) -> Result<S
                 transform: t * inst.transform,
                 ..*inst
             }));
+            if !base.instance_labels.is_empty() {
+                labels.extend((0..base.instances.len()).map(
+                    |k| match base.instance_labels.get(k) {
+                        Some(l) => format!("{l} of tile ({i}, {j})"),
+                        None => format!("tile ({i}, {j})"),
+                    },
+                ));
+            }
         }
     }
     Ok(Scene {
@@ -198,6 +207,7 @@ fn build_tiled_scene(plan: &Plan, spec: &crate::manifest::TiledSpec) -> Result<S
         instances,
         ground: plan.ground,
         model_bounds: Default::default(),
+        instance_labels: crate::InstanceLabels(labels),
     })
 }
 
@@ -452,12 +462,29 @@ fn build_with_placements(plan: &Plan) -> Result<(Scene, Option<Vec<park::Placeme
                     .collect()
             }
         };
+    // Labels for messages (issue 29 item 4): the manifest entries a user wrote.
+    let labels = match &plan.scene {
+        SceneSpec::Instances(list) => (0..list.len())
+            .map(|k| format!("manifest `scene` entry {k}"))
+            .collect(),
+        SceneSpec::Park(spec) if !spec.placed.is_empty() => {
+            let generated = instances.len() - spec.placed.len();
+            (0..instances.len())
+                .map(|k| match k.checked_sub(generated) {
+                    Some(j) => format!("manifest `placed` entry {j}"),
+                    None => String::new(),
+                })
+                .collect()
+        }
+        _ => Vec::new(),
+    };
     Ok((
         Scene {
             models,
             instances,
             ground: plan.ground,
             model_bounds: Default::default(),
+            instance_labels: crate::InstanceLabels(labels),
         },
         placed,
     ))
@@ -475,7 +502,8 @@ static GLTF_NOTES_SHOWN: std::sync::Mutex<std::collections::BTreeSet<PathBuf>> =
 fn build_gltf_scene(plan: &Plan, spec: &crate::manifest::GltfSpec) -> Result<Scene, SceneError> {
     let file = spec.file.as_path();
     let options = crate::load::GltfOptions {
-        group_by_parent: spec.group_by_parent,
+        objects: spec.objects,
+        max_object_extent: plan.cells.cell_size,
     };
     let gltf = crate::load::load_gltf_scene_with(file, options)?;
     if !gltf.notes.is_empty() {
@@ -517,7 +545,12 @@ fn build_gltf_scene(plan: &Plan, spec: &crate::manifest::GltfSpec) -> Result<Sce
         ));
     }
     let mut instances = Vec::with_capacity(gltf.instances.len());
+    let mut labels = Vec::with_capacity(gltf.instances.len());
     for i in &gltf.instances {
+        labels.push(match gltf.node_names.get(i.node as usize) {
+            Some(Some(name)) => format!("glTF node {} `{name}`", i.node),
+            _ => format!("glTF node {}", i.node),
+        });
         let t = i.transform.w_axis.truncate();
         if t.abs().max_element() > limit {
             return Err(too_far(format!(
@@ -536,6 +569,7 @@ fn build_gltf_scene(plan: &Plan, spec: &crate::manifest::GltfSpec) -> Result<Sce
         instances,
         ground: plan.ground,
         model_bounds: Default::default(),
+        instance_labels: crate::InstanceLabels(labels),
     })
 }
 

@@ -13,12 +13,11 @@ fn sample_scene_reuses_meshes_and_reads_textures() {
     let path = write_textured_sample(dir.path()).unwrap();
     let scene = load_gltf_scene(&path).unwrap();
     // Three nodes use one two-primitive mesh: textured + plain, direct + mirrored.
+    // The node scaled 1.5 shares the models of the unscaled one (issue 29).
     let names: Vec<&str> = scene.models.iter().map(|m| m.name.as_str()).collect();
     assert_eq!(
         names,
         [
-            "crate-textured",
-            "crate-plain",
             "crate-textured",
             "crate-plain",
             "crate-textured-mirrored",
@@ -27,16 +26,16 @@ fn sample_scene_reuses_meshes_and_reads_textures() {
     );
     assert_eq!(scene.instances.len(), 6);
     let models: Vec<u32> = scene.instances.iter().map(|i| i.model).collect();
-    assert_eq!(models, [0, 1, 2, 3, 4, 5]);
-    // Composed transforms, split into a scale baked into the model and a rigid
-    // instance transform: node b (scaled 1.5) uses models 4 and 5, the crate scaled.
+    assert_eq!(models, [0, 1, 0, 1, 2, 3]);
+    // Composed transforms, the uniform scale in the instance: node b (scaled 1.5,
+    // rotated) is a scaled rotation of the unscaled crate.
     let b = scene.instances[2].transform;
     assert!((b.w_axis.truncate() - Vec3::new(4.0, 0.0, 0.5)).length() < 1e-6);
-    assert!((Mat3::from_mat4(b).determinant() - 1.0).abs() < 1e-4);
+    assert!((Mat3::from_mat4(b).determinant() - 1.5f32.powi(3)).abs() < 1e-4);
     // The mirror is in the model, not the instance transform.
     assert!((Mat3::from_mat4(scene.instances[4].transform).determinant() - 1.0).abs() < 1e-4);
-    let (lo, hi) = scene.models[2].mesh.bounds().unwrap();
-    assert!((hi[1] - lo[1] - 3.0).abs() < 1e-5, "scaled crate is 3 tall");
+    let (lo, hi) = scene.models[0].mesh.bounds().unwrap();
+    assert!((hi[1] - lo[1] - 2.0).abs() < 1e-5, "the crate is 2 tall");
     // The textured model: UVs per vertex (seams kept), the texture
     // with the sampler's wrap modes, the factor in the vertex albedo. The cube's 24
     // face corners weld only where position and UV agree (4 corners do): 20.
@@ -55,7 +54,7 @@ fn sample_scene_reuses_meshes_and_reads_textures() {
         [srgb(0.8), srgb(0.1), srgb(0.1), 255]
     );
     // Mirrored copies: x negated, winding flipped.
-    let mirrored = &scene.models[4];
+    let mirrored = &scene.models[2];
     let negated: Vec<[f32; 3]> = textured
         .mesh
         .positions
@@ -81,7 +80,7 @@ fn manifest_gltf_scene_builds_with_hashes_that_cover_the_texture() {
     let plan = parse_manifest_str(text, &manifest).unwrap();
     assert!(matches!(&plan.scene, SceneSpec::Gltf(g) if g.file.ends_with("textured-sample.gltf")));
     let scene = plan.load_scene().unwrap();
-    assert_eq!(scene.models.len(), 6);
+    assert_eq!(scene.models.len(), 4);
     assert_eq!(scene.instances.len(), 6);
     let m = &scene.models[0];
     let map = m.albedo_map.as_ref().unwrap();
@@ -180,24 +179,35 @@ fn write_grouped_sample(dir: &std::path::Path) -> std::path::PathBuf {
     path
 }
 
-/// Issue 18: `group_by_parent` makes the mesh nodes under one parent one object
-/// (one model in the parent's frame, one instance); without it each mesh node is an
-/// instance of the shared mesh. Both through the loader and the manifest.
+/// Issue 18: `group_by_parent` (`objects: Parents`) makes the mesh nodes under one
+/// parent one object (one model in the parent's frame, one instance); with `objects:
+/// Nodes` each mesh node is an instance of the shared mesh; the default
+/// (`Hierarchy`, issue 29) groups the top-level "building" likewise. Both through
+/// the loader and the manifest.
 #[test]
 fn mesh_nodes_group_by_parent_when_asked() {
-    use format::load::{load_gltf_scene_with, GltfOptions};
+    use format::load::{load_gltf_scene_with, GltfObjects, GltfOptions};
     let dir = tempfile::tempdir().unwrap();
     let path = write_grouped_sample(dir.path());
-    let plain = load_gltf_scene(&path).unwrap();
+    let with = |objects| {
+        load_gltf_scene_with(
+            &path,
+            GltfOptions {
+                objects,
+                ..GltfOptions::default()
+            },
+        )
+        .unwrap()
+    };
+    let plain = with(GltfObjects::Nodes);
     assert_eq!(plain.models.len(), 1);
     assert_eq!(plain.instances.len(), 3);
-    let grouped = load_gltf_scene_with(
-        &path,
-        GltfOptions {
-            group_by_parent: true,
-        },
-    )
-    .unwrap();
+    assert_eq!(
+        load_gltf_scene(&path).unwrap(),
+        with(GltfObjects::Hierarchy)
+    );
+    let grouped = with(GltfObjects::Parents);
+    assert_eq!(grouped, with(GltfObjects::Hierarchy));
     let names: Vec<&str> = grouped.models.iter().map(|m| m.name.as_str()).collect();
     assert_eq!(names, ["building", "tri"]);
     assert_eq!(grouped.instances.len(), 2);
@@ -225,16 +235,189 @@ fn mesh_nodes_group_by_parent_when_asked() {
         let plan = parse_manifest_str(&text, &manifest).unwrap();
         plan.load_scene().unwrap()
     };
-    assert_eq!(scene_of(r#"Gltf("grouped.gltf")"#).instances.len(), 3);
+    assert_eq!(scene_of(r#"Gltf("grouped.gltf")"#).instances.len(), 2);
     assert_eq!(
         scene_of(r#"Gltf((file: "grouped.gltf"))"#).instances.len(),
-        3
+        2
     );
+    let s = scene_of(r#"Gltf((file: "grouped.gltf", objects: Nodes))"#);
+    assert_eq!((s.models.len(), s.instances.len()), (1, 3));
     let s = scene_of(r#"Gltf((file: "grouped.gltf", group_by_parent: true))"#);
     assert_eq!((s.models.len(), s.instances.len()), (2, 2));
+    let s = scene_of(r#"Gltf((file: "grouped.gltf", objects: Parents))"#);
+    assert_eq!((s.models.len(), s.instances.len()), (2, 2));
+    // Messages name the instance's node (issue 29 item 4).
+    assert_eq!(
+        s.describe_instance(0),
+        "instance 0 (glTF node 0 `building`, model `building`)"
+    );
+    // Contradicting settings are refused with their position.
+    let text = r#"(ground: (min: (-10.0, -10.0), max: (20.0, 10.0)),
+        scene: Gltf((file: "grouped.gltf", group_by_parent: true, objects: Nodes)),
+        cells: (cell_size: 5.0, min_eye_height: 1.0, max_eye_height: 2.0))"#;
+    let e = parse_manifest_str(text, &manifest).unwrap_err().to_string();
+    assert!(
+        e.contains("`group_by_parent: true` is `objects: Parents`"),
+        "{e}"
+    );
     // A misspelt field is refused, not ignored.
     let text = r#"(ground: (min: (-10.0, -10.0), max: (20.0, 10.0)),
         scene: Gltf((file: "grouped.gltf", group_by_parnet: true)),
         cells: (cell_size: 5.0, min_eye_height: 1.0, max_eye_height: 2.0))"#;
     assert!(parse_manifest_str(text, &manifest).is_err());
+}
+
+/// A glTF scene for issue 29 item 3, of one triangle mesh `tri` (1 × 1) and a
+/// "wheel" mesh: trucks (a `body` node using `tri` with two `wheel` children)
+/// under transform nodes at scales 1 and 2, one mirrored, a lone `tri` at scales
+/// 0.5, 1 and 3, and a `street` empty 40 units wide holding two small houses (each
+/// a `tri` node with a `wheel` child), all under one mesh-less `RootNode`.
+fn write_hierarchy_sample(dir: &std::path::Path) -> std::path::PathBuf {
+    let positions: [[f32; 3]; 6] = [
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [0.0, 0.0, 0.0],
+        [0.2, 0.0, 0.0],
+        [0.0, 0.2, 0.0],
+    ];
+    let bytes: Vec<u8> = positions
+        .iter()
+        .flatten()
+        .flat_map(|x| x.to_le_bytes())
+        .collect();
+    std::fs::write(dir.join("h.bin"), &bytes).unwrap();
+    let json = r#"{
+        "asset": {"version": "2.0"},
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
+        "nodes": [
+            {"name": "RootNode", "children": [1, 5, 9, 13, 14, 15, 16]},
+            {"name": "truck-0", "translation": [0.0, 0.0, 0.0], "children": [2]},
+            {"name": "body", "mesh": 0, "children": [3, 4]},
+            {"name": "wheel-l", "mesh": 1, "translation": [0.0, 0.0, 0.5]},
+            {"name": "wheel-r", "mesh": 1, "translation": [0.0, 0.0, -0.5]},
+            {"name": "truck-1", "translation": [10.0, 0.0, 0.0], "scale": [2.0, 2.0, 2.0], "children": [6]},
+            {"name": "body", "mesh": 0, "children": [7, 8]},
+            {"name": "wheel-l", "mesh": 1, "translation": [0.0, 0.0, 0.5]},
+            {"name": "wheel-r", "mesh": 1, "translation": [0.0, 0.0, -0.5]},
+            {"name": "truck-mirrored", "translation": [20.0, 0.0, 0.0], "scale": [-1.0, 1.0, 1.0], "children": [10]},
+            {"name": "body", "mesh": 0, "children": [11, 12]},
+            {"name": "wheel-l", "mesh": 1, "translation": [0.0, 0.0, 0.5]},
+            {"name": "wheel-r", "mesh": 1, "translation": [0.0, 0.0, -0.5]},
+            {"name": "tri-half", "mesh": 0, "translation": [0.0, 0.0, 5.0], "scale": [0.5, 0.5, 0.5]},
+            {"name": "tri-one", "mesh": 0, "translation": [2.0, 0.0, 5.0]},
+            {"name": "tri-three", "mesh": 0, "translation": [4.0, 0.0, 5.0], "scale": [3.0, 3.0, 3.0]},
+            {"name": "street", "translation": [0.0, 0.0, 20.0], "children": [17, 19]},
+            {"name": "house-a", "mesh": 0, "children": [18]},
+            {"name": "porch", "mesh": 1, "translation": [0.5, 0.0, 0.0]},
+            {"name": "house-b", "mesh": 0, "translation": [40.0, 0.0, 0.0], "children": [20]},
+            {"name": "porch", "mesh": 1, "translation": [0.5, 0.0, 0.0]}
+        ],
+        "meshes": [
+            {"name": "tri", "primitives": [{"attributes": {"POSITION": 0}}]},
+            {"name": "wheel", "primitives": [{"attributes": {"POSITION": 1}}]}
+        ],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+             "min": [0.0, 0.0, 0.0], "max": [1.0, 1.0, 0.0]},
+            {"bufferView": 0, "byteOffset": 36, "componentType": 5126, "count": 3, "type": "VEC3",
+             "min": [0.0, 0.0, 0.0], "max": [0.2, 0.2, 0.0]}
+        ],
+        "bufferViews": [{"buffer": 0, "byteLength": 72}],
+        "buffers": [{"uri": "h.bin", "byteLength": 72}]
+    }"#;
+    let path = dir.join("hierarchy.gltf");
+    std::fs::write(&path, json).unwrap();
+    path
+}
+
+/// Issue 29 item 3: glTF instances stay instances. Nodes using one mesh at several
+/// uniform scales share one model, the scale in the instance transform; by default
+/// a top-level node with everything under it is one object (a truck's body and
+/// wheels), identical trucks share that object's model at any uniform scale, a
+/// mirrored one gets a mirrored model, and an empty wider than the object limit
+/// (the manifest's cell size) is not merged: its children are the objects.
+#[test]
+fn issue29_gltf_instances_stay_instances_and_objects_follow_the_hierarchy() {
+    use format::load::{load_gltf_scene_with, GltfObjects, GltfOptions};
+    let dir = tempfile::tempdir().unwrap();
+    let path = write_hierarchy_sample(dir.path());
+    let options = GltfOptions {
+        objects: GltfObjects::Hierarchy,
+        max_object_extent: 10.0,
+    };
+    let scene = load_gltf_scene_with(&path, options).unwrap();
+    let named: Vec<(&str, u32)> = scene
+        .instances
+        .iter()
+        .map(|i| (scene.models[i.model as usize].name.as_str(), i.node))
+        .collect();
+    assert_eq!(
+        named,
+        [
+            ("truck-0", 1),
+            ("truck-0", 5),
+            ("truck-mirrored", 9),
+            ("tri", 13),
+            ("tri", 14),
+            ("tri", 15),
+            ("house-a", 17),
+            ("house-a", 19),
+        ]
+    );
+    assert_eq!(scene.models.len(), 4, "truck, mirrored truck, tri, house");
+    // The scales are in the instances: det = s³.
+    let det = |k: usize| Mat3::from_mat4(scene.instances[k].transform).determinant();
+    for (k, s) in [
+        (0, 1.0f32),
+        (1, 2.0),
+        (2, 1.0),
+        (3, 0.5),
+        (4, 1.0),
+        (5, 3.0),
+    ] {
+        assert!(
+            (det(k) - s.powi(3)).abs() < 1e-4,
+            "instance {k}: {}",
+            det(k)
+        );
+    }
+    // A truck is one model of its body and both wheels: 3 triangles.
+    assert_eq!(scene.models[0].mesh.triangles.len(), 3);
+    // World positions agree with the nodes': truck-1's body tip (0, 1, 0) · 2 + x 10.
+    let i = scene.instances[1];
+    let m = &scene.models[i.model as usize].mesh;
+    let top = m
+        .positions
+        .iter()
+        .map(|&p| i.transform.transform_point3(Vec3::from(p)))
+        .fold(f32::NEG_INFINITY, |a, p| a.max(p.y));
+    assert!((top - 2.0).abs() < 1e-5, "{top}");
+    // Every mesh node an object: 3 × 3 + 3 + 2 × 2 instances of two models (tri
+    // and wheel) and their mirrored copies.
+    let nodes = load_gltf_scene_with(
+        &path,
+        GltfOptions {
+            objects: GltfObjects::Nodes,
+            ..options
+        },
+    )
+    .unwrap();
+    assert_eq!(nodes.instances.len(), 16);
+    assert_eq!(nodes.models.len(), 4);
+    // Through a manifest: the cell size is the object limit; 50 merges the street.
+    let manifest = dir.path().join("m.ron");
+    let text = r#"(ground: (min: (-10.0, -10.0), max: (60.0, 40.0)),
+        scene: Gltf("hierarchy.gltf"),
+        cells: (cell_size: 50.0, min_eye_height: 1.0, max_eye_height: 2.0))"#;
+    let s = parse_manifest_str(text, &manifest)
+        .unwrap()
+        .load_scene()
+        .unwrap();
+    assert_eq!(s.instances.len(), 7);
+    assert_eq!(
+        s.describe_instance(6),
+        "instance 6 (glTF node 16 `street`, model `street`)"
+    );
 }

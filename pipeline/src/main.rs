@@ -302,6 +302,15 @@ fn completed(summary: &pipeline::run::RunSummary, jobs: &str) -> Result<(), Fail
     if summary.succeeded() {
         return Ok(());
     }
+    // What failed, in the user's terms (issue 29 item 4): the first few messages,
+    // each naming its job, cell, instance and what to change.
+    const SHOWN: usize = 3;
+    for (_, message) in summary.jobs_failed.iter().take(SHOWN) {
+        eprintln!("failed: {message}");
+    }
+    if summary.jobs_failed.len() > SHOWN {
+        eprintln!("… and {} more", summary.jobs_failed.len() - SHOWN);
+    }
     Err(failed(anyhow::anyhow!(
         "{} {jobs}; `pipeline status {}` lists them",
         summary.jobs_failed.len().max(1),

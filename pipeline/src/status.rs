@@ -44,8 +44,13 @@ impl Status {
         );
         if !self.failed.is_empty() {
             s += "failed:\n";
+            // The message names its job (worker `job::bake_job`).
             for (j, m) in &self.failed {
-                s += &format!("  job {j}: {m}\n");
+                if m.starts_with(&format!("job {j}:")) {
+                    s += &format!("  {m}\n");
+                } else {
+                    s += &format!("  job {j}: {m}\n");
+                }
             }
         }
         if !self.pending.is_empty() {

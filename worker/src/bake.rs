@@ -3,8 +3,19 @@
 //!
 //! Steps:
 //!
-//! 1. **Split.** An instance whose world box intersects the cell's prism is inside:
-//!    Original. Every other instance is outside and gets a proxy or is Culled.
+//! 1. **Split** ([`draws_as_original`], issue 29). An instance whose world box's
+//!    footprint (its x–z rectangle) overlaps the cell's hexagon is inside:
+//!    Original — whatever its height, so an object under the viewer's region
+//!    (terrain, a ground mesh, a road), over it (a bridge, an arcade's roof) or
+//!    enclosing part of it is drawn as it is, never captured from a point inside,
+//!    above or below it. Every other instance is outside and gets a proxy or is
+//!    Culled. The paper's view cells are regions of the ground (000 §3.1.1), and its
+//!    inside objects those standing in them: this is that rule for objects of any
+//!    height, of which the box–prism intersection (the rule until issue 29) is the
+//!    special case of objects reaching the eye heights. An outside object's box
+//!    misses the vertical column over the hexagon, so the cell centre lies outside
+//!    it and a capture from there sees all of it in front of the eye
+//!    ([`crate::view`]).
 //! 2. **Regional back-face culling** (§3.1.5): an outside instance all of whose
 //!    triangles face away from the whole prism is Culled (an instance without
 //!    triangles too).
@@ -79,6 +90,72 @@ pub enum BakeError {
         instance: u32,
         what: String,
     },
+}
+
+impl BakeError {
+    /// The failure in the user's terms (issue 29 item 4), without the cell or group
+    /// (the job names its unit): which instance failed — its glTF node or manifest
+    /// entry and its model ([`Scene::describe_instance`]) —, what went wrong, and
+    /// what to change in the scene or the manifest.
+    pub fn explain(&self, scene: &Scene) -> String {
+        use crate::capture::CaptureError;
+        use crate::view::ViewError;
+        let describe = |instances: &[u32]| -> String {
+            let mut named: Vec<String> = instances
+                .iter()
+                .take(3)
+                .map(|&i| scene.describe_instance(i as usize))
+                .collect();
+            if instances.len() > 3 {
+                named.push(format!("{} more", instances.len() - 3));
+            }
+            named.join(", ")
+        };
+        let split_it = "split it into parts no wider than a cell (`cells.cell_size`), \
+                        e.g. as separate nodes or meshes";
+        match self {
+            BakeError::NoCell { .. } | BakeError::NoGroup { .. } => self.to_string(),
+            BakeError::Texture { instance, what, .. } => format!(
+                "the texture of a proxy of {} cannot be stored: {what}; to change: check \
+                 `bake.image_res`, and report it if the manifest is sound",
+                describe(&[*instance])
+            ),
+            BakeError::Proxy { source, .. } => match source {
+                ProxyError::NoModel { .. } | ProxyError::NoInstance { .. } => format!(
+                    "the scene is inconsistent: {source}; to change: rebuild the scene \
+                     (a scene loaded from a manifest never is: report it)"
+                ),
+                ProxyError::Capture { instances, source } => {
+                    let what = describe(instances);
+                    let advice = match source {
+                        CaptureError::Empty => {
+                            "check the model: none of its triangles has valid vertices".into()
+                        }
+                        CaptureError::View {
+                            source: ViewError::TooLarge { .. },
+                            ..
+                        } => format!("lower `bake.image_res`, or {split_it}"),
+                        CaptureError::View {
+                            source: ViewError::BoxNotInFront { .. },
+                            ..
+                        } => format!(
+                            "the object's box surrounds the capture point; {split_it}, or \
+                             move it so that it does not enclose a cell's centre"
+                        ),
+                        CaptureError::View { .. } => {
+                            format!("check the object's placement and size, or {split_it}")
+                        }
+                    };
+                    format!("capture of {what} failed: {source}; to change: {advice}")
+                }
+                ProxyError::Simplify { instance, source } => format!(
+                    "simplifying {} failed: {source}; to change: check the model's mesh \
+                     (finite positions, valid triangles)",
+                    describe(&[*instance])
+                ),
+            },
+        }
+    }
 }
 
 /// What became of one instance in this cell.
@@ -391,6 +468,17 @@ enum Job {
     Mv(u32),
 }
 
+/// The split's rule (module docs, step 1; issue 29): an object whose world box
+/// `[lo, hi]` has a footprint overlapping the region's hexagon is drawn by the
+/// region as an original — it stands in, lies under, spans over or encloses part of
+/// the region's prism. Everything else is outside: its box misses the column over
+/// the hexagon, so the region's centre (the capture eye) is outside the box. The far
+/// field's groups ([`crate::far_field`]) apply the same rule to their prisms, so an
+/// object is never far for a group whose region it overlaps either.
+pub fn draws_as_original(prism: &Prism, lo: Vec3, hi: Vec3) -> bool {
+    prism.footprint_overlaps_aabb(lo, hi)
+}
+
 /// Bakes one cell (module docs) with every collapse starting from the full meshes
 /// (the paper as written; [`bake_cell_with`] starts from the models' LOD chains).
 pub fn bake_cell(
@@ -458,7 +546,7 @@ pub fn bake_cell_with(
                 return (None, Assignment::Far, false);
             }
             let (lo, hi) = scene.instance_bounds(i);
-            if prism.intersects_aabb(lo, hi) {
+            if draws_as_original(&prism, lo, hi) {
                 return (None, Assignment::Original, false);
             }
             // Culled by size (004, issue 16): with objective selection, an object

@@ -22,8 +22,9 @@
 //! `GROUP_SIZE_FACTOR`·c = 2√7/√3·c ≈ 3.06 c, extruded between the eye heights. That
 //! *group prism* contains the prism of every cell of the group; every test made
 //! against it is conservative for each of them:
-//! - **outside**: an instance whose box misses the group prism misses every cell's
-//!   prism;
+//! - **outside** ([`crate::bake::draws_as_original`], issue 29): an instance whose
+//!   box's footprint misses the group's hexagon misses every cell's hexagon, and
+//!   one that overlaps it — a ground mesh under the group — is never far for it;
 //! - **self-occluding error** (000 §3.1.2) from the group centre with c = the group
 //!   prism's size (the farthest viewpoint |VV'| of its region): below T_s, the object
 //!   is a single-view object for the whole group;
@@ -306,7 +307,7 @@ impl CellGroups {
 }
 
 /// The far test of one group for one instance (module docs): outside the group
-/// prism, a single-view object for it, at a merged level no nearer than
+/// prism's footprint ([`crate::bake::draws_as_original`]), a single-view object for it, at a merged level no nearer than
 /// [`merged_min_distance`], and not regionally back-facing to it. The cheap tests
 /// run first: the back-face test reads every triangle.
 struct FarTest {
@@ -347,7 +348,7 @@ impl FarTest {
             return false;
         }
         let (lo, hi) = scene.instance_bounds(i);
-        if self.prism.intersects_aabb(lo, hi) {
+        if crate::bake::draws_as_original(&self.prism, lo, hi) {
             return false;
         }
         let error =

@@ -367,8 +367,8 @@ pub fn bake_cell_pack(
             &plan.bake,
         ),
     }
-    .map_err(|e| e.to_string())?;
-    let pack = bake.to_pack(*fingerprint).map_err(|e| e.to_string())?;
+    .map_err(|e| e.explain(scene))?;
+    let pack = bake.to_pack(*fingerprint).map_err(|e| e.explain(scene))?;
     let s = &bake.stats;
     let t = &s.times;
     // What `pipeline report` reads (the paper's Tables 3–8 per cell), the quality

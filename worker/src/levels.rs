@@ -206,6 +206,7 @@ mod tests {
                 max: [1e6, 1e6],
             },
             model_bounds: Default::default(),
+            instance_labels: Default::default(),
         }
     }
 

@@ -931,6 +931,7 @@ mod tests {
                 max: [100.0, 100.0],
             },
             model_bounds: Default::default(),
+            instance_labels: Default::default(),
         };
         let prism = Prism {
             centre: Vec2::new(0.0, 0.0),

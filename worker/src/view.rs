@@ -206,6 +206,13 @@ impl View {
     /// of angular extent, i.e. `width = ceil(horizontal angle · image_res / (π/3))`
     /// (likewise the height). The view axis points at the box centre; near and far
     /// hug the box (its nearest and farthest corner depths, widened by 0.1%).
+    ///
+    /// A box wide beside the eye (a long wall, a building block along the cell) can
+    /// reach behind the plane through the eye across that axis although the eye is
+    /// outside it (issue 29). The axis then turns towards the box's nearest point
+    /// ([`tight_axes`]): every point of a box lies in front of the plane through the
+    /// eye normal to the direction of its nearest point, so a box that does not
+    /// hold the eye always gets a view (one wider than the centred one would be).
     pub fn tight_around(
         eye: Vec3,
         aabb_min: Vec3,
@@ -217,31 +224,37 @@ impl View {
                 what: format!("box {aabb_min:?}..{aabb_max:?}, resolution {image_res_per_60deg}"),
             });
         }
-        let centre = 0.5 * (aabb_min + aabb_max);
-        let forward = centre - eye;
-        if forward.length_squared() < 1e-20 {
-            return Err(ViewError::BoxNotInFront { depth: 0.0 });
-        }
-        let view = eye_basis(eye, forward, Vec3::Y);
-        let mut lo = glam::Vec2::splat(f32::INFINITY);
-        let mut hi = glam::Vec2::splat(f32::NEG_INFINITY);
-        let mut dmin = f32::INFINITY;
-        let mut dmax = f32::NEG_INFINITY;
-        for p in box_corners(aabb_min, aabb_max) {
-            let e = view.transform_point3(p);
-            let d = -e.z;
-            dmin = dmin.min(d);
-            dmax = dmax.max(d);
-            if d > 0.0 {
-                let s = glam::Vec2::new(e.x, e.y) / d;
-                lo = lo.min(s);
-                hi = hi.max(s);
+        let extent = (aabb_max - aabb_min).length().max(1e-6);
+        let mut first_depth = None;
+        let mut framed = None;
+        for forward in tight_axes(eye, aabb_min, aabb_max) {
+            let view = eye_basis(eye, forward, Vec3::Y);
+            let mut lo = glam::Vec2::splat(f32::INFINITY);
+            let mut hi = glam::Vec2::splat(f32::NEG_INFINITY);
+            let mut dmin = f32::INFINITY;
+            let mut dmax = f32::NEG_INFINITY;
+            for p in box_corners(aabb_min, aabb_max) {
+                let e = view.transform_point3(p);
+                let d = -e.z;
+                dmin = dmin.min(d);
+                dmax = dmax.max(d);
+                if d > 0.0 {
+                    let s = glam::Vec2::new(e.x, e.y) / d;
+                    lo = lo.min(s);
+                    hi = hi.max(s);
+                }
+            }
+            first_depth.get_or_insert(dmin);
+            if dmin > 1e-4 * extent {
+                framed = Some((view, lo, hi, dmin, dmax));
+                break;
             }
         }
-        let extent = (aabb_max - aabb_min).length().max(1e-6);
-        if dmin <= 1e-4 * extent {
-            return Err(ViewError::BoxNotInFront { depth: dmin });
-        }
+        let Some((view, lo, hi, dmin, dmax)) = framed else {
+            return Err(ViewError::BoxNotInFront {
+                depth: first_depth.unwrap_or(0.0),
+            });
+        };
         let near = dmin * 0.999;
         let far = dmax * 1.001 + f32::EPSILON * dmax.abs();
         let per_radian = image_res_per_60deg as f64 / FRAC_PI_3 as f64;
@@ -307,6 +320,31 @@ impl View {
         let p = p.truncate() / p.w;
         (p - self.eye).normalize()
     }
+}
+
+/// The view axes [`View::tight_around`] tries, in order: towards the box centre,
+/// then turning in quarter steps to the direction of the box's nearest point,
+/// which frames any box not holding the eye (module docs of the method). None
+/// when the eye is the centre; only the centre's when the eye is in the box.
+/// The first axis is the unnormalised centre direction (the basis normalises it).
+fn tight_axes(eye: Vec3, lo: Vec3, hi: Vec3) -> Vec<Vec3> {
+    let centre = 0.5 * (lo + hi) - eye;
+    if centre.length_squared() < 1e-20 {
+        return Vec::new();
+    }
+    let to_centre = centre.normalize();
+    let to_nearest = (eye.clamp(lo, hi) - eye).normalize_or_zero();
+    let mut axes = vec![centre];
+    if to_nearest != Vec3::ZERO {
+        for t in [0.75f32, 0.5, 0.25] {
+            let axis = (t * to_centre + (1.0 - t) * to_nearest).normalize_or_zero();
+            if axis != Vec3::ZERO {
+                axes.push(axis);
+            }
+        }
+        axes.push(to_nearest);
+    }
+    axes
 }
 
 fn widen(lo: glam::Vec2, hi: glam::Vec2) -> (glam::Vec2, glam::Vec2) {

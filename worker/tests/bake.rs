@@ -240,6 +240,7 @@ fn bunny_scene() -> Option<(Scene, HexGrid, CellParams)> {
         }],
         ground,
         model_bounds: Default::default(),
+        instance_labels: Default::default(),
     };
     let cells = CellParams {
         cell_size: CELL_SIZE,

@@ -207,6 +207,7 @@ fn bake_cell_culls_what_a_wall_hides_only_when_asked() {
             max: [100.0, 120.0],
         },
         model_bounds: Default::default(),
+        instance_labels: Default::default(),
     };
     let grid = HexGrid::new(scene.ground, 16.0);
     let cell = grid.cell_at(Vec2::new(50.0, 50.0)).unwrap();
@@ -271,6 +272,7 @@ proptest! {
             instances,
             ground: Ground { min: [-100.0, -100.0], max: [100.0, 100.0] },
             model_bounds: Default::default(),
+            instance_labels: Default::default(),
         };
         let prism = Prism { centre: Vec2::ZERO, cell_size: 10.0, min_y: 1.0, max_y: 3.0 };
         if prism.intersects_aabb(scene.instance_bounds(target_id as usize).0, scene.instance_bounds(target_id as usize).1) {

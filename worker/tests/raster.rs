@@ -570,6 +570,34 @@ fn tight_view_has_the_capture_resolution_and_holds_the_box() {
     assert!(View::tight_around(Vec3::ZERO, Vec3::splat(-1.0), Vec3::ONE, 1024).is_err());
 }
 
+/// Issue 29: a long wall beside the eye, off to one side, reaches behind the plane
+/// through the eye across the axis to its centre; the view turns towards its
+/// nearest point and still holds the whole box in front of the eye.
+#[test]
+fn tight_view_frames_a_long_box_beside_the_eye() {
+    let (lo, hi) = (Vec3::new(-100.0, 0.0, 44.0), Vec3::new(1900.0, 8.0, 45.0));
+    let eye = Vec3::new(0.0, 4.0, 0.0);
+    let view = View::tight_around(eye, lo, hi, 256).unwrap();
+    for p in worker::view::box_corners(lo, hi) {
+        let (s, depth) = view.project(p).unwrap();
+        assert!(
+            depth >= view.near && depth <= view.far,
+            "{p:?}: depth {depth}"
+        );
+        assert!(s.x > -0.5 && s.x < view.width as f32 + 0.5, "{p:?}: {s:?}");
+        assert!(s.y > -0.5 && s.y < view.height as f32 + 0.5, "{p:?}: {s:?}");
+    }
+    // The eye straight above a wide slab: looking down.
+    let view = View::tight_around(
+        Vec3::new(0.0, 4.0, 0.0),
+        Vec3::new(-30.0, -1.0, -30.0),
+        Vec3::new(30.0, 1.0, 30.0),
+        64,
+    )
+    .unwrap();
+    assert!(view.near > 2.0 && view.near < 3.0, "{}", view.near);
+}
+
 // ---------------------------------------------------------------- goldens
 
 fn golden_scenes() -> Vec<(&'static str, Capture)> {

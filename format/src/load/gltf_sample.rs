@@ -8,8 +8,9 @@
 //! 0 to 2 (so both wrap modes show) with base-colour factor (1, 0.9, 0.8), and a
 //! plain red lid (no texture). Three nodes use the mesh under a root node `yard`:
 //! one as is, one rotated 30° about y and scaled 1.5, one mirrored in x. The scene
-//! therefore has six models (textured / plain × as is / scaled 1.5 / mirrored: the
-//! reader bakes scales into models, `gltf_scene.rs`) and six instances.
+//! therefore has four models (textured / plain × as is / mirrored: the reader puts
+//! uniform scales in the instances and bakes mirrors into models, `gltf_scene.rs`)
+//! and six instances.
 
 use std::path::{Path, PathBuf};
 

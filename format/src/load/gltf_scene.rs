@@ -12,24 +12,40 @@
 //!    [`MAX_DEPTH`](super::gltf::MAX_DEPTH) is an error); skins and morph targets are
 //!    ignored with a note (the mesh is drawn in its bind pose / base shape);
 //! 3. per node with a mesh, split the mesh's triangle primitives by base-colour
-//!    texture: each (mesh, texture or none, scale) is one model, created at first
+//!    texture: each (mesh, texture or none, mirror) is one model, created at first
 //!    use, and the node places one instance of each of its mesh's models. The bake's
-//!    kernels see instances as parks have them — rigid transforms over models in
-//!    world units — so the node's composed transform is split ([`split_transform`]):
-//!    a similarity (uniform scale s × rotation, possibly mirroring) becomes a model
-//!    scaled by s (and mirrored in x when the node mirrors) and a rotation + translation
-//!    as the instance transform; anything else (non-uniform scale, shear) is baked
-//!    whole into the model and the instance only translates. Nodes with the same
-//!    mesh and scale share a model. A mirrored model has flipped winding, so
-//!    triangles stay counter-clockwise in the world;
-//!    With [`GltfOptions::group_by_parent`] (manifest `group_by_parent: true`), the
-//!    mesh nodes that are children of one node, when there are two or more, are one
-//!    object instead: their meshes are merged into one model per base-colour
-//!    texture, in the parent's frame (each child's local transform baked into the
-//!    model, the parent's world transform split as above), and placed once with
-//!    the parent's instance transform, so a building of 40 nodes is one object of
-//!    the bake. Such models are not shared with other nodes; a parent with a single
-//!    mesh child, and mesh nodes at the scene's root, stay as without grouping;
+//!    kernels see instances as parks and `Instances` manifests have them — rotation,
+//!    uniform scale and translation over models in world units — so the node's
+//!    composed transform is split ([`split_transform`]): a similarity (uniform
+//!    scale s × rotation, possibly mirroring) becomes the instance transform, with a
+//!    mirror in x baked into the model when the node mirrors; anything else
+//!    (non-uniform scale, shear) is baked whole into the model and the instance only
+//!    translates. So nodes using one mesh at any uniform scales share one model
+//!    (issue 29). A mirrored model has flipped winding, so triangles stay
+//!    counter-clockwise in the world.
+//!
+//!    **Objects** ([`GltfObjects`], manifest `objects`). A group of mesh nodes that
+//!    forms one object is merged into one model per base-colour texture, in the
+//!    frame of the group's root node (each member's transform relative to the root
+//!    baked into the model, the root's world transform split as above), and placed
+//!    once with the root's instance transform; groups of the same content (meshes
+//!    and their placements) share their models, so twenty trucks of the same nodes
+//!    are twenty instances of one truck. Which nodes form a group:
+//!    - `Hierarchy` (the default, issue 29): objects follow the scene's hierarchy,
+//!      as a Blender or assimp export lays them out. Below a chain of single
+//!      mesh-less roots (an exporter's `RootNode`), each top-level node with
+//!      everything under it is one object — a truck's body and wheels — unless the
+//!      subtree is wider in x or z than [`GltfOptions::max_object_extent`] (the
+//!      manifest's cell size: a merged object wider than a cell would be drawn
+//!      whole by every cell it overlaps). Then its own mesh is an object and each
+//!      child is tried the same way, so an empty that gathers a street of houses
+//!      gives one object per house. A subtree with a single mesh node places that
+//!      node alone (its model stays shared with the other nodes of its mesh).
+//!    - `Parents` (issue 18's `group_by_parent: true`): the mesh nodes that are
+//!      children of one node, when there are two or more, are one object; the
+//!      parent's own mesh and mesh nodes at the scene's root stay apart.
+//!    - `Nodes`: every mesh node is an object (the loader's behaviour before
+//!      issue 18).
 //! 4. a model's albedo: vertex colour (`COLOR_0`, linear) × the material's base-colour
 //!    factor, to sRGB8 per vertex (white when neither is there but a texture is; the
 //!    procedural pattern when nothing is); the base-colour texture (its UV set, the
@@ -77,11 +93,41 @@ pub struct GltfInstance {
     pub node: u32,
 }
 
+/// Which mesh nodes of a glTF scene form one object of the bake (module docs,
+/// step 3; manifest `objects`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub enum GltfObjects {
+    /// The default: objects follow the node hierarchy — each top-level node (below
+    /// a chain of single mesh-less roots) with everything under it is one object,
+    /// unless it spans more than [`GltfOptions::max_object_extent`]: then its own
+    /// mesh is one object and each child is tried the same way.
+    #[default]
+    Hierarchy,
+    /// The mesh nodes that are children of one node, two or more, are one object
+    /// (the parent's own mesh stays apart): issue 18's `group_by_parent`.
+    Parents,
+    /// Every mesh node is an object of its own.
+    Nodes,
+}
+
 /// How a glTF file is read as a scene.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct GltfOptions {
-    /// One object per parent node of two or more mesh nodes (module docs, step 3).
-    pub group_by_parent: bool,
+    /// Which mesh nodes form one object (module docs, step 3).
+    pub objects: GltfObjects,
+    /// [`GltfObjects::Hierarchy`]: the widest a group of nodes may be, in x or z
+    /// (world units), to be one object; the manifest passes its cell size, since an
+    /// object wider than a cell is drawn whole by every cell it overlaps.
+    pub max_object_extent: f32,
+}
+
+impl Default for GltfOptions {
+    fn default() -> Self {
+        GltfOptions {
+            objects: GltfObjects::Hierarchy,
+            max_object_extent: f32::INFINITY,
+        }
+    }
 }
 
 /// A glTF file as a scene.
@@ -91,14 +137,145 @@ pub struct GltfScene {
     pub instances: Vec<GltfInstance>,
     /// What was ignored, one line each (`KHR_texture_transform is not read`, ...).
     pub notes: Vec<String>,
+    /// Per node of the document (by index), its name where it has a non-empty one
+    /// (for messages that name an instance's node).
+    pub node_names: Vec<Option<String>>,
 }
 
-/// A node met in the walk (step 2a): its world transform and its parent's index and
-/// world transform.
+/// A node met in the walk (step 2a): its world transform and its parent's visit
+/// (index into the visits) and world transform.
 struct Visit<'a> {
     node: gltf::Node<'a>,
     world: Mat4,
     parent: Option<(usize, Mat4)>,
+}
+
+/// Mesh nodes placed as one object (step 3): their visits in walk order, each
+/// with its transform relative to the group's root node.
+struct Group {
+    members: Vec<usize>,
+    relative: Vec<Mat4>,
+}
+
+/// What a merged model is made of: its texture and, per part, the mesh and the
+/// bits of its placement in the model (linear part and offset).
+type GroupKey = (Option<usize>, Vec<(usize, [u32; 12])>);
+
+/// The groups of mesh nodes that form one object (step 3), by their root's visit:
+/// under [`GltfObjects::Hierarchy`], top-level subtrees of two or more mesh nodes
+/// no wider than `max_object_extent` (else their children, tried alike); under
+/// [`GltfObjects::Parents`], the mesh children of one node when two or more;
+/// under [`GltfObjects::Nodes`], none. Mesh nodes in no group stand alone.
+fn object_groups(visits: &[Visit], options: GltfOptions) -> BTreeMap<usize, Group> {
+    let n = visits.len();
+    let mut children: Vec<Vec<usize>> = vec![Vec::new(); n];
+    for (k, v) in visits.iter().enumerate() {
+        if let Some((p, _)) = v.parent {
+            children[p].push(k);
+        }
+    }
+    let local = |k: usize| Mat4::from_cols_array_2d(&visits[k].node.transform().matrix());
+    let mut groups = BTreeMap::new();
+    match options.objects {
+        GltfObjects::Nodes => {}
+        GltfObjects::Parents => {
+            for (p, kids) in children.iter().enumerate() {
+                let members: Vec<usize> = kids
+                    .iter()
+                    .copied()
+                    .filter(|&k| visits[k].node.mesh().is_some())
+                    .collect();
+                if members.len() >= 2 {
+                    let relative = members.iter().map(|&k| local(k)).collect();
+                    groups.insert(p, Group { members, relative });
+                }
+            }
+        }
+        GltfObjects::Hierarchy => {
+            // Per visit: mesh nodes in its subtree and the subtree's world box
+            // (children come after their parent in the walk: fold in reverse).
+            let mut meshes = vec![0usize; n];
+            let mut boxes: Vec<Option<(glam::Vec3, glam::Vec3)>> = vec![None; n];
+            for k in (0..n).rev() {
+                let v = &visits[k];
+                if let Some(mesh) = v.node.mesh() {
+                    meshes[k] += 1;
+                    for p in mesh.primitives() {
+                        let b = p.bounding_box();
+                        let (lo, hi) = (glam::Vec3::from(b.min), glam::Vec3::from(b.max));
+                        for c in 0..8 {
+                            let corner = glam::Vec3::new(
+                                if c & 1 == 0 { lo.x } else { hi.x },
+                                if c & 2 == 0 { lo.y } else { hi.y },
+                                if c & 4 == 0 { lo.z } else { hi.z },
+                            );
+                            let w = v.world.transform_point3(corner);
+                            boxes[k] = Some(match boxes[k] {
+                                Some((a, b)) => (a.min(w), b.max(w)),
+                                None => (w, w),
+                            });
+                        }
+                    }
+                }
+                if let Some((p, _)) = v.parent {
+                    meshes[p] += meshes[k];
+                    if let Some((a, b)) = boxes[k] {
+                        boxes[p] = Some(match boxes[p] {
+                            Some((c, d)) => (a.min(c), b.max(d)),
+                            None => (a, b),
+                        });
+                    }
+                }
+            }
+            let fits = |k: usize| {
+                boxes[k].is_none_or(|(lo, hi)| {
+                    let size = hi - lo;
+                    size.x.max(size.z) <= options.max_object_extent
+                })
+            };
+            // The top level: below a chain of single mesh-less roots.
+            let mut top: Vec<usize> = (0..n).filter(|&k| visits[k].parent.is_none()).collect();
+            while let [only] = top[..] {
+                if visits[only].node.mesh().is_some() || children[only].is_empty() {
+                    break;
+                }
+                top = children[only].clone();
+            }
+            let mut todo: Vec<usize> = top.into_iter().rev().collect();
+            while let Some(root) = todo.pop() {
+                if meshes[root] < 2 {
+                    continue;
+                }
+                if !fits(root) {
+                    todo.extend(children[root].iter().rev().copied());
+                    continue;
+                }
+                // The subtree in walk order (a subtree is a contiguous run of
+                // visits after its root), with transforms relative to the root.
+                let mut relative_of: BTreeMap<usize, Mat4> = BTreeMap::new();
+                relative_of.insert(root, Mat4::IDENTITY);
+                let mut members = Vec::new();
+                let mut relative = Vec::new();
+                for (k, visit) in visits.iter().enumerate().skip(root) {
+                    let rel = if k == root {
+                        Mat4::IDENTITY
+                    } else {
+                        match visit.parent.and_then(|(p, _)| relative_of.get(&p)) {
+                            Some(&parent_rel) => parent_rel * local(k),
+                            None => break,
+                        }
+                    };
+                    relative_of.insert(k, rel);
+                    if visit.node.mesh().is_some() {
+                        members.push(k);
+                        relative.push(rel);
+                    }
+                }
+                groups.insert(root, Group { members, relative });
+            }
+        }
+    }
+    groups
 }
 
 /// One mesh's primitives placed in a model: `offset + linear · p`, winding flipped
@@ -125,7 +302,7 @@ pub fn load_gltf_scene(path: &Path) -> Result<GltfScene, LoadError> {
     load_gltf_scene_with(path, GltfOptions::default())
 }
 
-/// [`load_gltf_scene`] with options (the manifest's `group_by_parent`).
+/// [`load_gltf_scene`] with options (the manifest's `objects`).
 pub fn load_gltf_scene_with(path: &Path, options: GltfOptions) -> Result<GltfScene, LoadError> {
     let bytes = std::fs::read(path).map_err(|source| LoadError::Io {
         path: path.to_path_buf(),
@@ -198,13 +375,15 @@ fn parse_scene(path: &Path, bytes: &[u8], options: GltfOptions) -> Result<GltfSc
     let mut skinned = Vec::new();
     let mut morphed = Vec::new();
     // Step 2a: every node in depth-first order with its world transform and its
-    // parent (index and world transform); then, when grouping, the parents of two
-    // or more mesh nodes.
+    // parent's visit; then the groups of mesh nodes that form one object.
     let mut visits: Vec<Visit> = Vec::new();
+    let mut last_visit: BTreeMap<usize, usize> = BTreeMap::new();
     walk_nodes(path, &scene, |node, world, parent| {
         if node.skin().is_some() {
             skinned.push(node.index());
         }
+        let parent = parent.and_then(|(p, w)| last_visit.get(&p).map(|&v| (v, w)));
+        last_visit.insert(node.index(), visits.len());
         visits.push(Visit {
             node: node.clone(),
             world,
@@ -212,20 +391,15 @@ fn parse_scene(path: &Path, bytes: &[u8], options: GltfOptions) -> Result<GltfSc
         });
         Ok(())
     })?;
-    // Parent index → its mesh children (in visit order), for parents of two or more.
-    let mut by_parent: BTreeMap<usize, Vec<usize>> = BTreeMap::new();
-    if options.group_by_parent {
-        for (k, Visit { node, parent, .. }) in visits.iter().enumerate() {
-            if let (Some(_), Some((p, _))) = (node.mesh(), parent) {
-                by_parent.entry(*p).or_default().push(k);
-            }
-        }
-        by_parent.retain(|_, members| members.len() >= 2);
-    }
-    let grouped: BTreeMap<usize, usize> = by_parent
+    let groups = object_groups(&visits, options);
+    // Member visit → its group's root visit (a group is placed at its first member).
+    let grouped: BTreeMap<usize, usize> = groups
         .iter()
-        .flat_map(|(&p, members)| members.iter().map(move |&k| (k, p)))
+        .flat_map(|(&root, g)| g.members.iter().map(move |&k| (k, root)))
         .collect();
+    // Merged models by content: (texture, parts) → model, so that identical groups
+    // (two trucks of the same nodes) share their models.
+    let mut group_models: BTreeMap<GroupKey, u32> = BTreeMap::new();
     // Step 2b: place the mesh nodes (a group where its first member is visited).
     for (
         k,
@@ -246,18 +420,19 @@ fn parse_scene(path: &Path, bytes: &[u8], options: GltfOptions) -> Result<GltfSc
                 morphed.push(mesh.index());
             }
         }
-        if let (Some(&p), Some((_, parent_world))) = (grouped.get(&k), parent) {
-            if by_parent[&p][0] == k {
-                let members: Vec<&gltf::Node> =
-                    by_parent[&p].iter().map(|&m| &visits[m].node).collect();
-                let parent_node = document.nodes().nth(p).expect("visited parent");
+        let _ = parent;
+        if let Some(&root) = grouped.get(&k) {
+            let group = &groups[&root];
+            if group.members[0] == k {
                 place_group(
                     path,
                     &document,
                     &buffers,
-                    (&parent_node, *parent_world),
-                    &members,
+                    &visits,
+                    root,
+                    group,
                     &mut textures,
+                    &mut group_models,
                     &mut models,
                     &mut instances,
                 )?;
@@ -350,36 +525,46 @@ fn parse_scene(path: &Path, bytes: &[u8], options: GltfOptions) -> Result<GltfSc
             Location::Unknown,
         ));
     }
+    let node_names = document
+        .nodes()
+        .map(|n| n.name().filter(|n| !n.is_empty()).map(str::to_string))
+        .collect();
     Ok(GltfScene {
         models,
         instances,
         notes,
+        node_names,
     })
 }
 
-/// Places a group of mesh nodes, children of `parent` (step 3, `group_by_parent`):
-/// one model per base-colour texture of all their primitives, in the parent's frame
-/// (the parent's world transform split by [`split_transform`]), each placed once
-/// with the parent's instance transform.
+/// Places a group of mesh nodes (step 3): one model per base-colour texture of all
+/// their primitives, in the frame of the group's root node (its world transform
+/// split by [`split_transform`]), each placed once with the root's instance
+/// transform. A model is shared with every earlier group of the same content
+/// (`models_of`: texture, meshes and placements in the model).
 #[allow(clippy::too_many_arguments)]
 fn place_group(
     path: &Path,
     document: &gltf::Document,
     buffers: &[gltf::buffer::Data],
-    (parent, parent_world): (&gltf::Node, Mat4),
-    members: &[&gltf::Node],
+    visits: &[Visit],
+    root: usize,
+    group: &Group,
     textures: &mut BTreeMap<usize, AlbedoTexture>,
+    models_of: &mut BTreeMap<GroupKey, u32>,
     models: &mut Vec<GltfModel>,
     instances: &mut Vec<GltfInstance>,
 ) -> Result<(), LoadError> {
-    let at = || Location::Element(format!("node {}", parent.index()));
-    let (baked, instance_transform) = split_transform(parent_world);
+    let root_node = &visits[root].node;
+    let at = || Location::Element(format!("node {}", root_node.index()));
+    let (baked, instance_transform) = split_transform(visits[root].world);
     // Textures in order of first appearance over the members' primitives.
     let mut by_texture: Vec<(Option<usize>, Vec<Part>)> = Vec::new();
-    for node in members {
-        let Some(mesh) = node.mesh() else { continue };
-        let local = Mat4::from_cols_array_2d(&node.transform().matrix());
-        let affine = Mat4::from_mat3(baked) * local;
+    for (&k, &relative) in group.members.iter().zip(&group.relative) {
+        let Some(mesh) = visits[k].node.mesh() else {
+            continue;
+        };
+        let affine = Mat4::from_mat3(baked) * relative;
         let linear = Mat3::from_mat4(affine);
         for p in mesh.primitives() {
             let texture = base_color_texture(&p);
@@ -413,22 +598,52 @@ fn place_group(
     }
     let split = by_texture.len() > 1;
     for (texture, parts) in by_texture {
-        let name = model_name(
-            parent.name(),
-            || format!("node{}", parent.index()),
+        let key: GroupKey = (
             texture,
-            split,
-            false,
+            parts
+                .iter()
+                .map(|part| {
+                    let mut bits = [0u32; 12];
+                    for (b, x) in bits.iter_mut().zip(
+                        part.linear
+                            .to_cols_array()
+                            .into_iter()
+                            .chain(part.offset.unwrap_or_default().to_array()),
+                    ) {
+                        *b = x.to_bits();
+                    }
+                    (part.mesh.index(), bits)
+                })
+                .collect(),
         );
-        let model = build_model(path, document, buffers, &parts, texture, name, textures)?;
-        if let Some(m) = model {
-            let id = u32::try_from(models.len())
-                .map_err(|_| parse_error(path, FORMAT, "too many models".to_string(), at()))?;
-            models.push(m);
+        let id = match models_of.get(&key) {
+            Some(&id) => Some(id),
+            None => {
+                let name = model_name(
+                    root_node.name(),
+                    || format!("node{}", root_node.index()),
+                    texture,
+                    split,
+                    false,
+                );
+                match build_model(path, document, buffers, &parts, texture, name, textures)? {
+                    Some(m) => {
+                        let id = u32::try_from(models.len()).map_err(|_| {
+                            parse_error(path, FORMAT, "too many models".to_string(), at())
+                        })?;
+                        models.push(m);
+                        models_of.insert(key, id);
+                        Some(id)
+                    }
+                    None => None,
+                }
+            }
+        };
+        if let Some(model) = id {
             instances.push(GltfInstance {
-                model: id,
+                model,
                 transform: instance_transform,
-                node: parent.index() as u32,
+                node: root_node.index() as u32,
             });
         }
     }
@@ -567,10 +782,11 @@ fn build_model(
 
 /// Splits a node's world transform into the linear part baked into its model and
 /// the instance transform (step 3 of the module docs): for a similarity `T·(s·Q)`
-/// (Q orthogonal; checked to 10⁻⁴), `(s·F, T·Q·F)` with F = I, or the mirror
-/// diag(−1, 1, 1) when Q mirrors (so instance transforms are proper rotations, as
-/// in parks); otherwise `(L, T)` with L the whole linear part. `instance · baked` is
-/// the world transform's linear part.
+/// (Q orthogonal; checked to 10⁻⁴), `(F, T·s·Q·F)` with F = I, or the mirror
+/// diag(−1, 1, 1) when Q mirrors (so instance transforms are uniformly scaled
+/// proper rotations, as an `Instances` manifest's `scale` makes them); otherwise
+/// `(L, T)` with L the whole linear part. `instance · baked` is the world
+/// transform's linear part.
 pub(crate) fn split_transform(world: Mat4) -> (Mat3, Mat4) {
     let linear = Mat3::from_mat4(world);
     let translation = Mat4::from_translation(world.w_axis.truncate());
@@ -583,13 +799,12 @@ pub(crate) fn split_transform(world: Mat4) -> (Mat3, Mat4) {
             .iter()
             .all(|d| d.abs() < 1e-4);
         if orthogonal {
-            // A mirror goes into the model (x negated), so the instance only rotates.
+            // A mirror goes into the model (x negated), so the instance rotates
+            // and scales uniformly (issue 29: a mesh reused at several scales is
+            // one model).
             let mirror = if q.determinant() < 0.0 { -1.0 } else { 1.0 };
             let flip = Mat3::from_diagonal(glam::Vec3::new(mirror, 1.0, 1.0));
-            return (
-                Mat3::from_diagonal(glam::Vec3::splat(s)) * flip,
-                translation * Mat4::from_mat3(q * flip),
-            );
+            return (flip, translation * Mat4::from_mat3(linear * flip));
         }
     }
     (linear, translation)

@@ -25,8 +25,8 @@ mod stl;
 use crate::cleanup::{finish_mesh, CleanupError, CleanupStats, RawMesh};
 use crate::mesh::Mesh;
 pub use gltf_scene::{
-    load_gltf_scene, load_gltf_scene_with, parse_gltf_scene, GltfInstance, GltfModel, GltfOptions,
-    GltfScene,
+    load_gltf_scene, load_gltf_scene_with, parse_gltf_scene, GltfInstance, GltfModel, GltfObjects,
+    GltfOptions, GltfScene,
 };
 use std::fmt;
 use std::path::{Path, PathBuf};
