@@ -1058,6 +1058,28 @@ fn player_compare_on_the_demo_bake() {
         let png = worst.join(format!("{worst_frame:05}-pop-{part}.png"));
         assert!(png.exists(), "{} written", png.display());
     }
+    // Issue 32 item 3: no cell fell back to originals on the whole bake; with the
+    // pack of a cell the walk visits removed, the report names that cell.
+    assert!(v.get("fallback_cells").is_none(), "{v}");
+    let visited = cells.iter().flatten().copied().max().unwrap();
+    std::fs::remove_file(out.join(format!("cells/{visited}.pack"))).unwrap();
+    let o = run(
+        "player",
+        &[
+            "compare",
+            out.to_str().unwrap(),
+            "--path",
+            "manifests/paths/demo-walk.ron",
+            "--json",
+            "--no-crossings",
+            "--reference-ss",
+            "1",
+        ],
+        &repo(),
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["fallback_cells"], serde_json::json!([visited]), "{v}");
 }
 
 mod random_manifests {

@@ -537,6 +537,12 @@ fn main() -> ExitCode {
                             );
                         }
                     }
+                    if !r.fallback_cells.is_empty() {
+                        println!(
+                            "fallback: cells {:?} were drawn with original geometry (pack missing, corrupt or off the index); their frames count full geometry as the hybrid",
+                            r.fallback_cells
+                        );
+                    }
                     if let Some(p) = &r.pops {
                         println!(
                             "pops at {} crossings: object-pixel PSNR(Y) of outgoing vs incoming cell mean {:.2} dB, worst {:.2} dB (frame {}); a one-pixel turn: mean {:.2} dB; {} crossings no larger than the turn",

@@ -574,6 +574,7 @@ pub fn compare(
     type Worst = (f64, usize, Vec<u8>, Vec<u8>, Option<Vec<u8>>);
     let mut worst: Vec<Worst> = Vec::new();
     let mut prev: Option<Option<u32>> = None;
+    let mut fallback_cells = std::collections::BTreeSet::new();
     for (i, f) in frames.iter().enumerate() {
         // 1. The reference (A), B for timing, the compared mode (C or lod).
         let cam = camera_for(f, path, size, far);
@@ -582,6 +583,9 @@ pub fn compare(
         let (fr_ms, _, _, _) = player.draw(&cam, Mode::Frustum, None);
         let (ms, list, stats) = player.draw_listed(&cam, opts.mode, Some(&mut streamer));
         let hybrid = player.renderer.read_pixels()?;
+        if let (true, Some(c)) = (stats.fallback, stats.cell) {
+            fallback_cells.insert(c);
+        }
         // 2. The anti-aliased reference: A at ss × ss samples, box-filtered in
         //    linear light.
         let aa_reference = match aa_renderer.as_mut() {
@@ -754,6 +758,7 @@ pub fn compare(
         crossing_prefetch: Some(crossing_stats(&hybrid_records)),
         crossing_no_prefetch,
         pops,
+        fallback_cells: fallback_cells.into_iter().collect(),
         per_frame,
     })
 }

@@ -292,6 +292,10 @@ pub struct StreamStats {
     /// Proxies of the current cell drawn as original geometry this frame because
     /// their textures are still queued.
     pub pending_proxies: usize,
+    /// The frame fell back to original geometry for the cell (its pack missing,
+    /// corrupt or off the index), or for the far objects of a group of its chain
+    /// whose pack could not be loaded (issue 32 item 3).
+    pub fallback: bool,
 }
 
 /// The cell cache, upload queue and prefetch thread.
@@ -471,6 +475,7 @@ impl Streamer {
                     Some(packs) => Far::Packs(packs),
                     None => Far::Unavailable,
                 };
+                self.stats.fallback = matches!(far, Far::Unavailable);
                 let stand_ins = self
                     .previous
                     .iter()
@@ -480,6 +485,7 @@ impl Streamer {
             }
             None => {
                 self.stats.pending_proxies = 0;
+                self.stats.fallback = cell.is_some();
                 CurrentCell::Originals
             }
         };

@@ -227,6 +227,12 @@ pub struct CompareReport {
     /// --pops`); `None` when not measured.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub pops: Option<PopReport>,
+    /// Cells of the walk (ascending) whose frames the compared mode drew with
+    /// original geometry in place of a pack: the cell's pack missing, corrupt or off
+    /// the index, or a far-field group's pack of its chain unavailable (issue 32).
+    /// Those frames' figures count full geometry as the hybrid.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub fallback_cells: Vec<u32>,
     pub per_frame: Vec<CompareFrame>,
 }
 
@@ -368,6 +374,7 @@ mod tests {
         assert_eq!(r.mode, "");
         assert_eq!(r.object, ObjectQuality::default());
         assert!(r.pops.is_none());
+        assert!(r.fallback_cells.is_empty());
         assert!(r.aa_reference.is_none() && r.per_frame[0].aa_reference.is_none());
         assert_eq!(r.per_frame[0].object_psnr_y_db, None);
         assert_eq!((r.mean_draw_calls, r.per_frame[0].draw_calls), (0.0, 0));
