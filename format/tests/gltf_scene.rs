@@ -421,3 +421,79 @@ fn issue29_gltf_instances_stay_instances_and_objects_follow_the_hierarchy() {
         "instance 6 (glTF node 16 `street`, model `street`)"
     );
 }
+
+/// Issue 32 item 4: what the gltf crate's validation leaves to the reader is refused
+/// before any node is walked, naming the node: a node listed twice (the 40-level
+/// "DAG" that made 2⁴⁰ visits, and a 22-level one), a node with two parents, a
+/// scene root that is also a child, a zero quaternion, and a glTF 3.0 asset.
+#[test]
+fn hostile_gltf_node_graphs_are_refused_naming_the_node() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("hostile.gltf");
+    let doc = |version: &str, roots: &str, nodes: Vec<String>| {
+        format!(
+            r#"{{"asset": {{"version": "{version}"}}, "scene": 0, "scenes": [{{"nodes": [{roots}]}}], "nodes": [{}]}}"#,
+            nodes.join(", ")
+        )
+    };
+    let refused = |text: String| -> String {
+        match format::load::parse_gltf_scene(&path, text.as_bytes()) {
+            Ok(_) => panic!("accepted: {text}"),
+            Err(e) => e.to_string(),
+        }
+    };
+    for levels in [40usize, 22] {
+        let nodes = (0..levels)
+            .map(|i| {
+                if i + 1 < levels {
+                    format!(r#"{{"name": "n{i}", "children": [{}, {}]}}"#, i + 1, i + 1)
+                } else {
+                    format!(r#"{{"name": "n{i}"}}"#)
+                }
+            })
+            .collect();
+        let e = refused(doc("2.0", "0", nodes));
+        assert!(
+            e.contains(r#"node 0 ("n0") lists node 1 ("n1") twice"#)
+                && e.contains("at most one parent"),
+            "{levels} levels: {e}"
+        );
+        assert!(e.contains("hostile.gltf"), "{e}");
+    }
+    let two_parents = vec![
+        r#"{"children": [2]}"#.to_string(),
+        r#"{"children": [2]}"#.to_string(),
+        r#"{"name": "shared"}"#.to_string(),
+    ];
+    let e = refused(doc("2.0", "0, 1", two_parents));
+    assert!(
+        e.contains(r#"node 2 ("shared") is a child of node 0 and of node 1"#),
+        "{e}"
+    );
+    let root_child = vec![r#"{"children": [1]}"#.to_string(), "{}".to_string()];
+    let e = refused(doc("2.0", "0, 1", root_child));
+    assert!(
+        e.contains("node 1 is a root of scene 0 and a child of node 0"),
+        "{e}"
+    );
+    let zero = vec![r#"{"name": "spin", "rotation": [0.0, 0.0, 0.0, 0.0]}"#.to_string()];
+    let e = refused(doc("2.0", "0", zero));
+    assert!(
+        e.contains(r#"node 0 ("spin"): rotation"#) && e.contains("unit quaternion"),
+        "{e}"
+    );
+    let e = refused(doc("3.0", "0", vec!["{}".to_string()]));
+    assert!(e.contains(r#"asset.version "3.0""#), "{e}");
+    // The same documents, well formed, read (no meshes: an empty scene).
+    let ok = vec![
+        r#"{"children": [1], "rotation": [0.0, 0.7071068, 0.0, 0.7071068]}"#.to_string(),
+        "{}".to_string(),
+    ];
+    let text = doc("2.0", "0", ok);
+    if let Err(e) = format::load::parse_gltf_scene(&path, text.as_bytes()) {
+        assert!(
+            !e.to_string().contains("parent") && !e.to_string().contains("quaternion"),
+            "{e}"
+        );
+    }
+}

@@ -55,6 +55,7 @@ pub(crate) fn open_document(
             ));
         }
     }
+    check_structure(path, document.as_json())?;
     let base = path.parent();
     let buffers = gltf::import_buffers(&document, base, blob)
         .map_err(|e| err(format!("buffers: {e}"), Location::Unknown))?;
@@ -124,6 +125,86 @@ pub(crate) fn parse(path: &Path, bytes: &[u8]) -> Result<Parsed, LoadError> {
 /// (index and world transform; `None` for a root node). Refuses a cycle, a hierarchy
 /// deeper than [`MAX_DEPTH`] and a transform that is not finite, where it meets
 /// them. Shared by the model loader and the scene loader (`gltf_scene.rs`).
+/// What the gltf crate's validation leaves to the reader (issue 32 item 4), checked
+/// on the JSON before any node is walked, each refusal naming the node:
+///
+/// - `asset.version` must be 2.x (the only glTF this reader knows);
+/// - every node has at most one parent, and a scene's root nodes none (glTF 2.0
+///   §3.5.3: the hierarchy is a set of disjoint trees). A node listed twice, by one
+///   parent or two, would otherwise be visited once per path: 40 nodes that each
+///   list the next twice make 2⁴⁰ visits;
+/// - a rotation is a unit quaternion (§5.25; a zero quaternion is not a rotation);
+///   1 % of slack for exporters' rounding.
+fn check_structure(path: &Path, root: &gltf::json::Root) -> Result<(), LoadError> {
+    let err = |what: String, at: Location| parse_error(path, FORMAT, what, at);
+    let version = root.asset.version.as_str();
+    if version.split('.').next() != Some("2") {
+        return Err(err(
+            format!("asset.version {version:?}: hexbake reads glTF 2.x"),
+            Location::Element("asset".into()),
+        ));
+    }
+    let node_name = |i: usize| {
+        root.nodes
+            .get(i)
+            .and_then(|n| n.name.as_deref())
+            .map_or(format!("node {i}"), |name| format!("node {i} ({name:?})"))
+    };
+    let mut parent: Vec<Option<usize>> = vec![None; root.nodes.len()];
+    for (p, node) in root.nodes.iter().enumerate() {
+        for child in node.children.iter().flatten() {
+            let c = child.value();
+            let Some(slot) = parent.get_mut(c) else {
+                continue; // an index out of range: the validation reported it
+            };
+            if let Some(first) = *slot {
+                let what = if first == p {
+                    format!("{} lists {} twice as a child", node_name(p), node_name(c))
+                } else {
+                    format!(
+                        "{} is a child of {} and of {}",
+                        node_name(c),
+                        node_name(first),
+                        node_name(p)
+                    )
+                };
+                return Err(err(
+                    format!("{what}: a glTF node has at most one parent (glTF 2.0 §3.5.3)"),
+                    Location::Element(format!("node {c}")),
+                ));
+            }
+            *slot = Some(p);
+        }
+        if let Some(q) = node.rotation.as_ref().map(|r| r.0) {
+            let len = q.iter().map(|v| v * v).sum::<f32>().sqrt();
+            if (len - 1.0).abs().is_nan() || (len - 1.0).abs() > 0.01 {
+                return Err(err(
+                    format!(
+                        "{}: rotation {q:?} is not a unit quaternion (length {len})",
+                        node_name(p)
+                    ),
+                    Location::Element(format!("node {p}")),
+                ));
+            }
+        }
+    }
+    for (k, scene) in root.scenes.iter().enumerate() {
+        for n in &scene.nodes {
+            if let Some(Some(p)) = parent.get(n.value()) {
+                return Err(err(
+                    format!(
+                        "{} is a root of scene {k} and a child of {}: a scene's root nodes have no parent",
+                        node_name(n.value()),
+                        node_name(*p)
+                    ),
+                    Location::Element(format!("node {}", n.value())),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
 pub(super) fn walk_nodes<'a>(
     path: &Path,
     scene: &gltf::Scene<'a>,
