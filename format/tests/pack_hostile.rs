@@ -1129,3 +1129,45 @@ fn structure_aware_edits_reach_the_content_validation() {
         assert!(refused > 0, "{kind:?}: no edit was refused");
     }
 }
+
+/// Issue 32 item 3: values the structural checks let through are refused by name —
+/// an instance transform of scale 0 (base pack), a view matrix of zeros (cell pack),
+/// and a cell that lists an original twice (checked against the base pack, as every
+/// reader does).
+#[test]
+fn degenerate_values_are_refused_by_name() {
+    let mut base = sample::small_base();
+    base.instances[0].transform = [0.0; 16];
+    let e = base.encode().unwrap_err().to_string();
+    assert!(e.contains("instance 0") && e.contains("singular"), "{e}");
+    let mut flat = sample::small_base();
+    flat.instances[0].transform[5] = 0.0; // y scaled to 0
+    flat.instances[0].transform[4] = 0.0;
+    flat.instances[0].transform[6] = 0.0;
+    assert!(flat.encode().is_err());
+
+    let base = sample::small_base();
+    let cell = sample::small_cell();
+    cell.check_against(&base).unwrap();
+    let mut zero_view = cell.clone();
+    let view = zero_view
+        .proxies
+        .iter_mut()
+        .find_map(|p| p.views.first_mut())
+        .expect("the sample cell has a proxy with a view");
+    view.matrix = [0.0; 16];
+    let e = zero_view.encode().unwrap_err().to_string();
+    assert!(e.contains("all zeros"), "{e}");
+
+    let first = *cell
+        .originals
+        .first()
+        .expect("the sample cell has an original");
+    let mut twice = cell.clone();
+    twice.originals.push(first);
+    let e = twice.check_against(&base).unwrap_err().to_string();
+    assert!(
+        e.contains(&format!("instance {first} is listed twice")),
+        "{e}"
+    );
+}

@@ -116,8 +116,14 @@ fn check_vertices(
     Ok(())
 }
 
-/// An instance's transform is finite with a translation within ±`MAX_COORDINATE`;
-/// its tint components are in `0..=MAX_TINT`.
+/// Smallest |determinant| of an instance transform's 3 × 3 part: the smallest normal
+/// f32, so that only a zero (or subnormal) scale is refused — a uniform scale of 10⁻¹²
+/// still passes (manifests bound an object's height to 0.001..=10⁶ units, but a
+/// glTF node may scale a model by any amount).
+pub const MIN_DETERMINANT: f32 = f32::MIN_POSITIVE;
+
+/// An instance's transform is finite with a translation within ±`MAX_COORDINATE` and
+/// an invertible 3 × 3 part; its tint components are in `0..=MAX_TINT`.
 fn check_instance(i: usize, transform: &[f32; 16], tint: &[f32; 3]) -> Result<(), BadValue> {
     let record = (i * std::mem::size_of::<InstanceRecord>()) as u64;
     let translation_ok = transform[12..15].iter().all(|x| x.abs() <= MAX_COORDINATE);
@@ -128,6 +134,32 @@ fn check_instance(i: usize, transform: &[f32; 16], tint: &[f32; 3]) -> Result<()
             format!(
                 "instance {i}: transform {transform:?} is not finite or translates beyond \
                  ±{MAX_COORDINATE}"
+            ),
+        ));
+    }
+    // The linear part must be invertible: an all-zero or scale-0 transform collapses
+    // the model to a point or a plane (issue 32 item 3), and the player's normal
+    // matrix divides by it.
+    let linear = glam::Mat3::from_cols_array(&[
+        transform[0],
+        transform[1],
+        transform[2],
+        transform[4],
+        transform[5],
+        transform[6],
+        transform[8],
+        transform[9],
+        transform[10],
+    ]);
+    let det = linear.determinant();
+    if det.is_nan() || det.abs() < MIN_DETERMINANT {
+        return Err(BadValue(
+            SectionKind::INSTANCES,
+            record,
+            format!(
+                "instance {i}: transform {transform:?} is singular (determinant {} of its \
+                 3 × 3 part): a model drawn at scale 0",
+                det
             ),
         ));
     }

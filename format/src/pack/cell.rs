@@ -293,6 +293,9 @@ fn check_view(eye: &[f32; 3], matrix: &[f32; 16]) -> Result<(), String> {
     if !matrix.iter().all(|x| x.is_finite()) {
         return Err(format!("texture matrix {matrix:?} is not finite"));
     }
+    if matrix.iter().all(|&x| x == 0.0) {
+        return Err("texture matrix is all zeros (it maps every point to no texel)".into());
+    }
     Ok(())
 }
 
@@ -802,12 +805,25 @@ impl CellPack {
                 .ok_or_else(|| invalid(format!("instance {id}: bad model")))?;
             Ok(model.mesh.positions.len() as u32)
         };
+        // An original is listed once (issue 32 item 3; the player would draw it
+        // twice). An instance that is both an original and a proxy member is not
+        // refused: the shipped sample packs (tests/data, format version 1 on) have
+        // one, and no bake writes one (`pipeline inspect` on park-2m, the demo and
+        // the demo world).
+        let mut originals = std::collections::BTreeSet::new();
         for &o in &self.originals {
             instance(o, "an original")?;
+            if !originals.insert(o) {
+                return Err(invalid(format!(
+                    "cell {}: instance {o} is listed twice as an original",
+                    self.cell_id
+                )));
+            }
         }
         for (p, proxy) in self.proxies.iter().enumerate() {
             for m in &proxy.members {
                 let vertices = instance(m.instance, "a proxy member")?;
+
                 if let Some(t) = m
                     .triangles
                     .iter()
