@@ -476,6 +476,26 @@ fn hostile_gltf_node_graphs_are_refused_naming_the_node() {
         e.contains("node 1 is a root of scene 0 and a child of node 0"),
         "{e}"
     );
+    // Cycles: through the root, and below it.
+    let through_root = vec![
+        r#"{"children": [1]}"#.to_string(),
+        r#"{"children": [0]}"#.to_string(),
+    ];
+    let e = refused(doc("2.0", "0", through_root));
+    assert!(
+        e.contains("node 0 is a root of scene 0 and a child of node 1"),
+        "{e}"
+    );
+    let below = vec![
+        r#"{"children": [1]}"#.to_string(),
+        r#"{"children": [2]}"#.to_string(),
+        r#"{"children": [1]}"#.to_string(),
+    ];
+    let e = refused(doc("2.0", "0", below));
+    assert!(
+        e.contains("node 1 is a child of node 0 and of node 2"),
+        "{e}"
+    );
     let zero = vec![r#"{"name": "spin", "rotation": [0.0, 0.0, 0.0, 0.0]}"#.to_string()];
     let e = refused(doc("2.0", "0", zero));
     assert!(

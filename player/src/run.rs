@@ -484,24 +484,26 @@ fn measure_pops(
                 &current,
                 crate::stream::PendingDraw::StandIns,
             );
-            player.renderer.render(&cam, &player.models, &list);
-            drawn.push(player.renderer.read_pixels()?);
+            drawn.push(pixels_of(
+                &mut player.renderer,
+                &player.models,
+                &cam,
+                &list,
+            )?);
         }
         let [a, b] = &drawn[..] else {
             continue; // a pack that cannot be loaded: no pop to measure
         };
         let pop = measure_frame(a, b, w, h);
-        let full = originals_list(&player.bake, &cam, false);
-        player.renderer.render(&cam, &player.models, &full);
-        let r0 = player.renderer.read_pixels()?;
         let turned = Camera {
             dir: glam::Quat::from_rotation_y(cam.fov_y_deg.to_radians() / size.1 as f32) * cam.dir,
             ..cam
         };
-        let full = originals_list(&player.bake, &turned, false);
-        player.renderer.render(&turned, &player.models, &full);
-        let r1 = player.renderer.read_pixels()?;
-        let shift = measure_frame(&r0, &r1, w, h);
+        let [r0, r1] = [cam, turned].map(|c| {
+            let full = originals_list(&player.bake, &c, false);
+            pixels_of(&mut player.renderer, &player.models, &c, &full)
+        });
+        let shift = measure_frame(&r0?, &r1?, w, h);
         let pop_psnr = pop.object_psnr_y_db.unwrap_or(PSNR_CAP);
         crossings.push(CrossingPop {
             frame: i,
@@ -517,6 +519,17 @@ fn measure_pops(
         }
     }
     Ok((PopReport::of(crossings), worst.map(|(_, pair)| pair)))
+}
+
+/// `list` drawn from `camera` and read back (RGBA8).
+fn pixels_of(
+    renderer: &mut Renderer,
+    models: &GpuModels,
+    camera: &Camera,
+    list: &crate::gpu::DrawList<'_>,
+) -> Result<Vec<u8>, GpuError> {
+    renderer.render(camera, models, list);
+    renderer.read_pixels()
 }
 
 fn mean(v: impl Iterator<Item = f64>) -> f64 {

@@ -465,16 +465,7 @@ impl Streamer {
         }
         let current = match cell.and_then(|id| self.cells.get(&id)) {
             Some(c) => {
-                let groups: Option<Vec<&ResidentCell>> = self
-                    .current_groups
-                    .iter()
-                    .map(|k| self.cells.get(k))
-                    .collect();
-                let far = match groups {
-                    _ if self.current_groups.is_empty() => Far::None,
-                    Some(packs) => Far::Packs(packs),
-                    None => Far::Unavailable,
-                };
+                let far = Self::far_of(&self.cells, &self.current_groups);
                 self.stats.fallback = matches!(far, Far::Unavailable);
                 let stand_ins = self
                     .previous
@@ -500,12 +491,29 @@ impl Streamer {
     pub fn prime(&mut self, renderer: &Renderer, bake: &Bake, camera: &Camera) {
         let (cell, groups) = cell_and_group(bake, camera);
         for key in cell.into_iter().chain(groups) {
-            self.load_now(renderer, bake, key);
-            self.prioritise(key);
-            while let Some(&(id, pi, vi)) = self.uploads.front().filter(|e| e.0 == key) {
-                self.uploads.pop_front();
-                self.upload_one(renderer, id, pi, vi);
-            }
+            self.load_fully(renderer, bake, key);
+        }
+    }
+
+    /// Loads `key`'s pack now and uploads all its textures, outside any budget
+    /// ([`Streamer::prime`], [`Streamer::settled`]).
+    fn load_fully(&mut self, renderer: &Renderer, bake: &Bake, key: u32) {
+        self.load_now(renderer, bake, key);
+        self.prioritise(key);
+        while let Some(&(id, pi, vi)) = self.uploads.front().filter(|e| e.0 == key) {
+            self.uploads.pop_front();
+            self.upload_one(renderer, id, pi, vi);
+        }
+    }
+
+    /// The far field drawn with a cell whose chain of group keys is `groups`, from
+    /// the resident `cells`.
+    fn far_of<'a>(cells: &'a BTreeMap<u32, ResidentCell>, groups: &[u32]) -> Far<'a> {
+        let packs: Option<Vec<&ResidentCell>> = groups.iter().map(|k| cells.get(k)).collect();
+        match packs {
+            _ if groups.is_empty() => Far::None,
+            Some(p) => Far::Packs(p),
+            None => Far::Unavailable,
         }
     }
 
@@ -522,25 +530,14 @@ impl Streamer {
     ) -> Option<CurrentCell<'_>> {
         let groups = group_keys_of(bake, cell);
         for key in std::iter::once(cell).chain(groups.iter().copied()) {
-            self.load_now(renderer, bake, key);
-            let pending: Vec<(usize, usize)> = self
-                .cells
-                .get(&key)
-                .map(|c| c.pending.keys().copied().collect())
-                .unwrap_or_default();
-            for (pi, vi) in pending {
-                self.upload_one(renderer, key, pi, vi);
-            }
-            self.uploads.retain(|e| e.0 != key);
+            self.load_fully(renderer, bake, key);
         }
         let c = self.cells.get(&cell)?;
-        let packs: Option<Vec<&ResidentCell>> = groups.iter().map(|k| self.cells.get(k)).collect();
-        let far = match packs {
-            _ if groups.is_empty() => Far::None,
-            Some(p) => Far::Packs(p),
-            None => Far::Unavailable,
-        };
-        Some(CurrentCell::Pack(c, far, Vec::new()))
+        Some(CurrentCell::Pack(
+            c,
+            Self::far_of(&self.cells, &groups),
+            Vec::new(),
+        ))
     }
 
     /// Loads `key`'s pack on the render thread (a demand load) unless it is

@@ -1,8 +1,8 @@
 //! glTF 2.0 (`.gltf` + buffers, or `.glb`) through the `gltf` crate: every triangle
 //! primitive (modes TRIANGLES, TRIANGLE_STRIP, TRIANGLE_FAN) of every node of the
 //! default scene (else the first scene), with node transforms composed from the root
-//! (a node seen twice along one path — a cycle — or deeper than [`MAX_DEPTH`] is an
-//! error). Mirroring transforms flip the winding so triangles stay CCW. Colours:
+//! (a node with two parents, a root with one — hence any cycle — or a hierarchy
+//! deeper than [`MAX_DEPTH`] is an error). Mirroring transforms flip the winding so triangles stay CCW. Colours:
 //! `COLOR_0` × the material's base colour factor (both linear, converted to sRGB8)
 //! when any primitive has `COLOR_0` or a non-white factor; else the procedural
 //! albedo. Textures are not read (images are never decoded).
@@ -120,11 +120,6 @@ pub(crate) fn parse(path: &Path, bytes: &[u8]) -> Result<Parsed, LoadError> {
     })
 }
 
-/// Walks the node tree of `scene` depth-first in document order, composing
-/// transforms, and calls `visit` with each node, its world transform and its parent
-/// (index and world transform; `None` for a root node). Refuses a cycle, a hierarchy
-/// deeper than [`MAX_DEPTH`] and a transform that is not finite, where it meets
-/// them. Shared by the model loader and the scene loader (`gltf_scene.rs`).
 /// What the gltf crate's validation leaves to the reader (issue 32 item 4), checked
 /// on the JSON before any node is walked, each refusal naming the node:
 ///
@@ -205,35 +200,37 @@ fn check_structure(path: &Path, root: &gltf::json::Root) -> Result<(), LoadError
     Ok(())
 }
 
+/// Walks the node tree of `scene` depth-first in document order, composing
+/// transforms, and calls `visit` with each node, its world transform and its parent
+/// (index and world transform; `None` for a root node). The hierarchy is a set of
+/// trees ([`check_structure`] ran in [`open_document`]: no node has two parents, no
+/// root has one, so no cycle is reachable); refuses one deeper than [`MAX_DEPTH`]
+/// and a transform that is not finite, where it meets them. Shared by the model
+/// loader and the scene loader (`gltf_scene.rs`).
 pub(super) fn walk_nodes<'a>(
     path: &Path,
     scene: &gltf::Scene<'a>,
     mut visit: impl FnMut(&gltf::Node<'a>, Mat4, Option<(usize, Mat4)>) -> Result<(), LoadError>,
 ) -> Result<(), LoadError> {
     let err = |what: String, at: Location| parse_error(path, FORMAT, what, at);
-    let mut stack: Vec<(gltf::Node, Mat4, Vec<usize>)> = scene
-        .nodes()
-        .map(|n| (n, Mat4::IDENTITY, Vec::new()))
-        .collect();
+    // (node, its parent's index and world transform, depth).
+    type Parent = Option<(usize, Mat4)>;
+    let mut stack: Vec<(gltf::Node, Parent, usize)> = scene.nodes().map(|n| (n, None, 0)).collect();
     stack.reverse();
-    while let Some((node, parent, mut ancestors)) = stack.pop() {
+    while let Some((node, parent, depth)) = stack.pop() {
         let at = || Location::Element(format!("node {}", node.index()));
-        if ancestors.contains(&node.index()) {
-            return Err(err("node hierarchy has a cycle".into(), at()));
-        }
-        if ancestors.len() >= MAX_DEPTH {
+        if depth >= MAX_DEPTH {
             return Err(err(format!("node hierarchy deeper than {MAX_DEPTH}"), at()));
         }
         let local = Mat4::from_cols_array_2d(&node.transform().matrix());
-        let world = parent * local;
+        let world = parent.map_or(Mat4::IDENTITY, |(_, w)| w) * local;
         if !world.is_finite() {
             return Err(err("node transform is not finite".into(), at()));
         }
-        visit(&node, world, ancestors.last().map(|&p| (p, parent)))?;
-        ancestors.push(node.index());
+        visit(&node, world, parent)?;
         let children: Vec<_> = node.children().collect();
         for child in children.into_iter().rev() {
-            stack.push((child, world, ancestors.clone()));
+            stack.push((child, Some((node.index(), world)), depth + 1));
         }
     }
     Ok(())

@@ -8,7 +8,8 @@
 //!    merely *uses* (they are ignored: the base colour is read from
 //!    `pbrMetallicRoughness` whatever `KHR_materials_pbrSpecularGlossiness` says);
 //! 2. walk the default scene's node tree depth-first (children in file order),
-//!    composing transforms (a cycle or a hierarchy deeper than
+//!    composing transforms (a node with two parents — hence any cycle — or a
+//!    hierarchy deeper than
 //!    [`MAX_DEPTH`](super::gltf::MAX_DEPTH) is an error); skins and morph targets are
 //!    ignored with a note (the mesh is drawn in its bind pose / base shape);
 //! 3. per node with a mesh, split the mesh's triangle primitives by base-colour
