@@ -7,11 +7,11 @@
 # With `cargo fuzz` and a nightly toolchain: runs the libFuzzer targets of fuzz/
 # (pack_base, pack_cell, pack_index, seeded with the golden packs of tests/data/;
 # gltf_scene, the glTF scene reader of issue 18, seeded with the textured sample
-# scene of format::load::gltf_sample).
+# scene of scene::load::gltf_sample).
 # Otherwise (no nightly or no cargo-fuzz; fuzz/ is then not built), the stable fallback driver
 # (format/examples/fuzz_packs.rs: seeded random mutations of the sample packs,
 # checksums resealed half the time) runs for SECONDS per target-equivalent instead,
-# and format/examples/fuzz_gltf.rs (mutations of the sample glTF scene, JSON and GLB)
+# and format/scene/examples/fuzz_gltf.rs (mutations of the sample glTF scene, JSON and GLB)
 # for SECONDS.
 # Exit status: non-zero on any crash/panic or build failure.
 set -euo pipefail
@@ -38,7 +38,7 @@ if have_cargo_fuzz && have_nightly; then
         corpus=fuzz/corpus/$t
         mkdir -p "$corpus"
         if [ "$t" = gltf_scene ]; then
-            cargo run -q -p format --example write_gltf_sample -- "$corpus" >/dev/null
+            cargo run -q -p scene --example write_gltf_sample -- "$corpus" >/dev/null
         else
             cp tests/data/*.pack "$corpus"/
         fi
@@ -50,12 +50,12 @@ if have_cargo_fuzz && have_nightly; then
     done
 else
     echo "fuzz.sh: cargo fuzz or nightly missing: stable fallback driver (format/examples/fuzz_packs.rs)"
-    cargo build -q -p format --example fuzz_packs --example fuzz_gltf
+    cargo build -q -p format --example fuzz_packs && cargo build -q -p scene --example fuzz_gltf
     if [ "$arg" = "--build-only" ]; then
         exit 0
     fi
     for i in 0 1 2; do
         cargo run -q -p format --example fuzz_packs -- "$arg" "$((i + 1))"
     done
-    cargo run -q -p format --example fuzz_gltf -- "$arg" 1
+    cargo run -q -p scene --example fuzz_gltf -- "$arg" 1
 fi

@@ -87,7 +87,7 @@ fn park_scenes_are_nested() {
     let load = |name: &str| {
         let plan = format::manifest::parse_manifest(&repo().join(format!("manifests/{name}.ron")))
             .unwrap();
-        plan.load_scene().unwrap()
+        scene::build_scene(&plan).unwrap()
     };
     let scenes = [load("park-2m"), load("park-4m"), load("park-8m")];
     for pair in scenes.windows(2) {
@@ -675,10 +675,7 @@ fn player_renders_like_the_cpu_rasterizer() {
     let Some(mut p) = open_player(dir.path(), (256, 256)) else {
         return;
     };
-    let scene = player::testdata::demo_park_plan()
-        .unwrap()
-        .load_scene()
-        .unwrap();
+    let scene = scene::build_scene(&player::testdata::demo_park_plan().unwrap()).unwrap();
     let views = [
         (Vec3::new(150.0, 8.0, 130.0), Vec3::new(40.0, 8.0, 60.0)),
         (Vec3::new(30.0, 6.0, 40.0), Vec3::new(150.0, 6.0, 120.0)),
@@ -693,7 +690,7 @@ fn player_renders_like_the_cpu_rasterizer() {
     }
 }
 
-/// Issue 18: a textured glTF scene (`format::load::gltf_sample`: a checker-textured
+/// Issue 18: a textured glTF scene (`scene::load::gltf_sample`: a checker-textured
 /// crate used by three nodes, one mirrored, REPEAT / MIRRORED_REPEAT wrap) bakes with
 /// `pipeline run`, and the player's full-geometry frame of it agrees with the CPU
 /// rasterizer's render of the same view (both sample the albedo texture bilinearly
@@ -703,7 +700,7 @@ fn player_renders_like_the_cpu_rasterizer() {
 fn textured_gltf_scene_bakes_and_renders_alike_on_cpu_and_gpu() {
     use glam::Vec3;
     let dir = tempfile::tempdir().unwrap();
-    let manifest = format::load::gltf_sample::write_textured_sample_manifest(dir.path()).unwrap();
+    let manifest = scene::load::gltf_sample::write_textured_sample_manifest(dir.path()).unwrap();
     let out = dir.path().join("bake");
     let o = run_manifest(manifest.to_str().unwrap(), &out, &[]);
     assert!(o.status.success(), "{}", stderr(&o));
@@ -717,7 +714,7 @@ fn textured_gltf_scene_bakes_and_renders_alike_on_cpu_and_gpu() {
         return;
     };
     let plan = format::manifest::parse_manifest(&manifest).unwrap();
-    let scene = plan.load_scene().unwrap();
+    let scene = scene::build_scene(&plan).unwrap();
     let pictures = repo().join("target/textured-cpu-gpu");
     std::fs::create_dir_all(&pictures).unwrap();
     let views = [

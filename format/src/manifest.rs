@@ -354,13 +354,6 @@ pub struct TiledSpec {
     pub period: [u32; 2],
 }
 
-/// Most levels of far-field groups (`bake.far_levels`; 7⁸ ≈ 5.8M cells in one top
-/// group).
-pub const MAX_FAR_LEVELS: u32 = 8;
-
-/// Most tiles per side of a `Tiled` scene.
-pub const MAX_TILES: u32 = 15;
-
 /// A glTF scene file (`scene: Gltf("file.glb")`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct GltfSpec {
@@ -369,7 +362,7 @@ pub struct GltfSpec {
     /// Which mesh nodes form one object of the bake (`load::GltfObjects`; default
     /// `Hierarchy`: each top-level node's subtree, when no wider than a cell).
     #[serde(default)]
-    pub objects: crate::load::GltfObjects,
+    pub objects: crate::model_source::GltfObjects,
 }
 
 /// A generated city (`city.rs`): blocks of buildings, streets, props on the pavements.
@@ -576,26 +569,15 @@ pub fn parse_manifest_str_with(
     .plan(raw)
 }
 
+pub use crate::limits::{
+    MAX_CELLS, MAX_COORDINATE, MAX_FAR_LEVELS, MAX_MANIFEST_BYTES, MAX_TILES, MAX_TINT, MIN_LENGTH,
+};
+
 /// Default number of cells baked by one job.
 pub const DEFAULT_CELLS_PER_JOB: u32 = 4;
 
-/// Largest manifest file read, in bytes (16 MiB; the paper's 8M park is 2 KB).
-pub const MAX_MANIFEST_BYTES: u64 = 16 << 20;
-
 /// Deepest bracket nesting a manifest may have (a real one nests about 5 deep).
 pub const MAX_NESTING: usize = crate::field_positions::MAX_NESTING;
-
-/// Largest absolute value of any coordinate or length in a manifest, in scene units.
-pub const MAX_COORDINATE: f32 = 1.0e6;
-
-/// Smallest object height (`target_height`, times `scale` for an instance).
-pub const MIN_LENGTH: f32 = 1.0e-3;
-
-/// Most cells a grid may have.
-pub const MAX_CELLS: u64 = 1_000_000;
-
-/// Largest tint component.
-pub const MAX_TINT: f32 = 100.0;
 
 /// A value outside the manifest's rules: the dotted path of the field and what is
 /// wrong with it. The manifest validator turns it into a positioned
@@ -815,7 +797,7 @@ struct RawGltfSpec {
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     group_by_parent: bool,
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    objects: Option<crate::load::GltfObjects>,
+    objects: Option<crate::model_source::GltfObjects>,
 }
 
 #[derive(Deserialize, Serialize)]
@@ -1362,13 +1344,13 @@ impl Validator<'_> {
                     return Err(self.error(field, "names an empty file path".into()));
                 }
                 let resolved = self.base_dir().join(&file);
-                let supported = crate::load::ModelFormat::from_path(&resolved).is_some();
+                let supported = crate::model_source::ModelFormat::from_path(&resolved).is_some();
                 if !supported {
                     return Err(self.error(
                         field,
                         format!(
                             "names `{file}`, an unsupported model format (expected one of {})",
-                            crate::load::SUPPORTED_EXTENSIONS.join(", ")
+                            crate::model_source::SUPPORTED_EXTENSIONS.join(", ")
                         ),
                     ));
                 }
@@ -1384,14 +1366,14 @@ impl Validator<'_> {
                 Ok(ModelSource::File(resolved))
             }
             RawModelSource::Procedural(name) => {
-                if crate::procedural::NAMES.contains(&name.as_str()) {
+                if crate::model_source::PROCEDURAL_NAMES.contains(&name.as_str()) {
                     Ok(ModelSource::Procedural(name))
                 } else {
                     Err(self.error(
                         field,
                         format!(
                             "names an unknown procedural model `{name}`, expected one of {}",
-                            crate::procedural::NAMES.join(", ")
+                            crate::model_source::PROCEDURAL_NAMES.join(", ")
                         ),
                     ))
                 }
@@ -1414,9 +1396,9 @@ impl Validator<'_> {
         &self,
         file: String,
         group_by_parent: bool,
-        objects: Option<crate::load::GltfObjects>,
+        objects: Option<crate::model_source::GltfObjects>,
     ) -> Result<SceneSpec, ManifestError> {
-        use crate::load::GltfObjects;
+        use crate::model_source::GltfObjects;
         let objects = match (group_by_parent, objects) {
             (false, objects) => objects.unwrap_or_default(),
             (true, None | Some(GltfObjects::Parents)) => GltfObjects::Parents,
@@ -1434,7 +1416,9 @@ impl Validator<'_> {
             return Err(self.error("scene", "names an empty file path".into()));
         }
         let resolved = self.base_dir().join(&file);
-        if crate::load::ModelFormat::from_path(&resolved) != Some(crate::load::ModelFormat::Gltf) {
+        if crate::model_source::ModelFormat::from_path(&resolved)
+            != Some(crate::model_source::ModelFormat::Gltf)
+        {
             return Err(self.error(
                 "scene",
                 format!("names `{file}`; a glTF scene must be a .gltf or .glb file"),
@@ -1568,14 +1552,14 @@ impl Validator<'_> {
         let floors = f64::from(max_height) / f64::from(floor_height);
         let columns = f64::from(block_size) / f64::from(floor_height);
         if floor_height > min_height
-            || floors * columns > crate::city::MAX_WINDOWS_PER_FACADE as f64
+            || floors * columns > crate::limits::MAX_WINDOWS_PER_FACADE as f64
         {
             return Err(self.error(
                 "scene.floor_height",
                 format!(
                     "must be at most `min_height` ({min_height}) and leave at most {} windows \
                      on a façade ({floors:.0} floors × {columns:.0} columns), found {floor_height}",
-                    crate::city::MAX_WINDOWS_PER_FACADE
+                    crate::limits::MAX_WINDOWS_PER_FACADE
                 ),
             ));
         }

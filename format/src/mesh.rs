@@ -5,6 +5,7 @@
 //! (the file's colours or the procedural pattern of DESIGN.md, "Shading").
 
 use serde::{Deserialize, Serialize};
+use std::collections::HashMap;
 
 /// An indexed triangle mesh: one position, normal and albedo per vertex.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -52,7 +53,7 @@ impl Mesh {
             albedo: vec![albedo; 8],
             triangles,
         };
-        crate::cleanup::recompute_normals(&mut mesh);
+        recompute_normals(&mut mesh);
         mesh
     }
 
@@ -77,4 +78,53 @@ impl Mesh {
         }
         Some((lo, hi))
     }
+}
+
+/// Unnormalised normal (twice the area) of triangle `t`, in f64.
+pub fn face_normal_f64(positions: &[[f32; 3]], t: [u32; 3]) -> [f64; 3] {
+    let p = t.map(|i| positions[i as usize].map(f64::from));
+    let u = [p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]];
+    let v = [p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]];
+    [
+        u[1] * v[2] - u[2] * v[1],
+        u[2] * v[0] - u[0] * v[2],
+        u[0] * v[1] - u[1] * v[0],
+    ]
+}
+
+/// Replaces `mesh.normals` with smooth area-weighted normals (step 5 of `scene::cleanup`'s
+/// clean-up; also [`Mesh::cuboid`]): faces are summed over all vertices sharing a position.
+pub fn recompute_normals(mesh: &mut Mesh) {
+    let key_of = |p: [f32; 3]| p.map(|x| (x + 0.0).to_bits());
+    let mut group_of_position: HashMap<[u32; 3], u32> = HashMap::new();
+    let group: Vec<u32> = mesh
+        .positions
+        .iter()
+        .map(|p| {
+            let next = group_of_position.len() as u32;
+            *group_of_position.entry(key_of(*p)).or_insert(next)
+        })
+        .collect();
+    let mut sums = vec![[0.0f64; 3]; group_of_position.len()];
+    for &t in &mesh.triangles {
+        let n = face_normal_f64(&mesh.positions, t);
+        for &i in &t {
+            let s = &mut sums[group[i as usize] as usize];
+            for k in 0..3 {
+                s[k] += n[k];
+            }
+        }
+    }
+    mesh.normals = group
+        .iter()
+        .map(|&g| {
+            let s = sums[g as usize];
+            let len = (s[0] * s[0] + s[1] * s[1] + s[2] * s[2]).sqrt();
+            if len > 0.0 && len.is_finite() {
+                s.map(|x| (x / len) as f32)
+            } else {
+                [0.0, 1.0, 0.0]
+            }
+        })
+        .collect();
 }

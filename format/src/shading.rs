@@ -31,7 +31,7 @@ pub fn shade(albedo_linear: Vec3, normal: Vec3) -> Vec3 {
 /// WGSL declarations of the shading and sRGB-decode constants, to prepend to a
 /// shader: `AMBIENT`, `LIGHT`, `SRGB_DECODE_THRESHOLD`, `SRGB_LINEAR_SLOPE`,
 /// `SRGB_OFFSET`, `SRGB_SCALE`, `SRGB_GAMMA` (`f32`) and `MAX_VIEWS` (`u32`, the
-/// pack's [`crate::pack::cell::MAX_MV_VIEWS`]). Numbers are written with
+/// pack's [`crate::limits::MAX_MV_VIEWS`]). Numbers are written with
 /// Rust's shortest round-trip formatting, so WGSL parses them to the same f32.
 pub fn wgsl_constants() -> String {
     use crate::srgb;
@@ -55,7 +55,7 @@ pub fn wgsl_constants() -> String {
         f(srgb::OFFSET as f32),
         f(srgb::SCALE as f32),
         f(srgb::GAMMA as f32),
-        crate::pack::cell::MAX_MV_VIEWS,
+        crate::limits::MAX_MV_VIEWS,
     )
 }
 

@@ -8,5 +8,5 @@ use std::path::Path;
 
 fuzz_target!(|data: &[u8]| {
     // External URIs resolve against a folder that holds nothing.
-    let _ = format::load::parse_gltf_scene(Path::new("/nonexistent/fuzz.glb"), data);
+    let _ = scene::load::parse_gltf_scene(Path::new("/nonexistent/fuzz.glb"), data);
 });

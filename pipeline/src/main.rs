@@ -139,11 +139,11 @@ fn run(cli: Cli) -> Result<(), Failure> {
             if as_instances {
                 print!(
                     "{}",
-                    format::scene_build::instances_manifest(&plan).map_err(bad_input)?
+                    scene::build::instances_manifest(&plan).map_err(bad_input)?
                 );
                 return Ok(());
             }
-            let scene = plan.load_scene().map_err(bad_input)?;
+            let scene = scene::build_scene(&plan).map_err(bad_input)?;
             let summary = pipeline::scene_cmd::summarize(&plan, &scene);
             print_json_or_text(json, &summary, || {
                 pipeline::scene_cmd::render_text(&summary)

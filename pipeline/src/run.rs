@@ -60,9 +60,7 @@ pub fn load_with(
     // The overrides replace raw manifest values before validation (one validator).
     let plan = format::manifest::parse_manifest_with(manifest, overrides)
         .map_err(|e| RunError::BadInput(e.into()))?;
-    let scene = plan
-        .load_scene()
-        .map_err(|e| RunError::BadInput(e.into()))?;
+    let scene = scene::build_scene(&plan).map_err(|e| RunError::BadInput(e.into()))?;
     let build = plan_jobs(&plan, &scene);
     let out = out
         .map(Path::to_path_buf)

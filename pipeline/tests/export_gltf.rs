@@ -235,14 +235,14 @@ fn exported_demo_cell_holds_its_layered_impostor() {
     assert_khronos_valid(&glb);
 }
 
-/// Issue 18: a cell of a textured glTF scene (`format::load::gltf_sample`, read with
+/// Issue 18: a cell of a textured glTF scene (`scene::load::gltf_sample`, read with
 /// `scene: Gltf(..)`) exports its originals with their albedo textures — TEXCOORD_0,
 /// a lit material with `baseColorTexture`, the model's wrap modes in its sampler —
 /// and passes the Khronos validator with 0 errors.
 #[test]
 fn exported_cell_of_a_textured_gltf_scene_carries_the_model_textures() {
     let dir = tempfile::tempdir().unwrap();
-    let manifest = format::load::gltf_sample::write_textured_sample_manifest(dir.path()).unwrap();
+    let manifest = scene::load::gltf_sample::write_textured_sample_manifest(dir.path()).unwrap();
     let out = dir.path().join("bake");
     let out_s = out.to_str().unwrap();
     let o = run_quiet(manifest.to_str().unwrap(), &out, &[]);

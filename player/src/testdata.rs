@@ -219,9 +219,7 @@ pub fn write_synthetic_bake_with(
     all_originals: bool,
 ) -> Result<SyntheticBake, TestDataError> {
     let plan = demo_park_plan()?;
-    let scene = plan
-        .load_scene()
-        .map_err(|e| TestDataError::Manifest(e.to_string()))?;
+    let scene = scene::build_scene(&plan).map_err(|e| TestDataError::Manifest(e.to_string()))?;
     let grid = grid_params(scene.ground, &plan.cells);
     let fingerprint = [7u8; 32];
     let base = BasePack::from_scene(&scene, grid, fingerprint);

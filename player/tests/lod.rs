@@ -105,7 +105,7 @@ fn bunny_chain_is_monotone() {
     let Some(path) = testkit::model("bunny.obj") else {
         return;
     };
-    let mesh = format::load::load_model(&path).unwrap();
+    let mesh = scene::load::load_model(&path).unwrap();
     let chain = build_chain(&mesh);
     println!("bunny: {}", levels_line(&chain));
     check_chain("bunny", &chain, mesh.positions.len(), mesh.triangles.len());

@@ -20,7 +20,7 @@ fn analysis(c: &mut Criterion) {
     let Some(path) = testkit::model("bunny.obj") else {
         return;
     };
-    let mesh = format::load::load_model(&path).unwrap();
+    let mesh = scene::load::load_model(&path).unwrap();
     // The paper's bunny: 43.2 units tall, base on y = 0; eye 250 units away at 1.7,
     // a 1024² square view just around its bounding sphere.
     let (lo, hi) = mesh.bounds().unwrap();

@@ -34,7 +34,7 @@ fn main() {
     }
     eprintln!("T_l = {}", plan.bake.edge_length_tolerance_px);
     let t = Instant::now();
-    let scene = plan.load_scene().expect("scene");
+    let scene = scene::build_scene(&plan).expect("scene");
     eprintln!(
         "park-2m: {} instances, {} triangles, loaded in {:.1} s, {} threads",
         scene.instances.len(),

@@ -19,7 +19,7 @@ use worker::raster::{render, render_into, CullMode, DrawItem, Shading, View};
 /// normals, albedo); `None` after a skip when it was not fetched.
 fn load(name: &str) -> Option<Mesh> {
     let path = testkit::model(name)?;
-    Some(format::load::load_model(&path).unwrap())
+    Some(scene::load::load_model(&path).unwrap())
 }
 
 fn in_pool<T: Send>(threads: Option<usize>, f: impl FnOnce() -> T + Send) -> T {

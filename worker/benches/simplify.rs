@@ -30,8 +30,8 @@ struct Bunny {
 /// The bunny as the bake sees it (format's loader), scaled to the paper's 43 units.
 fn load_bunny() -> Option<Bunny> {
     let path = testkit::model("bunny.obj")?;
-    let mut mesh = format::load::load_model(&path).unwrap();
-    format::scene_build::normalise(&mut mesh, [0.0; 3], 43.0).unwrap();
+    let mut mesh = scene::load::load_model(&path).unwrap();
+    scene::build::normalise(&mut mesh, [0.0; 3], 43.0).unwrap();
     Some(Bunny {
         positions: mesh.positions.iter().map(|&p| Vec3::from(p)).collect(),
         normals: mesh.normals.iter().map(|&n| Vec3::from(n)).collect(),

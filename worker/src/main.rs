@@ -148,7 +148,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
                     })?,
             };
             let plan = format::manifest::parse_manifest(&manifest).map_err(bad_input)?;
-            let scene = plan.load_scene().map_err(bad_input)?;
+            let scene = scene::build_scene(&plan).map_err(bad_input)?;
             let build = worker::job::plan_jobs(&plan, &scene);
             let job = build.jobs.get(id as usize).ok_or_else(|| {
                 bad_input(anyhow::anyhow!(
@@ -216,7 +216,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
             .map_err(bad_input)?;
             let plan =
                 format::manifest::parse_manifest_with(&manifest, &overrides).map_err(bad_input)?;
-            let scene = plan.load_scene().map_err(bad_input)?;
+            let scene = scene::build_scene(&plan).map_err(bad_input)?;
             let grid = worker::grid::HexGrid::new(scene.ground, plan.cells.cell_size);
             let groups = worker::far_field::CellGroups::for_params(&grid, &plan.bake);
             // The chains of the manifest's output, as the bake uses them.
@@ -319,7 +319,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
             json,
         } => {
             let plan = format::manifest::parse_manifest(&manifest).map_err(bad_input)?;
-            let scene = plan.load_scene().map_err(bad_input)?;
+            let scene = scene::build_scene(&plan).map_err(bad_input)?;
             let s = worker::diagnostics::capture_pictures(&plan, &scene, cell, instance, &out)
                 .map_err(|e| match e {
                     worker::diagnostics::DiagnosticsError::Picture(_) => failed(e),
@@ -360,7 +360,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
             out,
         } => {
             let plan = format::manifest::parse_manifest(&manifest).map_err(bad_input)?;
-            let scene = plan.load_scene().map_err(bad_input)?;
+            let scene = scene::build_scene(&plan).map_err(bad_input)?;
             let [w, d] = scene.ground.size();
             let centre = Vec3::new(
                 scene.ground.min[0] + w / 2.0,

@@ -12,9 +12,9 @@
 
 mod common;
 use common::{apothem, bunny, bunny_capture, bunny_view, look_at, CELL_SIZE, PIXELS_PER_RADIAN};
-use format::park::SplitMix64;
 use glam::{DVec3, Mat4, Vec3};
 use proptest::prelude::*;
+use scene::park::SplitMix64;
 use std::path::PathBuf;
 use worker::backface::{
     all_culled, front_facing_from, front_facing_vertices, regional_backface_cull,

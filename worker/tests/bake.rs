@@ -217,8 +217,8 @@ const PAPER_SV: [usize; 3] = [259, 254, 239];
 /// cells k rows away along +z are k·√3·c away.
 fn bunny_scene() -> Option<(Scene, HexGrid, CellParams)> {
     let path = fetched_model("bunny.obj")?;
-    let mut mesh = format::load::load_model(&path).unwrap();
-    format::scene_build::normalise(&mut mesh, [0.0; 3], 43.0).unwrap();
+    let mut mesh = scene::load::load_model(&path).unwrap();
+    scene::build::normalise(&mut mesh, [0.0; 3], 43.0).unwrap();
     let ground = Ground {
         min: [0.0, 0.0],
         max: [100.0, 900.0],

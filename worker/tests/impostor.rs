@@ -40,8 +40,8 @@ fn maybe_png(name: &str, c: &Capture) {
 }
 
 fn knot() -> format::Mesh {
-    let mut m = format::procedural::build("torus_knot").unwrap();
-    format::procedural::apply_albedo(&mut m, 3);
+    let mut m = scene::procedural::build("torus_knot").unwrap();
+    scene::pattern::apply_albedo(&mut m, 3);
     m
 }
 
@@ -188,7 +188,7 @@ fn impostor_reproduces_the_object_and_layers_reduce_the_warp_error() {
 #[test]
 fn impostor_composites_with_meshes_by_depth() {
     let mesh = knot();
-    let wall = format::procedural::build("box").unwrap();
+    let wall = scene::procedural::build("box").unwrap();
     let items = [item(&mesh, Vec3::new(0.0, 10.0, -120.0), 10.0, 1)];
     let eye = Vec3::new(0.0, 10.0, 0.0);
     let imp = build_layered_impostor(eye, &items, 256, 256, 10.0)

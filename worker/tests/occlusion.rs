@@ -16,10 +16,10 @@
 //!   could pass without checking anything).
 
 use format::manifest::{parse_manifest_str, BakeParams, CellParams};
-use format::park::SplitMix64;
 use format::{Ground, Instance, Model, Scene};
 use glam::{Mat4, Vec2, Vec3};
 use proptest::prelude::*;
+use scene::park::SplitMix64;
 use std::path::Path;
 use worker::bake::{bake_cell, Assignment};
 use worker::grid::{HexGrid, Prism};
@@ -65,7 +65,7 @@ fn distance_to_box(p: Vec3, lo: Vec3, hi: Vec3) -> f32 {
 #[test]
 fn no_culled_object_covers_a_pixel_from_1000_views_in_a_city() {
     let plan = parse_manifest_str(CITY, Path::new("manifests/test-city.ron")).unwrap();
-    let scene = plan.load_scene().unwrap();
+    let scene = scene::build_scene(&plan).unwrap();
     let grid = HexGrid::new(scene.ground, plan.cells.cell_size);
     let bounds: Vec<(Vec3, Vec3)> = (0..scene.instances.len())
         .map(|i| scene.instance_bounds(i))
@@ -190,9 +190,9 @@ fn placed(model: u32, at: Vec3) -> Instance {
 
 #[test]
 fn bake_cell_culls_what_a_wall_hides_only_when_asked() {
-    let statue = format::procedural::build("sphere").unwrap();
+    let statue = scene::procedural::build("sphere").unwrap();
     let mut statue = statue;
-    format::scene_build::normalise(&mut statue, [0.0; 3], 2.0).unwrap();
+    scene::build::normalise(&mut statue, [0.0; 3], 2.0).unwrap();
     let scene = Scene {
         models: vec![
             model(box_mesh([-30.0, 0.0, -3.0], [30.0, 20.0, 3.0])),

@@ -3,11 +3,11 @@
 //! normal-cone back-face test (003 §4.1). The error is measured as 002 §4 does: ID
 //! renders of the full model and of the chosen patches from random viewpoints.
 
-use format::city::{building_mesh, BuildingStyle, CityParams};
 use format::patch_visibility::{patch_backfacing, PatchTests, SamplingSphere};
 use format::Mesh;
 use glam::Vec3;
 use proptest::prelude::*;
+use scene::city::{building_mesh, BuildingStyle, CityParams};
 use worker::patches::{
     bake_patch_set, measure_error, model_patches, normal_cluster, tile_patches, PatchError,
     PatchPreset,
@@ -31,7 +31,7 @@ fn print_error(label: &str, patches: usize, e: &PatchError) {
 }
 
 fn sphere_mesh() -> Mesh {
-    let (positions, triangles) = format::procedural::unit_icosphere(4);
+    let (positions, triangles) = scene::procedural::unit_icosphere(4);
     let n = positions.len();
     Mesh {
         normals: positions.clone(),
@@ -191,7 +191,7 @@ fn error_and_savings_on_real_meshes() {
         let Some(path) = testkit::model(name) else {
             continue;
         };
-        let mesh = format::load::load_model(&path).unwrap();
+        let mesh = scene::load::load_model(&path).unwrap();
         let set = bake_patch_set(&[&mesh], &small_preset());
         let model = &set.models[0];
         for tests in [

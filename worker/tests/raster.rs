@@ -754,7 +754,7 @@ fn real_bunny_renders_deterministically() {
     let Some(path) = common::fetched_model("bunny.obj") else {
         return;
     };
-    let bunny = format::load::load_model(&path).unwrap();
+    let bunny = scene::load::load_model(&path).unwrap();
     assert_eq!(bunny.triangles.len(), 69_666);
     let (lo, hi) = bunny.bounds().unwrap();
     let (lo, hi) = (Vec3::from(lo), Vec3::from(hi));

@@ -79,7 +79,7 @@ fn perturbed_grid(w: usize, h: usize, jitter: &[f32], flips: &[bool]) -> TestMes
 /// An icosphere of radius `radius` at `centre`, `levels` times subdivided, with its
 /// vertices pushed in or out by `bumps` (closed, manifold, outward ccw).
 fn icosphere(levels: u32, centre: Vec3, radius: f32, bumps: &[f32]) -> TestMesh {
-    let (unit, triangles) = format::procedural::unit_icosphere(levels);
+    let (unit, triangles) = scene::procedural::unit_icosphere(levels);
     let positions: Vec<Vec3> = unit.into_iter().map(Vec3::from).collect();
     let positions: Vec<Vec3> = positions
         .iter()
@@ -833,8 +833,8 @@ fn validate_rejects_broken_outputs() {
 /// (format's loader and normalisation, as the bake sees it).
 fn bunny() -> Option<TestMesh> {
     let path = common::fetched_model("bunny.obj")?;
-    let mut mesh = format::load::load_model(&path).unwrap();
-    format::scene_build::normalise(&mut mesh, [0.0; 3], 43.0).unwrap();
+    let mut mesh = scene::load::load_model(&path).unwrap();
+    scene::build::normalise(&mut mesh, [0.0; 3], 43.0).unwrap();
     Some(TestMesh {
         positions: mesh.positions.iter().map(|&p| Vec3::from(p)).collect(),
         normals: mesh.normals.iter().map(|&n| Vec3::from(n)).collect(),

@@ -5,7 +5,7 @@
 //! the instance's model, so geometry is stored once (paper 000 §3.1.3.3: half-edge
 //! collapse keeps original vertices, so a proxy is just a new index buffer).
 
-use super::error::PackError;
+use super::error::{BadValue, PackError};
 use super::layout::{FileKind, SectionKind};
 use super::reader::{pod_vec, PackFile};
 use super::writer::{
@@ -75,11 +75,6 @@ impl GridParams {
         Ok(())
     }
 }
-
-/// A value of a base pack that breaks a content rule: the section, the byte offset
-/// in it, and what is wrong. The writer refuses it ([`PackError::Invalid`]), the
-/// reader reports it as [`PackError::Malformed`].
-pub(super) struct BadValue(pub(super) SectionKind, pub(super) u64, pub(super) String);
 
 /// Positions are finite and within ±`MAX_COORDINATE` (normalised models are at most
 /// that tall and wide); normals are finite. `first` is the index of `positions[0]` in

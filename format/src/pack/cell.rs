@@ -17,12 +17,9 @@ use super::writer::{
     assemble_reusing, SectionData, RAW_ONLY, TRY_INDICES, TRY_TRIANGLES, TRY_ZSTD,
 };
 use super::{invalid, malformed};
+pub use crate::limits::MAX_MV_VIEWS;
 use bytemuck::{Pod, Zeroable};
 use std::path::Path;
-
-/// Most views an MvMesh may have: the centre and the six neighbours (paper 000 §3.2)
-/// and one spare; view masks are one byte per triangle.
-pub const MAX_MV_VIEWS: usize = 8;
 
 super::code_enum! {
     /// How a proxy is drawn.

@@ -117,3 +117,8 @@ pub fn hex(bytes: &[u8]) -> String {
     }
     s
 }
+
+/// A value of a base pack that breaks a content rule: the section, the byte offset
+/// in it, and what is wrong. The writer refuses it ([`PackError::Invalid`]), the
+/// reader reports it as [`PackError::Malformed`].
+pub(super) struct BadValue(pub(super) SectionKind, pub(super) u64, pub(super) String);

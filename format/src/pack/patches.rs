@@ -5,7 +5,7 @@
 //! per cell. Byte layouts: format/README.md, "base.pack", sections 0x010B–0x010D.
 //! The run-time use of the data lives in [`crate::patch_visibility`].
 
-use super::base::BadValue;
+use super::error::BadValue;
 use super::layout::SectionKind;
 use super::reader::{pod_vec, PackFile};
 use super::writer::{SectionData, TRY_INDICES, TRY_ZSTD};

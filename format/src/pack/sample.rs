@@ -11,14 +11,14 @@ use super::index::{Index, IndexEntry};
 use super::texture::{Texture, TextureEncoding};
 use crate::mesh::Mesh;
 
-/// A small deterministic generator (the park's [`crate::park::splitmix64`], with
+/// A small deterministic generator (the park's [`crate::rng::splitmix64`], with
 /// its own `below` and `unit`), so samples need no `rand`.
 #[derive(Clone, Debug)]
 pub struct SplitMix(pub u64);
 
 impl SplitMix {
     pub fn next_u64(&mut self) -> u64 {
-        crate::park::splitmix64(&mut self.0)
+        crate::rng::splitmix64(&mut self.0)
     }
 
     /// Uniform in [0, n) (n > 0).

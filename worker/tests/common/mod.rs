@@ -93,8 +93,7 @@ pub fn look_at(eye: Vec3, target: Vec3, fov_y: f32, width: u32, height: u32, nea
 #[track_caller]
 pub fn bunny() -> Option<(format::Mesh, Mat4)> {
     let path = fetched_model("bunny.obj")?;
-    let mesh =
-        format::load::load_model(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let mesh = scene::load::load_model(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     let (lo, hi) = mesh.bounds().unwrap();
     let (lo, hi) = (Vec3::from(lo), Vec3::from(hi));
     let scale = 43.2 / (hi.y - lo.y);
@@ -142,7 +141,7 @@ pub fn demo() -> (
     format::manifest::BakeParams,
 ) {
     let plan = format::manifest::parse_manifest(&repo().join("manifests/demo.ron")).unwrap();
-    let scene = plan.load_scene().unwrap();
+    let scene = scene::build_scene(&plan).unwrap();
     let grid = worker::grid::HexGrid::new(plan.ground, plan.cells.cell_size);
     (scene, grid, plan.cells, plan.bake)
 }

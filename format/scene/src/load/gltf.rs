@@ -10,7 +10,7 @@
 use super::{parse_error, Location, ModelFormat, Parsed};
 use crate::cleanup::RawMesh;
 use crate::load::LoadError;
-use crate::srgb::linear_to_srgb_powf;
+use format::srgb::linear_to_srgb_powf;
 use glam::{Mat3, Mat4, Vec3};
 use std::path::Path;
 

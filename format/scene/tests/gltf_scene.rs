@@ -2,10 +2,10 @@
 //! base-colour textures with their UVs and wrap modes, refusals and notes.
 
 use format::albedo::Wrap;
-use format::load::gltf_sample::{sample_texture, write_textured_sample};
-use format::load::load_gltf_scene;
 use format::manifest::{parse_manifest_str, SceneSpec};
 use glam::{Mat3, Vec3};
+use scene::load::gltf_sample::{sample_texture, write_textured_sample};
+use scene::load::load_gltf_scene;
 
 #[test]
 fn sample_scene_reuses_meshes_and_reads_textures() {
@@ -79,7 +79,7 @@ fn manifest_gltf_scene_builds_with_hashes_that_cover_the_texture() {
     )"#;
     let plan = parse_manifest_str(text, &manifest).unwrap();
     assert!(matches!(&plan.scene, SceneSpec::Gltf(g) if g.file.ends_with("textured-sample.gltf")));
-    let scene = plan.load_scene().unwrap();
+    let scene = scene::build_scene(&plan).unwrap();
     assert_eq!(scene.models.len(), 4);
     assert_eq!(scene.instances.len(), 6);
     let m = &scene.models[0];
@@ -186,7 +186,7 @@ fn write_grouped_sample(dir: &std::path::Path) -> std::path::PathBuf {
 /// the loader and the manifest.
 #[test]
 fn mesh_nodes_group_by_parent_when_asked() {
-    use format::load::{load_gltf_scene_with, GltfObjects, GltfOptions};
+    use scene::load::{load_gltf_scene_with, GltfObjects, GltfOptions};
     let dir = tempfile::tempdir().unwrap();
     let path = write_grouped_sample(dir.path());
     let with = |objects| {
@@ -233,7 +233,7 @@ fn mesh_nodes_group_by_parent_when_asked() {
               cells: (cell_size: 5.0, min_eye_height: 1.0, max_eye_height: 2.0))"
         );
         let plan = parse_manifest_str(&text, &manifest).unwrap();
-        plan.load_scene().unwrap()
+        scene::build_scene(&plan).unwrap()
     };
     assert_eq!(scene_of(r#"Gltf("grouped.gltf")"#).instances.len(), 2);
     assert_eq!(
@@ -340,7 +340,7 @@ fn write_hierarchy_sample(dir: &std::path::Path) -> std::path::PathBuf {
 /// (the manifest's cell size) is not merged: its children are the objects.
 #[test]
 fn issue29_gltf_instances_stay_instances_and_objects_follow_the_hierarchy() {
-    use format::load::{load_gltf_scene_with, GltfObjects, GltfOptions};
+    use scene::load::{load_gltf_scene_with, GltfObjects, GltfOptions};
     let dir = tempfile::tempdir().unwrap();
     let path = write_hierarchy_sample(dir.path());
     let options = GltfOptions {
@@ -411,10 +411,7 @@ fn issue29_gltf_instances_stay_instances_and_objects_follow_the_hierarchy() {
     let text = r#"(ground: (min: (-10.0, -10.0), max: (60.0, 40.0)),
         scene: Gltf("hierarchy.gltf"),
         cells: (cell_size: 50.0, min_eye_height: 1.0, max_eye_height: 2.0))"#;
-    let s = parse_manifest_str(text, &manifest)
-        .unwrap()
-        .load_scene()
-        .unwrap();
+    let s = scene::build_scene(&parse_manifest_str(text, &manifest).unwrap()).unwrap();
     assert_eq!(s.instances.len(), 7);
     assert_eq!(
         s.describe_instance(6),
@@ -437,7 +434,7 @@ fn hostile_gltf_node_graphs_are_refused_naming_the_node() {
         )
     };
     let refused = |text: String| -> String {
-        match format::load::parse_gltf_scene(&path, text.as_bytes()) {
+        match scene::load::parse_gltf_scene(&path, text.as_bytes()) {
             Ok(_) => panic!("accepted: {text}"),
             Err(e) => e.to_string(),
         }
@@ -510,7 +507,7 @@ fn hostile_gltf_node_graphs_are_refused_naming_the_node() {
         "{}".to_string(),
     ];
     let text = doc("2.0", "0", ok);
-    if let Err(e) = format::load::parse_gltf_scene(&path, text.as_bytes()) {
+    if let Err(e) = scene::load::parse_gltf_scene(&path, text.as_bytes()) {
         assert!(
             !e.to_string().contains("parent") && !e.to_string().contains("quaternion"),
             "{e}"

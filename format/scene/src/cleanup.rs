@@ -15,9 +15,10 @@
 //!    normals around a vertex, accumulated over every vertex at the same position so
 //!    colour seams do not crease the shading); a vertex whose sum is zero gets +y;
 //! 6. albedo: the file's sRGB8 colours when it has them, else the procedural pattern
-//!    (`procedural::apply_albedo`) seeded from the mesh content.
+//!    (`pattern::apply_albedo`) seeded from the mesh content.
 
-use crate::mesh::Mesh;
+use format::mesh::Mesh;
+pub use format::mesh::{face_normal_f64, recompute_normals};
 use std::collections::{HashMap, HashSet};
 
 /// Largest absolute coordinate a model file may have, in the file's units (10¹²).
@@ -248,56 +249,7 @@ pub fn finish_mesh_with_uvs(
                 .try_into()
                 .expect("8 bytes of a 32-byte hash"),
         );
-        crate::procedural::apply_albedo(&mut mesh, seed);
+        crate::pattern::apply_albedo(&mut mesh, seed);
     }
     Ok((mesh, uvs.map(|_| out_uvs), stats))
-}
-
-/// Unnormalised normal (twice the area) of triangle `t`, in f64.
-fn face_normal_f64(positions: &[[f32; 3]], t: [u32; 3]) -> [f64; 3] {
-    let p = t.map(|i| positions[i as usize].map(f64::from));
-    let u = [p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]];
-    let v = [p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]];
-    [
-        u[1] * v[2] - u[2] * v[1],
-        u[2] * v[0] - u[0] * v[2],
-        u[0] * v[1] - u[1] * v[0],
-    ]
-}
-
-/// Replaces `mesh.normals` with smooth area-weighted normals (step 5 of the module
-/// docs): faces are summed over all vertices sharing a position.
-pub fn recompute_normals(mesh: &mut Mesh) {
-    let key_of = |p: [f32; 3]| p.map(|x| (x + 0.0).to_bits());
-    let mut group_of_position: HashMap<[u32; 3], u32> = HashMap::new();
-    let group: Vec<u32> = mesh
-        .positions
-        .iter()
-        .map(|p| {
-            let next = group_of_position.len() as u32;
-            *group_of_position.entry(key_of(*p)).or_insert(next)
-        })
-        .collect();
-    let mut sums = vec![[0.0f64; 3]; group_of_position.len()];
-    for &t in &mesh.triangles {
-        let n = face_normal_f64(&mesh.positions, t);
-        for &i in &t {
-            let s = &mut sums[group[i as usize] as usize];
-            for k in 0..3 {
-                s[k] += n[k];
-            }
-        }
-    }
-    mesh.normals = group
-        .iter()
-        .map(|&g| {
-            let s = sums[g as usize];
-            let len = (s[0] * s[0] + s[1] * s[1] + s[2] * s[2]).sqrt();
-            if len > 0.0 && len.is_finite() {
-                s.map(|x| (x / len) as f32)
-            } else {
-                [0.0, 1.0, 0.0]
-            }
-        })
-        .collect();
 }

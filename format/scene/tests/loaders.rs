@@ -5,8 +5,8 @@
 //! indices — which must give errors naming the problem, never panics
 //! (STYLE.md habit 5).
 
-use format::load::{load_model, load_model_with_stats, LoadError, Location};
 use format::Mesh;
+use scene::load::{load_model, load_model_with_stats, LoadError, Location};
 use std::path::{Path, PathBuf};
 
 // `model(name)`: a real model file (`$HEXBAKE_MODELS`, else `<repo>/models`), or
@@ -16,7 +16,7 @@ use testkit::model;
 /// A real model file loaded with [`load_ok`]: its path, mesh and statistics, or
 /// `None` (after a skip) when it was not fetched.
 #[track_caller]
-fn load_fetched(name: &str) -> Option<(PathBuf, Mesh, format::load::LoadStats)> {
+fn load_fetched(name: &str) -> Option<(PathBuf, Mesh, scene::load::LoadStats)> {
     let path = model(name)?;
     let (mesh, stats) = load_ok(&path);
     Some((path, mesh, stats))
@@ -48,7 +48,7 @@ fn binary_stl(title: &[u8], pad: u8, facets: &[Facet]) -> Vec<u8> {
     bin
 }
 
-fn load_ok(path: &Path) -> (Mesh, format::load::LoadStats) {
+fn load_ok(path: &Path) -> (Mesh, scene::load::LoadStats) {
     let (mesh, stats) =
         load_model_with_stats(path).unwrap_or_else(|e| panic!("loading failed: {e}"));
     mesh.validate().unwrap();

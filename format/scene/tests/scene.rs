@@ -2,19 +2,19 @@
 //! 2M ⊂ 4M ⊂ 8M subset property, no overlap) and `manifests/demo.ron`.
 
 use format::manifest::{parse_manifest, parse_manifest_str};
-use format::park::{self, ParkEntry, SlotGrid};
-use format::scene_build::{footprint, normalise};
 use format::{Ground, Scene};
 use proptest::prelude::*;
+use scene::build::{footprint, normalise};
+use scene::park::{self, ParkEntry, SlotGrid};
 use std::path::{Path, PathBuf};
 
 fn repo_root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
 }
 
 fn demo_scene() -> Scene {
     let plan = parse_manifest(&repo_root().join("manifests/demo.ron")).expect("demo.ron parses");
-    plan.load_scene().expect("demo scene builds")
+    scene::build_scene(&plan).expect("demo scene builds")
 }
 
 /// Asserts each model of `scene` is normalised to its target height.
@@ -100,7 +100,7 @@ fn scene_building_is_deterministic() {
 fn pre_rotation_turns_the_model_before_normalising() {
     // The column is 8.4 tall and 3.2 wide: lying down (x rotated 90°), its height
     // is its diameter and its length runs along z.
-    let upright = format::procedural::build("column").unwrap();
+    let upright = scene::procedural::build("column").unwrap();
     let mut lying = upright.clone();
     normalise(&mut lying, [90.0, 0.0, 0.0], 10.0).unwrap();
     let (lo, hi) = lying.bounds().unwrap();
@@ -145,7 +145,7 @@ fn nearly_flat_wide_model_is_refused_when_normalised() {
     let before = m.clone();
     let e = normalise(&mut m, [0.0; 3], 10.0).unwrap_err();
     assert!(
-        matches!(e, format::scene_build::NormaliseError::TooWide { .. }),
+        matches!(e, scene::build::NormaliseError::TooWide { .. }),
         "{e}"
     );
     assert!(e.to_string().contains("units wide"), "{e}");
@@ -164,7 +164,7 @@ fn explicit_instances_and_shared_models() {
         cells: (cell_size: 10.0, min_eye_height: 1.0, max_eye_height: 2.0),
     )"#;
     let plan = parse_manifest_str(text, Path::new("inline.ron")).unwrap();
-    let scene = plan.load_scene().unwrap();
+    let scene = scene::build_scene(&plan).unwrap();
     // Same source and height → one model; another height → another model.
     assert_eq!(scene.models.len(), 2);
     assert_eq!(scene.models[0].name, "box");
@@ -217,14 +217,14 @@ fn demo_with_counts(counts: [u32; 6]) -> String {
 #[test]
 fn smaller_park_is_a_subset_of_the_larger_one() {
     let path = repo_root().join("manifests/demo.ron");
-    let small = parse_manifest_str(&demo_with_counts([1, 2, 0, 3, 1, 1]), &path)
-        .unwrap()
-        .load_scene()
-        .unwrap();
-    let large = parse_manifest_str(&demo_with_counts([4, 5, 3, 3, 2, 6]), &path)
-        .unwrap()
-        .load_scene()
-        .unwrap();
+    let small = scene::build_scene(
+        &parse_manifest_str(&demo_with_counts([1, 2, 0, 3, 1, 1]), &path).unwrap(),
+    )
+    .unwrap();
+    let large = scene::build_scene(
+        &parse_manifest_str(&demo_with_counts([4, 5, 3, 3, 2, 6]), &path).unwrap(),
+    )
+    .unwrap();
     assert_eq!(small.models, large.models);
     assert_eq!(small.instances.len(), 8);
     assert_eq!(large.instances.len(), 23);
@@ -383,7 +383,7 @@ proptest! {
 fn instance_list_keeps_every_bake_parameter() {
     let plan = parse_manifest(&repo_root().join("manifests/demo.ron")).unwrap();
     assert!(plan.bake.quality.is_some(), "the demo selects by quality");
-    let text = format::scene_build::instances_manifest(&plan).unwrap();
+    let text = scene::build::instances_manifest(&plan).unwrap();
     let listed = parse_manifest_str(&text, Path::new("demo-instances.ron")).unwrap();
     assert_eq!(listed.bake, plan.bake);
     assert_eq!(listed.cells, plan.cells);
@@ -432,7 +432,7 @@ fn instance_list_round_trips_every_non_default_parameter() {
     assert_ne!(b.quality_check, d.quality_check);
     assert_ne!(plan.cells_per_job, format::manifest::DEFAULT_CELLS_PER_JOB);
 
-    let listed_text = format::scene_build::instances_manifest(&plan).unwrap();
+    let listed_text = scene::build::instances_manifest(&plan).unwrap();
     let listed = parse_manifest_str(&listed_text, Path::new("odd-instances.ron")).unwrap();
     assert!(!listed.bake.quality_check, "{listed_text}");
     assert_eq!(listed.bake, plan.bake, "{listed_text}");
@@ -448,7 +448,7 @@ fn instance_list_round_trips_every_non_default_parameter() {
     let off = demo.replacen("bake: (", "bake: (quality_check: false, ", 1);
     let plan = parse_manifest_str(&off, &repo_root().join("manifests/demo.ron")).unwrap();
     assert!(!plan.bake.quality_check);
-    let listed = format::scene_build::instances_manifest(&plan).unwrap();
+    let listed = scene::build::instances_manifest(&plan).unwrap();
     let listed = parse_manifest_str(&listed, Path::new("demo-instances.ron")).unwrap();
     assert_eq!(listed.bake, plan.bake);
 }
@@ -469,18 +469,20 @@ fn placed_objects_follow_the_park_and_move_nothing() {
     if let format::manifest::SceneSpec::Park(p) = &mut alone.scene {
         p.placed.clear();
     }
-    let (a, w) = (alone.load_scene().unwrap(), with.load_scene().unwrap());
+    let (a, w) = (
+        scene::build_scene(&alone).unwrap(),
+        scene::build_scene(&with).unwrap(),
+    );
     assert_eq!(w.instances[..a.instances.len()], a.instances[..]);
     let placed = &w.instances[a.instances.len()..];
     assert_eq!(placed.len(), 14);
     let first = placed[0].transform.w_axis;
     assert_eq!([first.x, first.y, first.z], park.placed[0].translation);
 
-    let listed = format::scene_build::instances_manifest(&with).unwrap();
-    let relisted = parse_manifest_str(&listed, Path::new("demo-instances.ron"))
-        .unwrap()
-        .load_scene()
-        .unwrap();
+    let listed = scene::build::instances_manifest(&with).unwrap();
+    let relisted =
+        scene::build_scene(&parse_manifest_str(&listed, Path::new("demo-instances.ron")).unwrap())
+            .unwrap();
     assert_eq!(relisted.instances.len(), w.instances.len());
     for (x, y) in relisted.instances.iter().zip(&w.instances) {
         assert!(x.transform.abs_diff_eq(y.transform, 1e-4), "{x:?} vs {y:?}");
@@ -501,9 +503,7 @@ fn placed_objects_are_validated() {
         &format!("translation: ({:?}, 0.0, {:?})", p.x, p.z),
         1,
     );
-    let err = parse_manifest_str(&on_statue, &path)
-        .unwrap()
-        .load_scene()
+    let err = scene::build_scene(&parse_manifest_str(&on_statue, &path).unwrap())
         .unwrap_err()
         .to_string();
     assert!(
@@ -539,8 +539,8 @@ fn tiled_world_centre_tile_is_the_base_shifted_by_whole_periods() {
         panic!("demo-world.ron is a Tiled scene");
     };
     assert_eq!(spec.tiles, 3);
-    let base = base_plan.load_scene().unwrap();
-    let world = world_plan.load_scene().unwrap();
+    let base = scene::build_scene(&base_plan).unwrap();
+    let world = scene::build_scene(&world_plan).unwrap();
     assert_eq!(world.instances.len(), 9 * base.instances.len());
     assert_eq!(
         world.models.len(),

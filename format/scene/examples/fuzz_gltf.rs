@@ -1,10 +1,10 @@
 //! Stable fuzz driver of the glTF scene reader (issue 18; `scripts/fuzz.sh` runs it
 //! when cargo-fuzz or nightly is missing): seeded mutations (bit flips, interesting
 //! bytes, truncations, duplicated spans) of the textured sample scene's JSON
-//! (`format::load::gltf_sample`) and of the same document as a GLB, each parsed by
-//! `format::load::parse_gltf_scene`. A panic is a failure (exit status non-zero).
+//! (`scene::load::gltf_sample`) and of the same document as a GLB, each parsed by
+//! `scene::load::parse_gltf_scene`. A panic is a failure (exit status non-zero).
 //!
-//!   cargo run -p format --example fuzz_gltf -- SECONDS SEED
+//!   cargo run -p scene --example fuzz_gltf -- SECONDS SEED
 
 use format::pack::sample::SplitMix;
 use std::time::{Duration, Instant};
@@ -14,7 +14,7 @@ fn main() {
     let seconds: u64 = args.next().and_then(|s| s.parse().ok()).unwrap_or(10);
     let seed: u64 = args.next().and_then(|s| s.parse().ok()).unwrap_or(1);
     let dir = std::env::temp_dir().join(format!("hexbake-fuzz-gltf-{}", std::process::id()));
-    let path = format::load::gltf_sample::write_textured_sample(&dir).expect("sample scene");
+    let path = scene::load::gltf_sample::write_textured_sample(&dir).expect("sample scene");
     let json = std::fs::read(&path).expect("sample json");
     let bin = std::fs::read(dir.join("textured-sample.bin")).expect("sample bin");
     // The same document as a GLB: the buffer URI dropped, the bytes as the BIN chunk.
@@ -38,7 +38,7 @@ fn main() {
     glb.extend_from_slice(&bin);
     let seeds = [(path.clone(), json), (dir.join("fuzz.glb"), glb)];
     for (p, bytes) in &seeds {
-        format::load::parse_gltf_scene(p, bytes).expect("the seeds parse");
+        scene::load::parse_gltf_scene(p, bytes).expect("the seeds parse");
     }
     // The gltf crate panics on some hostile inputs (index out of bounds in its
     // accessors, overflow in its GLB reader); the loader catches those and returns
@@ -69,7 +69,7 @@ fn main() {
                     }
                 }
             }
-            if format::load::parse_gltf_scene(p, &b).is_ok() {
+            if scene::load::parse_gltf_scene(p, &b).is_ok() {
                 accepted += 1;
             }
             runs += 1;

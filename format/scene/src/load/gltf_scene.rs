@@ -50,7 +50,7 @@
 //! 4. a model's albedo: vertex colour (`COLOR_0`, linear) × the material's base-colour
 //!    factor, to sRGB8 per vertex (white when neither is there but a texture is; the
 //!    procedural pattern when nothing is); the base-colour texture (its UV set, the
-//!    sampler's wrap modes) multiplies it when sampled ([`crate::albedo`]).
+//!    sampler's wrap modes) multiplies it when sampled ([`format::albedo`]).
 //!
 //! Models are in the file's units and frame (glTF is y-up, right-handed, as hexbake);
 //! nothing is normalised. Cameras, lights and animations are not read.
@@ -60,9 +60,10 @@ use super::gltf::{
     walk_nodes,
 };
 use super::{parse_error, LoadError, Location, ModelFormat};
-use crate::albedo::{AlbedoMap, AlbedoTexture, Wrap, MAX_TEXTURE_SIDE};
 use crate::cleanup::{finish_mesh_with_uvs, RawMesh};
-use crate::mesh::Mesh;
+use format::albedo::{AlbedoMap, AlbedoTexture, Wrap, MAX_TEXTURE_SIDE};
+use format::mesh::Mesh;
+pub use format::model_source::GltfObjects;
 use glam::{Mat3, Mat4};
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -92,23 +93,6 @@ pub struct GltfInstance {
     pub transform: Mat4,
     /// The glTF node it comes from.
     pub node: u32,
-}
-
-/// Which mesh nodes of a glTF scene form one object of the bake (module docs,
-/// step 3; manifest `objects`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-pub enum GltfObjects {
-    /// The default: objects follow the node hierarchy — each top-level node (below
-    /// a chain of single mesh-less roots) with everything under it is one object,
-    /// unless it spans more than [`GltfOptions::max_object_extent`]: then its own
-    /// mesh is one object and each child is tried the same way.
-    #[default]
-    Hierarchy,
-    /// The mesh nodes that are children of one node, two or more, are one object
-    /// (the parent's own mesh stays apart): issue 18's `group_by_parent`.
-    Parents,
-    /// Every mesh node is an object of its own.
-    Nodes,
 }
 
 /// How a glTF file is read as a scene.

@@ -23,7 +23,7 @@ mod ply;
 mod stl;
 
 use crate::cleanup::{finish_mesh, CleanupError, CleanupStats, RawMesh};
-use crate::mesh::Mesh;
+use format::mesh::Mesh;
 pub use gltf_scene::{
     load_gltf_scene, load_gltf_scene_with, parse_gltf_scene, GltfInstance, GltfModel, GltfObjects,
     GltfOptions, GltfScene,
@@ -31,43 +31,7 @@ pub use gltf_scene::{
 use std::fmt;
 use std::path::{Path, PathBuf};
 
-/// File extensions `load_model` reads (lower case; matching ignores case).
-pub const SUPPORTED_EXTENSIONS: &[&str] = &["gltf", "glb", "obj", "ply", "off", "stl"];
-
-/// A model file format, chosen by extension.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum ModelFormat {
-    Gltf,
-    Obj,
-    Ply,
-    Off,
-    Stl,
-}
-
-impl ModelFormat {
-    /// The format of `path` by its extension (case-insensitive); `None` if unsupported.
-    pub fn from_path(path: &Path) -> Option<ModelFormat> {
-        let ext = path.extension()?.to_str()?.to_ascii_lowercase();
-        match ext.as_str() {
-            "gltf" | "glb" => Some(ModelFormat::Gltf),
-            "obj" => Some(ModelFormat::Obj),
-            "ply" => Some(ModelFormat::Ply),
-            "off" => Some(ModelFormat::Off),
-            "stl" => Some(ModelFormat::Stl),
-            _ => None,
-        }
-    }
-
-    pub fn name(self) -> &'static str {
-        match self {
-            ModelFormat::Gltf => "glTF",
-            ModelFormat::Obj => "OBJ",
-            ModelFormat::Ply => "PLY",
-            ModelFormat::Off => "OFF",
-            ModelFormat::Stl => "STL",
-        }
-    }
-}
+pub use format::model_source::{ModelFormat, SUPPORTED_EXTENSIONS};
 
 /// Where in a file a problem is.
 #[derive(Clone, Debug, PartialEq, Eq)]

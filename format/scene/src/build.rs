@@ -11,10 +11,10 @@
 //!    its props).
 
 use crate::load::{load_model, LoadError};
-use crate::manifest::{InstanceSpec, ModelSource, Plan, SceneSpec};
-use crate::mesh::Mesh;
 use crate::park::{self, ParkEntry, ParkError};
-use crate::scene::{Instance, Model, Scene};
+use format::manifest::{InstanceSpec, ModelSource, Plan, SceneSpec};
+use format::mesh::Mesh;
+use format::scene::{Instance, Model, Scene};
 use glam::{Mat3, Mat4, Vec3};
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -82,16 +82,9 @@ pub enum NormaliseError {
     #[error(
         "scaled to height {target_height}, the model would be {extent} units wide, beyond \
          the limit of {}",
-        crate::manifest::MAX_COORDINATE
+        format::manifest::MAX_COORDINATE
     )]
     TooWide { target_height: f32, extent: f64 },
-}
-
-impl Plan {
-    /// Loads and normalises every model and places the instances (see [`build_scene`]).
-    pub fn load_scene(&self) -> Result<Scene, SceneError> {
-        build_scene(self)
-    }
 }
 
 /// Pre-rotates `mesh` by Euler angles (x, y, z degrees, applied x first: R = Rz·Ry·Rx),
@@ -133,7 +126,7 @@ pub fn normalise(
     let scale = f64::from(target_height) / height;
     let extent = (hi.x - lo.x).max(hi.z - lo.z) * scale;
     // NaN counts as too wide.
-    if extent.is_nan() || extent > f64::from(crate::manifest::MAX_COORDINATE) {
+    if extent.is_nan() || extent > f64::from(format::manifest::MAX_COORDINATE) {
         return Err(NormaliseError::TooWide {
             target_height,
             extent,
@@ -167,12 +160,12 @@ pub fn build_scene(plan: &Plan) -> Result<Scene, SceneError> {
     Ok(build_with_placements(plan)?.0)
 }
 
-/// A `Tiled` scene ([`crate::manifest::TiledSpec`]): the base manifest's scene, its
+/// A `Tiled` scene ([`format::manifest::TiledSpec`]): the base manifest's scene, its
 /// instances repeated tile by tile (row of tiles by row, each in the base's order)
 /// shifted by whole grid periods; the models are the base's, shared.
-fn build_tiled_scene(plan: &Plan, spec: &crate::manifest::TiledSpec) -> Result<Scene, SceneError> {
+fn build_tiled_scene(plan: &Plan, spec: &format::manifest::TiledSpec) -> Result<Scene, SceneError> {
     let base_plan =
-        crate::manifest::parse_manifest(&spec.manifest).map_err(|e| SceneError::Tiled {
+        format::manifest::parse_manifest(&spec.manifest).map_err(|e| SceneError::Tiled {
             manifest: plan.manifest_path.clone(),
             what: e.to_string(),
         })?;
@@ -188,7 +181,7 @@ fn build_tiled_scene(plan: &Plan, spec: &crate::manifest::TiledSpec) -> Result<S
                 (f64::from(j * spec.period[1]) * 3f64.sqrt() * c) as f32,
             );
             let t = glam::Mat4::from_translation(shift);
-            instances.extend(base.instances.iter().map(|inst| crate::Instance {
+            instances.extend(base.instances.iter().map(|inst| format::Instance {
                 transform: t * inst.transform,
                 ..*inst
             }));
@@ -207,7 +200,7 @@ fn build_tiled_scene(plan: &Plan, spec: &crate::manifest::TiledSpec) -> Result<S
         instances,
         ground: plan.ground,
         model_bounds: Default::default(),
-        instance_labels: crate::InstanceLabels(labels),
+        instance_labels: format::InstanceLabels(labels),
     })
 }
 
@@ -217,7 +210,7 @@ fn build_tiled_scene(plan: &Plan, spec: &crate::manifest::TiledSpec) -> Result<S
 /// rebake: only its proxies are derived again, issue 13). Building the written
 /// manifest gives the same models and, for parks, the same instance transforms;
 /// parsing it gives every other parameter of `plan` back
-/// ([`crate::manifest::write_instances_manifest`], serde over the parser's types).
+/// ([`format::manifest::write_instances_manifest`], serde over the parser's types).
 pub fn instances_manifest(plan: &Plan) -> Result<String, SceneError> {
     let (_, placements) = build_with_placements(plan)?;
     let instances: Vec<InstanceSpec> = match (&plan.scene, placements) {
@@ -245,7 +238,7 @@ pub fn instances_manifest(plan: &Plan) -> Result<String, SceneError> {
             })
         }
     };
-    Ok(crate::manifest::write_instances_manifest(
+    Ok(format::manifest::write_instances_manifest(
         plan,
         &instances,
         &format!(
@@ -484,7 +477,7 @@ fn build_with_placements(plan: &Plan) -> Result<(Scene, Option<Vec<park::Placeme
             instances,
             ground: plan.ground,
             model_bounds: Default::default(),
-            instance_labels: crate::InstanceLabels(labels),
+            instance_labels: format::InstanceLabels(labels),
         },
         placed,
     ))
@@ -499,7 +492,7 @@ static GLTF_NOTES_SHOWN: std::sync::Mutex<std::collections::BTreeSet<PathBuf>> =
 /// (file units, not normalised), one instance per node and model, tint 1. Model
 /// names are made unique with `#k` as for other scenes; textured models hash their
 /// texture and UVs into the content hash.
-fn build_gltf_scene(plan: &Plan, spec: &crate::manifest::GltfSpec) -> Result<Scene, SceneError> {
+fn build_gltf_scene(plan: &Plan, spec: &format::manifest::GltfSpec) -> Result<Scene, SceneError> {
     let file = spec.file.as_path();
     let options = crate::load::GltfOptions {
         objects: spec.objects,
@@ -514,7 +507,7 @@ fn build_gltf_scene(plan: &Plan, spec: &crate::manifest::GltfSpec) -> Result<Sce
             }
         }
     }
-    let limit = crate::manifest::MAX_COORDINATE;
+    let limit = format::manifest::MAX_COORDINATE;
     let too_far = |what: String| SceneError::GltfScene {
         file: file.to_path_buf(),
         what,
@@ -569,7 +562,7 @@ fn build_gltf_scene(plan: &Plan, spec: &crate::manifest::GltfSpec) -> Result<Sce
         instances,
         ground: plan.ground,
         model_bounds: Default::default(),
-        instance_labels: crate::InstanceLabels(labels),
+        instance_labels: format::InstanceLabels(labels),
     })
 }
 

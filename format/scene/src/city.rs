@@ -40,21 +40,16 @@
 //! Instances are listed buildings first (block-major, slot order), then props
 //! round-robin by copy then model.
 
-use crate::mesh::Mesh;
 use crate::park::SplitMix64;
-use crate::scene::Ground;
+pub use format::limits::{MAX_BLOCKS, MAX_WINDOWS_PER_FACADE};
+use format::mesh::Mesh;
+use format::scene::Ground;
 
 /// Fraction of a building slot by which a footprint exceeds its slot.
 pub const OVERLAP: f32 = 0.125;
 
 /// Depth of a window's recess into the wall, in scene units.
 pub const WINDOW_RECESS: f32 = 0.35;
-
-/// Most blocks a city may have.
-pub const MAX_BLOCKS: u64 = 100_000;
-
-/// Most windows one façade of one building may have.
-pub const MAX_WINDOWS_PER_FACADE: u64 = 20_000;
 
 /// What the generator needs (the validated manifest's `City` fields, with the props'
 /// normalised footprints).

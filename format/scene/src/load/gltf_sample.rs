@@ -127,7 +127,7 @@ pub fn write_textured_sample(dir: &Path) -> std::io::Result<PathBuf> {
     let (llo, lhi) = bounds(&lid_pos);
     let json = format!(
         r#"{{
-  "asset": {{"version": "2.0", "generator": "hexbake format::load::gltf_sample"}},
+  "asset": {{"version": "2.0", "generator": "hexbake scene::load::gltf_sample"}},
   "scene": 0,
   "scenes": [{{"nodes": [0]}}],
   "nodes": [

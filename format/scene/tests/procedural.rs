@@ -1,6 +1,7 @@
 //! Procedural models and the procedural albedo (DESIGN.md "Shading").
 
-use format::procedural::{albedo, apply_albedo, build, CHECKER_CELLS_PER_EXTENT, NAMES};
+use scene::pattern::{albedo, apply_albedo, CHECKER_CELLS_PER_EXTENT};
+use scene::procedural::{build, NAMES};
 use std::collections::BTreeSet;
 
 #[test]
