@@ -11,12 +11,12 @@
 //! each triangle's view mask and centroid (flat attributes), one draw per proxy.
 //! What a frame draws — the draw list, its counts and the plan the renderer
 //! uploads and encodes — is decided in `gpu/frame_model.rs` (re-exported here:
-//! [`DrawList`], [`PatchedDraw`]).
+//! [`DrawList`]).
 
 mod frame_model;
 mod setup;
 
-pub use frame_model::{DrawList, PatchedDraw};
+pub use frame_model::DrawList;
 use frame_model::{FramePlan, Span};
 
 use crate::camera::Camera;
@@ -356,7 +356,7 @@ impl Renderer {
     }
 
     /// With `on`, every triangle is drawn in its representation's debug colour
-    /// ([`crate::overlay::Representation`]), lit by DESIGN.md's Lambert term:
+    /// ([`crate::representation::Representation`]), lit by DESIGN.md's Lambert term:
     /// originals, SV / MV / cluster proxies (textured or waiting), LOD levels ≥ 1.
     pub fn set_representation_colours(&mut self, on: bool) {
         self.representation_colours = on;
@@ -802,7 +802,7 @@ impl Renderer {
                 0,
                 0,
             ],
-            palette: crate::overlay::Representation::linear_palette(),
+            palette: crate::representation::Representation::linear_palette(),
         };
         self.queue
             .write_buffer(&self.globals, 0, bytemuck::bytes_of(&g));
