@@ -180,6 +180,14 @@ impl Frustum {
     }
 }
 
+/// Distance from `eye` to the nearest point of `b` (0 inside).
+pub fn distance_to_box(eye: Vec3, b: &Aabb) -> f32 {
+    if b.is_empty() {
+        return f32::INFINITY;
+    }
+    eye.distance(eye.clamp(b.min, b.max))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -194,6 +202,17 @@ mod tests {
             near: 0.5,
             far: 100.0,
         }
+    }
+
+    #[test]
+    fn distance_to_box_is_zero_inside_and_euclidean_outside() {
+        let b = Aabb {
+            min: Vec3::ZERO,
+            max: Vec3::ONE,
+        };
+        assert_eq!(distance_to_box(Vec3::splat(0.5), &b), 0.0);
+        assert!((distance_to_box(Vec3::new(4.0, 0.5, 0.5), &b) - 3.0).abs() < 1e-6);
+        assert!((distance_to_box(Vec3::new(4.0, 5.0, 0.5), &b) - 5.0).abs() < 1e-6);
     }
 
     #[test]

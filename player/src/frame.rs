@@ -7,60 +7,14 @@
 //! error, [`crate::lod`]).
 
 use crate::bake::Bake;
-use crate::camera::{Camera, Frustum};
-use crate::gpu::{DrawList, GpuModels};
+use crate::camera::{Aabb, Camera, Frustum};
+use crate::gpu::{DrawList, GpuModels, GpuProxy};
+/// The configurations (their home is `mode.rs`, plain data; re-exported here, where
+/// each one's draw list is built).
+pub use crate::mode::Mode;
 use crate::stream::{CurrentCell, Far, PendingDraw, ResidentCell};
 use crate::vertex::InstanceRaw;
 use std::collections::BTreeMap;
-
-/// Rendering configuration.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum Mode {
-    /// Config A: every instance as original geometry.
-    Full,
-    /// Config B: originals with per-instance frustum culling.
-    Frustum,
-    /// Config C: the current cell's pack, frustum-culled.
-    #[default]
-    Hybrid,
-    /// Baseline: originals, frustum-culled, at a distance-chosen level of detail.
-    Lod,
-}
-
-impl Mode {
-    pub fn name(self) -> &'static str {
-        match self {
-            Mode::Full => "full",
-            Mode::Frustum => "frustum",
-            Mode::Hybrid => "hybrid",
-            Mode::Lod => "lod",
-        }
-    }
-}
-
-impl std::str::FromStr for Mode {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Mode, String> {
-        let modes = [Mode::Full, Mode::Frustum, Mode::Hybrid, Mode::Lod];
-        parse_named("mode", s, modes.map(|m| (m.name(), m)))
-    }
-}
-
-/// The value named `s` in `names`; else an error naming `what` and listing the names,
-/// e.g. `unknown mode "x" (full, frustum, hybrid, lod)`.
-pub(crate) fn parse_named<T: Copy, const N: usize>(
-    what: &str,
-    s: &str,
-    names: [(&str, T); N],
-) -> Result<T, String> {
-    match names.iter().find(|(name, _)| *name == s) {
-        Some(&(_, value)) => Ok(value),
-        None => {
-            let list: Vec<&str> = names.iter().map(|(name, _)| *name).collect();
-            Err(format!("unknown {what} {s:?} ({})", list.join(", ")))
-        }
-    }
-}
 
 fn group(bake: &Bake, ids: impl Iterator<Item = u32>) -> Vec<(u32, Vec<InstanceRaw>)> {
     let mut by_model: BTreeMap<u32, Vec<InstanceRaw>> = BTreeMap::new();
@@ -201,13 +155,13 @@ fn cell_list<'a>(
     };
     // Issue 17: the originals' visible patches only (bitfields and normal cones).
     if let Some(runtime) = &bake.patches {
-        crate::patches::apply(
+        list.patched = crate::patches::apply(
             runtime,
             &bake.base,
             &shown,
             (camera.eye, &f),
             &bake.instances,
-            &mut list,
+            &mut list.originals,
         );
     }
     list
@@ -221,7 +175,7 @@ fn cell_list<'a>(
 fn stand_ins_for<'a>(
     stand_ins: &[&'a ResidentCell],
     waiting: &mut std::collections::BTreeSet<u32>,
-) -> Vec<(&'a crate::gpu::GpuProxy, &'a crate::camera::Aabb)> {
+) -> Vec<(&'a GpuProxy, &'a Aabb)> {
     let mut chosen = Vec::new();
     for pack in stand_ins {
         for ((proxy, bounds), members) in pack.proxies.iter().zip(&pack.bounds).zip(&pack.members) {

@@ -2,23 +2,24 @@
 //! with wgpu — inside objects as original meshes, outside objects as projectively
 //! textured SV/MV meshes — headless (`player render`, `player compare`).
 //!
-//! Modules:
-//! - [`gpu`]: the wgpu renderer (offscreen `Rgba8UnormSrgb` + `Depth32Float`,
-//!   DESIGN.md shading in WGSL, projective texturing, MvMesh two-view blending).
-//! - [`bake`]: reading a bake directory; cell packs → upload-ready [`bake::PreparedCell`].
-//! - [`stream`]: current cell, prefetch thread, timestamped priority queue, FIFO
-//!   texture uploads under a per-frame budget, LRU eviction.
-//! - [`frame`]: draw lists of configurations A (`full`), B (`frustum`), C (`hybrid`).
-//! - [`grid`]: the current cell, on `format::grid::HexGrid` (the worker's own
-//!   layout, from `format`: the player never links the worker); [`camera`]: camera,
-//!   frustum culling.
-//! - [`lod`]: the distance-LOD baseline (`--mode lod`, issue 8): meshoptimizer
-//!   chains per model, level chosen by projected pixel error.
-//! - [`metrics`]: PSNR on luminance and SSIM, over whole frames and over object
-//!   pixels; the anti-aliased reference's linear-light downsampling.
-//! - [`overlay`]: `player view`'s on-screen text and the representation colours.
-//! - [`run`]: the `render`/`compare` commands.
-//! - [`testdata`]: synthetic bakes for tests (`write_synthetic_bake`, `write_quad_bake`).
+//! Modules, in layers: each imports only modules of the layers before it (no import
+//! circle, issue 28).
+//! 1. Plain data, no GPU type: [`vertex`] (GPU records), [`camera`] (camera, frustum,
+//!    boxes), [`grid`] (the current cell on `format::grid::HexGrid`: the player never
+//!    links the worker), [`metrics`] (PSNR/SSIM), [`mode`] (configurations A/B/C and
+//!    `lod`), [`representation`] (the debug colours), [`DrawOptions`] (the culling
+//!    switches, from `format`).
+//! 2. CPU algorithms: [`patches`] (per-tile patch and cluster culling, issue 17).
+//! 3. The bake in memory: [`bake`] (a bake directory → [`bake::PreparedCell`]),
+//!    [`lod`] (the distance-LOD baseline's chains, issue 8).
+//! 4. The GPU: [`gpu`] (resources and submission; its `frame_model` turns a
+//!    [`gpu::DrawList`] into what one frame uploads and encodes).
+//! 5. Streaming: [`stream`] (current cell, prefetch thread, priority queue, upload
+//!    budget, LRU eviction; uploads through the renderer).
+//! 6. Frames: [`frame`] (the draw list of each configuration).
+//! 7. Commands: [`run`] (`render`/`compare`), [`view`] (the window), [`overlay`]
+//!    (the view's text panel), [`cmd`] (one function per `player` subcommand, with
+//!    its flags), [`testdata`] (synthetic bakes for tests).
 //!
 //! Conventions the bake must follow (what the player assumes):
 //! - `ProxyView::matrix` maps world points to homogeneous texture coordinates:
@@ -49,13 +50,16 @@ pub use format::schema::frames::DrawOptions;
 
 pub mod bake;
 pub mod camera;
+pub mod cmd;
 pub mod frame;
 pub mod gpu;
 pub mod grid;
 pub mod lod;
 pub mod metrics;
+pub mod mode;
 pub mod overlay;
 pub mod patches;
+pub mod representation;
 pub mod run;
 pub mod stream;
 pub mod testdata;

@@ -30,11 +30,11 @@
 //! on scoped threads) and gathered in model order.
 
 use crate::bake::Bake;
-use crate::camera::{Aabb, Camera};
+use crate::camera::{distance_to_box, Camera};
 use crate::vertex::InstanceRaw;
 use format::pack::BasePack;
 use format::Mesh;
-use glam::{Mat4, Vec3};
+use glam::Mat4;
 use std::collections::BTreeMap;
 use std::time::Instant;
 
@@ -218,14 +218,6 @@ pub fn pixels_per_radian(camera: &Camera) -> f32 {
     camera.height as f32 / camera.fov_y_deg.to_radians().max(1e-6)
 }
 
-/// Distance from `eye` to the nearest point of `b` (0 inside).
-pub fn distance_to_box(eye: Vec3, b: &Aabb) -> f32 {
-    if b.is_empty() {
-        return f32::INFINITY;
-    }
-    eye.distance(eye.clamp(b.min, b.max))
-}
-
 /// The coarsest level of `chain` whose projected error is below `threshold_px`;
 /// `px_per_model_unit` = instance scale / distance × pixels per radian. Level 0 (the
 /// original) when no simplified level qualifies.
@@ -287,6 +279,7 @@ pub fn lod_triangles(set: &LodSet, groups: &LodGroups) -> u64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::Vec3;
 
     fn grid_mesh(n: u32) -> Mesh {
         // An n × n bumpy height field (distinct errors per level).
@@ -353,17 +346,6 @@ mod tests {
         let t1 = c.triangle_count(1);
         assert!(t1 <= m.triangles.len() as u64 / 2 + 16, "{t1}");
         assert!(c.levels[1].error > 0.0);
-    }
-
-    #[test]
-    fn distance_to_box_is_zero_inside_and_euclidean_outside() {
-        let b = Aabb {
-            min: Vec3::ZERO,
-            max: Vec3::ONE,
-        };
-        assert_eq!(distance_to_box(Vec3::splat(0.5), &b), 0.0);
-        assert!((distance_to_box(Vec3::new(4.0, 0.5, 0.5), &b) - 3.0).abs() < 1e-6);
-        assert!((distance_to_box(Vec3::new(4.0, 5.0, 0.5), &b) - 5.0).abs() < 1e-6);
     }
 
     #[test]

@@ -18,7 +18,6 @@
 //! three tests off the originals are drawn whole.
 
 use crate::camera::{Aabb, Frustum};
-use crate::gpu::{DrawList, PatchedDraw};
 use crate::vertex::InstanceRaw;
 use crate::DrawOptions;
 use format::pack::BasePack;
@@ -220,17 +219,30 @@ pub fn refine_patches(
     (order, tiles)
 }
 
-/// Moves every original of `list` whose model has patch data into
-/// `list.patched`, with the ranges its visible patches make from `eye` within
-/// `frustum`. Instances with nothing left to draw are dropped.
+/// One original drawn as the index ranges of its visible patches.
+#[derive(Clone, Debug)]
+pub struct PatchedDraw {
+    pub model: u32,
+    pub instance: InstanceRaw,
+    /// Ranges of the model's patch-ordered index buffer.
+    pub ranges: Vec<(u32, u32)>,
+    pub triangles: u64,
+}
+
+/// Takes every original of `ids` whose model has patch data out of `originals`
+/// (the draw list's instanced groups, rebuilt from `ids` without them) and returns
+/// them as patched draws, with the ranges their visible patches make from `eye`
+/// within `frustum`, grouped by model. Instances with nothing left to draw are
+/// dropped.
 pub fn apply(
     runtime: &PatchRuntime,
     base: &BasePack,
     ids: &[u32],
     (eye, frustum): (Vec3, &Frustum),
     instances: &[InstanceRaw],
-    list: &mut DrawList<'_>,
-) {
+    originals: &mut Vec<(u32, Vec<InstanceRaw>)>,
+) -> Vec<PatchedDraw> {
+    let mut patched = Vec::new();
     let mut keep = Vec::new();
     let mut moved: std::collections::BTreeSet<u32> = std::collections::BTreeSet::new();
     for &i in ids {
@@ -243,7 +255,7 @@ pub fn apply(
         };
         moved.insert(i);
         if !ranges.is_empty() {
-            list.patched.push(PatchedDraw {
+            patched.push(PatchedDraw {
                 model: inst.model,
                 instance: instances[i as usize],
                 ranges,
@@ -252,11 +264,11 @@ pub fn apply(
         }
     }
     if moved.is_empty() {
-        return;
+        return patched;
     }
     // Grouped by model like the full-geometry reference's instanced draws (instances
     // in id order within a model): the same draw order, the same depth ties.
-    list.patched.sort_by_key(|p| p.model);
+    patched.sort_by_key(|p| p.model);
     // Rebuild the grouped originals without the moved instances.
     let mut by_model: std::collections::BTreeMap<u32, Vec<InstanceRaw>> = Default::default();
     for &i in ids {
@@ -270,7 +282,8 @@ pub fn apply(
                 .push(instances[i as usize]);
         }
     }
-    list.originals = by_model.into_iter().collect();
+    *originals = by_model.into_iter().collect();
+    patched
 }
 
 /// A run of a proxy's (de-indexed, world-space) triangles in one normal cluster and

@@ -551,6 +551,8 @@ pub fn compare(
     path: &CameraPath,
     opts: &CompareOptions,
 ) -> Result<CompareReport, RunError> {
+    // 1. The request checked; the bake, the renderers (the compared frames' and the
+    //    anti-aliased reference's) and the streamer opened, warmed up and primed.
     let size = opts.size.unwrap_or(path.resolution);
     let frames = path.frames();
     if frames.is_empty() {
@@ -583,13 +585,13 @@ pub fn compare(
     let mut per_frame = Vec::with_capacity(frames.len());
     let mut quality = Vec::with_capacity(frames.len());
     let mut hybrid_records = Vec::with_capacity(frames.len());
-    // (object psnr, frame, reference, hybrid, aa reference) of the worst frames.
-    type Worst = (f64, usize, Vec<u8>, Vec<u8>, Option<Vec<u8>>);
     let mut worst: Vec<Worst> = Vec::new();
     let mut prev: Option<Option<u32>> = None;
     let mut fallback_cells = std::collections::BTreeSet::new();
+    // 2. The walk: per frame the reference (A), B for timing and the compared mode
+    //    (C or lod), the anti-aliased reference, the metrics, the worst frames.
     for (i, f) in frames.iter().enumerate() {
-        // 1. The reference (A), B for timing, the compared mode (C or lod).
+        // 2a. The reference (A), B for timing, the compared mode (C or lod).
         let cam = camera_for(f, path, size, far);
         let (ref_ms, ref_tris, _, _) = player.draw(&cam, Mode::Full, None);
         let reference = player.renderer.read_pixels()?;
@@ -599,8 +601,8 @@ pub fn compare(
         if let (true, Some(c)) = (stats.fallback, stats.cell) {
             fallback_cells.insert(c);
         }
-        // 2. The anti-aliased reference: A at ss × ss samples, box-filtered in
-        //    linear light.
+        // 2b. The anti-aliased reference: A at ss × ss samples, box-filtered in
+        //     linear light.
         let aa_reference = match aa_renderer.as_mut() {
             Some(r) => {
                 let big = camera_for(f, path, (size.0 * ss, size.1 * ss), far);
@@ -616,7 +618,7 @@ pub fn compare(
             }
             None => None,
         };
-        // 3. The metrics: full frame and object pixels, against A and the AA reference.
+        // 2c. The metrics: full frame and object pixels, against A and the AA reference.
         let q = measure_frame(&reference, &hybrid, w, h);
         let aa = aa_reference.as_ref().map(|aa| AaFrame {
             compared: measure_frame(aa, &hybrid, w, h),
@@ -640,7 +642,7 @@ pub fn compare(
         });
         hybrid_records.push(frame_row(i, f.time_s, &stats, prev, (ms, list), &options));
         prev = Some(stats.cell);
-        // 4. The worst frames by object-pixel PSNR (frames without objects last).
+        // 2d. The worst frames by object-pixel PSNR (frames without objects last).
         if opts.worst_dir.is_some() && opts.worst_count > 0 {
             let key = q.object_psnr_y_db.unwrap_or(f64::INFINITY);
             worst.push((key, i, reference, hybrid, aa_reference));
@@ -650,86 +652,22 @@ pub fn compare(
         quality.push(q);
     }
     drop(streamer);
-    let crossing_no_prefetch = if opts.crossings && opts.mode == Mode::Hybrid {
-        let mut s = Streamer::new(
-            &player.bake,
-            StreamConfig {
-                prefetch: false,
-                ..opts.stream.clone()
-            },
-        );
-        player.prime(&mut s, &camera_for(&frames[0], path, size, far));
-        let mut recs = Vec::new();
-        let mut prev: Option<Option<u32>> = None;
-        for (i, f) in frames.iter().enumerate() {
-            let cam = camera_for(f, path, size, far);
-            let (ms, list, stats) = player.draw_listed(&cam, Mode::Hybrid, Some(&mut s));
-            recs.push(frame_row(i, f.time_s, &stats, prev, (ms, list), &options));
-            prev = Some(stats.cell);
-        }
-        Some(crossing_stats(&recs))
-    } else {
-        None
-    };
-    let pops = if opts.pops && opts.mode == Mode::Hybrid {
+    // 3. The crossing spikes without prefetch (hybrid only, unless --no-crossings).
+    let crossing_no_prefetch = (opts.crossings && opts.mode == Mode::Hybrid)
+        .then(|| crossings_without_prefetch(&mut player, path, &frames, size, opts));
+    // 4. The pop at each crossing (`--pops`, hybrid only).
+    let (pops, worst_pop) = if opts.pops && opts.mode == Mode::Hybrid {
         let cells: Vec<Option<u32>> = per_frame.iter().map(|f| f.cell).collect();
         let (report, worst_pair) = measure_pops(&mut player, path, &frames, &cells, size, opts)?;
-        if let (Some(dir), Some((i, from, to))) = (&opts.worst_dir, worst_pair) {
-            std::fs::create_dir_all(dir).map_err(|e| write_err(dir, e))?;
-            write_png(
-                &dir.join(format!("{i:05}-pop-from.png")),
-                size.0,
-                size.1,
-                &opaque(&from),
-            )?;
-            write_png(
-                &dir.join(format!("{i:05}-pop-to.png")),
-                size.0,
-                size.1,
-                &opaque(&to),
-            )?;
-            write_png(
-                &dir.join(format!("{i:05}-pop-diff.png")),
-                size.0,
-                size.1,
-                &diff_image(&from, &to),
-            )?;
-        }
-        Some(report)
+        (Some(report), worst_pair)
     } else {
-        None
+        (None, None)
     };
+    // 5. The worst frames and the worst pop as PNGs (`--worst`).
     if let Some(dir) = &opts.worst_dir {
-        std::fs::create_dir_all(dir).map_err(|e| write_err(dir, e))?;
-        for (_, i, r, h, aa) in &worst {
-            write_png(
-                &dir.join(format!("{i:05}-reference.png")),
-                size.0,
-                size.1,
-                &opaque(r),
-            )?;
-            write_png(
-                &dir.join(format!("{i:05}-{}.png", opts.mode.name())),
-                size.0,
-                size.1,
-                &opaque(h),
-            )?;
-            if let Some(aa) = aa {
-                write_png(
-                    &dir.join(format!("{i:05}-aa-reference.png")),
-                    size.0,
-                    size.1,
-                    &opaque(aa),
-                )?;
-            }
-            write_png(
-                &dir.join(format!("{i:05}-diff.png")),
-                size.0,
-                size.1,
-                &diff_image(r, h),
-            )?;
-        }
+        write_worst(dir, size, opts.mode, worst_pop, &worst)?;
     }
+    // 6. The report.
     let n = per_frame.len();
     let finite_min = per_frame
         .iter()
@@ -774,4 +712,101 @@ pub fn compare(
         fallback_cells: fallback_cells.into_iter().collect(),
         per_frame,
     })
+}
+
+/// Step 3 of [`compare`]: the hybrid walked again with the prefetch thread off, for
+/// the frame-time spikes after cell crossings (paper Fig. 14).
+fn crossings_without_prefetch(
+    player: &mut Player,
+    path: &CameraPath,
+    frames: &[PathFrame],
+    size: (u32, u32),
+    opts: &CompareOptions,
+) -> CrossingStats {
+    let far = player.bake.extent;
+    let options = player.draw_options();
+    let mut s = Streamer::new(
+        &player.bake,
+        StreamConfig {
+            prefetch: false,
+            ..opts.stream.clone()
+        },
+    );
+    player.prime(&mut s, &camera_for(&frames[0], path, size, far));
+    let mut recs = Vec::new();
+    let mut prev: Option<Option<u32>> = None;
+    for (i, f) in frames.iter().enumerate() {
+        let cam = camera_for(f, path, size, far);
+        let (ms, list, stats) = player.draw_listed(&cam, Mode::Hybrid, Some(&mut s));
+        recs.push(frame_row(i, f.time_s, &stats, prev, (ms, list), &options));
+        prev = Some(stats.cell);
+    }
+    crossing_stats(&recs)
+}
+
+/// The worst frames of a comparison, worst first: (object PSNR, frame, reference,
+/// compared frame, anti-aliased reference).
+type Worst = (f64, usize, Vec<u8>, Vec<u8>, Option<Vec<u8>>);
+
+/// Step 5 of [`compare`]: the worst crossing's pair (`pop`: frame, outgoing,
+/// incoming) and the worst frames (reference, `mode`'s frame, anti-aliased
+/// reference, difference) as PNGs in `dir`.
+fn write_worst(
+    dir: &Path,
+    size: (u32, u32),
+    mode: Mode,
+    pop: Option<(usize, Vec<u8>, Vec<u8>)>,
+    worst: &[Worst],
+) -> Result<(), RunError> {
+    if let Some((i, from, to)) = pop {
+        std::fs::create_dir_all(dir).map_err(|e| write_err(dir, e))?;
+        write_png(
+            &dir.join(format!("{i:05}-pop-from.png")),
+            size.0,
+            size.1,
+            &opaque(&from),
+        )?;
+        write_png(
+            &dir.join(format!("{i:05}-pop-to.png")),
+            size.0,
+            size.1,
+            &opaque(&to),
+        )?;
+        write_png(
+            &dir.join(format!("{i:05}-pop-diff.png")),
+            size.0,
+            size.1,
+            &diff_image(&from, &to),
+        )?;
+    }
+    std::fs::create_dir_all(dir).map_err(|e| write_err(dir, e))?;
+    for (_, i, r, h, aa) in worst {
+        write_png(
+            &dir.join(format!("{i:05}-reference.png")),
+            size.0,
+            size.1,
+            &opaque(r),
+        )?;
+        write_png(
+            &dir.join(format!("{i:05}-{}.png", mode.name())),
+            size.0,
+            size.1,
+            &opaque(h),
+        )?;
+        if let Some(aa) = aa {
+            write_png(
+                &dir.join(format!("{i:05}-aa-reference.png")),
+                size.0,
+                size.1,
+                &opaque(aa),
+            )?;
+        }
+        write_png(
+            &dir.join(format!("{i:05}-diff.png")),
+            size.0,
+            size.1,
+            &diff_image(r, h),
+        )?;
+    }
+    Ok(())
 }

@@ -100,7 +100,7 @@ pub enum PendingDraw {
 impl std::str::FromStr for PendingDraw {
     type Err = String;
     fn from_str(s: &str) -> Result<PendingDraw, String> {
-        crate::frame::parse_named(
+        crate::mode::parse_named(
             "pending draw",
             s,
             [

@@ -10,7 +10,8 @@
 //! with. `Renderer::render` (the parent module) uploads the plan and encodes it.
 
 use super::{GpuModels, GpuProxy};
-use crate::overlay::Representation;
+use crate::patches::PatchedDraw;
+use crate::representation::Representation;
 use crate::vertex::InstanceRaw;
 use glam::{Mat4, Vec3};
 
@@ -33,16 +34,6 @@ pub struct DrawList<'a> {
     /// Per proxy of `proxies`, then of `lit_proxies`, the vertex ranges drawn
     /// ([`DrawList::proxy_ranges`], computed once).
     pub(crate) ranges: std::cell::OnceCell<Vec<Vec<(u32, u32)>>>,
-}
-
-/// One original drawn as the index ranges of its visible patches.
-#[derive(Clone, Debug)]
-pub struct PatchedDraw {
-    pub model: u32,
-    pub instance: InstanceRaw,
-    /// Ranges of the model's patch-ordered index buffer.
-    pub ranges: Vec<(u32, u32)>,
-    pub triangles: u64,
 }
 
 impl DrawList<'_> {
@@ -306,7 +297,7 @@ fn near_to_far(proxies: &[&GpuProxy], eye: Vec3) -> Vec<usize> {
     let mut keyed: Vec<(f32, usize)> = proxies
         .iter()
         .enumerate()
-        .map(|(k, p)| (crate::lod::distance_to_box(eye, &p.bounds), k))
+        .map(|(k, p)| (crate::camera::distance_to_box(eye, &p.bounds), k))
         .collect();
     keyed.sort_by(|a, b| a.0.total_cmp(&b.0));
     keyed.into_iter().map(|(_, k)| k).collect()

@@ -3,7 +3,7 @@
 //! pipelines, and the shared buffers, sampler and placeholder textures. One
 //! function per object or family, in the order `with_device` calls them.
 
-use super::{albedo_bind_group, shader_source, texture_2d, COLOR_FORMAT, DEPTH_FORMAT};
+use super::{shader_source, texture_2d, COLOR_FORMAT, DEPTH_FORMAT};
 use crate::vertex::{Globals, InstanceRaw, ModelVertex, ProxyVertex, MAX_VIEWS};
 use wgpu::util::DeviceExt;
 
@@ -332,4 +332,59 @@ pub(super) fn shared(
         instances,
         white_albedo,
     }
+}
+
+/// Bind group 2 of the lit pipeline: an `Rgba8UnormSrgb` texture (sampled in
+/// linear space, as `format::albedo` does on the CPU) and a linear, non-mipmapped
+/// sampler with the texture's wrap modes.
+pub(super) fn albedo_bind_group(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    layout: &wgpu::BindGroupLayout,
+    label: &str,
+    (width, height): (u32, u32),
+    rgba: &[u8],
+    wrap: [format::albedo::Wrap; 2],
+) -> wgpu::BindGroup {
+    use format::albedo::Wrap;
+    let texture = device.create_texture_with_data(
+        queue,
+        &texture_2d(
+            label,
+            (width, height),
+            wgpu::TextureFormat::Rgba8UnormSrgb,
+            wgpu::TextureUsages::TEXTURE_BINDING,
+        ),
+        wgpu::util::TextureDataOrder::LayerMajor,
+        rgba,
+    );
+    let mode = |w: Wrap| match w {
+        Wrap::Repeat => wgpu::AddressMode::Repeat,
+        Wrap::MirroredRepeat => wgpu::AddressMode::MirrorRepeat,
+        Wrap::ClampToEdge => wgpu::AddressMode::ClampToEdge,
+    };
+    let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+        label: Some(label),
+        address_mode_u: mode(wrap[0]),
+        address_mode_v: mode(wrap[1]),
+        mag_filter: wgpu::FilterMode::Linear,
+        min_filter: wgpu::FilterMode::Linear,
+        ..Default::default()
+    });
+    device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some(label),
+        layout,
+        entries: &[
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: wgpu::BindingResource::TextureView(
+                    &texture.create_view(&Default::default()),
+                ),
+            },
+            wgpu::BindGroupEntry {
+                binding: 1,
+                resource: wgpu::BindingResource::Sampler(&sampler),
+            },
+        ],
+    })
 }

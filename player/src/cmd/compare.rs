@@ -1,0 +1,177 @@
+//! `player compare`: the hybrid (or the distance-LOD baseline) against the
+//! full-geometry reference along a camera path ([`crate::run::compare`]): PSNR on
+//! luminance and SSIM over whole frames and object pixels, also against an
+//! anti-aliased reference; triangle and frame-time ratios; crossing spikes and, with
+//! `--pops`, the pop at each crossing. Prints the report as text or as JSON.
+
+use super::args::{DrawArgs, PathArgs};
+use crate::frame::Mode;
+use crate::run::{CompareOptions, CompareReport, RunError};
+use std::path::PathBuf;
+
+// The flags of `player compare` (its help text is the `Command::Compare` doc in
+// main.rs).
+#[derive(clap::Args, Clone)]
+pub struct CompareArgs {
+    pub out: PathBuf,
+    #[arg(long)]
+    pub path: PathBuf,
+    /// What to compare with the full-geometry reference: hybrid or lod.
+    #[arg(long, default_value = "hybrid")]
+    pub mode: Mode,
+    /// Print the report as JSON on stdout.
+    #[arg(long)]
+    pub json: bool,
+    /// Write the worst frames by object-pixel PSNR (reference, hybrid,
+    /// difference, anti-aliased reference) here.
+    #[arg(long)]
+    pub worst: Option<PathBuf>,
+    /// How many worst frames to write.
+    #[arg(long, default_value_t = 3)]
+    pub worst_count: usize,
+    /// Skip the extra no-prefetch pass (crossing frame times).
+    #[arg(long)]
+    pub no_crossings: bool,
+    /// Measure the pop at each cell crossing: the crossing pose drawn with the
+    /// outgoing and with the incoming cell, compared over object pixels, beside
+    /// the change a one-pixel camera turn makes (issue 31); with --worst, the
+    /// worst crossing's pair as PNGs.
+    #[arg(long)]
+    pub pops: bool,
+    /// Supersampling per axis of the anti-aliased reference (full geometry
+    /// rendered N times wider and higher, box-filtered in linear light); 1 = none.
+    #[arg(long, default_value_t = crate::run::DEFAULT_REFERENCE_SS,
+          value_parser = clap::value_parser!(u32).range(1..=crate::run::MAX_REFERENCE_SS as i64))]
+    pub reference_ss: u32,
+    /// Draw each configuration's frame this many times and time it by the
+    /// fastest draw (robust to a busy machine; above 1 the hybrid's time leaves
+    /// out the texture uploads its first draw submits).
+    #[arg(long, default_value_t = 1,
+          value_parser = clap::value_parser!(u32).range(1..=100))]
+    pub repeat: u32,
+    #[command(flatten)]
+    pub walk: PathArgs,
+    #[command(flatten)]
+    pub draw: DrawArgs,
+}
+
+/// Compares along the path of `args` and prints the report (JSON with `--json`).
+pub fn compare(args: CompareArgs) -> Result<(), RunError> {
+    let path = format::path::CameraPath::load(&args.path)?;
+    let r = crate::run::compare(
+        &args.out,
+        &path,
+        &CompareOptions {
+            worst_dir: args.worst,
+            worst_count: args.worst_count,
+            size: args.walk.stream.size,
+            crossings: !args.no_crossings,
+            pops: args.pops,
+            stream: args.walk.path_config(&path),
+            mode: args.mode,
+            lod_pixel_error: args.walk.stream.lod_pixel_error,
+            reference_ss: args.reference_ss,
+            repeat: args.repeat,
+            draw: args.draw.options(),
+        },
+    )?;
+    if args.json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&r).unwrap_or_else(|e| e.to_string())
+        );
+    } else {
+        print_report(&r);
+    }
+    Ok(())
+}
+
+/// The report as text: one line per frame, then the summary lines.
+fn print_report(r: &CompareReport) {
+    let db = |v: Option<f64>| v.map_or("      –".to_string(), |v| format!("{v:7.2}"));
+    for f in &r.per_frame {
+        let aa = f.aa_reference.as_ref().map_or(String::new(), |a| {
+            format!(
+                " | vs AA: object {} dB (full geometry {} dB)",
+                db(a.compared.object_psnr_y_db),
+                db(a.full.object_psnr_y_db)
+            )
+        });
+        println!(
+                "frame {:4} cell {:>4} psnr_y {:7.2} dB ssim {:.4} object {} dB ssim {} ({} px) triangles {} / {}{aa}",
+                f.frame,
+                f.cell.map_or(-1, |c| c as i64),
+                f.psnr_y,
+                f.ssim,
+                db(f.object_psnr_y_db),
+                f.object_ssim.map_or("     –".to_string(), |s| format!("{s:.4}")),
+                f.object_pixels,
+                f.triangles,
+                f.reference_triangles
+            );
+    }
+    println!(
+            "{} frames ({}): mean PSNR(Y) {:.2} dB (min {:.2}), mean SSIM {:.4}, triangles {:.0} / {:.0} ({:.3}), frame time ratio {:.3} vs full, {:.3} vs frustum",
+            r.frames,
+            r.mode,
+            r.mean_psnr_y,
+            r.min_psnr_y,
+            r.mean_ssim,
+            r.mean_triangles,
+            r.reference_triangles,
+            r.mean_triangles / r.reference_triangles.max(1.0),
+            r.frame_time_ratio,
+            r.frame_time_ratio_frustum
+        );
+    let object = |o: &crate::metrics::ObjectQuality| {
+        format!(
+                "object pixels ({:.1}% of all): PSNR(Y) {:.2} dB pooled, worst frame {} at {:.2} dB, mean SSIM {:.4}",
+                100.0 * o.object_pixel_fraction,
+                o.object_psnr_y_db,
+                o.worst_object_frame.map_or(-1, |f| f as i64),
+                o.min_object_psnr_y_db,
+                o.mean_object_ssim
+            )
+    };
+    println!("{} vs full geometry: {}", r.mode, object(&r.object));
+    if let Some(aa) = &r.aa_reference {
+        for (name, q) in [(r.mode.as_str(), &aa.compared), ("full geometry", &aa.full)] {
+            println!(
+                    "{name} vs anti-aliased reference ({0}×{0} samples): mean PSNR(Y) {1:.2} dB (min {2:.2}), mean SSIM {3:.4}; {4}",
+                    aa.supersampling_factor,
+                    q.mean_psnr_y_db,
+                    q.min_psnr_y_db,
+                    q.mean_ssim,
+                    object(&q.object)
+                );
+        }
+    }
+    if !r.fallback_cells.is_empty() {
+        println!(
+                "fallback: cells {:?} were drawn with original geometry (pack missing, corrupt or off the index); their frames count full geometry as the hybrid",
+                r.fallback_cells
+            );
+    }
+    if let Some(p) = &r.pops {
+        println!(
+                "pops at {} crossings: object-pixel PSNR(Y) of outgoing vs incoming cell mean {:.2} dB, worst {:.2} dB (frame {}); a one-pixel turn: mean {:.2} dB; {} crossings no larger than the turn",
+                p.crossings.len(),
+                p.mean_pop_psnr_y_db,
+                p.worst_pop_psnr_y_db,
+                p.worst_frame.map_or("-".to_string(), |f| f.to_string()),
+                p.mean_shift_psnr_y_db,
+                p.below_shift
+            );
+    }
+    for (name, c) in [
+        ("prefetch on", &r.crossing_prefetch),
+        ("prefetch off", &r.crossing_no_prefetch),
+    ] {
+        if let Some(c) = c {
+            println!(
+                    "crossings ({name}): {} — max frame time in the 10 frames after a crossing {:.2} ms = {:.2} × in-cell median {:.2} ms",
+                    c.crossings, c.max_after_crossing_ms, c.ratio, c.in_cell_median_ms
+                );
+        }
+    }
+}
