@@ -304,9 +304,51 @@ pub fn select_patches(
     }
 }
 
+/// The normal cluster of a geometric normal: the cube face its largest component
+/// points at (6) times the signs of the other two components (4), 24 in all
+/// (Zhang & Hoff's normal-space partition, coarse). Degenerate normals: cluster 0.
+/// One home for the bake's patches (worker `patches.rs`) and the player's proxy
+/// tiles (player `patches.rs`), both computing the normal in f64.
+pub fn normal_cluster(n: glam::DVec3) -> u8 {
+    let a = n.abs();
+    let (axis, u, v) = if a.x >= a.y && a.x >= a.z {
+        (0, n.y, n.z)
+    } else if a.y >= a.z {
+        (1, n.z, n.x)
+    } else {
+        (2, n.x, n.y)
+    };
+    let sign = |x: f64| u8::from(x < 0.0);
+    let major = if [n.x, n.y, n.z][axis] < 0.0 { 1 } else { 0 };
+    ((axis as u8 * 2 + major) << 2) | (sign(u) << 1) | sign(v)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn normal_clusters_are_24_cube_face_quadrants() {
+        // Each of the 24 (face, quadrant) directions lands in its own cluster, and
+        // scaling a normal (f32 rounding of the same direction) never changes it.
+        let mut seen = std::collections::BTreeSet::new();
+        for axis in 0..3 {
+            for major in [1.0, -1.0] {
+                for (su, sv) in [(1.0, 1.0), (1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0)] {
+                    let mut n = [0.0f64; 3];
+                    n[axis] = major;
+                    n[(axis + 1) % 3] = 0.3 * su;
+                    n[(axis + 2) % 3] = 0.2 * sv;
+                    let c = normal_cluster(glam::DVec3::from(n));
+                    assert!(c < 24);
+                    assert_eq!(c, normal_cluster(glam::DVec3::from(n) * 1e-3));
+                    seen.insert(c);
+                }
+            }
+        }
+        assert_eq!(seen.len(), 24);
+        assert_eq!(normal_cluster(glam::DVec3::ZERO), 0);
+    }
 
     #[test]
     fn sphere_counts_match_the_paper() {

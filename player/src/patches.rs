@@ -22,7 +22,8 @@ use crate::vertex::InstanceRaw;
 use crate::DrawOptions;
 use format::pack::BasePack;
 use format::patch_visibility::{
-    patch_backfacing, select_patches, ModelPatchView, PatchBounds, PatchTests, SamplingSphere,
+    normal_cluster, patch_backfacing, select_patches, ModelPatchView, PatchBounds, PatchTests,
+    SamplingSphere,
 };
 use glam::{Mat4, Vec3};
 
@@ -301,21 +302,6 @@ pub struct ProxyCluster {
     pub count: u32,
 }
 
-/// The cluster (Zhang & Hoff's cube-face partition, 24 clusters) of a geometric
-/// normal; the same partition as the bake's patches (worker `patches.rs`).
-fn cluster_of(n: Vec3) -> u8 {
-    let a = n.abs();
-    let (axis, u, v) = if a.x >= a.y && a.x >= a.z {
-        (0u8, n.y, n.z)
-    } else if a.y >= a.z {
-        (1, n.z, n.x)
-    } else {
-        (2, n.x, n.y)
-    };
-    let major = u8::from(n.to_array()[axis as usize] < 0.0);
-    ((axis * 2 + major) << 2) | (u8::from(u < 0.0) << 1) | u8::from(v < 0.0)
-}
-
 /// Most triangles in one proxy cluster or original tile (default): a normal cluster
 /// (or a bake patch) with more is split in halves at the median centroid along its
 /// longest axis until every piece holds at most this many. Smaller pieces cull more
@@ -388,9 +374,7 @@ pub fn cluster_proxy_vertices(
     };
     let centroid =
         |t: usize| (0..3).fold(Vec3::ZERO, |s, k| s + Vec3::from(vertices[3 * t + k].pos)) / 3.0;
-    let mut order: Vec<(u8, usize)> = (0..tris)
-        .map(|t| (cluster_of(normal(t).as_vec3()), t))
-        .collect();
+    let mut order: Vec<(u8, usize)> = (0..tris).map(|t| (normal_cluster(normal(t)), t)).collect();
     order.sort_unstable();
     let mut out = Vec::with_capacity(vertices.len());
     let mut clusters = Vec::new();

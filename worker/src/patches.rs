@@ -158,22 +158,7 @@ fn corners(mesh: &Mesh, t: [u32; 3]) -> [DVec3; 3] {
     })
 }
 
-/// The normal cluster of a geometric normal: the cube face its largest component
-/// points at (6) times the signs of the other two components (4), 24 in all
-/// (Zhang & Hoff's normal-space partition, coarse). Degenerate normals: cluster 0.
-pub fn normal_cluster(n: DVec3) -> u8 {
-    let a = n.abs();
-    let (axis, u, v) = if a.x >= a.y && a.x >= a.z {
-        (0, n.y, n.z)
-    } else if a.y >= a.z {
-        (1, n.z, n.x)
-    } else {
-        (2, n.x, n.y)
-    };
-    let sign = |x: f64| u8::from(x < 0.0);
-    let major = if [n.x, n.y, n.z][axis] < 0.0 { 1 } else { 0 };
-    ((axis as u8 * 2 + major) << 2) | (sign(u) << 1) | sign(v)
-}
+pub use format::patch_visibility::normal_cluster;
 
 /// 002 §3.1 patch creation inside normal clusters (module docs). Returns the
 /// patches' triangle ids (each ascending), patches ordered by their first triangle.
