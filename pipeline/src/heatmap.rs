@@ -6,8 +6,8 @@
 //! labelled with the values there (a tiny built-in digit font: tiny-skia draws
 //! no text).
 
-use crate::report::CellLine;
 use format::pack::GridParams;
+use format::schema::report::CellLine;
 use tiny_skia::{Color, FillRule, Paint, PathBuilder, Pixmap, Rect, Stroke, Transform};
 use worker::grid::HexGrid;
 use worker::picture::ramp;

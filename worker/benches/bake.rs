@@ -15,9 +15,9 @@
 use format::manifest::parse_manifest;
 use std::path::PathBuf;
 use std::time::Instant;
-use worker::bake::bake_cell_hybrid;
 use worker::check::check_cell;
 use worker::grid::HexGrid;
+use worker::groups::bake_cell_hybrid;
 use worker::lod_chain::LodChains;
 
 fn main() {

@@ -67,7 +67,7 @@
 //! `bake.merge_level` (default 1: none) keep SvMesh and cluster proxies, one per
 //! object, as the one-level far field did; from it on,
 //! groups draw merged layered impostors ([`crate::levels`]), and an object is far
-//! for such a group only when it also lies at least [`merged_min_distance`] from
+//! for such a group only when it also lies at least [`crate::levels::merged_min_distance`] from
 //! its centre — a distance proportional to the group's size, so a merged level
 //! serves an annulus whose radii scale with the level (× √7 each), and its
 //! impostors need at most [`crate::levels::MAX_BANDS`] depth bands per sector:
@@ -308,13 +308,13 @@ impl CellGroups {
 
 /// The far test of one group for one instance (module docs): outside the group
 /// prism's footprint ([`crate::bake::draws_as_original`]), a single-view object for it, at a merged level no nearer than
-/// [`merged_min_distance`], and not regionally back-facing to it. The cheap tests
+/// [`crate::levels::merged_min_distance`], and not regionally back-facing to it. The cheap tests
 /// run first: the back-face test reads every triangle.
 struct FarTest {
     prism: Prism,
     corners: [glam::Vec3; 12],
     eye: glam::Vec3,
-    /// At a merged level: [`merged_min_distance`].
+    /// At a merged level: [`crate::levels::merged_min_distance`].
     min_distance: Option<f32>,
 }
 
@@ -323,7 +323,8 @@ impl FarTest {
         FarTest {
             corners: prism.corners(),
             eye: prism.centre3(),
-            min_distance: merged.then(|| merged_min_distance(&prism, params.image_res)),
+            min_distance: merged
+                .then(|| crate::levels::merged_min_distance(&prism, params.image_res)),
             prism,
         }
     }
@@ -348,7 +349,7 @@ impl FarTest {
             return false;
         }
         let (lo, hi) = scene.instance_bounds(i);
-        if crate::bake::draws_as_original(&self.prism, lo, hi) {
+        if crate::grid::draws_as_original(&self.prism, lo, hi) {
             return false;
         }
         let error =
@@ -364,20 +365,6 @@ impl FarTest {
         }
         !all_culled(&model.mesh, inst.transform, &self.corners)
     }
-}
-
-/// The nearest an object may be to the centre of a group of a merged level
-/// (`bake.merge_level`, [`crate::levels`]) to be far for it: `e / (2θ · L · B)`
-/// for the prism's largest viewer offset `e`, one output pixel θ, `L` =
-/// [`crate::levels::BAND_LAYERS`] layers per band and `B` =
-/// [`crate::levels::MAX_BANDS`] bands. From there on, 001's parallax error stays
-/// within one pixel with at most `B` depth bands per sector, and since `e` grows by
-/// √7 per level, so does this distance: the annuli the merged levels serve are
-/// scaled copies of each other (module docs, "Levels").
-pub fn merged_min_distance(prism: &Prism, image_res: u32) -> f32 {
-    let theta = std::f64::consts::FRAC_PI_3 / f64::from(image_res.max(1));
-    let bands = crate::levels::BAND_LAYERS * crate::levels::MAX_BANDS as f64;
-    (f64::from(crate::levels::max_offset(prism)) / (2.0 * theta * bands)) as f32
 }
 
 /// What group `group` serves (module docs, "Levels"): its far objects that are far

@@ -5,13 +5,13 @@
 //! proxies with those of its whole chain of groups appended. Split from `bake.rs`
 //! (issue 28: one file per role).
 
-use crate::bake::{
-    bake_cell_with, derive_region, finish, proxy_key, selection_culled, Assignment, BakeError,
-    BakedProxy, CellBake, CellTimes, ProxyReuse, Region,
-};
+use crate::bake::{bake_cell_with, finish, Assignment, CellBake};
+use crate::derive::{derive_region, selection_culled, CellTimes, Region};
+use crate::error::BakeError;
 use crate::far_field::{served_instances, CellGroups, FarField};
 use crate::grid::{HexGrid, Prism};
 use crate::lod_chain::LodChains;
+use crate::proxy::{proxy_key, BakedProxy, ProxyReuse};
 use crate::select::subpixel_from_region;
 use crate::svmesh::{ms_since, StageTimes};
 use format::manifest::{BakeParams, CellParams};

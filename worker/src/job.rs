@@ -356,7 +356,7 @@ pub fn bake_cell_pack(
                 far.as_ref(),
             )
         }
-        Unit::Group(group) => crate::bake::bake_group(
+        Unit::Group(group) => crate::groups::bake_group(
             scene,
             chains,
             reuse,

@@ -22,7 +22,7 @@
 //! # Why the count is bounded
 //!
 //! A merged level's group serves only objects at least
-//! [`crate::far_field::merged_min_distance`] from its centre, a distance `D`
+//! [`merged_min_distance`] from its centre, a distance `D`
 //! proportional to its prism's size `e`: 1/d over its objects spans at most
 //! 1/D = [`MAX_BANDS`] × the inverse-depth span one band of [`BAND_LAYERS`] layers
 //! covers at viewer offset `e`, so a sector needs at most `MAX_BANDS` bands,
@@ -42,9 +42,9 @@
 //! whole region are dropped ([`crate::select::subpixel_from_region`]), the one
 //! object-dropping rule of every level; nothing is clipped by distance.
 
-use crate::bake::BakedProxy;
 use crate::grid::Prism;
 use crate::impostor::build_layered_impostor_up_to;
+use crate::proxy::BakedProxy;
 use crate::raster::DrawItem;
 use crate::select::subpixel_from_region;
 use format::Scene;
@@ -57,7 +57,7 @@ pub const SECTORS: usize = 6;
 pub const MERGED_MAX_LAYERS: usize = format::pack::MAX_IMPOSTOR_LAYERS;
 
 /// Depth bands per sector the distance rule of a merged level allows
-/// ([`crate::far_field::merged_min_distance`]).
+/// ([`merged_min_distance`]).
 pub const MAX_BANDS: usize = 2;
 
 /// Most layers a depth band may need (module docs, "Merging"): a margin below
@@ -75,6 +75,20 @@ pub struct Band {
 /// prism's farthest corner.
 pub fn max_offset(prism: &Prism) -> f32 {
     crate::impostor::max_offset(prism, prism.centre3())
+}
+
+/// The nearest an object may be to the centre of a group of a merged level
+/// (`bake.merge_level`) to be far for it: `e / (2θ · L · B)`
+/// for the prism's largest viewer offset `e`, one output pixel θ, `L` =
+/// [`BAND_LAYERS`] layers per band and `B` =
+/// [`MAX_BANDS`] bands. From there on, 001's parallax error stays
+/// within one pixel with at most `B` depth bands per sector, and since `e` grows by
+/// √7 per level, so does this distance: the annuli the merged levels serve are
+/// scaled copies of each other ([`crate::far_field`]'s module docs, "Levels").
+pub fn merged_min_distance(prism: &Prism, image_res: u32) -> f32 {
+    let theta = std::f64::consts::FRAC_PI_3 / f64::from(image_res.max(1));
+    let bands = BAND_LAYERS * MAX_BANDS as f64;
+    (f64::from(max_offset(prism)) / (2.0 * theta * bands)) as f32
 }
 
 /// 001 §3.3's layer count, unclamped, for depths `near..far` (module docs).
@@ -149,7 +163,7 @@ pub fn merged_impostor(
     prism: &Prism,
     band: &Band,
     image_res: u32,
-    key: crate::bake::ProxyKey,
+    key: crate::proxy::ProxyKey,
 ) -> Result<Option<BakedProxy>, crate::capture::CaptureError> {
     let items: Vec<DrawItem> = band
         .members
@@ -222,7 +236,7 @@ mod tests {
         ) {
             let p = prism(size);
             let image_res = 1024;
-            let min = crate::far_field::merged_min_distance(&p, image_res);
+            let min = merged_min_distance(&p, image_res);
             let points: Vec<(f32, f32)> = polar
                 .iter()
                 .map(|&(turn, scale)| {

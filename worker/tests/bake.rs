@@ -655,8 +655,8 @@ fn deviation_setting_is_off_only_at_zero() {
 /// the cell baked with a proxy of its own for every object.
 #[test]
 fn demo_far_field_is_shared_conservative_and_close() {
-    use worker::bake::bake_cell_hybrid;
     use worker::far_field::{CellGroups, FarField};
+    use worker::groups::bake_cell_hybrid;
     let (scene, grid, cells, params) = demo();
     assert!(params.far_field, "on by default");
     let groups = CellGroups::new(&grid);
