@@ -682,6 +682,7 @@ pub fn pooled_psnr_y(c: &CompareReport) -> f64 {
 /// Tables 6–7: the player along the path.
 fn runtime(ctx: &Ctx) -> String {
     let mut m = String::new();
+    // 1. The hybrid compare run of each scene (none measured: say so).
     let compares: Vec<_> = scenes()
         .iter()
         .map(|(s, _)| ctx.hybrid_compare(s).filter(|c| c.available))
@@ -689,6 +690,7 @@ fn runtime(ctx: &Ctx) -> String {
     if compares.iter().all(Option::is_none) {
         return NOT_MEASURED.into();
     }
+    // 2. The header: the walks measured and the paper's columns.
     let paths: BTreeSet<String> = compares
         .iter()
         .flatten()
@@ -715,6 +717,7 @@ fn runtime(ctx: &Ctx) -> String {
         cols.push("vs paper".to_string());
     }
     table_header(&mut m, &cols);
+    // 3. The renders beside each compare, and the paper's tables 6 and 7.
     let frustum: Vec<Option<&RenderResult>> = scenes()
         .iter()
         .map(|(s, _)| {
@@ -737,6 +740,7 @@ fn runtime(ctx: &Ctx) -> String {
             paper().scene_polygons.total.values[k]
         }
     };
+    // 4. One row per measure: ours per scene beside the paper's.
     let mut add = |name: &str,
                    paper: [f64; 3],
                    ours: [f64; 3],
@@ -845,6 +849,7 @@ fn runtime(ctx: &Ctx) -> String {
         |v| fixed(v, 2),
         &|_, _| String::new(),
     );
+    // 5. The adapters the times were taken on.
     let adapters: BTreeSet<String> = compares
         .iter()
         .flatten()

@@ -32,6 +32,10 @@
 //! Contract for views: the projection must be an OpenGL-style perspective matrix
 //! whose clip `w` is the eye-space depth −z_eye (every builder in [`crate::view`]
 //! makes one); the depth buffer holds that `w`.
+//!
+//! One algorithm in one file (issue 28: over 1,000 lines only where one algorithm
+//! needs it): setup, edge functions, the four buffers and their tests belong
+//! together; the shading convention and sRGB live in `format`.
 
 use crate::shade::{linear_to_srgb8, shade, srgb8_to_linear, SKY};
 use format::Mesh;

@@ -274,6 +274,7 @@ pub(super) fn sections(set: &PatchSet) -> Vec<SectionData> {
 /// Decodes the sections when `patch-table` is present (`None` when it is absent);
 /// the structure is checked here, the values by [`check`].
 pub(super) fn decode(pack: &PackFile, model_count: usize) -> Result<Option<PatchSet>, BadValue> {
+    // 1. The patch table is optional; when present its 32-byte head is checked.
     let table = SectionKind::PATCH_TABLE;
     if pack.section_info(table).is_none() {
         return Ok(None);
@@ -315,6 +316,7 @@ pub(super) fn decode(pack: &PackFile, model_count: usize) -> Result<Option<Patch
             ),
         ));
     }
+    // 2. The model and patch records: sizes, counts and reserved fields.
     let expected = (head.model_count as u64) * 32 + (head.patch_count as u64) * 48 + 32;
     if bytes.len() as u64 != expected {
         return Err(BadValue(
@@ -358,6 +360,7 @@ pub(super) fn decode(pack: &PackFile, model_count: usize) -> Result<Option<Patch
             format!("patch {i}: reserved field is not 0"),
         ));
     }
+    // 3. The shells and the sampling sphere the bitfields refer to.
     let shell_radius = head.shell_radius[..head.shell_count as usize].to_vec();
     if head.shell_radius[head.shell_count as usize..]
         .iter()
@@ -370,6 +373,7 @@ pub(super) fn decode(pack: &PackFile, model_count: usize) -> Result<Option<Patch
         shell_radius,
         models: Vec::with_capacity(model_count),
     };
+    // 4. The triangle order and sample bitfield sections, sized by the records.
     let words = set.words_per_patch();
     let order: Vec<u32> = pack
         .section_vec(SectionKind::PATCH_TRIANGLES)
@@ -389,6 +393,7 @@ pub(super) fn decode(pack: &PackFile, model_count: usize) -> Result<Option<Patch
             ),
         ));
     }
+    // 5. Each model's patches: ranges that tile its triangles, bounds and bits.
     let (mut p0, mut t0) = (0usize, 0usize);
     for (i, m) in models.iter().enumerate() {
         let p1 = p0 + m.patch_count as usize;
