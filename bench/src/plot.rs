@@ -1,10 +1,10 @@
 //! The per-frame plot of a walk (000 Fig. 14 (b)): PSNR(Y) of every frame against
 //! full geometry on top, triangles drawn (log scale) below, cell crossings as yellow
 //! vertical lines — from `player compare`'s per-frame output. Drawn with tiny-skia;
-//! labels use a small built-in 3×5 font (tiny-skia draws no text).
+//! text in DejaVu Sans ([`pipeline::text`]).
 
 use crate::results::CompareReport;
-use pipeline::pixel_font::{draw_text, text_width};
+use pipeline::text::{draw_text, text_width};
 use tiny_skia::{Color, Paint, Path, PathBuilder, Pixmap, Rect, Stroke, Transform};
 
 const W: f32 = 1200.0;
@@ -90,7 +90,7 @@ pub fn render_walk_plot(
         &|v| (v - lo) / (hi - lo),
         &ticks,
         &|v| format!("{v:.0}"),
-        "PSNR DB",
+        "PSNR(Y) against full geometry (dB)",
     );
 
     // Bottom: triangles, log10.
@@ -146,7 +146,7 @@ pub fn render_walk_plot(
                 format!("{v:.0}")
             }
         },
-        "TRIANGLES",
+        "triangles drawn per frame (log scale)",
     );
     // Frame axis labels.
     let y = TOP + 2.0 * PANEL_H + GAP + 12.0;
@@ -159,9 +159,9 @@ pub fn render_walk_plot(
     }
     draw_text(
         &mut pm,
-        LEFT + plot_w / 2.0 - text_width("FRAME", 2.0) / 2.0,
+        LEFT + plot_w / 2.0 - text_width("frame of the walk", 2.0) / 2.0,
         y + 16.0,
-        "FRAME",
+        "frame of the walk",
         INK,
         2.0,
     );

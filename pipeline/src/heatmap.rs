@@ -1,10 +1,10 @@
 //! `report.png`: the hex grid drawn four times as heat maps — polygons per cell
 //! (inside + proxies), pack bytes, bake time, and (issue 16) the quality check's
-//! worst sample view PSNR(Y) per cell in dB ("worst psnr db": low is bad, so its
+//! worst sample view PSNR(Y) per cell in dB (low is bad, so its
 //! ramp runs the other way — the lowest PSNR is the hot end, at the bar's right,
 //! labelled with its positive dB value) — each with a colour bar whose ends are
-//! labelled with the values there (a tiny built-in digit font: tiny-skia draws
-//! no text).
+//! labelled with the values there, each panel titled with its unit (text in
+//! DejaVu Sans, [`crate::text`]).
 
 use format::pack::GridParams;
 use format::schema::report::CellLine;
@@ -16,6 +16,8 @@ const PANEL: f32 = 360.0;
 const MARGIN: f32 = 16.0;
 const BAR_H: f32 = 14.0;
 const LABEL_H: f32 = 24.0;
+/// The row of panel titles above the maps.
+const TITLE_H: f32 = 26.0;
 
 /// A panel: its label, the value it maps per cell, whether the lowest value is the
 /// hot end of the ramp (PSNR), and how an end of its colour bar is labelled.
@@ -56,7 +58,7 @@ impl Metric {
 fn metrics() -> [Metric; 4] {
     [
         Metric {
-            name: "polygons",
+            name: "triangles of the cell (inside + proxies)",
             value: |l| {
                 l.polygons_inside
                     + l.sv_polygons
@@ -68,20 +70,20 @@ fn metrics() -> [Metric; 4] {
             label: format_value,
         },
         Metric {
-            name: "bytes",
+            name: "cell pack size (bytes)",
             value: |l| l.pack_bytes as f64,
             low_is_hot: false,
             label: format_value,
         },
         Metric {
-            name: "ms",
+            name: "bake time of the cell (ms)",
             value: |l| l.bake_ms,
             low_is_hot: false,
             label: format_value,
         },
         // The worst (lowest) PSNR is the hot end; labels are its dB, positive.
         Metric {
-            name: "worst psnr db",
+            name: "worst check view, PSNR(Y) (dB)",
             value: |l| l.worst_view_psnr_db,
             low_is_hot: true,
             label: |v| format!("{v:.1}"),
@@ -107,7 +109,7 @@ pub fn render(grid_params: &GridParams, lines: &[CellLine]) -> anyhow::Result<Ve
     let scale = PANEL / gw.max(gd).max(1e-6);
     let panel_h = gd * scale;
     let width = (4.0 * PANEL + 5.0 * MARGIN) as u32;
-    let height = (panel_h + 2.0 * MARGIN + BAR_H + LABEL_H + 8.0) as u32;
+    let height = (TITLE_H + panel_h + 2.0 * MARGIN + BAR_H + LABEL_H + 8.0) as u32;
     let mut pm = Pixmap::new(width, height).ok_or_else(|| anyhow::anyhow!("bad image size"))?;
     pm.fill(Color::WHITE);
     for (k, metric) in metrics().iter().enumerate() {
@@ -126,7 +128,7 @@ pub fn render(grid_params: &GridParams, lines: &[CellLine]) -> anyhow::Result<Ve
             let mut pb = PathBuilder::new();
             for (i, c) in corners.iter().enumerate() {
                 let px = x0 + (c.x - cmin.x) * scale;
-                let py = MARGIN + (c.y - cmin.y) * scale;
+                let py = TITLE_H + MARGIN + (c.y - cmin.y) * scale;
                 if i == 0 {
                     pb.move_to(px, py);
                 } else {
@@ -154,7 +156,7 @@ pub fn render(grid_params: &GridParams, lines: &[CellLine]) -> anyhow::Result<Ve
             }
         }
         // Colour bar and its labels.
-        let bar_y = MARGIN + panel_h + 8.0;
+        let bar_y = TITLE_H + MARGIN + panel_h + 8.0;
         let steps = 64;
         for s in 0..steps {
             let c = ramp(s as f32 / (steps - 1) as f32);
@@ -169,12 +171,15 @@ pub fn render(grid_params: &GridParams, lines: &[CellLine]) -> anyhow::Result<Ve
         let (cold, hot) = metric.legend(lo, hi);
         draw_text(&mut pm, x0, label_y, &cold);
         draw_text(&mut pm, x0 + PANEL - text_width(&hot), label_y, &hot);
+        // The panel's title, with its unit, centred above the map.
         let name = metric.name;
-        draw_text(
+        crate::text::draw_text(
             &mut pm,
-            x0 + PANEL / 2.0 - text_width(name) / 2.0,
-            label_y,
+            x0 + PANEL / 2.0 - crate::text::text_width(name, TITLE_PX) / 2.0,
+            MARGIN,
             name,
+            [30, 30, 30],
+            TITLE_PX,
         );
     }
     Ok(pm.encode_png()?)
@@ -190,14 +195,15 @@ fn format_value(v: f64) -> String {
     }
 }
 
-const PX: f32 = 3.0;
+const PX: f32 = 2.6;
+const TITLE_PX: f32 = 2.8;
 
 fn text_width(s: &str) -> f32 {
-    crate::pixel_font::text_width(s, PX)
+    crate::text::text_width(s, PX)
 }
 
 fn draw_text(pm: &mut Pixmap, x: f32, y: f32, s: &str) {
-    crate::pixel_font::draw_text(pm, x, y, s, [30, 30, 30], PX);
+    crate::text::draw_text(pm, x, y, s, [30, 30, 30], PX);
 }
 
 #[cfg(test)]
@@ -211,7 +217,7 @@ mod tests {
     #[test]
     fn worst_psnr_legend_reads_positive_db_best_to_worst() {
         let m = metrics();
-        let psnr = m.iter().find(|m| m.name == "worst psnr db").unwrap();
+        let psnr = m.iter().find(|m| m.name.starts_with("worst")).unwrap();
         let (lo, hi) = (11.8, 16.04);
         assert_eq!(
             psnr.legend(lo, hi),
@@ -220,7 +226,7 @@ mod tests {
         assert_eq!(psnr.ramp_position(lo, lo, hi), 1.0, "the worst cell is hot");
         assert_eq!(psnr.ramp_position(hi, lo, hi), 0.0);
         // The other panels: low values cold, at the left.
-        let bytes = m.iter().find(|m| m.name == "bytes").unwrap();
+        let bytes = m.iter().find(|m| m.name.starts_with("cell pack")).unwrap();
         assert_eq!(
             bytes.legend(1e3, 2e6),
             ("1000".to_string(), "2.0m".to_string())

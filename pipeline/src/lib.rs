@@ -5,13 +5,13 @@ pub mod heatmap;
 pub mod inspect;
 pub mod lock;
 pub mod overrides;
-pub mod pixel_font;
 pub mod report;
 pub mod run;
 pub mod scene_cmd;
 pub mod slurm;
 pub mod status;
 pub mod subset;
+pub mod text;
 
 /// `items` joined by ", " between `before` and `after`; empty when there are none
 /// (an optional list inside a summary line).
