@@ -9,6 +9,7 @@ pub mod pixel_font;
 pub mod report;
 pub mod run;
 pub mod scene_cmd;
+pub mod serve;
 pub mod slurm;
 pub mod status;
 pub mod subset;

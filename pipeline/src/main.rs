@@ -99,6 +99,8 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Serve a bake and the browser viewer over HTTP (range requests; issue 33).
+    Serve(pipeline::serve::ServeArgs),
     /// Print a pack's header and sections and check every checksum.
     Inspect {
         /// A `base.pack`, `cells/<id>.pack` or `index.pack`; or a bake directory, to
@@ -242,6 +244,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
             print_json_or_text(json, &summary, || format!("{}\n", summary.line()));
             Ok(())
         }
+        Command::Serve(args) => pipeline::serve::serve(&args).map_err(bad_input),
         Command::Inspect { pack, json } if pack.is_dir() => {
             let check = pipeline::inspect::check_bake(&pack).map_err(bad_input)?;
             print_json_or_text(json, &check, || {
