@@ -79,6 +79,8 @@ const stats: Stats = {
 
 const overlay = document.getElementById("overlay") as HTMLPreElement;
 function fail(msg: string) {
+  console.error(msg);
+  if (stats.error) return; // the first error is the cause
   stats.error = msg;
   overlay.textContent = `error: ${msg}`;
   overlay.classList.add("error");
@@ -125,6 +127,11 @@ interface Resident {
 
 let device: GPUDevice;
 let ctx: GPUCanvasContext;
+let readback = false;
+let ctx2d: CanvasRenderingContext2D;
+let colourTex: GPUTexture;
+let readBuf: GPUBuffer;
+let rowBytes = 0;
 let base: Base;
 let index: Index;
 let grid: HexGrid;
@@ -186,14 +193,29 @@ async function init() {
   const hasBc = adapter.features.has("texture-compression-bc");
   if (!hasBc) throw new Error("the WebGPU adapter lacks texture-compression-bc (the packs' BC1/BC3 captures)");
   device = await adapter.requestDevice({ requiredFeatures: ["texture-compression-bc"] });
-  device.lost.then((i) => fail(`WebGPU device lost: ${i.message}`));
+  device.lost.then((i) => fail(`WebGPU device lost (${i.reason}): ${i.message}`));
   device.onuncapturederror = (e) => fail(`WebGPU: ${e.error.message}`);
 
   const canvas = document.getElementById("view") as HTMLCanvasElement;
   canvas.width = cam.width;
   canvas.height = cam.height;
-  ctx = canvas.getContext("webgpu") as GPUCanvasContext;
-  ctx.configure({ device, format: "rgba8unorm", viewFormats: ["rgba8unorm-srgb"], alphaMode: "opaque" });
+  // Headless Chromium on SwiftShader destroys the device as soon as a WebGPU canvas
+  // is configured (measured with Chromium 14x here), so under automation (or with
+  // ?readback=1) frames are drawn into a texture and copied to a 2D canvas.
+  readback = q.get("readback") === "1" || (navigator.webdriver && q.get("readback") !== "0");
+  if (readback) {
+    ctx2d = canvas.getContext("2d") as CanvasRenderingContext2D;
+    colourTex = device.createTexture({
+      size: [cam.width, cam.height],
+      format: "rgba8unorm-srgb",
+      usage: GPUTextureUsage.RENDER_ATTACHMENT | GPUTextureUsage.COPY_SRC,
+    });
+    rowBytes = Math.ceil((cam.width * 4) / 256) * 256;
+    readBuf = device.createBuffer({ size: rowBytes * cam.height, usage: GPUBufferUsage.MAP_READ | GPUBufferUsage.COPY_DST });
+  } else {
+    ctx = canvas.getContext("webgpu") as GPUCanvasContext;
+    ctx.configure({ device, format: "rgba8unorm", viewFormats: ["rgba8unorm-srgb"], alphaMode: "opaque" });
+  }
 
   const [shaderText, indexBytes, baseBytes] = await Promise.all([
     fetch("/shader.wgsl").then((r) => {
@@ -448,8 +470,18 @@ let last = performance.now();
 let walk: CameraPath | null = null;
 let walkStart: number | null = null;
 const keys = new Set<string>();
+let shownChain: string[] = [];
 
-function frame(now: number) {
+async function present() {
+  await readBuf.mapAsync(GPUMapMode.READ);
+  const src = new Uint8Array(readBuf.getMappedRange());
+  const img = new ImageData(cam.width, cam.height);
+  for (let y = 0; y < cam.height; y++) img.data.set(src.subarray(y * rowBytes, y * rowBytes + cam.width * 4), y * cam.width * 4);
+  readBuf.unmap();
+  ctx2d.putImageData(img, 0, 0);
+}
+
+async function frame(now: number) {
   if (stats.error) return;
   const dt = Math.min(0.1, (now - last) / 1000);
   stats.frameMs = now - last;
@@ -469,6 +501,14 @@ function frame(now: number) {
   } catch (e: any) {
     fail(`${e.message ?? e}`);
     return;
+  }
+  if (readback) {
+    try {
+      await present();
+    } catch (e: any) {
+      fail(`reading the frame back: ${e.message ?? e}`);
+      return;
+    }
   }
   stats.frames++;
   requestAnimationFrame(frame);
@@ -525,13 +565,21 @@ function draw() {
   evict(keep);
 
   // What to draw (player/src/frame.rs `cell_list`, pending proxies as originals).
-  const packs = want.map((w) => resident.get(w.key));
+  let packs = want.map((w) => resident.get(w.key));
+  const current = packs[0]?.state === "ready" && packs.slice(1).every((p) => p?.state === "ready");
+  if (current) shownChain = want.map((w) => w.key);
+  else if (shownChain.every((k) => resident.get(k)?.state === "ready")) {
+    // Until the new cell's packs are in, the last cell drawn stands in (a cold start
+    // draws the ground and sky only: drawing every original instead, as the native
+    // player's fallback does, takes seconds per frame on SwiftShader).
+    packs = shownChain.map((k) => resident.get(k));
+  }
   const cellPack = packs[0]?.state === "ready" ? packs[0] : undefined;
   const farReady = packs.slice(1).every((p) => p?.state === "ready");
   const originals = new Set<number>();
   const proxies: GpuProxy[] = [];
   if (!cellPack) {
-    for (let i = 0; i < base.instances.length; i++) originals.add(i); // CurrentCell::Originals
+    // Nothing drawn yet: ground and sky only.
   } else {
     for (const i of cellPack.pack!.originals) originals.add(i);
     const drawn = farReady ? (packs as Resident[]) : [cellPack];
@@ -546,7 +594,7 @@ function draw() {
       for (let i = 0; i < base.instances.length; i++) if (!proxied.has(i)) originals.add(i);
     }
   }
-  stats.settled = !!cellPack && farReady && proxies.length === packs.reduce((s, r) => s + (r?.proxies.length ?? 0), 0);
+  stats.settled = current && !!cellPack && farReady && proxies.length === packs.reduce((s, r) => s + (r?.proxies.length ?? 0), 0);
   if (stats.firstFrameMs === null && stats.settled) {
     stats.firstFrameMs = performance.now();
     stats.firstFrameBytes = stats.fetched;
@@ -584,7 +632,7 @@ function draw() {
   const pass = enc.beginRenderPass({
     colorAttachments: [
       {
-        view: ctx.getCurrentTexture().createView({ format: "rgba8unorm-srgb" }),
+        view: readback ? colourTex.createView() : ctx.getCurrentTexture().createView({ format: "rgba8unorm-srgb" }),
         clearValue: { r: lin(SKY[0]), g: lin(SKY[1]), b: lin(SKY[2]), a: 1 },
         loadOp: "clear",
         storeOp: "store",
@@ -623,6 +671,7 @@ function draw() {
     tris += p.count / 3;
   }
   pass.end();
+  if (readback) enc.copyTextureToBuffer({ texture: colourTex }, { buffer: readBuf, bytesPerRow: rowBytes }, [cam.width, cam.height]);
   device.queue.submit([enc.finish()]);
 
   stats.triangles = tris;

@@ -6,9 +6,6 @@
 // Prints one JSON line: the viewer's stats (window.hexbake.stats), the page-load
 // time, the bytes the page downloaded, and for `walk` the cells the overlay showed.
 import { chromium } from "playwright-core";
-import { mkdtempSync } from "node:fs";
-import { tmpdir } from "node:os";
-import { join } from "node:path";
 
 const [mode, url, a3, a4] = process.argv.slice(2);
 const timeoutS = Number((mode === "shot" ? a4 : a3) ?? 120);
@@ -17,7 +14,6 @@ const browser = await chromium.launch({
   args: [
     "--no-sandbox", "--disable-gpu-sandbox", "--no-first-run",
     "--disable-background-networking", "--disable-component-update", "--disable-sync",
-    `--user-data-dir=${mkdtempSync(join(tmpdir(), "hexbake-chromium-"))}`,
     "--enable-unsafe-webgpu", "--enable-unsafe-swiftshader", "--use-webgpu-adapter=swiftshader",
     "--enable-features=Vulkan",
   ],
