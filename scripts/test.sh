@@ -45,6 +45,10 @@ scripts/fetch-models.sh
 if command -v npm >/dev/null; then
     scripts/install-gltf-validator.sh ||
         echo "test.sh: the glTF-Validator did not install: the export test's validator step will skip"
+    # The browser viewer's npm packages and bundle (tests/web.rs skips without them,
+    # unless HEXBAKE_REQUIRE_WEB=1); no apt here: CI installs chromium.
+    scripts/install-web.sh --no-apt ||
+        echo "test.sh: the web viewer did not install: tests/web.rs will skip"
 fi
 
 if [ "${HEXBAKE_SLURM:-1}" != 0 ]; then
