@@ -200,7 +200,7 @@ async function init() {
   canvas.width = cam.width;
   canvas.height = cam.height;
   // Headless Chromium on SwiftShader destroys the device as soon as a WebGPU canvas
-  // is configured (measured with Chromium 14x here), so under automation (or with
+  // is configured (measured with Chromium 148 here), so under automation (or with
   // ?readback=1) frames are drawn into a texture and copied to a 2D canvas.
   readback = q.get("readback") === "1" || (navigator.webdriver && q.get("readback") !== "0");
   if (readback) {
