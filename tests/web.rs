@@ -174,10 +174,7 @@ fn web_viewer_draws_the_demo_like_the_player() {
 
     let server = serve(&out);
     let web_png = art.join("web.png");
-    let url = format!(
-        "{}&pose={x},,{z},{yaw},{pitch}&size={w}x{h}",
-        server.url
-    );
+    let url = format!("{}&pose={x},,{z},{yaw},{pitch}&size={w}x{h}", server.url);
     let (v, ok) = drive(&["shot", &url, web_png.to_str().unwrap(), "240"]);
     std::fs::write(art.join("shot.json"), v.to_string()).unwrap();
     assert!(ok, "the viewer did not settle: {v}");
@@ -224,7 +221,12 @@ fn web_viewer_draws_the_demo_like_the_player() {
         let bytes = std::fs::read(&p).unwrap();
         std::fs::write(&p, &bytes[..bytes.len() / 2]).unwrap();
     }
-    let (v, ok) = drive(&["shot", &server.url, art.join("broken.png").to_str().unwrap(), "60"]);
+    let (v, ok) = drive(&[
+        "shot",
+        &server.url,
+        art.join("broken.png").to_str().unwrap(),
+        "60",
+    ]);
     assert!(!ok, "a truncated pack must not settle: {v}");
     let err = v["stats"]["error"].as_str().unwrap_or_default();
     assert!(

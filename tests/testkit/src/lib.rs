@@ -1,8 +1,9 @@
 //! The one place where a hexbake test decides to skip (issue 28, item 5).
 //!
 //! A test that needs something the machine may lack — a wgpu adapter, the fetched
-//! models, a running Slurm, the Khronos glTF-Validator, valgrind, headless Chromium — calls [`skip`] when it is
-//! missing and returns. What happens then depends on `HEXBAKE_REQUIRE_<X>`:
+//! models, a running Slurm, the Khronos glTF-Validator, valgrind, headless
+//! Chromium — calls [`skip`] when it is missing and returns. What happens then
+//! depends on `HEXBAKE_REQUIRE_<X>`:
 //!
 //! - `1`, `true` or `yes` (any case): the resource is required, and [`skip`]
 //!   panics with the reason, so the test fails.
