@@ -113,6 +113,8 @@ interface GpuProxy {
   layered: boolean;
   members: number[];
   texBytes: number;
+  min: number[];
+  max: number[];
 }
 
 interface Resident {
@@ -259,6 +261,17 @@ async function init() {
     tris: m.triangleCount,
   }));
   groundBuf = buffer(groundVertices(g), GPUBufferUsage.VERTEX);
+  instanceBounds = base.instances.map((inst) => {
+    const m = base.models[inst.model];
+    const lo = [Infinity, Infinity, Infinity];
+    const hi = [-Infinity, -Infinity, -Infinity];
+    for (let v = 0; v < m.vertexCount; v++)
+      for (let k = 0; k < 3; k++) {
+        lo[k] = Math.min(lo[k], m.positions[3 * v + k]);
+        hi[k] = Math.max(hi[k], m.positions[3 * v + k]);
+      }
+    return transformBox(lo, hi, inst.transform);
+  });
   instBuf = device.createBuffer({ size: INSTANCE_RAW * (base.instances.length + 1), usage: GPUBufferUsage.VERTEX | GPUBufferUsage.COPY_DST });
   depthTex = device.createTexture({ size: [cam.width, cam.height], format: "depth32float", usage: GPUTextureUsage.RENDER_ATTACHMENT });
   stats.ready = true;
@@ -343,6 +356,45 @@ function makePipelines(module: GPUShaderModule) {
   });
 }
 
+// ---- frustum culling (player/src/camera.rs Frustum; conservative, so the image is
+// the same with or without it) ----
+
+let instanceBounds: { min: number[]; max: number[] }[] = [];
+
+function transformBox(lo: number[], hi: number[], t: ArrayLike<number>) {
+  const min = [Infinity, Infinity, Infinity];
+  const max = [-Infinity, -Infinity, -Infinity];
+  if (!(lo[0] <= hi[0])) return { min, max };
+  for (let i = 0; i < 8; i++) {
+    const p = [i & 1 ? hi[0] : lo[0], i & 2 ? hi[1] : lo[1], i & 4 ? hi[2] : lo[2]];
+    for (let k = 0; k < 3; k++) {
+      const w = t[k] * p[0] + t[4 + k] * p[1] + t[8 + k] * p[2] + t[12 + k];
+      min[k] = Math.min(min[k], w);
+      max[k] = Math.max(max[k], w);
+    }
+  }
+  return { min, max };
+}
+
+/** The six planes (a, b, c, d: a·x + b·y + c·z + d ≥ 0 inside) of a wgpu clip matrix. */
+function planes(m: Float64Array): number[][] {
+  const row = (r: number) => [m[r], m[4 + r], m[8 + r], m[12 + r]];
+  const [r0, r1, r2, r3] = [row(0), row(1), row(2), row(3)];
+  const add = (a: number[], b: number[], s: number) => a.map((v, i) => v + s * b[i]);
+  return [add(r3, r0, 1), add(r3, r0, -1), add(r3, r1, 1), add(r3, r1, -1), r2, add(r3, r2, -1)];
+}
+
+function inside(ps: number[][], b: { min: number[]; max: number[] }): boolean {
+  if (!(b.min[0] <= b.max[0])) return false;
+  for (const p of ps) {
+    const x = p[0] >= 0 ? b.max[0] : b.min[0];
+    const y = p[1] >= 0 ? b.max[1] : b.min[1];
+    const z = p[2] >= 0 ? b.max[2] : b.min[2];
+    if (p[0] * x + p[1] * y + p[2] * z + p[3] < 0) return false;
+  }
+  return true;
+}
+
 // ---- streaming ----
 
 const keyOf = (kind: "c" | "g", id: number) => `${kind}${id}`;
@@ -415,6 +467,8 @@ function makeProxy(res: Resident, p: CellPack["proxies"][number]): GpuProxy {
     layered: p.kind === 4,
     members: p.members.map((m) => m.instance),
     texBytes: 0,
+    min: v.min,
+    max: v.max,
   };
   p.views.slice(0, n).forEach((view, i) =>
     uploads.push({ res, proxy: gp, view: i, w: view.width, h: view.height, enc: view.encoding, data: view.encoding <= 1 ? rgba8(view) : view.data }),
@@ -600,15 +654,19 @@ function draw() {
     stats.firstFrameBytes = stats.fetched;
   }
 
+  const clip = clipFromWorld(cam);
+  const fr = planes(clip);
   // Instances by model (ascending, as the native BTreeMap), then the ground's.
   const byModel = new Map<number, number[]>();
   for (const i of [...originals].sort((a, b) => a - b)) {
+    if (!inside(fr, instanceBounds[i])) continue;
     const m = base.instances[i].model;
     if (!byModel.has(m)) byModel.set(m, []);
     byModel.get(m)!.push(i);
   }
   const order = [...byModel.keys()].sort((a, b) => a - b);
-  const instData = new ArrayBuffer(INSTANCE_RAW * (originals.size + 1));
+  const shown = order.reduce((n, m) => n + byModel.get(m)!.length, 0);
+  const instData = new ArrayBuffer(INSTANCE_RAW * (shown + 1));
   const idv = new DataView(instData);
   let at = 0;
   for (const m of order) for (const i of byModel.get(m)!) writeInstance(idv, INSTANCE_RAW * at++, base.instances[i].transform, base.instances[i].tint);
@@ -618,7 +676,6 @@ function draw() {
 
   const gl = new ArrayBuffer(GLOBALS);
   const gdv = new DataView(gl);
-  const clip = clipFromWorld(cam);
   for (let k = 0; k < 16; k++) gdv.setFloat32(4 * k, clip[k], true);
   for (let k = 0; k < 3; k++) gdv.setFloat32(64 + 4 * k, cam.eye[k], true);
   gdv.setFloat32(76, 1, true);
@@ -662,7 +719,7 @@ function draw() {
   }
   let bound: GPURenderPipeline | null = null;
   for (const p of proxies) {
-    if (p.count === 0) continue;
+    if (p.count === 0 || !inside(fr, p)) continue;
     const pl = p.layered ? pipes.proxy : pipes.mesh[p.slots];
     if (pl !== bound) pass.setPipeline((bound = pl));
     pass.setBindGroup(1, p.bind!);
