@@ -243,3 +243,30 @@ fn served_shader_is_the_players() {
         player::gpu::shader_source()
     );
 }
+
+/// The browser's pack reader (`player/web/src/pack.ts`) decodes every golden pack of
+/// tests/data and answers 6,600 truncations and byte edits of them with a
+/// `PackError`, never another exception (`npm test`, node only).
+#[test]
+fn web_pack_reader_survives_hostile_edits() {
+    let web = repo().join("player/web");
+    if !web.join("node_modules/fzstd").exists() || !web.join("node_modules/esbuild").exists() {
+        testkit::skip(
+            testkit::Need::Chromium,
+            "player/web/node_modules missing (run scripts/install-web.sh)",
+        );
+        return;
+    }
+    let o = Command::new("npm")
+        .args(["test", "--silent"])
+        .current_dir(&web)
+        .output()
+        .expect("npm runs");
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        o.status.success(),
+        "npm test: {text}{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(text.contains("0 non-PackError exceptions"), "{text}");
+}

@@ -87,6 +87,13 @@ export class PackFile {
     if (s.codec === 0) return stored;
     let out: Uint8Array;
     try {
+      // A frame may not announce more than the section's bound (raw_len, or 1.5 ·
+      // raw_len pre-coded for codec 3), so a lying frame header cannot make the
+      // decoder allocate more (fzstd allocates the announced content size).
+      const announced = zstdContentSize(stored);
+      const bound = s.codec === 3 ? Math.ceil(1.5 * s.raw) + 16 : s.raw;
+      if (announced !== null && announced > bound)
+        throw new PackError(`${label}: zstd frame announces ${announced} bytes, more than ${bound}`);
       out = decompress(stored);
     } catch (e) {
       throw new PackError(`${label}: zstd: ${e}`);
@@ -98,6 +105,20 @@ export class PackFile {
     if (s.codec === 2) return undelta(out, s.raw, label);
     return unmtf(out, s.raw, label);
   }
+}
+
+/** The Frame_Content_Size of a zstd frame header (RFC 8878 §3.1.1.1), if present. */
+function zstdContentSize(b: Uint8Array): number | null {
+  if (b.length < 6 || b[0] !== 0x28 || b[1] !== 0xb5 || b[2] !== 0x2f || b[3] !== 0xfd) return null;
+  const desc = b[4];
+  const fcsFlag = desc >> 6;
+  const single = (desc >> 5) & 1;
+  const at = 5 + (single ? 0 : 1) + [0, 1, 2, 4][desc & 3];
+  const size = [single ? 1 : 0, 2, 4, 8][fcsFlag];
+  if (size === 0 || at + size > b.length) return null;
+  let v = 0;
+  for (let i = size - 1; i >= 0; i--) v = v * 256 + b[at + i];
+  return size === 2 ? v + 256 : v;
 }
 
 /** Codec 2: byte planes → zig-zag → delta (format/README.md "Codecs"). */
