@@ -1,5 +1,6 @@
-// Drives the viewer in Debian's headless Chromium (playwright-core; flags from
-// ../shared/WEB.md) for tests/web.rs and the measurements of player/web/README.md
+// Drives the viewer (paper 000 §3.2 run-time streaming; packs per format/README.md)
+// in Debian's headless Chromium (playwright-core; flags from ../shared/WEB.md) for
+// tests/web.rs and the measurements of player/web/README.md
 // (issue 33). Usage:
 //   node test/drive.mjs shot URL OUT.png [timeout_s]   frame at a pose, once settled
 //   node test/drive.mjs walk URL [timeout_s]            a ?path= walk to its end
