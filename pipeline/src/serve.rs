@@ -339,42 +339,42 @@ fn percent_decode(s: &str) -> Option<String> {
 }
 
 /// A byte range `start..end` (end exclusive) of a file of length `len`, from a `Range`
-/// header value; `Err(())` = answer 416.
-pub fn parse_range(value: &str, len: u64) -> Result<(u64, u64), ()> {
-    let spec = value.trim().strip_prefix("bytes=").ok_or(())?.trim();
+/// header value; `None` = answer 416.
+pub fn parse_range(value: &str, len: u64) -> Option<(u64, u64)> {
+    let spec = value.trim().strip_prefix("bytes=")?.trim();
     if spec.contains(',') {
-        return Err(());
+        return None;
     }
-    let (a, b) = spec.split_once('-').ok_or(())?;
+    let (a, b) = spec.split_once('-')?;
     let (a, b) = (a.trim(), b.trim());
-    let num = |s: &str| -> Result<u64, ()> {
+    let num = |s: &str| -> Option<u64> {
         if s.is_empty() || !s.bytes().all(|c| c.is_ascii_digit()) {
-            return Err(());
+            return None;
         }
-        s.parse::<u64>().map_err(|_| ())
+        s.parse::<u64>().ok()
     };
     if a.is_empty() {
         // Suffix: the last n bytes.
         let n = num(b)?;
         if n == 0 || len == 0 {
-            return Err(());
+            return None;
         }
-        return Ok((len - n.min(len), len));
+        return Some((len - n.min(len), len));
     }
     let start = num(a)?;
     if start >= len {
-        return Err(());
+        return None;
     }
     let end = if b.is_empty() {
         len
     } else {
         let last = num(b)?;
         if last < start {
-            return Err(());
+            return None;
         }
         last.min(len - 1) + 1
     };
-    Ok((start, end))
+    Some((start, end))
 }
 
 fn content_type(p: &Path) -> &'static str {
@@ -447,8 +447,8 @@ fn respond(out: &mut TcpStream, req: &Request, roots: &Roots) -> std::io::Result
     let (code, start, end) = match &req.range {
         None => (200, 0, len),
         Some(r) => match parse_range(r, len) {
-            Ok((s, e)) => (206, s, e),
-            Err(()) => {
+            Some((s, e)) => (206, s, e),
+            None => {
                 write_head(
                     out,
                     416,
@@ -483,13 +483,13 @@ mod tests {
 
     #[test]
     fn ranges_parse() {
-        assert_eq!(parse_range("bytes=0-9", 100), Ok((0, 10)));
-        assert_eq!(parse_range("bytes=90-", 100), Ok((90, 100)));
-        assert_eq!(parse_range("bytes=90-1000", 100), Ok((90, 100)));
-        assert_eq!(parse_range("bytes=-10", 100), Ok((90, 100)));
-        assert_eq!(parse_range("bytes=-1000", 100), Ok((0, 100)));
-        assert_eq!(parse_range(" bytes=5-5 ", 100), Ok((5, 6)));
-        assert_eq!(parse_range("bytes=99-99", 100), Ok((99, 100)));
+        assert_eq!(parse_range("bytes=0-9", 100), Some((0, 10)));
+        assert_eq!(parse_range("bytes=90-", 100), Some((90, 100)));
+        assert_eq!(parse_range("bytes=90-1000", 100), Some((90, 100)));
+        assert_eq!(parse_range("bytes=-10", 100), Some((90, 100)));
+        assert_eq!(parse_range("bytes=-1000", 100), Some((0, 100)));
+        assert_eq!(parse_range(" bytes=5-5 ", 100), Some((5, 6)));
+        assert_eq!(parse_range("bytes=99-99", 100), Some((99, 100)));
     }
 
     #[test]
@@ -508,10 +508,10 @@ mod tests {
             "bytes=99999999999999999999999-",
             "",
         ] {
-            assert_eq!(parse_range(r, 100), Err(()), "{r}");
+            assert_eq!(parse_range(r, 100), None, "{r}");
         }
-        assert_eq!(parse_range("bytes=0-", 0), Err(()));
-        assert_eq!(parse_range("bytes=-5", 0), Err(()));
+        assert_eq!(parse_range("bytes=0-", 0), None);
+        assert_eq!(parse_range("bytes=-5", 0), None);
     }
 
     fn roots() -> Roots {
