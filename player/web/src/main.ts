@@ -54,6 +54,7 @@ interface Stats {
   settled: boolean; // the current cell and its far field are drawn from their packs, every texture uploaded
   walkDone: boolean;
   cellsVisited: number[];
+  phases: Record<string, number>; // ms since navigation start: where a cold start goes
 }
 
 const stats: Stats = {
@@ -74,7 +75,9 @@ const stats: Stats = {
   settled: false,
   walkDone: false,
   cellsVisited: [],
+  phases: {},
 };
+const mark = (name: string) => (stats.phases[name] ??= Math.round(performance.now()));
 (window as any).hexbake = { stats, setPose: (p: number[]) => setPose(p) };
 
 const overlay = document.getElementById("overlay") as HTMLPreElement;
@@ -219,17 +222,28 @@ async function init() {
     ctx.configure({ device, format: "rgba8unorm", viewFormats: ["rgba8unorm-srgb"], alphaMode: "opaque" });
   }
 
-  const [shaderText, indexBytes, baseBytes] = await Promise.all([
-    fetch("/shader.wgsl").then((r) => {
+  // The pipelines compile (in the GPU process) while the packs download and decode:
+  // on SwiftShader their compilation is the largest part of a cold start.
+  const pipelinesReady = fetch("/shader.wgsl")
+    .then((r) => {
       if (!r.ok) throw new Error(`/shader.wgsl: HTTP ${r.status}`);
       return r.text();
-    }),
-    fetchBytes(bakeUrl + "index.pack"),
-    fetchBytes(bakeUrl + "base.pack"),
-  ]);
+    })
+    .then(async (shaderText) => {
+      const module = device.createShaderModule({ code: shaderText });
+      const info = await module.getCompilationInfo();
+      const errs = info.messages.filter((m) => m.type === "error");
+      if (errs.length) throw new Error(`shader.wgsl: ${errs.map((m) => `${m.lineNum}:${m.linePos} ${m.message}`).join("; ")}`);
+      mark("shader compiled");
+      await makePipelines(module);
+      mark("pipelines");
+    });
+  pipelinesReady.catch(() => {}); // awaited below; no unhandled rejection meanwhile
+  const [indexBytes, baseBytes] = await Promise.all([fetchBytes(bakeUrl + "index.pack"), fetchBytes(bakeUrl + "base.pack")]);
   index = decodeIndex(new PackFile("index.pack", indexBytes));
   base = decodeBase(new PackFile("base.pack", baseBytes));
   grid = new HexGrid(base.grid);
+  mark("base decoded");
   const g = base.grid;
   const diag = Math.hypot(g.groundMax[0] - g.groundMin[0], Math.max(g.maxEye, 1), g.groundMax[1] - g.groundMin[1]);
   cam.far = diag * 2 + 100; // Bake::extent (the scene's diagonal is within the ground's for parks)
@@ -246,13 +260,15 @@ async function init() {
     if (!r.ok) throw new Error(`${pathUrl}: HTTP ${r.status}`);
     walk = parsePath(await r.text());
     walkStart = null;
+    const p0 = walkPose(walk, 0);
+    cam.eye = p0.eye;
+    cam.yaw = p0.yaw;
   }
 
-  const module = device.createShaderModule({ code: shaderText });
-  const info = await module.getCompilationInfo();
-  const errs = info.messages.filter((m) => m.type === "error");
-  if (errs.length) throw new Error(`shader.wgsl: ${errs.map((m) => `${m.lineNum}:${m.linePos} ${m.message}`).join("; ")}`);
-  makePipelines(module);
+  // The start cell's packs are fetched while the pipelines compile.
+  const start = grid.cellAt(cam.eye[0], cam.eye[2]);
+  if (start !== null) for (const w of chain(start)) early.set(w.key, fetchBytes(bakeUrl + w.entry.file));
+  await pipelinesReady;
 
   models = base.models.map((m) => ({
     vbuf: buffer(modelVertices(m), GPUBufferUsage.VERTEX),
@@ -274,12 +290,13 @@ async function init() {
   });
   instBuf = device.createBuffer({ size: INSTANCE_RAW * (base.instances.length + 1), usage: GPUBufferUsage.VERTEX | GPUBufferUsage.COPY_DST });
   depthTex = device.createTexture({ size: [cam.width, cam.height], format: "depth32float", usage: GPUTextureUsage.RENDER_ATTACHMENT });
+  mark("models uploaded");
   stats.ready = true;
   installControls(canvas);
   requestAnimationFrame(frame);
 }
 
-function makePipelines(module: GPUShaderModule) {
+async function makePipelines(module: GPUShaderModule) {
   const VF = GPUShaderStage.VERTEX | GPUShaderStage.FRAGMENT;
   const g0 = device.createBindGroupLayout({ entries: [{ binding: 0, visibility: VF, buffer: { type: "uniform" } }] });
   const g1Entries: GPUBindGroupLayoutEntry[] = [
@@ -322,18 +339,26 @@ function makePipelines(module: GPUShaderModule) {
     },
   ];
   const pipe = (layout: GPUPipelineLayout, vs: string, fs: string, buffers: GPUVertexBufferLayout[], constants?: Record<string, number>) =>
-    device.createRenderPipeline({
+    device.createRenderPipelineAsync({
       layout,
       vertex: { module, entryPoint: vs, buffers },
       primitive: { topology: "triangle-list", frontFace: "ccw", cullMode: "back" },
       depthStencil: { format: "depth32float", depthWriteEnabled: true, depthCompare: "less" },
       fragment: { module, entryPoint: fs, targets: [{ format: "rgba8unorm-srgb" }], constants },
     });
+  // Compiled concurrently (createRenderPipelineAsync): on SwiftShader the ten
+  // pipelines are most of the time between base.pack and the first frame.
+  const [lit, ground, proxy, ...mesh] = await Promise.all([
+    pipe(litLayout, "vs_lit", "fs_lit", litBuffers),
+    pipe(litLayout, "vs_lit", "fs_ground", litBuffers),
+    pipe(proxyLayout, "vs_proxy", "fs_proxy", proxyBuffers),
+    ...Array.from({ length: MAX_VIEWS }, (_, i) => pipe(proxyLayout, "vs_proxy", "fs_proxy_mesh", proxyBuffers, { VIEW_SLOTS: i + 1 })),
+  ]);
   pipes = {
-    lit: pipe(litLayout, "vs_lit", "fs_lit", litBuffers),
-    ground: pipe(litLayout, "vs_lit", "fs_ground", litBuffers),
-    proxy: pipe(proxyLayout, "vs_proxy", "fs_proxy", proxyBuffers),
-    mesh: Array.from({ length: MAX_VIEWS }, (_, i) => pipe(proxyLayout, "vs_proxy", "fs_proxy_mesh", proxyBuffers, { VIEW_SLOTS: i + 1 })),
+    lit,
+    ground,
+    proxy,
+    mesh,
     g0,
     g1,
   };
@@ -397,6 +422,7 @@ function inside(ps: number[][], b: { min: number[]; max: number[] }): boolean {
 
 // ---- streaming ----
 
+const early = new Map<string, Promise<Uint8Array>>();
 const keyOf = (kind: "c" | "g", id: number) => `${kind}${id}`;
 
 /** The packs a cell draws: itself, then its far-field group and each parent. */
@@ -426,7 +452,9 @@ function request(key: string, entry: IndexEntry, priority: boolean) {
   const res: Resident = { key, entry, state: "loading", proxies: [], lastUsed: stats.frames, bytes: 0 };
   resident.set(key, res);
   inflight++;
-  fetchBytes(bakeUrl + entry.file)
+  const bytes = early.get(key) ?? fetchBytes(bakeUrl + entry.file);
+  early.delete(key);
+  bytes
     .then((bytes) => {
       const file = new PackFile(entry.file, bytes);
       const pack = decodeCell(file, base);
@@ -435,6 +463,7 @@ function request(key: string, entry: IndexEntry, priority: boolean) {
       res.bytes = bytes.length;
       res.proxies = pack.proxies.map((p) => makeProxy(res, p));
       res.state = "ready";
+      mark(`first pack decoded`);
     })
     .catch((e) => {
       res.state = "error";

@@ -142,7 +142,7 @@ function unmtf(src: Uint8Array, raw: number, label: string): Uint8Array {
   const m = raw / 4;
   if (src.length < m) throw new PackError(`${label}: index-mtf codes cut short`);
   const out = new Uint32Array(m);
-  const list = new Array<number>(16).fill(0);
+  const list = new Uint32Array(16);
   let p = 0;
   let at = m;
   for (let i = 0; i < m; i++) {
@@ -178,6 +178,8 @@ function unmtf(src: Uint8Array, raw: number, label: string): Uint8Array {
   return new Uint8Array(out.buffer);
 }
 
+const LITTLE = new Uint8Array(new Uint32Array([1]).buffer)[0] === 1;
+
 /** A bounds-checked little-endian reader over one section. */
 export class Reader {
   private dv: DataView;
@@ -208,15 +210,18 @@ export class Reader {
     for (let i = 0; i < n; i++) a.push(this.f32(off + 4 * i));
     return a;
   }
-  /** A copy of `n` u32 values at `off` (aligned or not). */
+  /** `n` u32 values at `off`: a view when aligned (sections are 64-byte aligned in
+   * a pack) on a little-endian host, else a copy. */
   u32array(off: number, n: number): Uint32Array {
     this.need(off, 4 * n);
+    if (LITTLE && (this.bytes.byteOffset + off) % 4 === 0) return new Uint32Array(this.bytes.buffer, this.bytes.byteOffset + off, n);
     const a = new Uint32Array(n);
     for (let i = 0; i < n; i++) a[i] = this.dv.getUint32(off + 4 * i, true);
     return a;
   }
   f32array(off: number, n: number): Float32Array {
     this.need(off, 4 * n);
+    if (LITTLE && (this.bytes.byteOffset + off) % 4 === 0) return new Float32Array(this.bytes.buffer, this.bytes.byteOffset + off, n);
     const a = new Float32Array(n);
     for (let i = 0; i < n; i++) a[i] = this.dv.getFloat32(off + 4 * i, true);
     return a;
@@ -284,8 +289,9 @@ export function decodeBase(file: PackFile): Base {
     const tc = table.u32(48 * m + 4);
     if (4 * (v0 + vc) > col.length) throw new PackError(`${file.name}: vertex-colours shorter than the models' vertices`);
     const triangles = tri.u32array(12 * t0, 3 * tc);
-    for (const i of triangles)
-      if (i >= vc) throw new PackError(`${file.name}: triangles: index ${i} ≥ model ${m}'s ${vc} vertices`);
+    let top = 0;
+    for (let i = 0; i < triangles.length; i++) top = Math.max(top, triangles[i]);
+    if (triangles.length && top >= vc) throw new PackError(`${file.name}: triangles: index ${top} ≥ model ${m}'s ${vc} vertices`);
     models.push({
       vertexCount: vc,
       triangleCount: tc,
