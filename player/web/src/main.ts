@@ -55,6 +55,11 @@ interface Stats {
   walkDone: boolean;
   cellsVisited: number[];
   phases: Record<string, number>; // ms since navigation start: where a cold start goes
+  // Frames after the first settled one that drew a stand-in (the last cell's packs)
+  // because the current cell's were not in yet, and frames that drew a proxy's
+  // members as originals while its textures waited.
+  standInFrames: number;
+  pendingFrames: number;
 }
 
 const stats: Stats = {
@@ -76,6 +81,8 @@ const stats: Stats = {
   walkDone: false,
   cellsVisited: [],
   phases: {},
+  standInFrames: 0,
+  pendingFrames: 0,
 };
 const mark = (name: string) => (stats.phases[name] ??= Math.round(performance.now()));
 (window as any).hexbake = { stats, setPose: (p: number[]) => setPose(p) };
@@ -677,6 +684,8 @@ function draw() {
       for (let i = 0; i < base.instances.length; i++) if (!proxied.has(i)) originals.add(i);
     }
   }
+  if (stats.firstFrameMs !== null && cell !== null && !current) stats.standInFrames++;
+  if (stats.firstFrameMs !== null && current && proxies.length < packs.reduce((s, r) => s + (r?.proxies.length ?? 0), 0)) stats.pendingFrames++;
   stats.settled = current && !!cellPack && farReady && proxies.length === packs.reduce((s, r) => s + (r?.proxies.length ?? 0), 0);
   if (stats.firstFrameMs === null && stats.settled) {
     stats.firstFrameMs = performance.now();
