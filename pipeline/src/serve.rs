@@ -90,6 +90,12 @@ pub fn serve(args: &ServeArgs) -> anyhow::Result<()> {
     let web = web_arg
         .canonicalize()
         .map_err(|e| anyhow::anyhow!("viewer folder {}: {e}", web_arg.display()))?;
+    if !web.join("dist/viewer.js").is_file() {
+        eprintln!(
+            "pipeline serve: warning: {} has no dist/viewer.js (run scripts/install-web.sh); the page will not start",
+            web.display()
+        );
+    }
     let listener = TcpListener::bind((args.bind.as_str(), args.port))
         .map_err(|e| anyhow::anyhow!("cannot listen on {}:{}: {e}", args.bind, args.port))?;
     let addr = listener.local_addr()?;
