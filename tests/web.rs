@@ -139,50 +139,11 @@ fn web_viewer_draws_the_demo_like_the_player() {
     assert!(o.status.success(), "{}", stderr(&o));
     let art = artefacts();
 
-    // The native frame (no overlay) at the pose.
-    let (x, z, yaw, pitch) = (150.0, 120.0, 30.0, 0.0);
-    let (w, h) = (512, 384);
-    let native_png = art.join("native.png");
-    let o = run(
-        "player",
-        &[
-            "view",
-            out.to_str().unwrap(),
-            "--headless",
-            "--no-overlay",
-            "--screenshot",
-            native_png.to_str().unwrap(),
-            "--start",
-            &format!("{x},{z}"),
-            "--yaw-deg",
-            &format!("{yaw}"),
-            "--pitch-deg",
-            &format!("{pitch}"),
-            "--size",
-            &format!("{w}x{h}"),
-        ],
-        &repo(),
-    );
-    if !o.status.success() {
-        let err = stderr(&o);
-        if err.contains("no graphics adapter") {
-            testkit::skip(testkit::Need::Gpu, format_args!("no wgpu adapter ({err})"));
-            return;
-        }
-        panic!("player view --headless: {err}");
-    }
-
+    let (x, z, yaw) = (150.0, 120.0, 30.0);
     let server = serve(&out);
-    let web_png = art.join("web.png");
-    let url = format!("{}&pose={x},,{z},{yaw},{pitch}&size={w}x{h}", server.url);
-    let (v, ok) = drive(&["shot", &url, web_png.to_str().unwrap(), "240"]);
-    std::fs::write(art.join("shot.json"), v.to_string()).unwrap();
-    assert!(ok, "the viewer did not settle: {v}");
-    let (nw, nh, native) = read_png(&native_png);
-    let (ww, wh, web) = read_png(&web_png);
-    assert_eq!((nw, nh), (ww, wh), "frame sizes");
-    let mse = format::metrics::mse_y_rgba(&native, &web).unwrap();
-    let psnr = format::metrics::psnr_of_mse(mse);
+    let Some((psnr, v)) = native_vs_web(&out, &server, (x, z, yaw, 0.0), "demo") else {
+        return;
+    };
     eprintln!(
         "web vs native at ({x}, {z}, yaw {yaw}°): PSNR(Y) {psnr:.2} dB; first frame {} ms after navigation start, {} bytes fetched; PNGs in {}",
         v["stats"]["firstFrameMs"],
@@ -232,6 +193,94 @@ fn web_viewer_draws_the_demo_like_the_player() {
     assert!(
         err.contains("cells/") && err.contains("truncated"),
         "the page's error names the pack: {v}"
+    );
+}
+
+/// `player view --headless --no-overlay` and the viewer at pose (x, eye height, z,
+/// yaw°, pitch°), 512 × 384: PSNR(Y) of the two frames (`format::metrics`) and the
+/// driver's JSON; `None` (skipped) without a wgpu adapter. PNGs `<tag>-native.png`,
+/// `<tag>-web.png` under [`artefacts`].
+fn native_vs_web(
+    out: &Path,
+    server: &Server,
+    (x, z, yaw, pitch): (f32, f32, f32, f32),
+    tag: &str,
+) -> Option<(f64, serde_json::Value)> {
+    let (w, h) = (512, 384);
+    let art = artefacts();
+    let native_png = art.join(format!("{tag}-native.png"));
+    let o = run(
+        "player",
+        &[
+            "view",
+            out.to_str().unwrap(),
+            "--headless",
+            "--no-overlay",
+            "--screenshot",
+            native_png.to_str().unwrap(),
+            "--start",
+            &format!("{x},{z}"),
+            "--yaw-deg",
+            &format!("{yaw}"),
+            "--pitch-deg",
+            &format!("{pitch}"),
+            "--size",
+            &format!("{w}x{h}"),
+        ],
+        &repo(),
+    );
+    if !o.status.success() {
+        let err = stderr(&o);
+        if err.contains("no graphics adapter") {
+            testkit::skip(testkit::Need::Gpu, format_args!("no wgpu adapter ({err})"));
+            return None;
+        }
+        panic!("player view --headless: {err}");
+    }
+    let web_png = art.join(format!("{tag}-web.png"));
+    let url = format!("{}&pose={x},,{z},{yaw},{pitch}&size={w}x{h}", server.url);
+    let (v, ok) = drive(&["shot", &url, web_png.to_str().unwrap(), "240"]);
+    std::fs::write(art.join(format!("{tag}-shot.json")), v.to_string()).unwrap();
+    assert!(ok, "{tag}: the viewer did not settle: {v}");
+    let (nw, nh, native) = read_png(&native_png);
+    let (ww, wh, web) = read_png(&web_png);
+    assert_eq!((nw, nh), (ww, wh), "frame sizes");
+    let mse = format::metrics::mse_y_rgba(&native, &web).unwrap();
+    Some((format::metrics::psnr_of_mse(mse), v))
+}
+
+/// Issue 18's textured glTF sample (`format::load::gltf_sample`: checker-textured
+/// crates, REPEAT and MIRRORED_REPEAT wraps): the viewer samples the albedo
+/// textures as the player does (PSNR(Y) ≥ 35 dB at a pose facing the crates).
+#[test]
+fn web_viewer_draws_textured_models_like_the_player() {
+    if let Some(why) = web_missing() {
+        testkit::skip(testkit::Need::Chromium, why);
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let manifest = format::load::gltf_sample::write_textured_sample_manifest(dir.path()).unwrap();
+    let out = dir.path().join("bake");
+    let o = run(
+        "pipeline",
+        &[
+            "run",
+            manifest.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--quiet",
+        ],
+        &repo(),
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let server = serve(&out);
+    let Some((psnr, _)) = native_vs_web(&out, &server, (0.0, 8.0, -90.0, -10.0), "textured") else {
+        return;
+    };
+    eprintln!("textured sample: web vs native PSNR(Y) {psnr:.2} dB");
+    assert!(
+        psnr >= 35.0,
+        "textured: web vs native PSNR(Y) {psnr:.2} dB < 35"
     );
 }
 

@@ -155,6 +155,7 @@ let pipes: {
   mesh: GPURenderPipeline[];
   g0: GPUBindGroupLayout;
   g1: GPUBindGroupLayout;
+  g2: GPUBindGroupLayout;
 };
 let globalsBuf: GPUBuffer;
 let globalsBg: GPUBindGroup;
@@ -164,7 +165,7 @@ let dummyView: GPUTextureView;
 let depthTex: GPUTexture;
 let groundBuf: GPUBuffer;
 let instBuf: GPUBuffer;
-let models: { vbuf: GPUBuffer; ibuf: GPUBuffer; indexCount: number; tris: number }[] = [];
+let models: { vbuf: GPUBuffer; ibuf: GPUBuffer; indexCount: number; tris: number; albedo: GPUBindGroup }[] = [];
 const resident = new Map<string, Resident>();
 const uploads: { res: Resident; proxy: GpuProxy; view: number; w: number; h: number; enc: number; data: Uint8Array }[] = [];
 let uploadBudget = 8 << 20;
@@ -277,11 +278,13 @@ async function init() {
   if (start !== null) for (const w of chain(start)) early.set(w.key, fetchBytes(bakeUrl + w.entry.file));
   await pipelinesReady;
 
+  const albedoGroups: GPUBindGroup[] = [];
   models = base.models.map((m) => ({
     vbuf: buffer(modelVertices(m), GPUBufferUsage.VERTEX),
     ibuf: buffer(m.triangles, GPUBufferUsage.INDEX),
     indexCount: m.triangles.length,
     tris: m.triangleCount,
+    albedo: m.texture !== null ? (albedoGroups[m.texture] ??= albedoGroup(base.textures[m.texture])) : whiteBg,
   }));
   groundBuf = buffer(groundVertices(g), GPUBufferUsage.VERTEX);
   instanceBounds = base.instances.map((inst) => {
@@ -368,6 +371,7 @@ async function makePipelines(module: GPUShaderModule) {
     mesh,
     g0,
     g1,
+    g2,
   };
   globalsBuf = device.createBuffer({ size: GLOBALS, usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST });
   globalsBg = device.createBindGroup({ layout: g0, entries: [{ binding: 0, resource: { buffer: globalsBuf } }] });
@@ -384,6 +388,22 @@ async function makePipelines(module: GPUShaderModule) {
     entries: [
       { binding: 0, resource: tex1([255, 255, 255, 255]).createView() },
       { binding: 1, resource: albedoSampler },
+    ],
+  });
+}
+
+/** A textured model's group 2: its albedo texture (sRGB, no mipmaps) and a bilinear
+ * sampler with its glTF wrap modes (player/src/gpu.rs `albedo_bind_group`). */
+function albedoGroup(t: Base["textures"][number]): GPUBindGroup {
+  const tex = device.createTexture({ size: [t.width, t.height], format: "rgba8unorm-srgb", usage: GPUTextureUsage.TEXTURE_BINDING | GPUTextureUsage.COPY_DST });
+  device.queue.writeTexture({ texture: tex }, t.rgba, { bytesPerRow: 4 * t.width }, [t.width, t.height]);
+  const mode = (w: number): GPUAddressMode => (w === 0 ? "repeat" : w === 1 ? "mirror-repeat" : "clamp-to-edge");
+  const samp = device.createSampler({ addressModeU: mode(t.wrap[0]), addressModeV: mode(t.wrap[1]), magFilter: "linear", minFilter: "linear" });
+  return device.createBindGroup({
+    layout: pipes.g2,
+    entries: [
+      { binding: 0, resource: tex.createView() },
+      { binding: 1, resource: samp },
     ],
   });
 }
@@ -748,6 +768,7 @@ function draw() {
     const n = byModel.get(m)!.length;
     const g = models[m];
     if (g.indexCount > 0) {
+      pass.setBindGroup(2, g.albedo);
       pass.setVertexBuffer(0, g.vbuf);
       pass.setIndexBuffer(g.ibuf, "uint32");
       pass.drawIndexed(g.indexCount, n, 0, 0, first);

@@ -247,6 +247,16 @@ export interface Model {
   normals: Float32Array;
   colours: Uint8Array; // 4 per vertex, sRGB8
   triangles: Uint32Array; // 3 per triangle
+  uvs: Float32Array | null; // 2 per vertex, for a textured model (issue 18)
+  texture: number | null; // index into Base.textures
+}
+
+/** An albedo texture (format/README.md "Optional albedo texture sections"). */
+export interface AlbedoTexture {
+  width: number;
+  height: number;
+  wrap: [number, number]; // 0 REPEAT, 1 MIRRORED_REPEAT, 2 CLAMP_TO_EDGE
+  rgba: Uint8Array; // sRGB8, row 0 first
 }
 
 export interface Instance {
@@ -259,6 +269,7 @@ export interface Base {
   grid: GridParams;
   models: Model[];
   instances: Instance[];
+  textures: AlbedoTexture[];
 }
 
 export function decodeBase(file: PackFile): Base {
@@ -299,6 +310,8 @@ export function decodeBase(file: PackFile): Base {
       normals: nor.f32array(12 * v0, 3 * vc),
       colours: col.slice(4 * v0, 4 * (v0 + vc)),
       triangles,
+      uvs: null,
+      texture: null,
     });
     v0 += vc;
     t0 += tc;
@@ -315,7 +328,37 @@ export function decodeBase(file: PackFile): Base {
       model,
     });
   }
-  return { grid, models, instances };
+  const textures = decodeAlbedo(file, models);
+  return { grid, models, instances, textures };
+}
+
+/** Sections 0x0109 albedo-textures and 0x010A texcoords (both or neither). */
+function decodeAlbedo(file: PackFile, models: Model[]): AlbedoTexture[] {
+  if (!file.has(0x0109) && !file.has(0x010a)) return [];
+  if (!file.has(0x0109) || !file.has(0x010a))
+    throw new PackError(`${file.name}: albedo-textures and texcoords must both be present or neither`);
+  const t = new Reader(file.section(0x0109), `${file.name}: albedo-textures`);
+  const count = t.u32(0);
+  const textures: AlbedoTexture[] = [];
+  let at = 8 + 16 * count;
+  for (let i = 0; i < count; i++) {
+    const [w, h, wu, wv] = [t.u32(8 + 16 * i), t.u32(12 + 16 * i), t.u32(16 + 16 * i), t.u32(20 + 16 * i)];
+    if (w < 1 || h < 1 || w > 8192 || h > 8192 || wu > 2 || wv > 2) throw new PackError(`${t.label}: texture ${i}: ${w}×${h}, wrap ${wu}/${wv}`);
+    t.need(at, 4 * w * h);
+    textures.push({ width: w, height: h, wrap: [wu, wv], rgba: t.bytes.subarray(at, at + 4 * w * h) });
+    at += 4 * w * h;
+  }
+  const c = new Reader(file.section(0x010a), `${file.name}: texcoords`);
+  const n = c.u32(0);
+  let uv = 8 + 8 * n;
+  for (let i = 0; i < n; i++) {
+    const [m, tex] = [c.u32(8 + 8 * i), c.u32(12 + 8 * i)];
+    if (m >= models.length || tex >= textures.length) throw new PackError(`${c.label}: record ${i}: model ${m}, texture ${tex} out of range`);
+    models[m].uvs = c.f32array(uv, 2 * models[m].vertexCount);
+    models[m].texture = tex;
+    uv += 8 * models[m].vertexCount;
+  }
+  return textures;
 }
 
 // ---- index.pack ----

@@ -3,7 +3,7 @@
 // "Space", "Hex grid"; player/src/camera.rs, format/src/grid.rs,
 // player/src/vertex.rs, player/src/bake.rs `prepare_cell`).
 
-import type { Base, GridParams, Proxy } from "./pack";
+import type { AlbedoTexture, Base, GridParams, Proxy } from "./pack";
 
 export type Mat4 = Float64Array; // column-major
 
@@ -187,6 +187,10 @@ export function modelVertices(m: Base["models"][number]): ArrayBuffer {
       dv.setFloat32(o + 12 + 4 * k, m.normals[3 * v + k], true);
     }
     for (let k = 0; k < 4; k++) dv.setUint8(o + 24 + k, m.colours[4 * v + k]);
+    if (m.uvs) {
+      dv.setFloat32(o + 28, m.uvs[2 * v], true);
+      dv.setFloat32(o + 32, m.uvs[2 * v + 1], true);
+    }
   }
   return buf;
 }
@@ -277,9 +281,52 @@ export function proxyVertices(base: Base, p: Proxy): { data: ArrayBuffer; count:
         const v = tri[3 * k + j];
         const [a, b, c] = [model.normals[3 * v], model.normals[3 * v + 1], model.normals[3 * v + 2]];
         const n = norm([nm[0] * a + nm[3] * b + nm[6] * c, nm[1] * a + nm[4] * b + nm[7] * c, nm[2] * a + nm[5] * b + nm[8] * c]);
-        put(w[j], n, model.colours.subarray(4 * v, 4 * v + 4), inst.tint, mask, cen, p.kind);
+        const colour = model.colours.subarray(4 * v, 4 * v + 4);
+        const albedo =
+          model.uvs && model.texture !== null ? vertexAlbedo(colour, base.textures[model.texture], model.uvs[2 * v], model.uvs[2 * v + 1]) : colour;
+        put(w[j], n, albedo, inst.tint, mask, cen, p.kind);
       }
     }
   }
   return { data, count, min, max };
+}
+
+// ---- albedo textures (format/src/albedo.rs, format/src/srgb.rs) ----
+
+const srgbToLinear = (c: number) => {
+  const x = c / 255;
+  return x <= 0.04045 ? x / 12.92 : ((x + 0.055) / 1.055) ** 2.4;
+};
+const linearToSrgb8 = (v: number) => {
+  const x = Math.min(Math.max(v, 0), 1);
+  const e = x <= 0.0031308 ? x * 12.92 : 1.055 * x ** (1 / 2.4) - 0.055;
+  return Math.round(e * 255);
+};
+
+function wrapTexel(mode: number, i: number, n: number): number {
+  if (mode === 0) return ((i % n) + n) % n;
+  if (mode === 2) return Math.min(Math.max(i, 0), n - 1);
+  const m = ((i % (2 * n)) + 2 * n) % (2 * n);
+  return m < n ? m : 2 * n - 1 - m;
+}
+
+/** Texture::sample: bilinear in linear light, texel centres at +0.5. */
+export function sampleAlbedo(t: AlbedoTexture, u: number, v: number): number[] {
+  if (!Number.isFinite(u) || !Number.isFinite(v)) return [1, 1, 1];
+  const x = u * t.width - 0.5;
+  const y = v * t.height - 0.5;
+  const [x0, y0] = [Math.floor(x), Math.floor(y)];
+  const [fx, fy] = [Math.fround(x - x0), Math.fround(y - y0)];
+  const texel = (i: number, j: number) => {
+    const o = (wrapTexel(t.wrap[1], j, t.height) * t.width + wrapTexel(t.wrap[0], i, t.width)) * 4;
+    return [0, 1, 2].map((k) => srgbToLinear(t.rgba[o + k]));
+  };
+  const lerp = (a: number[], b: number[], f: number) => a.map((x, k) => x + (b[k] - x) * f);
+  return lerp(lerp(texel(x0, y0), texel(x0 + 1, y0), fx), lerp(texel(x0, y0 + 1), texel(x0 + 1, y0 + 1), fx), fy);
+}
+
+/** AlbedoMap::vertex_albedo: a textured vertex's colour × its texture, sRGB8. */
+export function vertexAlbedo(c: ArrayLike<number>, t: AlbedoTexture, u: number, v: number): number[] {
+  const s = sampleAlbedo(t, u, v);
+  return [0, 1, 2].map((k) => linearToSrgb8(srgbToLinear(c[k]) * s[k])).concat([255]);
 }
