@@ -9,8 +9,8 @@
 # A test that lacks a GPU adapter, the fetched models, Slurm or the glTF-Validator
 # skips through tests/testkit (one helper): it appends "<test>\t<reason>" to
 # $HEXBAKE_SKIP_LOG, which this script creates. HEXBAKE_REQUIRE_GPU, _MODELS, _SLURM,
-# _GLTF_VALIDATOR and _VALGRIND set to 1/true/yes make such a test fail instead
-# (.ci/run sets all five). tests/guard.rs is the guard against slipping back
+# _GLTF_VALIDATOR, _VALGRIND and _WEB set to 1/true/yes make such a test fail instead
+# (.ci/run sets all six). tests/guard.rs is the guard against slipping back
 # (scripts/guard.sh).
 set -euo pipefail
 cd "$(dirname "$0")/.."
