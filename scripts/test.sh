@@ -9,8 +9,8 @@
 # A test that lacks a GPU adapter, the fetched models, Slurm or the glTF-Validator
 # skips through tests/testkit (one helper): it appends "<test>\t<reason>" to
 # $HEXBAKE_SKIP_LOG, which this script creates. HEXBAKE_REQUIRE_GPU, _MODELS, _SLURM,
-# _GLTF_VALIDATOR and _VALGRIND set to 1/true/yes make such a test fail instead
-# (.ci/run sets all five). tests/guard.rs is the guard against slipping back
+# _GLTF_VALIDATOR, _VALGRIND and _WEB set to 1/true/yes make such a test fail instead
+# (.ci/run sets all six). tests/guard.rs is the guard against slipping back
 # (scripts/guard.sh).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -45,6 +45,10 @@ scripts/fetch-models.sh
 if command -v npm >/dev/null; then
     scripts/install-gltf-validator.sh ||
         echo "test.sh: the glTF-Validator did not install: the export test's validator step will skip"
+    # The browser viewer's npm packages and bundle (tests/web.rs skips without them,
+    # unless HEXBAKE_REQUIRE_WEB=1); no apt here: CI installs chromium.
+    scripts/install-web.sh --no-apt ||
+        echo "test.sh: the web viewer did not install: tests/web.rs will skip"
 fi
 
 if [ "${HEXBAKE_SLURM:-1}" != 0 ]; then

@@ -8,6 +8,7 @@ pub mod overrides;
 pub mod report;
 pub mod run;
 pub mod scene_cmd;
+pub mod serve;
 pub mod slurm;
 pub mod status;
 pub mod subset;

@@ -5,7 +5,7 @@ mod cmd;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
-use worker::cli::{exit_code, restore_default_sigpipe, Failure};
+use worker::cli::{bad_input, exit_code, restore_default_sigpipe, Failure};
 
 #[derive(Parser)]
 #[command(
@@ -35,6 +35,8 @@ enum Command {
     /// Write one cell of a bake as glTF 2.0 binary (GLB): its originals and its
     /// SV / MV / cluster proxies and layered impostors with their capture textures.
     Export(cmd::export::Args),
+    /// Serve a bake and the browser viewer over HTTP (range requests; issue 33).
+    Serve(pipeline::serve::ServeArgs),
     /// Print a pack's header and sections and check every checksum.
     Inspect(cmd::inspect::Args),
 }
@@ -52,6 +54,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
         Command::Report(args) => cmd::report::run(args),
         Command::Finalize(args) => cmd::finalize::run(args),
         Command::Export(args) => cmd::export::run(args),
+        Command::Serve(args) => pipeline::serve::serve(&args).map_err(bad_input),
         Command::Inspect(args) => cmd::inspect::run(args),
     }
 }

@@ -1,8 +1,9 @@
 //! The one place where a hexbake test decides to skip (issue 28, item 5).
 //!
 //! A test that needs something the machine may lack — a wgpu adapter, the fetched
-//! models, a running Slurm, the Khronos glTF-Validator, valgrind — calls [`skip`] when it is
-//! missing and returns. What happens then depends on `HEXBAKE_REQUIRE_<X>`:
+//! models, a running Slurm, the Khronos glTF-Validator, valgrind, headless
+//! Chromium — calls [`skip`] when it is missing and returns. What happens then
+//! depends on `HEXBAKE_REQUIRE_<X>`:
 //!
 //! - `1`, `true` or `yes` (any case): the resource is required, and [`skip`]
 //!   panics with the reason, so the test fails.
@@ -39,16 +40,21 @@ pub enum Need {
     /// valgrind's cachegrind, which counts the guard sample's instructions
     /// (`HEXBAKE_REQUIRE_VALGRIND`; the Debian package `valgrind`).
     Valgrind,
+    /// Headless Chromium with WebGPU, node and the viewer's npm packages
+    /// (`HEXBAKE_REQUIRE_WEB`; the Debian package `chromium` and
+    /// `scripts/install-web.sh`, issue 33).
+    Chromium,
 }
 
 impl Need {
     /// Every need, in the order the docs list them.
-    pub const ALL: [Need; 5] = [
+    pub const ALL: [Need; 6] = [
         Need::Gpu,
         Need::Models,
         Need::Slurm,
         Need::GltfValidator,
         Need::Valgrind,
+        Need::Chromium,
     ];
 
     /// The variable that makes this need required.
@@ -59,6 +65,7 @@ impl Need {
             Need::Slurm => "HEXBAKE_REQUIRE_SLURM",
             Need::GltfValidator => "HEXBAKE_REQUIRE_GLTF_VALIDATOR",
             Need::Valgrind => "HEXBAKE_REQUIRE_VALGRIND",
+            Need::Chromium => "HEXBAKE_REQUIRE_WEB",
         }
     }
 }
