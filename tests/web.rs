@@ -249,7 +249,7 @@ fn native_vs_web(
     Some((format::metrics::psnr_of_mse(mse), v))
 }
 
-/// Issue 18's textured glTF sample (`format::load::gltf_sample`: checker-textured
+/// Issue 18's textured glTF sample (`scene::load::gltf_sample`: checker-textured
 /// crates, REPEAT and MIRRORED_REPEAT wraps): the viewer samples the albedo
 /// textures as the player does (PSNR(Y) ≥ 35 dB at a pose facing the crates).
 #[test]
@@ -259,7 +259,7 @@ fn web_viewer_draws_textured_models_like_the_player() {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
-    let manifest = format::load::gltf_sample::write_textured_sample_manifest(dir.path()).unwrap();
+    let manifest = scene::load::gltf_sample::write_textured_sample_manifest(dir.path()).unwrap();
     let out = dir.path().join("bake");
     let o = run(
         "pipeline",
