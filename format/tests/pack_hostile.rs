@@ -420,6 +420,9 @@ fn base_pack_values_are_validated() {
             24,
             "vertex 2: normal",
         ),
+        // Issue 32: a zero normal and one that is not unit length.
+        (SectionKind::NORMALS, 12, f32s(0.0), 12, "vertex 1: normal"),
+        (SectionKind::NORMALS, 36, f32s(2.0), 36, "vertex 3: normal"),
         (
             SectionKind::INSTANCES,
             80,
@@ -809,7 +812,18 @@ fn arb_mesh() -> impl Strategy<Value = Mesh> {
         )
             .prop_map(|(positions, normals, albedo, triangles)| Mesh {
                 positions,
-                normals,
+                // Packs hold unit normals (issue 32); a zero draw stands for +y.
+                normals: normals
+                    .into_iter()
+                    .map(|n| {
+                        let v = glam::Vec3::from(n);
+                        if v.length() > 1e-3 {
+                            v.normalize().to_array()
+                        } else {
+                            [0.0, 1.0, 0.0]
+                        }
+                    })
+                    .collect(),
                 albedo,
                 triangles,
             })
@@ -1170,4 +1184,34 @@ fn degenerate_values_are_refused_by_name() {
         e.contains(&format!("instance {first} is listed twice")),
         "{e}"
     );
+}
+
+/// Issue 32: the index is checked against the base pack it is read with: a cell
+/// past the grid and a neighbour that is not adjacent are refused, naming both.
+#[test]
+fn index_is_bound_to_the_base_grid() {
+    let base = sample::small_base();
+    let grid = format::grid::HexGrid::from_params(&base.grid).unwrap();
+    let mut index = sample::small_index();
+    // Make the sample's neighbour lists the grid's own: then it is accepted.
+    for e in &mut index.cells {
+        e.neighbours = grid.neighbours(e.cell_id);
+    }
+    index.check_against(&base).unwrap();
+
+    let mut far = index.clone();
+    let not_adjacent = (0..grid.cell_count())
+        .find(|&c| c != far.cells[0].cell_id && !grid.neighbours(far.cells[0].cell_id).contains(&c))
+        .unwrap();
+    far.cells[0].neighbours.push(not_adjacent);
+    let e = far.check_against(&base).unwrap_err().to_string();
+    assert!(
+        e.contains(&format!("neighbour {not_adjacent}")) && e.contains("not adjacent"),
+        "{e}"
+    );
+
+    let mut past = index.clone();
+    past.cells.last_mut().unwrap().cell_id = grid.cell_count();
+    let e = past.check_against(&base).unwrap_err().to_string();
+    assert!(e.contains(&format!("cell {}", grid.cell_count())), "{e}");
 }

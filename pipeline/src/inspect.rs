@@ -323,20 +323,10 @@ pub fn check_bake(dir: &Path) -> anyhow::Result<BakeCheck> {
         .with_context(|| format!("{}: cannot read the index", dir.display()))?;
     let mut problems = Vec::new();
     let (mut ok, mut groups_ok) = (0, 0);
-    // The index against the base pack: every listed cell and neighbour is a cell of
-    // the base pack's grid.
-    let grid_cells = base.grid.n_cols as u64 * base.grid.n_rows as u64;
-    for entry in &index.cells {
-        if let Some(bad) = std::iter::once(entry.cell_id)
-            .chain(entry.neighbours.iter().copied())
-            .find(|&c| u64::from(c) >= grid_cells)
-        {
-            problems.push(format!(
-                "{}: lists cell {bad} (for cell {}), but base.pack's grid has {grid_cells} cells",
-                dir.join("index.pack").display(),
-                entry.cell_id
-            ));
-        }
+    // The index against the base pack: every listed cell is a cell of the base pack's
+    // grid, and every neighbour it lists is adjacent to it there.
+    if let Err(e) = index.check_against(&base) {
+        problems.push(format!("{}: {e}", dir.join("index.pack").display()));
     }
     // Cells, then far-field groups (format version 2).
     let units = index

@@ -86,7 +86,10 @@ impl Bake {
             source,
         })?;
         let index_path = dir.join("index.pack");
-        let index = match Index::read(&index_path) {
+        // An index that does not belong to the base pack's grid is as bad as a
+        // corrupt one (issue 32: a neighbour that is not adjacent, a cell past the grid).
+        let index = match Index::read(&index_path).and_then(|i| i.check_against(&base).map(|()| i))
+        {
             Ok(i) => Some(Arc::new(i)),
             Err(source) => {
                 let e = BakeError::Index {

@@ -662,3 +662,57 @@ mod hostile {
         }
     }
 }
+
+/// A glTF file of 12 vertices and `count` u16 indices (i mod 12) in TRIANGLES mode,
+/// whose index view holds `view_indices` of them; the buffer beside it.
+fn gltf_with_indices(dir: &Path, count: usize, view_indices: usize) -> PathBuf {
+    let mut bin: Vec<u8> = Vec::new();
+    for k in 0..12u32 {
+        let a = k as f32 * 0.5;
+        for c in [a.cos(), (k % 3) as f32, a.sin()] {
+            bin.extend_from_slice(&c.to_le_bytes());
+        }
+    }
+    let positions_len = bin.len();
+    for i in 0..view_indices {
+        bin.extend_from_slice(&((i % 12) as u16).to_le_bytes());
+    }
+    std::fs::write(dir.join("b.bin"), &bin).unwrap();
+    let json = format!(
+        r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0]}}],
+        "nodes":[{{"mesh":0}}],
+        "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}},"indices":1,"mode":4}}]}}],
+        "buffers":[{{"uri":"b.bin","byteLength":{total}}}],
+        "bufferViews":[{{"buffer":0,"byteLength":{positions_len}}},
+                       {{"buffer":0,"byteOffset":{positions_len},"byteLength":{index_len}}}],
+        "accessors":[{{"bufferView":0,"componentType":5126,"count":12,"type":"VEC3",
+                       "min":[-1,0,-1],"max":[1,2,1]}},
+                     {{"bufferView":1,"componentType":5123,"count":{count},"type":"SCALAR"}}]}}"#,
+        total = bin.len(),
+        index_len = 2 * view_indices,
+    );
+    write(dir, "m.gltf", json.as_bytes())
+}
+
+/// Issue 32 item 4: an index accessor longer than its buffer view was read as the
+/// triangles that fit (2 of 12); a TRIANGLES count that is not a multiple of 3 lost
+/// its tail. Both are refused, naming the accessor or the count.
+#[test]
+fn gltf_accessors_are_checked_against_their_views() {
+    let dir = tempfile::tempdir().unwrap();
+    // 36 indices i mod 12: four triangles, each listed three times (the clean-up
+    // keeps one of each).
+    let (mesh, _) = load_ok(&gltf_with_indices(dir.path(), 36, 36));
+    assert_eq!(mesh.triangle_count(), 4);
+
+    let e = expect_error(&gltf_with_indices(dir.path(), 36, 6));
+    assert!(
+        e.to_string()
+            .contains("need 72 bytes of bufferView 1, which has 12"),
+        "{e}"
+    );
+    assert!(matches!(e.location(), Location::Element(v) if v == "accessor 1"));
+
+    let e = expect_error(&gltf_with_indices(dir.path(), 35, 35));
+    assert!(e.to_string().contains("35 indices"), "{e}");
+}

@@ -76,8 +76,17 @@ impl GridParams {
     }
 }
 
+/// How far from 1 a stored normal's length may be: normals are unit vectors in f32
+/// (issue 32: a zero or unnormalised normal is refused; the shading divides by none).
+pub const NORMAL_LENGTH_TOLERANCE: f32 = 0.01;
+
+fn is_unit(n: &[f32; 3]) -> bool {
+    let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+    len.is_finite() && (len - 1.0).abs() <= NORMAL_LENGTH_TOLERANCE
+}
+
 /// Positions are finite and within ±`MAX_COORDINATE` (normalised models are at most
-/// that tall and wide); normals are finite. `first` is the index of `positions[0]` in
+/// that tall and wide); normals are finite unit vectors. `first` is the index of `positions[0]` in
 /// the whole `positions` section.
 fn check_vertices(
     positions: &[[f32; 3]],
@@ -96,16 +105,12 @@ fn check_vertices(
             format!("vertex {v}: position {p:?} is not finite or beyond ±{MAX_COORDINATE}"),
         ));
     }
-    if let Some((k, n)) = normals
-        .iter()
-        .enumerate()
-        .find(|(_, n)| !n.iter().all(|x| x.is_finite()))
-    {
+    if let Some((k, n)) = normals.iter().enumerate().find(|(_, n)| !is_unit(n)) {
         let v = first + k;
         return Err(BadValue(
             SectionKind::NORMALS,
             (v * 12) as u64,
-            format!("vertex {v}: normal {n:?} is not finite"),
+            format!("vertex {v}: normal {n:?} is not a finite unit vector (length 1 ± {NORMAL_LENGTH_TOLERANCE})"),
         ));
     }
     Ok(())

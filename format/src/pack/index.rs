@@ -111,6 +111,36 @@ pub fn check_relative_path(file: &str) -> Result<(), String> {
 /// `index-cell-groups` value of a cell without a far-field group.
 pub const NO_GROUP: u32 = u32::MAX;
 
+impl Index {
+    /// Checks the index against the base pack it is read with (what every reader
+    /// runs; issue 32): every listed cell is a cell of the base pack's grid and every
+    /// neighbour it lists is adjacent to it on that grid. A group's id is a cell of the
+    /// grid too (a grid has at most as many groups as cells).
+    pub fn check_against(&self, base: &super::BasePack) -> Result<(), PackError> {
+        let grid = crate::grid::HexGrid::from_params(&base.grid)
+            .map_err(|e| invalid(format!("the base pack's grid: {e}")))?;
+        let cells = grid.cell_count();
+        let listed = self.cells.iter().map(|e| ("cell", e.cell_id));
+        let groups = self.groups.iter().map(|e| ("group", e.cell_id));
+        if let Some((what, id)) = listed.chain(groups).find(|&(_, id)| id >= cells) {
+            return Err(invalid(format!(
+                "index.pack lists {what} {id}, but base.pack's grid has {cells} cells"
+            )));
+        }
+        for entry in &self.cells {
+            let adjacent = grid.neighbours(entry.cell_id);
+            if let Some(&n) = entry.neighbours.iter().find(|n| !adjacent.contains(n)) {
+                return Err(invalid(format!(
+                    "index.pack: cell {} lists neighbour {n}, which is not adjacent to it on \
+                     base.pack's grid (its neighbours are {adjacent:?})",
+                    entry.cell_id
+                )));
+            }
+        }
+        Ok(())
+    }
+}
+
 /// Most neighbours a hexagonal cell has.
 pub const MAX_NEIGHBOURS: usize = 6;
 

@@ -59,6 +59,7 @@ pub(crate) fn open_document(
     let base = path.parent();
     let buffers = gltf::import_buffers(&document, base, blob)
         .map_err(|e| err(format!("buffers: {e}"), Location::Unknown))?;
+    check_accessors(path, document.as_json(), &buffers)?;
     Ok((document, buffers))
 }
 
@@ -118,6 +119,75 @@ pub(crate) fn parse(path: &Path, bytes: &[u8]) -> Result<Parsed, LoadError> {
         nodes: nodes_with_geometry,
         parts: prims.len(),
     })
+}
+
+/// Every accessor fits its buffer view and every buffer view its buffer, checked on
+/// the JSON and the loaded buffers before the gltf crate reads a value (issue 32
+/// item 4: its reader stops silently at the end of a short view, so an index accessor
+/// whose count exceeds its view gave 2 of 12 triangles). glTF 2.0 §3.6.2.4: an
+/// element `i` starts at `byteOffset + i · stride`, `stride` the view's
+/// `byteStride` or the element's size. Accessors without a view (all zeros, or
+/// sparse) hold no bytes to check.
+fn check_accessors(
+    path: &Path,
+    root: &gltf::json::Root,
+    buffers: &[gltf::buffer::Data],
+) -> Result<(), LoadError> {
+    use gltf::json::validation::Checked;
+    let err = |what: String, at: String| parse_error(path, FORMAT, what, Location::Element(at));
+    for (v, view) in root.buffer_views.iter().enumerate() {
+        let have = buffers
+            .get(view.buffer.value())
+            .map_or(0, |b| b.len() as u64);
+        let end = view
+            .byte_offset
+            .map_or(0, |o| o.0)
+            .saturating_add(view.byte_length.0);
+        if end > have {
+            return Err(err(
+                format!(
+                    "bytes up to {end} of buffer {}, which has {have}",
+                    view.buffer.value()
+                ),
+                format!("bufferView {v}"),
+            ));
+        }
+    }
+    for (a, accessor) in root.accessors.iter().enumerate() {
+        let (Some(view_index), Checked::Valid(component), Checked::Valid(kind)) = (
+            accessor.buffer_view,
+            &accessor.component_type,
+            &accessor.type_,
+        ) else {
+            continue;
+        };
+        let Some(view) = root.buffer_views.get(view_index.value()) else {
+            continue; // the crate's validation names a missing view
+        };
+        let element = (component.0.size() * kind.multiplicity()) as u64;
+        let stride = view.byte_stride.map_or(element, |s| s.0 as u64);
+        let count = accessor.count.0;
+        let offset = accessor.byte_offset.map_or(0, |o| o.0);
+        let need = if count == 0 {
+            offset
+        } else {
+            offset
+                .saturating_add((count - 1).saturating_mul(stride))
+                .saturating_add(element)
+        };
+        if need > view.byte_length.0 {
+            return Err(err(
+                format!(
+                    "{count} elements of {element} bytes (stride {stride}, offset {offset}) \
+                     need {need} bytes of bufferView {}, which has {}",
+                    view_index.value(),
+                    view.byte_length.0
+                ),
+                format!("accessor {a}"),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// What the gltf crate's validation leaves to the reader (issue 32 item 4), checked
@@ -254,6 +324,14 @@ pub(super) fn primitive_triangles(
         }
     };
     let triangles: Vec<[u32; 3]> = match mode {
+        // glTF 2.0 §3.7.2.1: TRIANGLES takes whole triples; a count that is not a
+        // multiple of 3 is a broken file, not a hint to drop the rest.
+        Mode::Triangles if !indices.len().is_multiple_of(3) => {
+            return Err(err(format!(
+                "{} indices for TRIANGLES, not a multiple of 3",
+                indices.len()
+            )));
+        }
         Mode::Triangles => indices
             .chunks_exact(3)
             .map(|t| [t[0], t[1], t[2]])

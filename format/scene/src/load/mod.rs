@@ -158,13 +158,42 @@ pub fn load_model_with_stats(path: &Path) -> Result<(Mesh, LoadStats), LoadError
     ))
 }
 
-/// Runs a parser, turning a panic inside a crate parser into [`LoadError::ParserPanic`].
+thread_local! {
+    /// Set while this thread runs a crate parser under [`guarded`]: its panics are
+    /// returned as errors, so the panic hook does not print them (issue 32 item 4: a
+    /// backtrace before a clean exit 2 reads as a crash).
+    static QUIET: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+/// Installs, once per process, a panic hook that stays silent on a thread inside
+/// [`guarded`] and otherwise calls the hook that was there before.
+fn install_quiet_hook() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        let previous = std::panic::take_hook();
+        std::panic::set_hook(Box::new(move |info| {
+            if !QUIET.with(|q| q.get()) {
+                previous(info);
+            }
+        }));
+    });
+}
+
+/// Runs a parser, turning a panic inside a crate parser into [`LoadError::ParserPanic`]
+/// without printing it.
 fn guarded<T>(
     path: &Path,
     format: ModelFormat,
     parse: impl FnOnce() -> Result<T, LoadError>,
 ) -> Result<T, LoadError> {
-    match std::panic::catch_unwind(std::panic::AssertUnwindSafe(parse)) {
+    let result = QUIET.with(|quiet| {
+        install_quiet_hook();
+        quiet.set(true);
+        let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(parse));
+        quiet.set(false);
+        result
+    });
+    match result {
         Ok(result) => result,
         Err(payload) => {
             let message = payload
