@@ -119,7 +119,7 @@ pub enum JobError {
 /// Reads a job's record if the job is done (see the module docs), else `None`.
 pub fn done_record(out: &Path, job: &Job) -> Option<JobRecord> {
     let text = std::fs::read_to_string(record_path(out, job.id)).ok()?;
-    let record: JobRecord = serde_json::from_str(&text).ok()?;
+    let record = JobRecord::from_sealed_json(&text).ok()?;
     if record.fingerprint != job.fingerprint
         || record
             .cells
@@ -251,10 +251,11 @@ where
         cpu_s: (process_cpu_seconds() - cpu_start).max(0.0),
         shared_process,
         host: format::pack::hostname(),
+        seal: None,
     };
     let path = record_path(out, job.id);
     std::fs::create_dir_all(path.parent().unwrap()).map_err(|e| io(&path, &e))?;
-    let text = serde_json::to_vec_pretty(&record).expect("a job record serializes");
+    let text = record.sealed_json();
     format::pack::write_atomic(&path, &text).map_err(|e| io(&path, &e))?;
     Ok(record)
 }
@@ -290,7 +291,7 @@ pub fn previous_proxies(out: &Path, job: &Job) -> std::collections::BTreeMap<Uni
     let Ok(text) = std::fs::read_to_string(record_path(out, job.id)) else {
         return reuse;
     };
-    let Ok(record) = serde_json::from_str::<JobRecord>(&text) else {
+    let Ok(record) = JobRecord::from_sealed_json(&text) else {
         return reuse;
     };
     let units = record

@@ -179,8 +179,9 @@ pub struct CellRecord {
     pub report: CellReport,
 }
 
-/// `jobs/<id>.json`.
+/// `jobs/<id>.json`. Unknown keys are refused: a record says exactly what it says.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct JobRecord {
     pub job: u32,
     #[serde(with = "hex32")]
@@ -203,6 +204,48 @@ pub struct JobRecord {
     pub shared_process: bool,
     /// Where it ran.
     pub host: String,
+    /// blake3 of the record's JSON with this field absent (issue 32 item 2: a record is
+    /// bound to its content; [`JobRecord::sealed_json`] writes it,
+    /// [`JobRecord::from_sealed_json`] checks it). Records written before the seal
+    /// read as `None` and are not trusted as done.
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        with = "hex32_option"
+    )]
+    pub seal: Option<[u8; 32]>,
+}
+
+impl JobRecord {
+    /// The record as written to `jobs/<id>.json`: pretty JSON with its seal.
+    pub fn sealed_json(&self) -> Vec<u8> {
+        let mut sealed = self.clone();
+        sealed.seal = Some(self.content_hash());
+        serde_json::to_vec_pretty(&sealed).expect("a job record serializes")
+    }
+
+    /// Reads a record written by [`JobRecord::sealed_json`]: unknown keys, a missing
+    /// seal or one that does not match the content (an edited field, a flipped bit
+    /// that still parses) are errors, each saying which.
+    pub fn from_sealed_json(text: &str) -> Result<JobRecord, String> {
+        let record: JobRecord = serde_json::from_str(text).map_err(|e| e.to_string())?;
+        match record.seal {
+            None => Err("the record has no seal (written before issue 32)".into()),
+            Some(seal) if seal != record.content_hash() => Err(format!(
+                "its seal {} does not match its content {}: the record was edited",
+                crate::fingerprint::to_hex(&seal),
+                crate::fingerprint::to_hex(&record.content_hash())
+            )),
+            Some(_) => Ok(record),
+        }
+    }
+
+    /// blake3 of the compact JSON of the record without its seal.
+    fn content_hash(&self) -> [u8; 32] {
+        let mut bare = self.clone();
+        bare.seal = None;
+        *blake3::hash(&serde_json::to_vec(&bare).expect("a job record serializes")).as_bytes()
+    }
 }
 
 /// `cells/<cell>.pack`, relative to the output directory.
@@ -237,5 +280,26 @@ pub mod hex32 {
         let text = String::deserialize(d)?;
         crate::fingerprint::from_hex(&text)
             .ok_or_else(|| serde::de::Error::custom("expected 64 hex digits"))
+    }
+}
+
+/// Serde for an optional 32-byte hash as 64 lowercase hex digits.
+pub mod hex32_option {
+    use serde::{Deserialize, Deserializer, Serializer};
+
+    pub fn serialize<S: Serializer>(v: &Option<[u8; 32]>, s: S) -> Result<S::Ok, S::Error> {
+        match v {
+            Some(v) => super::hex32::serialize(v, s),
+            None => s.serialize_none(),
+        }
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Option<[u8; 32]>, D::Error> {
+        let text = Option::<String>::deserialize(d)?;
+        text.map(|t| {
+            crate::fingerprint::from_hex(&t)
+                .ok_or_else(|| serde::de::Error::custom("expected 64 hex digits"))
+        })
+        .transpose()
     }
 }
