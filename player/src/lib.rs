@@ -50,6 +50,7 @@ pub use format::schema::frames::DrawOptions;
 
 pub mod bake;
 pub mod camera;
+pub mod clusterlod;
 pub mod cmd;
 pub mod frame;
 pub mod gpu;
