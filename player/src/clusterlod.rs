@@ -331,7 +331,7 @@ fn make_monotone(dag: &mut ClusterDag) {
             v.push(k);
         }
     }
-    for g in 0..dag.groups.len() {
+    for (g, members) in by_group.iter().enumerate() {
         let mut s = dag.groups[g].simplified;
         if !s.error.is_finite() || s.error >= TERMINAL_ERROR {
             s.error = TERMINAL_ERROR;
@@ -339,12 +339,12 @@ fn make_monotone(dag: &mut ClusterDag) {
         if !(s.radius.is_finite() && s.radius >= 0.0) {
             s.radius = 0.0;
         }
-        for &k in &by_group[g] {
+        for &k in members {
             let own = dag.own(&dag.clusters[k]);
             s.error = s.error.max(own.error);
             s.enclose(&own);
         }
-        if !(s.error > 0.0) {
+        if s.error.is_nan() || s.error <= 0.0 {
             s.error = (1e-6 * s.radius).max(f32::MIN_POSITIVE);
         }
         dag.groups[g].simplified = s;
