@@ -799,12 +799,12 @@ pub fn compare(
     })
 }
 
-/// Bytes of the bake's packs (`*.pack` in `out`), as on disk.
+/// Bytes of the bake's packs as on disk: every `*.pack` in `out` and in its
+/// `cells/` and `groups/` folders (base, index, cell and far-field group packs).
 pub fn pack_bytes(out: &Path) -> u64 {
-    std::fs::read_dir(out)
-        .into_iter()
-        .flatten()
-        .flatten()
+    [out.to_path_buf(), out.join("cells"), out.join("groups")]
+        .iter()
+        .flat_map(|d| std::fs::read_dir(d).into_iter().flatten().flatten())
         .filter(|e| e.path().extension().is_some_and(|x| x == "pack"))
         .filter_map(|e| e.metadata().ok())
         .filter(|m| m.is_file())
