@@ -207,6 +207,7 @@ impl ViewSession {
             frame_ms: ms,
             triangles: list.triangles,
             draw_calls: list.draw_calls,
+            clusters: list.clusters,
             cell: stats.cell,
             resident_packs: self.streamer.resident_cells().len(),
             resident_mib: self.streamer.resident_bytes() as f64 / (1 << 20) as f64,
