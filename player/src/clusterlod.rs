@@ -576,12 +576,15 @@ pub fn cluster_draws(
         let Some(sel) = set.select(inst.model, i as u32, camera, tau_px, cull, &mut scratch) else {
             continue;
         };
+        let Some(&instance) = bake.instances.get(i) else {
+            continue;
+        };
         if sel.ranges.is_empty() {
             continue;
         }
         draws.push(ClusterDraw {
             model: inst.model,
-            instance: bake.instances[i],
+            instance,
             ranges: sel.ranges,
             triangles: sel.triangles,
             clusters: sel.clusters,
@@ -626,7 +629,11 @@ fn load_or_build(mesh: &Mesh, cache_dir: Option<&Path>) -> (ClusterDag, bool) {
     }
     let dag = build_dag(mesh);
     if let Some(p) = &path {
-        let tmp = p.with_extension(format!("clod.tmp{}", std::process::id()));
+        // A name of its own per process and write (two models of the same content
+        // may be built at once on two threads).
+        static WRITES: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+        let n = WRITES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let tmp = p.with_extension(format!("clod.tmp{}-{n}", std::process::id()));
         let written =
             std::fs::write(&tmp, encode(&dag, hash)).and_then(|_| std::fs::rename(&tmp, p));
         if let Err(e) = written {

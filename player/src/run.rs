@@ -110,6 +110,9 @@ pub struct Player {
     pub clusters: Option<ClusterSet>,
     /// `--cluster-tau`: the projected error a drawn cluster may have, in pixels.
     pub cluster_tau: f32,
+    /// CPU time of the last cluster-LOD frame's cut and culling (building its draw
+    /// list), milliseconds.
+    pub last_cluster_cut_ms: f64,
     /// `compare --repeat`: times each configuration's frame is drawn; its frame time
     /// is the fastest (1: the one draw, with the uploads the frame submits).
     pub timing_repeats: u32,
@@ -137,6 +140,7 @@ impl Player {
             lod_pixel_error: crate::lod::DEFAULT_PIXEL_ERROR,
             clusters: None,
             cluster_tau: crate::clusterlod::DEFAULT_TAU_PX,
+            last_cluster_cut_ms: 0.0,
             timing_repeats: 1,
         }
     }
@@ -245,7 +249,9 @@ impl Player {
             (Mode::ClusterLod, _) => {
                 self.prepare_clusters();
                 let set = self.clusters.as_ref().expect("prepared");
+                let t0 = std::time::Instant::now();
                 let list = cluster_list(&self.bake, set, camera, self.cluster_tau);
+                self.last_cluster_cut_ms = t0.elapsed().as_secs_f64() * 1e3;
                 let stats_of_list = list_stats(&list, &self.models);
                 let ms =
                     self.renderer
@@ -636,7 +642,7 @@ pub fn compare(
     if opts.mode == Mode::ClusterLod {
         player.prepare_clusters();
     }
-    let mut clusters_drawn: Vec<f64> = Vec::new();
+    let (mut clusters_drawn, mut cut_ms): (Vec<f64>, Vec<f64>) = Default::default();
     let far = player.bake.extent;
     player.warm_up(&camera_for(&frames[0], path, size, far));
     // Alpha tells object pixels from sky in every frame compared (metrics.rs).
@@ -668,6 +674,7 @@ pub fn compare(
         let (ms, list, stats) = player.draw_listed(&cam, opts.mode, Some(&mut streamer));
         let hybrid = player.renderer.read_pixels()?;
         clusters_drawn.push(list.clusters as f64);
+        cut_ms.push(player.last_cluster_cut_ms);
         if let (true, Some(c)) = (stats.fallback, stats.cell) {
             fallback_cells.insert(c);
         }
@@ -789,6 +796,7 @@ pub fn compare(
                 pack_bytes: pack_bytes(out),
                 resident_bytes: player.cluster_resident_bytes(),
                 mean_clusters_drawn: mean(clusters_drawn.iter().copied()),
+                mean_cut_ms: mean(cut_ms.iter().copied()),
             }),
         draw_options: Some(options),
         crossing_prefetch: Some(crossing_stats(&hybrid_records)),

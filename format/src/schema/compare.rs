@@ -261,6 +261,9 @@ pub struct ClusterLodSummary {
     pub resident_bytes: u64,
     /// Mean clusters drawn per frame.
     pub mean_clusters_drawn: f64,
+    /// Mean CPU time of a frame's DAG cut and cluster culling, milliseconds (not
+    /// in the frame time, like every mode's draw-list building).
+    pub mean_cut_ms: f64,
 }
 
 /// The pop at one cell crossing (issue 31 item 1): the crossing frame's pose drawn
