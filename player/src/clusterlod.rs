@@ -468,6 +468,33 @@ impl ClusterSet {
         self.dags.iter().map(|d| d.clusters.len()).sum()
     }
 
+    /// The projected error (pixels) of every group of model `model`'s DAG seen as
+    /// instance `instance` from `camera`, into `out` (group order; infinite for a
+    /// terminal group). `None` for an unknown model or instance.
+    pub fn projected_errors(
+        &self,
+        model: u32,
+        instance: u32,
+        camera: &Camera,
+        out: &mut Vec<f32>,
+    ) -> Option<()> {
+        let dag = self.dags.get(model as usize)?;
+        let &(fwd, _, scale, _) = self.placement.get(instance as usize)?;
+        let ppr = crate::lod::pixels_per_radian(camera);
+        let near = camera.near.max(1e-6);
+        let project = |s: &ErrorSphere| -> f32 {
+            if s.error >= TERMINAL_ERROR {
+                return f32::INFINITY;
+            }
+            let c = fwd.transform_point3(Vec3::from(s.centre));
+            let d = ((c - camera.eye).length() - s.radius * scale).max(near);
+            s.error * scale / d * ppr
+        };
+        out.clear();
+        out.extend(dag.groups.iter().map(|g| project(&g.simplified)));
+        Some(())
+    }
+
     /// The DAG cut of model `model` seen as instance `instance` from `camera` at
     /// `tau_px`, with the cone and frustum tests of `cull` (`None`: no cluster
     /// culling). `scratch` holds the groups' projected errors between calls.
@@ -481,24 +508,13 @@ impl ClusterSet {
         scratch: &mut Vec<f32>,
     ) -> Option<Selection> {
         let dag = self.dags.get(model as usize)?;
-        let &(fwd, inv, scale, mirrored) = self.placement.get(instance as usize)?;
+        let &(fwd, inv, _, mirrored) = self.placement.get(instance as usize)?;
         let tau = if tau_px > 0.0 {
             tau_px.min(f32::MAX)
         } else {
             0.0
         };
-        let ppr = crate::lod::pixels_per_radian(camera);
-        let near = camera.near.max(1e-6);
-        let project = |s: &ErrorSphere| -> f32 {
-            if s.error >= TERMINAL_ERROR {
-                return f32::INFINITY;
-            }
-            let c = fwd.transform_point3(Vec3::from(s.centre));
-            let d = ((c - camera.eye).length() - s.radius * scale).max(near);
-            s.error * scale / d * ppr
-        };
-        scratch.clear();
-        scratch.extend(dag.groups.iter().map(|g| project(&g.simplified)));
+        self.projected_errors(model, instance, camera, scratch)?;
         let eye_obj = inv.transform_point3(camera.eye);
         let frustum: Option<Frustum> = cull
             .filter(|v| v.frustum_test)
