@@ -299,10 +299,10 @@ fn cluster_lod_walk_of_the_demo_scene_reports_its_figures() {
 /// cluster's own projected error is ≤ its parent group's (world spheres nested, so
 /// each region of the surface is drawn at exactly one level); a coarser τ never
 /// draws more; τ = 0 draws the original triangles; and at τ ≤ 1 px the drawn
-/// surface keeps the original's area within 15 % (a sanity bound: simplifying the
-/// demo's thin torus-knot tube to fewer sides legitimately loses up to ~9 %:
-/// the torus far away at 94 of 12,288 triangles; an
-/// overlap would double a region, a hole drop one).
+/// surface keeps the original's area within 15 % (a sanity bound: the demo's thin
+/// tubes lose area legitimately when simplified to fewer sides, 9 % for the far
+/// torus at 94 of its 12,288 triangles; an overlap would double a region, a hole
+/// drop one).
 #[test]
 fn every_cut_is_consistent() {
     let dir = tempfile::tempdir().unwrap();
