@@ -390,14 +390,16 @@ impl ClusterSet {
     pub fn build(base: &format::pack::BasePack, cache_dir: Option<&Path>) -> ClusterSet {
         let t0 = Instant::now();
         let meshes: Vec<&Mesh> = base.models.iter().map(|m| &m.mesh).collect();
-        if let Some(dir) = cache_dir {
-            if let Err(e) = std::fs::create_dir_all(dir) {
+        let cache_dir = cache_dir.filter(|dir| match std::fs::create_dir_all(dir) {
+            Ok(()) => true,
+            Err(e) => {
                 eprintln!(
                     "player: warning: cannot create {}: {e}; cluster DAGs not cached",
                     dir.display()
                 );
+                false
             }
-        }
+        });
         let threads = std::thread::available_parallelism()
             .map_or(1, |n| n.get())
             .clamp(1, meshes.len().max(1));

@@ -134,6 +134,12 @@ fn cache_is_written_read_back_and_a_bad_file_is_rebuilt() {
         assert!(again.built >= 1);
         assert_eq!(std::fs::read(&p).unwrap(), good, "rewritten");
     }
+    // A cache folder that cannot be made (a file is in its place): built, not
+    // cached, no panic.
+    let blocked = dir.path().join("base.pack");
+    let uncached = ClusterSet::build(&bake.base, Some(&blocked));
+    assert_eq!(uncached.dags, first.dags);
+    assert_eq!(uncached.cache_hits, 0);
 }
 
 #[test]
