@@ -360,6 +360,9 @@ pub struct ClusterSet {
     placement: Vec<(Mat4, Mat4, f32, bool)>,
     /// Per model: the radius of its original vertices' box (culling epsilon).
     radius: Vec<f32>,
+    /// Per model, per group: its clusters (indices into `clusters`, in order), so
+    /// that the cut skips a group whose own projected error is ≤ τ at once.
+    members: Vec<Vec<Vec<u32>>>,
     /// Wall time of [`ClusterSet::build`] (cache reads included), milliseconds.
     pub build_ms: f64,
     /// DAGs read from the cache / built (and written).
@@ -454,12 +457,25 @@ impl ClusterSet {
             })
             .collect();
         let bytes = dags.iter().map(ClusterDag::encoded_bytes).sum();
+        let members = dags
+            .iter()
+            .map(|d| {
+                let mut m = vec![Vec::new(); d.groups.len()];
+                for (k, c) in d.clusters.iter().enumerate() {
+                    if let Some(v) = m.get_mut(c.group as usize) {
+                        v.push(k as u32);
+                    }
+                }
+                m
+            })
+            .collect();
         ClusterSet {
             built: dags.len() - cache_hits,
             cache_hits,
             dags,
             placement,
             radius,
+            members,
             build_ms: t0.elapsed().as_secs_f64() * 1e3,
             bytes,
         }
@@ -524,16 +540,20 @@ impl ClusterSet {
         let backface = cull.is_some_and(|v| v.backface_test) && !mirrored;
         let eps = 1e-4 * self.radius.get(model as usize).copied().unwrap_or(0.0);
         let mut sel = Selection::default();
-        for c in &dag.clusters {
+        let members = self.members.get(model as usize)?;
+        // Group by group: a group whose error projects to ≤ τ draws none of its
+        // clusters (their parent test fails), the others test each cluster's own.
+        let candidates = members
+            .iter()
+            .zip(scratch.iter())
+            .filter(|(_, &parent)| parent > tau)
+            .flat_map(|(ks, _)| ks.iter().filter_map(|&k| dag.clusters.get(k as usize)));
+        for c in candidates {
             let own = match usize::try_from(c.refined) {
                 Ok(r) => scratch.get(r).copied().unwrap_or(f32::INFINITY),
                 Err(_) => 0.0,
             };
-            let parent = scratch
-                .get(c.group as usize)
-                .copied()
-                .unwrap_or(f32::INFINITY);
-            if !(own <= tau && parent > tau) {
+            if own > tau || own.is_nan() {
                 continue;
             }
             if (backface && patch_backfacing(&c.cone, eye_obj, eps))
