@@ -4,7 +4,9 @@
 //! view-frustum culling per instance and per proxy (`hybrid`, §3.2); and the
 //! distance-LOD baseline (`lod`, issue 8: every instance frustum-culled and drawn at
 //! the coarsest level of its model's meshoptimizer chain under a projected pixel
-//! error, [`crate::lod`]).
+//! error, [`crate::lod`]); and Nanite-style cluster LOD (`cluster-lod`, issue 30:
+//! every instance frustum-culled and drawn as the cut of its model's cluster DAG,
+//! [`crate::clusterlod`]).
 
 use crate::bake::Bake;
 use crate::camera::{Aabb, Camera, Frustum};
@@ -65,6 +67,22 @@ pub fn lod_list<'a>(
 ) -> DrawList<'a> {
     DrawList {
         levels: crate::lod::lod_groups(bake, set, camera, threshold_px),
+        ..Default::default()
+    }
+}
+
+/// The draw list of cluster LOD (issue 30): every instance frustum-culled and drawn
+/// as its model's DAG cut at `tau_px`, each selected cluster tested with the
+/// hybrid originals' per-tile cone and frustum tests (the bake's [`crate::DrawOptions`]).
+pub fn cluster_list<'a>(
+    bake: &Bake,
+    set: &crate::clusterlod::ClusterSet,
+    camera: &Camera,
+    tau_px: f32,
+) -> DrawList<'a> {
+    let cull = crate::patches::CullView::new(camera.eye, camera.frustum(), &bake.options);
+    DrawList {
+        clusters: crate::clusterlod::cluster_draws(bake, set, camera, tau_px, Some(&cull)),
         ..Default::default()
     }
 }
@@ -200,6 +218,8 @@ pub struct ListStats {
     /// Texture bytes of the proxies drawn.
     pub texture_bytes: u64,
     pub draw_calls: u64,
+    /// Clusters drawn (`cluster-lod`; 0 in the other modes).
+    pub clusters: u64,
 }
 
 /// Triangles, texture bytes and draw calls a draw list submits.
@@ -208,5 +228,6 @@ pub fn list_stats(list: &DrawList<'_>, models: &GpuModels) -> ListStats {
         triangles: list.triangle_count(models),
         texture_bytes: list.proxies.iter().map(|p| p.texture_bytes).sum(),
         draw_calls: list.draw_calls(models),
+        clusters: list.cluster_count(),
     }
 }

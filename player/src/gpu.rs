@@ -93,6 +93,9 @@ pub struct GpuModel {
     /// Simplified levels 1.. of the LOD baseline ([`Renderer::upload_lods`]); they
     /// index `vertices`.
     pub lods: Vec<GpuLod>,
+    /// The cluster DAG's index buffer of `cluster-lod` mode
+    /// ([`Renderer::upload_clusters`]); it indexes `vertices`.
+    pub clusters: Option<GpuClusters>,
     /// Bind group 2 of the lit pipeline: the model's albedo texture and sampler (its
     /// glTF wrap modes), or a white texel for an untextured model (issue 18).
     albedo: wgpu::BindGroup,
@@ -114,6 +117,16 @@ impl GpuModel {
             None => (&self.indices, self.index_count, self.triangle_count),
         }
     }
+}
+
+/// A model's cluster DAG on the GPU: every cluster's triangles in one index buffer,
+/// and its CPU copy, from which an instance's selected clusters are gathered into
+/// the frame's index buffer ([`crate::clusterlod`]).
+pub struct GpuClusters {
+    indices: wgpu::Buffer,
+    cpu_indices: Vec<u32>,
+    /// Bytes of the index buffer.
+    pub bytes: u64,
 }
 
 /// One simplified level of a model on the GPU (an index buffer only).
@@ -531,8 +544,8 @@ impl Renderer {
         1 + self.draw_originals(&mut pass, models, list, plan) + self.draw_proxies(&mut pass, plan)
     }
 
-    /// Instanced originals, then LOD levels, then patched originals (each its one
-    /// span), with the lit pipeline; instances in the plan's order. Returns the
+    /// Instanced originals, then LOD levels, then patched originals and cluster-LOD
+    /// instances (each its one span), with the lit pipeline; instances in the plan's order. Returns the
     /// draw calls.
     fn draw_originals(
         &self,
@@ -583,6 +596,26 @@ impl Renderer {
             pass.set_vertex_buffer(1, self.instances.slice(..));
             let (buffer, r) = match (span, frame_indices) {
                 (Span::Own(r), _) => (&model.indices, r),
+                (Span::Gathered(r), Some(b)) => (b, r),
+                (Span::Gathered(_), None) => continue,
+            };
+            pass.set_index_buffer(buffer.slice(..), wgpu::IndexFormat::Uint32);
+            pass.draw_indexed(r.clone(), 0, instance..instance + 1);
+            draws += 1;
+        }
+        // Cluster LOD: each instance's selected clusters, one draw.
+        let first = first + list.patched.len() as u32;
+        for (k, (c, span)) in list.clusters.iter().zip(&plan.clusters).enumerate() {
+            let instance = first + k as u32;
+            let model = &models.models[c.model as usize];
+            let (Some(span), Some(own)) = (span, model.clusters.as_ref()) else {
+                continue;
+            };
+            pass.set_bind_group(2, Some(&model.albedo), &[]);
+            pass.set_vertex_buffer(0, model.vertices.slice(..));
+            pass.set_vertex_buffer(1, self.instances.slice(..));
+            let (buffer, r) = match (span, frame_indices) {
+                (Span::Own(r), _) => (&own.indices, r),
                 (Span::Gathered(r), Some(b)) => (b, r),
                 (Span::Gathered(_), None) => continue,
             };

@@ -7,11 +7,12 @@
 //! 1. Plain data, no GPU type: [`vertex`] (GPU records), [`camera`] (camera, frustum,
 //!    boxes), [`grid`] (the current cell on `format::grid::HexGrid`: the player never
 //!    links the worker), [`metrics`] (PSNR/SSIM), [`mode`] (configurations A/B/C and
-//!    `lod`), [`representation`] (the debug colours), [`DrawOptions`] (the culling
+//!    `lod`, `cluster-lod`), [`representation`] (the debug colours), [`DrawOptions`] (the culling
 //!    switches, from `format`).
 //! 2. CPU algorithms: [`patches`] (per-tile patch and cluster culling, issue 17).
 //! 3. The bake in memory: [`bake`] (a bake directory → [`bake::PreparedCell`]),
-//!    [`lod`] (the distance-LOD baseline's chains, issue 8).
+//!    [`lod`] (the distance-LOD baseline's chains, issue 8), [`clusterlod`]
+//!    (cluster LOD's DAGs, their cache beside the bake and per-frame cut, issue 30).
 //! 4. The GPU: [`gpu`] (resources and submission; its `frame_model` turns a
 //!    [`gpu::DrawList`] into what one frame uploads and encodes).
 //! 5. Streaming: [`stream`] (current cell, prefetch thread, priority queue, upload
@@ -34,10 +35,10 @@
 //!   with weights inversely proportional to those angles.
 //!
 //! CLI: `player render <out> --path <path.ron> --frames DIR
-//! [--mode hybrid|full|frustum|lod] [--lod-pixel-error PX] [--png] [--no-prefetch]
-//! [--size WxH]`, `player compare <out> --path <path.ron> [--mode hybrid|lod] [--json]
+//! [--mode hybrid|full|frustum|lod|cluster-lod] [--lod-pixel-error PX] [--cluster-tau PX] [--png] [--no-prefetch]
+//! [--size WxH]`, `player compare <out> --path <path.ron> [--mode hybrid|lod|cluster-lod] [--json]
 //! [--worst DIR] [--worst-count N] [--no-crossings] [--reference-ss N] [--size WxH]`,
-//! `player view <out> [--mode hybrid|full|lod] [--lod-pixel-error PX] ...` (a window;
+//! `player view <out> [--mode hybrid|full|lod|cluster-lod] [--lod-pixel-error PX] ...` (a window;
 //! `--display-hz`, a path's display rate, is `render`'s and `compare`'s only),
 //! `player synth <out>` (a synthetic bake of `manifests/demo.ron`). `view`, `render`
 //! and `compare` also take the draw options ([`DrawOptions`]: `--no-patch-bitfields`,
@@ -50,6 +51,7 @@ pub use format::schema::frames::DrawOptions;
 
 pub mod bake;
 pub mod camera;
+pub mod clusterlod;
 pub mod cmd;
 pub mod frame;
 pub mod gpu;

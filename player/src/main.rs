@@ -138,6 +138,43 @@ mod tests {
         assert!(path_args(&["--display-hz", "30"]).is_ok());
     }
 
+    /// Issue 30: `--mode cluster-lod` and `--cluster-tau PX` (default 1, ≥ 0 and
+    /// finite) for render, compare and view.
+    #[test]
+    fn cluster_lod_mode_and_tau_parse() {
+        assert_eq!(stream_args(&[]).unwrap().cluster_tau, 1.0);
+        assert_eq!(
+            stream_args(&["--cluster-tau", "0"]).unwrap().cluster_tau,
+            0.0
+        );
+        assert_eq!(
+            stream_args(&["--cluster-tau", "2.5"]).unwrap().cluster_tau,
+            2.5
+        );
+        for bad in ["-1", "nan", "inf", "x"] {
+            assert!(
+                stream_args(&["--cluster-tau", bad]).is_err(),
+                "--cluster-tau {bad}"
+            );
+        }
+        let cli = Cli::try_parse_from([
+            "player",
+            "compare",
+            "out",
+            "--path",
+            "p.ron",
+            "--mode",
+            "cluster-lod",
+        ])
+        .unwrap();
+        let Command::Compare(a) = cli.command else {
+            panic!("a compare command")
+        };
+        assert_eq!(a.mode, player::frame::Mode::ClusterLod);
+        let e = "clusterlod".parse::<player::frame::Mode>().unwrap_err();
+        assert!(e.contains("cluster-lod"), "{e}");
+    }
+
     /// Issue 14: `view`'s angles carry their unit; the old flags name the new ones.
     #[cfg(feature = "view")]
     #[test]

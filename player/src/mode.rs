@@ -14,6 +14,10 @@ pub enum Mode {
     Hybrid,
     /// Baseline: originals, frustum-culled, at a distance-chosen level of detail.
     Lod,
+    /// Nanite-style cluster LOD (issue 30): every instance frustum-culled, drawn as
+    /// the cut of its model's cluster DAG at `--cluster-tau` pixels, each cluster
+    /// cone- and frustum-culled ([`crate::clusterlod`]).
+    ClusterLod,
 }
 
 impl Mode {
@@ -23,6 +27,7 @@ impl Mode {
             Mode::Frustum => "frustum",
             Mode::Hybrid => "hybrid",
             Mode::Lod => "lod",
+            Mode::ClusterLod => "cluster-lod",
         }
     }
 }
@@ -30,13 +35,19 @@ impl Mode {
 impl std::str::FromStr for Mode {
     type Err = String;
     fn from_str(s: &str) -> Result<Mode, String> {
-        let modes = [Mode::Full, Mode::Frustum, Mode::Hybrid, Mode::Lod];
+        let modes = [
+            Mode::Full,
+            Mode::Frustum,
+            Mode::Hybrid,
+            Mode::Lod,
+            Mode::ClusterLod,
+        ];
         parse_named("mode", s, modes.map(|m| (m.name(), m)))
     }
 }
 
 /// The value named `s` in `names`; else an error naming `what` and listing the names,
-/// e.g. `unknown mode "x" (full, frustum, hybrid, lod)`.
+/// e.g. `unknown mode "x" (full, frustum, hybrid, lod, cluster-lod)`.
 pub(crate) fn parse_named<T: Copy, const N: usize>(
     what: &str,
     s: &str,

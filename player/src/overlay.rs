@@ -22,6 +22,8 @@ pub struct OverlayInfo {
     pub frame_ms: f64,
     pub triangles: u64,
     pub draw_calls: u64,
+    /// Clusters drawn (`cluster-lod` mode; shown in that mode only).
+    pub clusters: u64,
     pub cell: Option<u32>,
     pub resident_packs: usize,
     pub resident_mib: f64,
@@ -52,10 +54,15 @@ pub fn overlay_lines(info: &OverlayInfo) -> Vec<String> {
             info.frame_ms
         ),
         format!(
-            "{} tris  {} draws  cell {}",
+            "{} tris  {} draws  cell {}{}",
             group_thousands(info.triangles),
             info.draw_calls,
-            info.cell.map_or("-".to_string(), |c| c.to_string())
+            info.cell.map_or("-".to_string(), |c| c.to_string()),
+            if info.mode == Mode::ClusterLod {
+                format!("  {} clusters", group_thousands(info.clusters))
+            } else {
+                String::new()
+            }
         ),
         format!(
             "packs {} ({:.1} MiB)",
@@ -244,6 +251,15 @@ mod tests {
             .count();
         assert_eq!(outside, 0);
         assert_eq!(overlay_lines(&info)[1], "1,234,567 tris  33 draws  cell 7");
+        let clusters = OverlayInfo {
+            mode: Mode::ClusterLod,
+            clusters: 1_500,
+            ..info
+        };
+        assert_eq!(
+            overlay_lines(&clusters)[1],
+            "1,234,567 tris  33 draws  cell 7  1,500 clusters"
+        );
     }
 
     #[test]

@@ -411,7 +411,7 @@ pub fn cluster_proxy_vertices(
 
 /// Normal cone, box centre and plane offset of a run of triangles, as the bake
 /// computes them for patches ([`PatchBounds::of_triangles`]), and the run's box.
-fn run_bounds(triangles: impl Iterator<Item = [Vec3; 3]>) -> (PatchBounds, Aabb) {
+pub(crate) fn run_bounds(triangles: impl Iterator<Item = [Vec3; 3]>) -> (PatchBounds, Aabb) {
     let mut aabb = Aabb::EMPTY;
     let corners: Vec<[glam::DVec3; 3]> = triangles
         .map(|t| {

@@ -3,7 +3,10 @@
 
 use crate::bake::Bake;
 use crate::camera::Camera;
-use crate::frame::{hybrid_list, list_stats, lod_list, originals_list, ListStats, Mode};
+use crate::clusterlod::ClusterSet;
+use crate::frame::{
+    cluster_list, hybrid_list, list_stats, lod_list, originals_list, ListStats, Mode,
+};
 use crate::gpu::{GpuError, GpuModels, Renderer};
 use crate::lod::LodSet;
 use crate::metrics::{
@@ -14,8 +17,8 @@ use format::path::{CameraPath, PathFrame};
 // The `--json` report: its schema lives in format (issue 14 item 2), read by the
 // benchmark tool.
 pub use format::schema::compare::{
-    AaFrame, AaQuality, AaReference, CompareFrame, CompareReport, CrossingPop, CrossingStats,
-    PopReport,
+    AaFrame, AaQuality, AaReference, ClusterLodSummary, CompareFrame, CompareReport, CrossingPop,
+    CrossingStats, PopReport,
 };
 // `frames.csv`: one row type, also read by the benchmark tool (issue 28).
 pub use format::schema::frames::{FrameRow, FRAMES_CSV_HEADER};
@@ -103,6 +106,13 @@ pub struct Player {
     pub lod: Option<LodSet>,
     /// `--lod-pixel-error`: the projected error a level may have, in pixels.
     pub lod_pixel_error: f32,
+    /// Cluster LOD's DAGs, read or built on first use ([`Player::prepare_clusters`]).
+    pub clusters: Option<ClusterSet>,
+    /// `--cluster-tau`: the projected error a drawn cluster may have, in pixels.
+    pub cluster_tau: f32,
+    /// CPU time of the last cluster-LOD frame's cut and culling (building its draw
+    /// list), milliseconds.
+    pub last_cluster_cut_ms: f64,
     /// `compare --repeat`: times each configuration's frame is drawn; its frame time
     /// is the fastest (1: the one draw, with the uploads the frame submits).
     pub timing_repeats: u32,
@@ -128,6 +138,9 @@ impl Player {
             models,
             lod: None,
             lod_pixel_error: crate::lod::DEFAULT_PIXEL_ERROR,
+            clusters: None,
+            cluster_tau: crate::clusterlod::DEFAULT_TAU_PX,
+            last_cluster_cut_ms: 0.0,
             timing_repeats: 1,
         }
     }
@@ -157,6 +170,39 @@ impl Player {
             self.lod = Some(set);
         }
         self.lod.as_ref().expect("built above")
+    }
+
+    /// Reads (from `<out>/clusterlod/`) or builds every model's cluster DAG once
+    /// (cached in memory and on disk beside the bake) and uploads their index
+    /// buffers; prints the time and the cache's use. Returns the DAGs.
+    pub fn prepare_clusters(&mut self) -> &ClusterSet {
+        if self.clusters.is_none() {
+            let dir = self.bake.dir.join(crate::clusterlod::CACHE_DIR);
+            let set = ClusterSet::build(&self.bake.base, Some(&dir));
+            self.renderer.upload_clusters(&mut self.models, &set);
+            eprintln!(
+                "player: cluster DAGs of {} models ready in {:.1} ms ({} from {}, {} built; {} clusters, {} bytes)",
+                set.dags.len(),
+                set.build_ms,
+                set.cache_hits,
+                dir.display(),
+                set.built,
+                set.cluster_count(),
+                set.bytes
+            );
+            self.clusters = Some(set);
+        }
+        self.clusters.as_ref().expect("built above")
+    }
+
+    /// Bytes of the cluster index buffers on the GPU.
+    pub fn cluster_resident_bytes(&self) -> u64 {
+        self.models
+            .models
+            .iter()
+            .filter_map(|m| m.clusters.as_ref())
+            .map(|c| c.bytes)
+            .sum()
     }
 
     /// Draws one frame of a configuration; `streamer` is needed for `Hybrid`.
@@ -194,6 +240,18 @@ impl Player {
                 self.prepare_lod();
                 let set = self.lod.as_ref().expect("prepared");
                 let list = lod_list(&self.bake, set, camera, self.lod_pixel_error);
+                let stats_of_list = list_stats(&list, &self.models);
+                let ms =
+                    self.renderer
+                        .render_fastest(self.timing_repeats, camera, &self.models, &list);
+                (ms, stats_of_list, self.cell_stats(camera))
+            }
+            (Mode::ClusterLod, _) => {
+                self.prepare_clusters();
+                let set = self.clusters.as_ref().expect("prepared");
+                let t0 = std::time::Instant::now();
+                let list = cluster_list(&self.bake, set, camera, self.cluster_tau);
+                self.last_cluster_cut_ms = t0.elapsed().as_secs_f64() * 1e3;
                 let stats_of_list = list_stats(&list, &self.models);
                 let ms =
                     self.renderer
@@ -242,6 +300,9 @@ impl Player {
         if self.lod.is_some() {
             self.draw(camera, Mode::Lod, None);
         }
+        if self.clusters.is_some() {
+            self.draw(camera, Mode::ClusterLod, None);
+        }
     }
 }
 
@@ -267,6 +328,8 @@ pub struct RenderOptions {
     pub size: Option<(u32, u32)>,
     /// `--lod-pixel-error` of `lod` mode.
     pub lod_pixel_error: f32,
+    /// `--cluster-tau` of `cluster-lod` mode.
+    pub cluster_tau: f32,
     /// The frame model's switches (`--no-backface`, `--tile-triangles`, ...).
     pub draw: crate::DrawOptions,
 }
@@ -287,8 +350,12 @@ pub fn render(
     eprintln!("player: adapter {}", player.renderer.adapter());
     std::fs::create_dir_all(&opts.frames_dir).map_err(|e| write_err(&opts.frames_dir, e))?;
     player.lod_pixel_error = opts.lod_pixel_error;
+    player.cluster_tau = opts.cluster_tau;
     if opts.mode == Mode::Lod {
         player.prepare_lod();
+    }
+    if opts.mode == Mode::ClusterLod {
+        player.prepare_clusters();
     }
     let far = player.bake.extent;
     player.warm_up(&camera_for(&frames[0], path, size, far));
@@ -406,6 +473,8 @@ pub struct CompareOptions {
     pub mode: Mode,
     /// `--lod-pixel-error` of `lod` mode.
     pub lod_pixel_error: f32,
+    /// `--cluster-tau` of `cluster-lod` mode.
+    pub cluster_tau: f32,
     /// `--reference-ss`: supersampling per axis of the anti-aliased reference;
     /// 1 (or 0) renders none.
     pub reference_ss: u32,
@@ -428,6 +497,7 @@ impl Default for CompareOptions {
             stream: StreamConfig::default(),
             mode: Mode::Hybrid,
             lod_pixel_error: crate::lod::DEFAULT_PIXEL_ERROR,
+            cluster_tau: crate::clusterlod::DEFAULT_TAU_PX,
             reference_ss: DEFAULT_REFERENCE_SS,
             repeat: 1,
             draw: crate::DrawOptions::default(),
@@ -568,6 +638,11 @@ pub fn compare(
     player.lod_pixel_error = opts.lod_pixel_error;
     player.timing_repeats = opts.repeat;
     let lod_build_ms = (opts.mode == Mode::Lod).then(|| player.prepare_lod().build_ms);
+    player.cluster_tau = opts.cluster_tau;
+    if opts.mode == Mode::ClusterLod {
+        player.prepare_clusters();
+    }
+    let (mut clusters_drawn, mut cut_ms): (Vec<f64>, Vec<f64>) = Default::default();
     let far = player.bake.extent;
     player.warm_up(&camera_for(&frames[0], path, size, far));
     // Alpha tells object pixels from sky in every frame compared (metrics.rs).
@@ -598,6 +673,8 @@ pub fn compare(
         let (fr_ms, _, _, _) = player.draw(&cam, Mode::Frustum, None);
         let (ms, list, stats) = player.draw_listed(&cam, opts.mode, Some(&mut streamer));
         let hybrid = player.renderer.read_pixels()?;
+        clusters_drawn.push(list.clusters as f64);
+        cut_ms.push(player.last_cluster_cut_ms);
         if let (true, Some(c)) = (stats.fallback, stats.cell) {
             fallback_cells.insert(c);
         }
@@ -705,6 +782,22 @@ pub fn compare(
         mode: opts.mode.name().to_string(),
         lod_pixel_error: (opts.mode == Mode::Lod).then_some(opts.lod_pixel_error),
         lod_build_ms,
+        cluster_lod: player
+            .clusters
+            .as_ref()
+            .filter(|_| opts.mode == Mode::ClusterLod)
+            .map(|set| ClusterLodSummary {
+                tau_px: opts.cluster_tau,
+                build_ms: set.build_ms,
+                cache_hits: set.cache_hits,
+                built: set.built,
+                clusters: set.cluster_count(),
+                cluster_bytes: set.bytes,
+                pack_bytes: pack_bytes(out),
+                resident_bytes: player.cluster_resident_bytes(),
+                mean_clusters_drawn: mean(clusters_drawn.iter().copied()),
+                mean_cut_ms: mean(cut_ms.iter().copied()),
+            }),
         draw_options: Some(options),
         crossing_prefetch: Some(crossing_stats(&hybrid_records)),
         crossing_no_prefetch,
@@ -712,6 +805,19 @@ pub fn compare(
         fallback_cells: fallback_cells.into_iter().collect(),
         per_frame,
     })
+}
+
+/// Bytes of the bake's packs as on disk: every `*.pack` in `out` and in its
+/// `cells/` and `groups/` folders (base, index, cell and far-field group packs).
+pub fn pack_bytes(out: &Path) -> u64 {
+    [out.to_path_buf(), out.join("cells"), out.join("groups")]
+        .iter()
+        .flat_map(|d| std::fs::read_dir(d).into_iter().flatten().flatten())
+        .filter(|e| e.path().extension().is_some_and(|x| x == "pack"))
+        .filter_map(|e| e.metadata().ok())
+        .filter(|m| m.is_file())
+        .map(|m| m.len())
+        .sum()
 }
 
 /// Step 3 of [`compare`]: the hybrid walked again with the prefetch thread off, for

@@ -44,6 +44,8 @@ pub struct ViewOptions {
     pub mode: Mode,
     /// The pixel error of `lod` mode (`--lod-pixel-error`).
     pub lod_pixel_error: f32,
+    /// τ of `cluster-lod` mode (`--cluster-tau`).
+    pub cluster_tau: f32,
     /// Start with the representation colouring on.
     pub colours: bool,
     /// Start with the overlay shown.
@@ -68,6 +70,7 @@ impl ViewOptions {
             pitch_deg: 0.0,
             mode: Mode::Hybrid,
             lod_pixel_error: crate::lod::DEFAULT_PIXEL_ERROR,
+            cluster_tau: crate::clusterlod::DEFAULT_TAU_PX,
             colours: false,
             overlay: true,
             exit_after: None,
@@ -104,6 +107,7 @@ impl ViewSession {
         ));
         player.renderer.set_representation_colours(opts.colours);
         player.lod_pixel_error = opts.lod_pixel_error;
+        player.cluster_tau = opts.cluster_tau;
         let mut session = ViewSession {
             player,
             streamer,
@@ -152,12 +156,13 @@ impl ViewSession {
         }
     }
 
-    /// The M key: hybrid → full → LOD baseline → hybrid, same pose.
+    /// The M key: hybrid → full → LOD baseline → cluster LOD → hybrid, same pose.
     pub fn cycle_mode(&mut self) {
         self.mode = match self.mode {
             Mode::Hybrid => Mode::Full,
             Mode::Full | Mode::Frustum => Mode::Lod,
-            Mode::Lod => Mode::Hybrid,
+            Mode::Lod => Mode::ClusterLod,
+            Mode::ClusterLod => Mode::Hybrid,
         };
     }
 
@@ -202,6 +207,7 @@ impl ViewSession {
             frame_ms: ms,
             triangles: list.triangles,
             draw_calls: list.draw_calls,
+            clusters: list.clusters,
             cell: stats.cell,
             resident_packs: self.streamer.resident_cells().len(),
             resident_mib: self.streamer.resident_bytes() as f64 / (1 << 20) as f64,

@@ -87,6 +87,23 @@ fn view_frame_shows_the_overlay_and_every_drawn_representation_in_its_colour() {
     assert_ne!(hybrid, full);
     s.cycle_mode();
     assert_eq!(s.mode, Mode::Lod);
+    // Cluster LOD (issue 30): originals and simplified clusters (the LOD colour),
+    // no proxy.
+    s.cycle_mode();
+    assert_eq!(s.mode, Mode::ClusterLod);
+    let clod = s.frame().unwrap().0;
+    let c = Representation::count_pixels(&clod);
+    assert!(
+        c[Representation::Original as usize] + c[Representation::LodLevel as usize] > 50,
+        "{c:?}"
+    );
+    for r in [
+        Representation::SvMesh,
+        Representation::MvMesh,
+        Representation::Cluster,
+    ] {
+        assert_eq!(c[r as usize], 0, "{r:?} in cluster-lod mode: {c:?}");
+    }
     s.cycle_mode();
     assert_eq!(s.mode, Mode::Hybrid);
 

@@ -235,6 +235,7 @@ fn render_hybrid(
         stream,
         size,
         lod_pixel_error: 1.0,
+        cluster_tau: player::clusterlod::DEFAULT_TAU_PX,
         draw: DrawOptions::default(),
     };
     render(dir, path, &opts).unwrap().0

@@ -217,6 +217,10 @@ pub struct CompareReport {
     pub lod_pixel_error: Option<f32>,
     /// Wall time of building the LOD chains (`lod` mode only), milliseconds.
     pub lod_build_ms: Option<f64>,
+    /// Cluster LOD's figures (`cluster-lod` mode only, issue 30): its τ, the DAGs'
+    /// build and bytes beside the packs' bytes, clusters drawn per frame.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cluster_lod: Option<ClusterLodSummary>,
     /// What every configuration's frames were drawn with (the player's flags; issue
     /// 28). `None` in reports of older players, which did not record it.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -234,6 +238,32 @@ pub struct CompareReport {
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub fallback_cells: Vec<u32>,
     pub per_frame: Vec<CompareFrame>,
+}
+
+/// What `player compare --mode cluster-lod` adds to its report (issue 30 item 1).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct ClusterLodSummary {
+    /// `--cluster-tau`: the projected error a drawn cluster may have, pixels.
+    pub tau_px: f32,
+    /// Wall time of reading or building every model's cluster DAG, milliseconds.
+    pub build_ms: f64,
+    /// Models whose DAG came from the cache beside the bake / was built.
+    pub cache_hits: usize,
+    pub built: usize,
+    /// Clusters over all DAGs (every level).
+    pub clusters: usize,
+    /// Bytes of the DAGs on disk (`<out>/clusterlod/*.clod`), and of the bake's
+    /// packs (`*.pack`) beside them.
+    pub cluster_bytes: u64,
+    pub pack_bytes: u64,
+    /// Bytes of the DAGs' index buffers resident on the GPU.
+    pub resident_bytes: u64,
+    /// Mean clusters drawn per frame.
+    pub mean_clusters_drawn: f64,
+    /// Mean CPU time of a frame's DAG cut and cluster culling, milliseconds (not
+    /// in the frame time, like every mode's draw-list building).
+    pub mean_cut_ms: f64,
 }
 
 /// The pop at one cell crossing (issue 31 item 1): the crossing frame's pose drawn

@@ -34,6 +34,19 @@ pub struct StreamArgs {
     /// below which an instance may use a coarser level of its model's LOD chain.
     #[arg(long, default_value_t = crate::lod::DEFAULT_PIXEL_ERROR)]
     pub lod_pixel_error: f32,
+    /// `cluster-lod` mode: τ, the projected error in pixels a drawn cluster may
+    /// have (a cluster is drawn when its own error is ≤ τ and its parent group's
+    /// > τ); 0 draws exactly the original triangles.
+    #[arg(long, default_value_t = crate::clusterlod::DEFAULT_TAU_PX, value_parser = parse_tau)]
+    pub cluster_tau: f32,
+}
+
+/// `--cluster-tau`: a finite number of pixels ≥ 0.
+fn parse_tau(s: &str) -> Result<f32, String> {
+    match s.parse::<f32>() {
+        Ok(x) if x.is_finite() && x >= 0.0 => Ok(x),
+        _ => Err(format!("{s:?} is not a finite number of pixels >= 0")),
+    }
 }
 
 /// The frame model's switches ([`crate::DrawOptions`]; issue 28): every default is

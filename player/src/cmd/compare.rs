@@ -16,7 +16,8 @@ pub struct CompareArgs {
     pub out: PathBuf,
     #[arg(long)]
     pub path: PathBuf,
-    /// What to compare with the full-geometry reference: hybrid or lod.
+    /// What to compare with the full-geometry reference: hybrid, lod or
+    /// cluster-lod (full and frustum work too).
     #[arg(long, default_value = "hybrid")]
     pub mode: Mode,
     /// Print the report as JSON on stdout.
@@ -70,6 +71,7 @@ pub fn compare(args: CompareArgs) -> Result<(), RunError> {
             stream: args.walk.path_config(&path),
             mode: args.mode,
             lod_pixel_error: args.walk.stream.lod_pixel_error,
+            cluster_tau: args.walk.stream.cluster_tau,
             reference_ss: args.reference_ss,
             repeat: args.repeat,
             draw: args.draw.options(),

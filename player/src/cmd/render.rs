@@ -47,6 +47,7 @@ pub fn render(args: RenderArgs) -> Result<(), RunError> {
         stream: walk.path_config(&path),
         size: walk.stream.size,
         lod_pixel_error: walk.stream.lod_pixel_error,
+        cluster_tau: walk.stream.cluster_tau,
         draw: draw.options(),
     };
     let (records, _) = crate::run::render(&out, &path, &opts)?;

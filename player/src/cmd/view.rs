@@ -31,7 +31,8 @@ pub struct ViewArgs {
     pub yaw_renamed: Option<f32>,
     #[arg(long = "pitch", hide = true, allow_hyphen_values = true, value_parser = renamed_pitch)]
     pub pitch_renamed: Option<f32>,
-    /// Start mode (M flips hybrid → full → lod): hybrid, full or lod.
+    /// Start mode (M flips hybrid → full → lod → cluster-lod): hybrid, full, lod or
+    /// cluster-lod.
     #[arg(long, default_value = "hybrid")]
     pub mode: Mode,
     /// Start with the colouring by representation on (C flips it).
@@ -73,6 +74,7 @@ pub fn view(args: ViewArgs) -> Result<(), RunError> {
         size: stream.size.unwrap_or((1024, 768)),
         stream: stream.config(),
         lod_pixel_error: stream.lod_pixel_error,
+        cluster_tau: stream.cluster_tau,
         start,
         yaw_deg,
         pitch_deg,

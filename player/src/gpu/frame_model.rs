@@ -10,6 +10,7 @@
 //! with. `Renderer::render` (the parent module) uploads the plan and encodes it.
 
 use super::{GpuModels, GpuProxy};
+use crate::clusterlod::ClusterDraw;
 use crate::patches::PatchedDraw;
 use crate::representation::Representation;
 use crate::vertex::InstanceRaw;
@@ -28,6 +29,9 @@ pub struct DrawList<'a> {
     pub lit_proxies: Vec<&'a GpuProxy>,
     /// Originals drawn patch by patch (issue 17, [`crate::patches`]).
     pub patched: Vec<PatchedDraw>,
+    /// Instances drawn as their cluster DAG's cut (`cluster-lod`,
+    /// [`crate::clusterlod`]): ranges of the model's cluster index buffer.
+    pub clusters: Vec<ClusterDraw>,
     /// The view the proxies' clusters are tested against (issue 17); `None` draws
     /// every proxy triangle.
     pub cull: Option<crate::patches::CullView>,
@@ -100,7 +104,23 @@ impl DrawList<'_> {
                             .is_some_and(|g| g.patch_ordered)
                 })
                 .count() as u64
+            + self
+                .clusters
+                .iter()
+                .filter(|c| {
+                    !c.ranges.is_empty()
+                        && models
+                            .models
+                            .get(c.model as usize)
+                            .is_some_and(|g| g.clusters.is_some())
+                })
+                .count() as u64
             + proxies
+    }
+
+    /// Clusters the list draws (`cluster-lod`).
+    pub fn cluster_count(&self) -> u64 {
+        self.clusters.iter().map(|c| c.clusters as u64).sum()
     }
 
     pub fn triangle_count(&self, models: &GpuModels) -> u64 {
@@ -116,6 +136,7 @@ impl DrawList<'_> {
             .sum();
         o + l
             + self.patched.iter().map(|p| p.triangles).sum::<u64>()
+            + self.clusters.iter().map(|c| c.triangles).sum::<u64>()
             + self
                 .proxy_ranges()
                 .iter()
@@ -147,6 +168,9 @@ pub(super) struct FramePlan<'a> {
     /// Per patched original of the list, in list order: how it is drawn (`None`:
     /// nothing visible, or its model is not patch-ordered).
     pub patched: Vec<Option<Span>>,
+    /// Per cluster-LOD instance of the list, in list order: how it is drawn (`None`:
+    /// nothing selected, or its model has no clusters on the GPU).
+    pub clusters: Vec<Option<Span>>,
     /// The ready proxies nearest first, then the lit ones nearest first; proxies
     /// with nothing to draw are left out.
     pub proxies: Vec<ProxyDraw<'a>>,
@@ -179,6 +203,14 @@ impl<'a> FramePlan<'a> {
                     .iter()
                     .map(|p| recolour(p.instance, Representation::Original)),
             )
+            .chain(list.clusters.iter().map(|c| {
+                let r = if c.simplified {
+                    Representation::LodLevel
+                } else {
+                    Representation::Original
+                };
+                recolour(c.instance, r)
+            }))
             .collect();
         let ground_instance = instances.len() as u32;
         instances.push(InstanceRaw::new(Mat4::IDENTITY, Vec3::ONE));
@@ -193,6 +225,14 @@ impl<'a> FramePlan<'a> {
                 model
                     .patch_ordered
                     .then(|| gathered.span(&p.ranges, Some(&model.cpu_indices)))?
+            })
+            .collect();
+        let clusters: Vec<Option<Span>> = list
+            .clusters
+            .iter()
+            .map(|c| {
+                let own = models.models.get(c.model as usize)?.clusters.as_ref()?;
+                gathered.span(&c.ranges, Some(&own.cpu_indices))
             })
             .collect();
         let ranges = list.proxy_ranges();
@@ -210,6 +250,7 @@ impl<'a> FramePlan<'a> {
             ground_instance,
             indices: gathered.indices,
             patched,
+            clusters,
             proxies,
         }
     }

@@ -6,7 +6,7 @@
 //! all its views are there.
 
 use super::setup::{self, albedo_bind_group};
-use super::{texture_2d, GpuLod, GpuModel, GpuModels, GpuProxy, Renderer, MAX_VIEWS};
+use super::{texture_2d, GpuClusters, GpuLod, GpuModel, GpuModels, GpuProxy, Renderer, MAX_VIEWS};
 use crate::vertex::{ModelVertex, ProxyUniform, ProxyVertex};
 use bytemuck::Zeroable;
 use format::pack::{BasePack, Texture, TextureEncoding};
@@ -97,6 +97,7 @@ impl Renderer {
             index_count,
             triangle_count: mesh.triangles.len() as u64,
             lods: Vec::new(),
+            clusters: None,
             albedo,
             patch_ordered: order.is_some(),
             cpu_indices: if order.is_some() { idx } else { Vec::new() },
@@ -159,6 +160,23 @@ impl Renderer {
                     triangle_count: level.triangle_count(),
                 })
                 .collect();
+        }
+    }
+
+    /// Uploads each model's cluster DAG (`cluster-lod` mode) as one index buffer over
+    /// the model's vertex buffer, keeping a CPU copy for gathering; replaces earlier
+    /// ones. A model without clusters keeps none (nothing drawn in that mode).
+    pub fn upload_clusters(&self, models: &mut GpuModels, set: &crate::clusterlod::ClusterSet) {
+        for (model, dag) in models.models.iter_mut().zip(&set.dags) {
+            model.clusters = (!dag.indices.is_empty()).then(|| GpuClusters {
+                indices: self.buffer_init(
+                    "cluster indices",
+                    bytemuck::cast_slice(&dag.indices),
+                    wgpu::BufferUsages::INDEX,
+                ),
+                cpu_indices: dag.indices.clone(),
+                bytes: 4 * dag.indices.len() as u64,
+            });
         }
     }
 
