@@ -183,3 +183,38 @@ fn slurm_submission_round_trips() {
     assert_eq!(s.finalize_job, "4712");
     assert_eq!(s.jobs, [0, 3, 5]);
 }
+
+/// Issue 32 item 2: a job record is bound to its content. Sealed, it reads back;
+/// an edited field, an unknown key or a missing seal is refused, saying which.
+#[test]
+fn job_records_are_sealed() {
+    let r: JobRecord =
+        serde_json::from_slice(&std::fs::read(data("job-record.json")).unwrap()).unwrap();
+    let sealed = String::from_utf8(r.sealed_json()).unwrap();
+    let read = JobRecord::from_sealed_json(&sealed).unwrap();
+    assert_eq!(
+        JobRecord {
+            seal: None,
+            ..read.clone()
+        },
+        JobRecord {
+            seal: None,
+            ..r.clone()
+        }
+    );
+    assert!(read.seal.is_some());
+
+    let host = format!("\"host\": {}", serde_json::to_string(&r.host).unwrap());
+    assert!(sealed.contains(&host), "{sealed}");
+    let edited = sealed.replace(&host, "\"host\": \"elsewhere\"");
+    let e = JobRecord::from_sealed_json(&edited).unwrap_err();
+    assert!(e.contains("does not match its content"), "{e}");
+
+    let unknown = sealed.replacen('{', "{\n  \"extra\": 1,", 1);
+    let e = JobRecord::from_sealed_json(&unknown).unwrap_err();
+    assert!(e.contains("unknown field `extra`"), "{e}");
+
+    let unsealed = String::from_utf8(serde_json::to_vec_pretty(&r).unwrap()).unwrap();
+    let e = JobRecord::from_sealed_json(&unsealed).unwrap_err();
+    assert!(e.contains("no seal"), "{e}");
+}
