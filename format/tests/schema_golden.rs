@@ -188,8 +188,15 @@ fn slurm_submission_round_trips() {
 /// an edited field, an unknown key or a missing seal is refused, saying which.
 #[test]
 fn job_records_are_sealed() {
-    let r: JobRecord =
+    let mut r: JobRecord =
         serde_json::from_slice(&std::fs::read(data("job-record.json")).unwrap()).unwrap();
+    // Times as a bake measures them: floats whose shortest text must read back to the
+    // same bits (serde_json's `float_roundtrip`), or the seal would not match.
+    r.wall_s = 0.1 + 0.2;
+    r.cpu_s = std::f64::consts::PI / 7.0;
+    for (k, c) in r.cells.iter_mut().enumerate() {
+        c.report.stage_ms.capture = 1.0 / (3.0 + k as f64);
+    }
     let sealed = String::from_utf8(r.sealed_json()).unwrap();
     let read = JobRecord::from_sealed_json(&sealed).unwrap();
     assert_eq!(
