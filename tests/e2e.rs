@@ -323,6 +323,24 @@ fn moving_one_instance_rebakes_only_its_proxies_identically() {
         serde_json::from_slice(&std::fs::read(inc.join("report.json")).unwrap()).unwrap();
     assert_eq!(report["proxies_reused"], reused, "{report}");
     assert_eq!(report["proxies"], all, "{report}");
+    // Issue 32 item 2: reused proxies carry their measurements and texture bytes, so
+    // every cell line equals the clean bake's but for times.
+    let fresh_report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(fresh.join("report.json")).unwrap()).unwrap();
+    let lines = |r: &serde_json::Value| -> Vec<serde_json::Value> {
+        let mut lines = r["cell_lines"].as_array().unwrap().clone();
+        for l in &mut lines {
+            let l = l.as_object_mut().unwrap();
+            l.remove("bake_ms");
+            l.remove("stage_ms");
+        }
+        lines
+    };
+    assert_eq!(lines(&report), lines(&fresh_report));
+    assert_eq!(report["worst_cells"], fresh_report["worst_cells"]);
+    assert!(lines(&report)
+        .iter()
+        .any(|l| l["measured_proxies"].as_f64() > Some(0.0)));
     // Per cell at most the moved object's proxy and a cluster it left change;
     // some cells' proxies of it changed, so not everything is reused.
     assert!(reused > 0 && reused < all, "{reused} of {all}");

@@ -269,6 +269,7 @@ fn derive_job(
                     packed: None,
                     impostor: None,
                     quality: None,
+                    reused_texture_bytes: None,
                 },
                 sv.times,
             ))
@@ -294,6 +295,7 @@ fn derive_job(
                     packed: None,
                     impostor: None,
                     quality: None,
+                    reused_texture_bytes: None,
                 },
                 mv.times,
             ))

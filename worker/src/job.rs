@@ -326,7 +326,18 @@ pub fn previous_proxies(out: &Path, job: &Job) -> std::collections::BTreeMap<Uni
         if pack.cell_id != c.cell || keys.len() != pack.proxies.len() {
             continue;
         }
-        reuse.insert(unit, keys.into_iter().zip(pack.proxies).collect());
+        // What the earlier bake measured of each proxy, where the record has it.
+        let facts = &c.report.proxy_facts;
+        let facts = (facts.len() == keys.len()).then_some(facts);
+        let reused = keys
+            .into_iter()
+            .zip(pack.proxies)
+            .enumerate()
+            .map(|(i, (key, proxy))| {
+                let facts = facts.map(|f| f[i].clone());
+                (key, crate::proxy::Reused { proxy, facts })
+            });
+        reuse.insert(unit, reused.collect());
     }
     reuse
 }
@@ -396,6 +407,7 @@ pub fn bake_cell_pack(
             .iter()
             .map(|p| format::fingerprint::to_hex(&p.key))
             .collect(),
+        proxy_facts: bake.proxies.iter().map(|p| p.facts()).collect(),
         quality: CellQualityReport {
             error_histogram: s.quality.error_histogram,
             measured_proxies: s.quality.measured,

@@ -7,6 +7,7 @@ use crate::impostor::LayeredImpostor;
 use crate::raster::ProjectedTexture;
 use crate::select::Measured;
 use format::pack::{Proxy, ProxyKind};
+use format::schema::job::ProxyFacts;
 use format::Scene;
 use glam::Vec3;
 use std::collections::BTreeMap;
@@ -44,6 +45,9 @@ pub struct BakedProxy {
     /// The objective selection's measurement of the kept candidate
     /// ([`crate::select`]), where one was measured.
     pub quality: Option<Measured>,
+    /// A reused proxy: its earlier bake's texture bytes as derived (what
+    /// [`BakedProxy::texture_bytes`] counts for it), where the record had them.
+    pub reused_texture_bytes: Option<u64>,
 }
 
 impl BakedProxy {
@@ -71,6 +75,7 @@ impl BakedProxy {
             packed: None,
             impostor: Some(imp),
             quality,
+            reused_texture_bytes: None,
         }
     }
 
@@ -97,6 +102,9 @@ impl BakedProxy {
 
     /// Decoded RGBA8 bytes of the proxy's textures.
     pub fn texture_bytes(&self) -> u64 {
+        if let Some(bytes) = self.reused_texture_bytes {
+            return bytes;
+        }
         match &self.packed {
             Some(p) => p
                 .views
@@ -107,8 +115,9 @@ impl BakedProxy {
         }
     }
 
-    /// A proxy of an earlier bake whose key matches.
-    pub(crate) fn reused(packed: &Proxy, key: ProxyKey) -> BakedProxy {
+    /// A proxy of an earlier bake whose key matches, with that bake's measurement.
+    pub(crate) fn reused(earlier: &Reused, key: ProxyKey) -> BakedProxy {
+        let packed = &earlier.proxy;
         BakedProxy {
             kind: packed.kind,
             members: packed
@@ -126,7 +135,20 @@ impl BakedProxy {
             key,
             packed: Some(packed.clone()),
             impostor: None,
-            quality: None,
+            quality: earlier
+                .facts
+                .as_ref()
+                .and_then(|f| f.quality.as_ref())
+                .map(Measured::from_report),
+            reused_texture_bytes: earlier.facts.as_ref().map(|f| f.texture_bytes),
+        }
+    }
+
+    /// What its bake measured and counted, for the job record.
+    pub fn facts(&self) -> ProxyFacts {
+        ProxyFacts {
+            texture_bytes: self.texture_bytes(),
+            quality: self.quality.as_ref().map(Measured::to_report),
         }
     }
 }
@@ -136,7 +158,15 @@ pub type ProxyKey = [u8; 32];
 
 /// Proxies of an earlier bake of a cell, by key: a proxy whose key is here is taken
 /// as it is instead of derived again.
-pub type ProxyReuse = BTreeMap<ProxyKey, Proxy>;
+pub type ProxyReuse = BTreeMap<ProxyKey, Reused>;
+
+/// A proxy of an earlier bake: its pack form and what that bake measured and counted
+/// of it (`None` for records written before issue 32).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Reused {
+    pub proxy: Proxy,
+    pub facts: Option<ProxyFacts>,
+}
 
 /// The key of a proxy: blake3 of exactly what its derivation reads — the bake and
 /// cell parameters with the format version and bake revision

@@ -164,6 +164,32 @@ pub struct Measured {
 }
 
 impl Measured {
+    /// The job record's form ([`format::schema::job::ProxyQuality`]).
+    pub fn to_report(&self) -> format::schema::job::ProxyQuality {
+        format::schema::job::ProxyQuality {
+            worst_psnr_db: self.worst_psnr_db,
+            worst_ssim: self.worst_ssim,
+            pooled_psnr_db: self.pooled_psnr_db,
+            mean_ssim: self.mean_ssim,
+            views: self.views,
+            passed: self.passed,
+            error_histogram: self.error_histogram,
+        }
+    }
+
+    /// Back from the job record's form.
+    pub fn from_report(q: &format::schema::job::ProxyQuality) -> Measured {
+        Measured {
+            worst_psnr_db: q.worst_psnr_db,
+            worst_ssim: q.worst_ssim,
+            pooled_psnr_db: q.pooled_psnr_db,
+            mean_ssim: q.mean_ssim,
+            views: q.views,
+            passed: q.passed,
+            error_histogram: q.error_histogram,
+        }
+    }
+
     /// Before any view: capped PSNR, SSIM 1, passed.
     fn unmeasured() -> Measured {
         Measured {

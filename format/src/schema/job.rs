@@ -106,6 +106,12 @@ pub struct CellReport {
     /// Per proxy, in pack order: its content key (64 hex digits), read back when the
     /// job is baked again to reuse unchanged proxies.
     pub proxy_keys: Vec<String>,
+    /// Per proxy, in pack order: what its bake measured and counted (issue 32 item 2),
+    /// carried over to the report of a rebake that reuses the proxy by key, so an
+    /// incremental bake's report equals a clean bake's. Empty in records written
+    /// before it (a reused proxy then counts as unmeasured).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub proxy_facts: Vec<ProxyFacts>,
     pub quality: CellQualityReport,
     /// Proxies taken from the job's earlier bake by key instead of derived.
     pub reused_proxies: u32,
@@ -177,6 +183,30 @@ pub struct CellRecord {
     #[serde(with = "hex32")]
     pub checksum: [u8; 32],
     pub report: CellReport,
+}
+
+/// What one proxy's bake measured and counted ([`CellReport::proxy_facts`]).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct ProxyFacts {
+    /// Decoded RGBA8 bytes of its captures as derived (the report's `texture_bytes`).
+    pub texture_bytes: u64,
+    /// The quality check's measurement of the proxy, where one was made.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub quality: Option<ProxyQuality>,
+}
+
+/// One proxy's measurement by the quality check (worker `select::Measured`).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct ProxyQuality {
+    pub worst_psnr_db: f64,
+    pub worst_ssim: f64,
+    pub pooled_psnr_db: f64,
+    pub mean_ssim: f64,
+    pub views: u32,
+    pub passed: bool,
+    pub error_histogram: [u64; 8],
 }
 
 /// `jobs/<id>.json`. Unknown keys are refused: a record says exactly what it says.
