@@ -239,7 +239,7 @@ pub fn markdown(m: &MultiCompare, walk: &str) -> String {
             };
             let _ = writeln!(
                 s,
-                "- {} reaches the hybrid's object PSNR ({:.2} dB) at: {what} ({} sweep points).",
+                "- {} reaches the hybrid's object PSNR ({:.2} dB) at: {what} (sweep of {}).",
                 reach.mode, reach.target_object_psnr_y_db, reach.sweep_points
             );
         }
