@@ -181,7 +181,7 @@ pub fn markdown(m: &MultiCompare, walk: &str) -> String {
     let against = m.rows.first().map_or("full", |r| r.against.as_str());
     let _ = writeln!(
         s,
-        "Walk `{walk}`: {} frames at {}×{}, adapter {}; object pixels against the {} reference.\n",
+        "Walk `{walk}`: {} frames at {}×{}, adapter {}; object pixels against the {} reference; frustum-culled originals {:.2} ms per frame.\n",
         m.frames,
         m.width,
         m.height,
@@ -190,7 +190,8 @@ pub fn markdown(m: &MultiCompare, walk: &str) -> String {
             "one-sample full-geometry".to_string()
         } else {
             format!("{against} supersampled")
-        }
+        },
+        m.rows.first().map_or(f64::NAN, |r| r.frustum_frame_ms)
     );
     s.push_str("| mode | triangles/frame | draw calls/frame | object PSNR(Y) dB | object SSIM | disk MiB | resident MiB | frame ms | tris vs hybrid | ΔPSNR dB vs hybrid | ΔSSIM vs hybrid | disk vs hybrid | resident vs hybrid | frame time vs hybrid |\n");
     s.push_str("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
