@@ -68,6 +68,11 @@ pub struct Bake {
     /// Patch data for drawing originals patch by patch (issue 17); `None` without
     /// it or with every test of [`Bake::options`] switched off.
     pub patches: Option<crate::patches::PatchRuntime>,
+    /// The same tiles with only the exact tests of [`Bake::options`] (per-tile
+    /// normal cone and frustum, no patch bitfields): the culling `frustum` mode's
+    /// originals get (issue 30 item 2, fair culling); `None` without patch data or
+    /// with both tests off.
+    pub exact_patches: Option<crate::patches::PatchRuntime>,
     /// Per model, its triangles in tile order (`patches::refine_patches`) when the
     /// base pack has patch data: the order every mode uploads them in.
     pub draw_order: Option<Vec<Vec<u32>>>,
@@ -152,10 +157,16 @@ impl Bake {
                 .unzip(),
             None => (Vec::new(), Vec::new()),
         };
+        let exact = crate::DrawOptions {
+            patch_bitfields: false,
+            ..*options
+        };
+        let exact_patches = crate::patches::PatchRuntime::new(&base, tiles.clone(), &exact);
         let patches = crate::patches::PatchRuntime::new(&base, tiles, options);
         Bake {
             options: *options,
             patches,
+            exact_patches,
             draw_order: base.patches.is_some().then_some(draw_order),
             dir: dir.to_path_buf(),
             grid: CellGrid::new(base.grid),

@@ -44,18 +44,35 @@ fn visible<'a>(
 }
 
 /// The draw list of configuration A or B, or of C's fallback (no usable pack).
+/// With `cull` (B, C's fallback): instances frustum-culled whole, then the tiles of
+/// their patches by the bake's exact per-tile tests ([`Bake::exact_patches`]).
 pub fn originals_list<'a>(bake: &Bake, camera: &Camera, cull: bool) -> DrawList<'a> {
     let n = bake.base.instances.len() as u32;
-    let originals = if cull {
-        let f = camera.frustum();
-        group(bake, visible(bake, &f, 0..n))
-    } else {
-        group(bake, 0..n)
-    };
-    DrawList {
-        originals,
-        ..Default::default()
+    if !cull {
+        return DrawList {
+            originals: group(bake, 0..n),
+            ..Default::default()
+        };
     }
+    let f = camera.frustum();
+    let shown: Vec<u32> = visible(bake, &f, 0..n).collect();
+    let mut list = DrawList {
+        originals: group(bake, shown.iter().copied()),
+        ..Default::default()
+    };
+    // Issue 30 item 2, fair culling: the per-tile normal-cone and frustum tests the
+    // hybrid's originals get (exact: no pixel changes; not the patch bitfields).
+    if let Some(runtime) = &bake.exact_patches {
+        list.patched = crate::patches::apply(
+            runtime,
+            &bake.base,
+            &shown,
+            (camera.eye, &f),
+            &bake.instances,
+            &mut list.originals,
+        );
+    }
+    list
 }
 
 /// The draw list of the LOD baseline.

@@ -64,6 +64,7 @@ pub mod patches;
 pub mod representation;
 pub mod run;
 pub mod stream;
+pub mod table;
 pub mod testdata;
 pub mod vertex;
 #[cfg(feature = "view")]

@@ -41,6 +41,8 @@ pub enum RunError {
     NoFrames,
     #[error("--reference-ss {0} outside 1..={MAX_REFERENCE_SS}")]
     ReferenceSs(u32),
+    #[error("--modes: {0}")]
+    Runs(String),
 }
 
 impl From<crate::bake::BakeError> for RunError {
@@ -611,6 +613,60 @@ fn mean(v: impl Iterator<Item = f64>) -> f64 {
     }
 }
 
+/// One configuration of a multi-mode compare ([`compare_runs`]): a mode and the
+/// threshold it is drawn at (`lod_pixel_error` for `lod`, `cluster_tau` for
+/// `cluster-lod`; the other modes ignore both).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CompareRun {
+    pub mode: Mode,
+    pub lod_pixel_error: f32,
+    pub cluster_tau: f32,
+}
+
+impl CompareRun {
+    /// The run of a single-mode compare: `opts.mode` at `opts`' thresholds.
+    pub fn of(opts: &CompareOptions) -> CompareRun {
+        CompareRun {
+            mode: opts.mode,
+            lod_pixel_error: opts.lod_pixel_error,
+            cluster_tau: opts.cluster_tau,
+        }
+    }
+
+    /// A short name: the mode, with its threshold for the LOD modes
+    /// (`cluster-lod τ=1`, `lod 2px`).
+    pub fn label(&self) -> String {
+        match self.mode {
+            Mode::ClusterLod => format!("cluster-lod τ={}", self.cluster_tau),
+            Mode::Lod => format!("lod {}px", self.lod_pixel_error),
+            m => m.name().to_string(),
+        }
+    }
+
+    /// A file-name-safe form of [`CompareRun::label`] (`cluster-lod-tau1`, `lod-px2`).
+    pub fn slug(&self) -> String {
+        match self.mode {
+            Mode::ClusterLod => format!("cluster-lod-tau{}", self.cluster_tau),
+            Mode::Lod => format!("lod-px{}", self.lod_pixel_error),
+            m => m.name().to_string(),
+        }
+    }
+}
+
+/// What [`compare_runs`] measures besides each run's report: the bytes each run's
+/// representation takes on disk and resident (`None` where it has none beyond the
+/// base pack's originals, which every mode keeps resident and no row counts).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RunBytes {
+    /// hybrid: every `*.pack` of the bake; cluster-lod: the `.clod` DAGs; lod: none
+    /// (its chains are built at load and not stored).
+    pub disk: Option<u64>,
+    /// hybrid: the streamer's resident cell data at its peak over the walk;
+    /// cluster-lod: the DAGs' index buffers on the GPU; lod: the simplified levels'
+    /// index buffers (u32 indices).
+    pub resident: Option<u64>,
+}
+
 /// Renders the reference (config A) and the hybrid (C, or the mode of
 /// `opts.mode`, e.g. the LOD baseline) for every frame of the path (and B for
 /// timing); PSNR(Y) and SSIM against A, over the whole frame and over object pixels;
@@ -621,6 +677,38 @@ pub fn compare(
     path: &CameraPath,
     opts: &CompareOptions,
 ) -> Result<CompareReport, RunError> {
+    let mut all = compare_runs(out, path, opts, &[CompareRun::of(opts)])?;
+    Ok(all.remove(0).0)
+}
+
+/// Per run of [`compare_runs`]: what its walk gathers.
+struct RunAcc {
+    run: CompareRun,
+    per_frame: Vec<CompareFrame>,
+    quality: Vec<FrameQuality>,
+    records: Vec<FrameRow>,
+    worst: Vec<Worst>,
+    prev: Option<Option<u32>>,
+    fallback_cells: std::collections::BTreeSet<u32>,
+    clusters_drawn: Vec<f64>,
+    cut_ms: Vec<f64>,
+    peak_resident: u64,
+}
+
+/// [`compare`] for several configurations on one walk (`player compare --modes`,
+/// issue 30 item 3): per frame the reference (A), B for timing and the anti-aliased
+/// reference are rendered once, and each run of `runs` is drawn and measured
+/// against them. `opts.mode`, `opts.lod_pixel_error` and `opts.cluster_tau` are
+/// ignored (each run carries its own). Returns each run's report (in the order of
+/// `runs`) with its bytes. At most one hybrid run (they would share a streamer);
+/// with `opts.worst_dir` and more than one run, each run's worst frames go to a
+/// folder of its own ([`CompareRun::slug`]).
+pub fn compare_runs(
+    out: &Path,
+    path: &CameraPath,
+    opts: &CompareOptions,
+    runs: &[CompareRun],
+) -> Result<Vec<(CompareReport, RunBytes)>, RunError> {
     // 1. The request checked; the bake, the renderers (the compared frames' and the
     //    anti-aliased reference's) and the streamer opened, warmed up and primed.
     let size = opts.size.unwrap_or(path.resolution);
@@ -631,18 +719,26 @@ pub fn compare(
     if opts.reference_ss > MAX_REFERENCE_SS {
         return Err(RunError::ReferenceSs(opts.reference_ss));
     }
+    if runs.is_empty() {
+        return Err(RunError::Runs("no mode to compare".into()));
+    }
+    if runs.iter().filter(|r| r.mode == Mode::Hybrid).count() > 1 {
+        return Err(RunError::Runs("hybrid listed more than once".into()));
+    }
+    let has = |m: Mode| runs.iter().find(|r| r.mode == m);
     let ss = opts.reference_ss.max(1);
     let mut player = Player::open(out, size, &opts.draw)?;
     let options = player.draw_options();
     eprintln!("player: adapter {}", player.renderer.adapter());
-    player.lod_pixel_error = opts.lod_pixel_error;
     player.timing_repeats = opts.repeat;
-    let lod_build_ms = (opts.mode == Mode::Lod).then(|| player.prepare_lod().build_ms);
-    player.cluster_tau = opts.cluster_tau;
-    if opts.mode == Mode::ClusterLod {
+    if let Some(r) = has(Mode::Lod) {
+        player.lod_pixel_error = r.lod_pixel_error;
+    }
+    let lod_build_ms = has(Mode::Lod).map(|_| player.prepare_lod().build_ms);
+    if let Some(r) = has(Mode::ClusterLod) {
+        player.cluster_tau = r.cluster_tau;
         player.prepare_clusters();
     }
-    let (mut clusters_drawn, mut cut_ms): (Vec<f64>, Vec<f64>) = Default::default();
     let far = player.bake.extent;
     player.warm_up(&camera_for(&frames[0], path, size, far));
     // Alpha tells object pixels from sky in every frame compared (metrics.rs).
@@ -657,28 +753,44 @@ pub fn compare(
     let (w, h) = (size.0 as usize, size.1 as usize);
     let mut streamer = Streamer::new(&player.bake, opts.stream.clone());
     player.prime(&mut streamer, &camera_for(&frames[0], path, size, far));
-    let mut per_frame = Vec::with_capacity(frames.len());
-    let mut quality = Vec::with_capacity(frames.len());
-    let mut hybrid_records = Vec::with_capacity(frames.len());
-    let mut worst: Vec<Worst> = Vec::new();
-    let mut prev: Option<Option<u32>> = None;
-    let mut fallback_cells = std::collections::BTreeSet::new();
-    // 2. The walk: per frame the reference (A), B for timing and the compared mode
-    //    (C or lod), the anti-aliased reference, the metrics, the worst frames.
+    let mut accs: Vec<RunAcc> = runs
+        .iter()
+        .map(|&run| RunAcc {
+            run,
+            per_frame: Vec::with_capacity(frames.len()),
+            quality: Vec::with_capacity(frames.len()),
+            records: Vec::with_capacity(frames.len()),
+            worst: Vec::new(),
+            prev: None,
+            fallback_cells: Default::default(),
+            clusters_drawn: Vec::new(),
+            cut_ms: Vec::new(),
+            peak_resident: 0,
+        })
+        .collect();
+    let keep_worst = opts.worst_dir.is_some() && opts.worst_count > 0;
+    // 2. The walk: per frame the reference (A), B for timing and the anti-aliased
+    //    reference once, then each run's frame, its metrics and worst frames.
     for (i, f) in frames.iter().enumerate() {
-        // 2a. The reference (A), B for timing, the compared mode (C or lod).
+        // 2a. The reference (A) and B for timing.
         let cam = camera_for(f, path, size, far);
         let (ref_ms, ref_tris, _, _) = player.draw(&cam, Mode::Full, None);
         let reference = player.renderer.read_pixels()?;
         let (fr_ms, _, _, _) = player.draw(&cam, Mode::Frustum, None);
-        let (ms, list, stats) = player.draw_listed(&cam, opts.mode, Some(&mut streamer));
-        let hybrid = player.renderer.read_pixels()?;
-        clusters_drawn.push(list.clusters as f64);
-        cut_ms.push(player.last_cluster_cut_ms);
-        if let (true, Some(c)) = (stats.fallback, stats.cell) {
-            fallback_cells.insert(c);
+        // 2b. Each run's frame.
+        let mut drawn = Vec::with_capacity(accs.len());
+        for acc in accs.iter_mut() {
+            player.lod_pixel_error = acc.run.lod_pixel_error;
+            player.cluster_tau = acc.run.cluster_tau;
+            let (ms, list, stats) = player.draw_listed(&cam, acc.run.mode, Some(&mut streamer));
+            drawn.push((ms, list, stats, player.renderer.read_pixels()?));
+            acc.clusters_drawn.push(list.clusters as f64);
+            acc.cut_ms.push(player.last_cluster_cut_ms);
+            if acc.run.mode == Mode::Hybrid {
+                acc.peak_resident = acc.peak_resident.max(streamer.resident_bytes());
+            }
         }
-        // 2b. The anti-aliased reference: A at ss × ss samples, box-filtered in
+        // 2c. The anti-aliased reference: A at ss × ss samples, box-filtered in
         //     linear light.
         let aa_reference = match aa_renderer.as_mut() {
             Some(r) => {
@@ -695,116 +807,166 @@ pub fn compare(
             }
             None => None,
         };
-        // 2c. The metrics: full frame and object pixels, against A and the AA reference.
-        let q = measure_frame(&reference, &hybrid, w, h);
-        let aa = aa_reference.as_ref().map(|aa| AaFrame {
-            compared: measure_frame(aa, &hybrid, w, h),
-            full: measure_frame(aa, &reference, w, h),
-        });
-        per_frame.push(CompareFrame {
-            frame: i,
-            cell: stats.cell,
-            psnr_y: q.psnr_y_db,
-            ssim: q.ssim,
-            object_pixels: q.object_pixels,
-            object_psnr_y_db: q.object_psnr_y_db,
-            object_ssim: q.object_ssim,
-            aa_reference: aa,
-            triangles: list.triangles,
-            reference_triangles: ref_tris,
-            draw_calls: list.draw_calls,
-            frame_ms: ms,
-            reference_frame_ms: ref_ms,
-            frustum_frame_ms: fr_ms,
-        });
-        hybrid_records.push(frame_row(i, f.time_s, &stats, prev, (ms, list), &options));
-        prev = Some(stats.cell);
-        // 2d. The worst frames by object-pixel PSNR (frames without objects last).
-        if opts.worst_dir.is_some() && opts.worst_count > 0 {
-            let key = q.object_psnr_y_db.unwrap_or(f64::INFINITY);
-            worst.push((key, i, reference, hybrid, aa_reference));
-            worst.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-            worst.truncate(opts.worst_count);
+        let aa_full = aa_reference
+            .as_ref()
+            .map(|aa| measure_frame(aa, &reference, w, h));
+        // 2d. The metrics: full frame and object pixels, against A and the AA
+        //     reference; the worst frames by object-pixel PSNR (frames without
+        //     objects last).
+        for (acc, (ms, list, stats, frame)) in accs.iter_mut().zip(drawn) {
+            if let (true, Some(c)) = (stats.fallback, stats.cell) {
+                acc.fallback_cells.insert(c);
+            }
+            let q = measure_frame(&reference, &frame, w, h);
+            let aa = aa_reference
+                .as_ref()
+                .zip(aa_full.as_ref())
+                .map(|(aa, full)| AaFrame {
+                    compared: measure_frame(aa, &frame, w, h),
+                    full: full.clone(),
+                });
+            acc.per_frame.push(CompareFrame {
+                frame: i,
+                cell: stats.cell,
+                psnr_y: q.psnr_y_db,
+                ssim: q.ssim,
+                object_pixels: q.object_pixels,
+                object_psnr_y_db: q.object_psnr_y_db,
+                object_ssim: q.object_ssim,
+                aa_reference: aa,
+                triangles: list.triangles,
+                reference_triangles: ref_tris,
+                draw_calls: list.draw_calls,
+                frame_ms: ms,
+                reference_frame_ms: ref_ms,
+                frustum_frame_ms: fr_ms,
+            });
+            acc.records.push(frame_row(
+                i,
+                f.time_s,
+                &stats,
+                acc.prev,
+                (ms, list),
+                &options,
+            ));
+            acc.prev = Some(stats.cell);
+            if keep_worst {
+                let key = q.object_psnr_y_db.unwrap_or(f64::INFINITY);
+                acc.worst
+                    .push((key, i, reference.clone(), frame, aa_reference.clone()));
+                acc.worst
+                    .sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+                acc.worst.truncate(opts.worst_count);
+            }
+            acc.quality.push(q);
         }
-        quality.push(q);
     }
     drop(streamer);
-    // 3. The crossing spikes without prefetch (hybrid only, unless --no-crossings).
-    let crossing_no_prefetch = (opts.crossings && opts.mode == Mode::Hybrid)
-        .then(|| crossings_without_prefetch(&mut player, path, &frames, size, opts));
-    // 4. The pop at each crossing (`--pops`, hybrid only).
-    let (pops, worst_pop) = if opts.pops && opts.mode == Mode::Hybrid {
-        let cells: Vec<Option<u32>> = per_frame.iter().map(|f| f.cell).collect();
-        let (report, worst_pair) = measure_pops(&mut player, path, &frames, &cells, size, opts)?;
-        (Some(report), worst_pair)
-    } else {
-        (None, None)
-    };
-    // 5. The worst frames and the worst pop as PNGs (`--worst`).
-    if let Some(dir) = &opts.worst_dir {
-        write_worst(dir, size, opts.mode, worst_pop, &worst)?;
-    }
-    // 6. The report.
-    let n = per_frame.len();
-    let finite_min = per_frame
-        .iter()
-        .map(|f| f.psnr_y)
-        .fold(f64::INFINITY, f64::min);
-    Ok(CompareReport {
-        frames: n,
-        mean_psnr_y: mean(per_frame.iter().map(|f| f.psnr_y)),
-        min_psnr_y: finite_min.min(PSNR_CAP),
-        mean_ssim: mean(per_frame.iter().map(|f| f.ssim)),
-        object: summarize_objects(quality.iter().enumerate()),
-        aa_reference: (ss > 1).then(|| {
-            let aa = || {
-                per_frame
-                    .iter()
-                    .filter_map(|f| f.aa_reference.as_ref().map(|a| (f.frame, a)))
+    let mut reports = Vec::with_capacity(accs.len());
+    for acc in accs {
+        let hybrid = acc.run.mode == Mode::Hybrid;
+        // 3. The crossing spikes without prefetch (hybrid only, unless --no-crossings).
+        let crossing_no_prefetch = (opts.crossings && hybrid)
+            .then(|| crossings_without_prefetch(&mut player, path, &frames, size, opts));
+        // 4. The pop at each crossing (`--pops`, hybrid only).
+        let (pops, worst_pop) = if opts.pops && hybrid {
+            let cells: Vec<Option<u32>> = acc.per_frame.iter().map(|f| f.cell).collect();
+            let (report, worst_pair) =
+                measure_pops(&mut player, path, &frames, &cells, size, opts)?;
+            (Some(report), worst_pair)
+        } else {
+            (None, None)
+        };
+        // 5. The worst frames and the worst pop as PNGs (`--worst`).
+        if let Some(dir) = &opts.worst_dir {
+            let dir = if runs.len() > 1 {
+                dir.join(acc.run.slug())
+            } else {
+                dir.clone()
             };
-            AaReference {
-                supersampling_factor: ss,
-                samples_per_pixel: ss * ss,
-                compared: summarize_aa(aa().map(|(i, a)| (i, &a.compared))),
-                full: summarize_aa(aa().map(|(i, a)| (i, &a.full))),
-            }
-        }),
-        mean_triangles: mean(per_frame.iter().map(|f| f.triangles as f64)),
-        reference_triangles: mean(per_frame.iter().map(|f| f.reference_triangles as f64)),
-        mean_draw_calls: mean(per_frame.iter().map(|f| f.draw_calls as f64)),
-        frame_time_ratio: mean(per_frame.iter().map(|f| f.frame_ms))
-            / mean(per_frame.iter().map(|f| f.reference_frame_ms)),
-        frame_time_ratio_frustum: mean(per_frame.iter().map(|f| f.frame_ms))
-            / mean(per_frame.iter().map(|f| f.frustum_frame_ms)),
-        adapter: player.renderer.adapter().to_string(),
-        width: size.0,
-        height: size.1,
-        mode: opts.mode.name().to_string(),
-        lod_pixel_error: (opts.mode == Mode::Lod).then_some(opts.lod_pixel_error),
-        lod_build_ms,
-        cluster_lod: player
-            .clusters
-            .as_ref()
-            .filter(|_| opts.mode == Mode::ClusterLod)
-            .map(|set| ClusterLodSummary {
-                tau_px: opts.cluster_tau,
-                build_ms: set.build_ms,
-                cache_hits: set.cache_hits,
-                built: set.built,
-                clusters: set.cluster_count(),
-                cluster_bytes: set.bytes,
-                pack_bytes: pack_bytes(out),
-                resident_bytes: player.cluster_resident_bytes(),
-                mean_clusters_drawn: mean(clusters_drawn.iter().copied()),
-                mean_cut_ms: mean(cut_ms.iter().copied()),
+            write_worst(&dir, size, acc.run.mode, worst_pop, &acc.worst)?;
+        }
+        // 6. The report.
+        let run = acc.run;
+        let per_frame = acc.per_frame;
+        let n = per_frame.len();
+        let finite_min = per_frame
+            .iter()
+            .map(|f| f.psnr_y)
+            .fold(f64::INFINITY, f64::min);
+        let bytes = match run.mode {
+            Mode::Hybrid => RunBytes {
+                disk: Some(pack_bytes(out)),
+                resident: Some(acc.peak_resident),
+            },
+            Mode::ClusterLod => RunBytes {
+                disk: player.clusters.as_ref().map(|s| s.bytes),
+                resident: Some(player.cluster_resident_bytes()),
+            },
+            Mode::Lod => RunBytes {
+                disk: None,
+                resident: player.lod.as_ref().map(|s| s.simplified_triangles() * 12),
+            },
+            _ => RunBytes::default(),
+        };
+        let report = CompareReport {
+            frames: n,
+            mean_psnr_y: mean(per_frame.iter().map(|f| f.psnr_y)),
+            min_psnr_y: finite_min.min(PSNR_CAP),
+            mean_ssim: mean(per_frame.iter().map(|f| f.ssim)),
+            object: summarize_objects(acc.quality.iter().enumerate()),
+            aa_reference: (ss > 1).then(|| {
+                let aa = || {
+                    per_frame
+                        .iter()
+                        .filter_map(|f| f.aa_reference.as_ref().map(|a| (f.frame, a)))
+                };
+                AaReference {
+                    supersampling_factor: ss,
+                    samples_per_pixel: ss * ss,
+                    compared: summarize_aa(aa().map(|(i, a)| (i, &a.compared))),
+                    full: summarize_aa(aa().map(|(i, a)| (i, &a.full))),
+                }
             }),
-        draw_options: Some(options),
-        crossing_prefetch: Some(crossing_stats(&hybrid_records)),
-        crossing_no_prefetch,
-        pops,
-        fallback_cells: fallback_cells.into_iter().collect(),
-        per_frame,
-    })
+            mean_triangles: mean(per_frame.iter().map(|f| f.triangles as f64)),
+            reference_triangles: mean(per_frame.iter().map(|f| f.reference_triangles as f64)),
+            mean_draw_calls: mean(per_frame.iter().map(|f| f.draw_calls as f64)),
+            frame_time_ratio: mean(per_frame.iter().map(|f| f.frame_ms))
+                / mean(per_frame.iter().map(|f| f.reference_frame_ms)),
+            frame_time_ratio_frustum: mean(per_frame.iter().map(|f| f.frame_ms))
+                / mean(per_frame.iter().map(|f| f.frustum_frame_ms)),
+            adapter: player.renderer.adapter().to_string(),
+            width: size.0,
+            height: size.1,
+            mode: run.mode.name().to_string(),
+            lod_pixel_error: (run.mode == Mode::Lod).then_some(run.lod_pixel_error),
+            lod_build_ms: lod_build_ms.filter(|_| run.mode == Mode::Lod),
+            cluster_lod: player
+                .clusters
+                .as_ref()
+                .filter(|_| run.mode == Mode::ClusterLod)
+                .map(|set| ClusterLodSummary {
+                    tau_px: run.cluster_tau,
+                    build_ms: set.build_ms,
+                    cache_hits: set.cache_hits,
+                    built: set.built,
+                    clusters: set.cluster_count(),
+                    cluster_bytes: set.bytes,
+                    pack_bytes: pack_bytes(out),
+                    resident_bytes: player.cluster_resident_bytes(),
+                    mean_clusters_drawn: mean(acc.clusters_drawn.iter().copied()),
+                    mean_cut_ms: mean(acc.cut_ms.iter().copied()),
+                }),
+            draw_options: Some(options),
+            crossing_prefetch: Some(crossing_stats(&acc.records)),
+            crossing_no_prefetch,
+            pops,
+            fallback_cells: acc.fallback_cells.into_iter().collect(),
+            per_frame,
+        };
+        reports.push((report, bytes));
+    }
+    Ok(reports)
 }
 
 /// Bytes of the bake's packs as on disk: every `*.pack` in `out` and in its

@@ -212,9 +212,9 @@ fn tau_zero_equals_full_and_cluster_culling_is_conservative() {
             .count();
         assert_eq!(differing, 0, "t={:.2}s: τ = 0 differs from full", f.time_s);
         // The triangles are the frustum-visible instances' originals minus culled
-        // clusters.
+        // clusters (the instances of `q`, whose originals are drawn whole).
         let visible: u64 = {
-            let l = originals_list(&p.bake, &cam, true);
+            let l = originals_list(&q.bake, &cam, true);
             l.originals
                 .iter()
                 .map(|(m, i)| {

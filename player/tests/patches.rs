@@ -7,8 +7,7 @@
 //! conservative cone test; a camera close to an instance exercises the per-tile
 //! frustum test (`patches::refine_patches`).
 
-use format::pack::{BasePack, ModelPatch, ModelPatches, PatchSet};
-use format::patch_visibility::{direction_count, PatchBounds};
+use format::pack::BasePack;
 use glam::Vec3;
 use player::camera::Camera;
 use player::frame::Mode;
@@ -18,73 +17,7 @@ use player::testdata::write_synthetic_bake_with;
 use player::DrawOptions;
 
 mod common;
-use common::open_player;
-
-fn per_triangle_patches(base: &BasePack) -> PatchSet {
-    let (level, shells) = (0u32, vec![1.5f32, 64.0]);
-    let samples = direction_count(level) * shells.len();
-    let words = samples.div_ceil(32);
-    let all = |w: usize| {
-        if w + 1 < words || samples.is_multiple_of(32) {
-            u32::MAX
-        } else {
-            u32::MAX >> (32 - samples % 32)
-        }
-    };
-    let models = base
-        .models
-        .iter()
-        .map(|m| {
-            let mesh = &m.mesh;
-            let p = |i: u32| Vec3::from(mesh.positions[i as usize]);
-            let (lo, hi) = mesh.positions.iter().fold(
-                (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
-                |(lo, hi), q| (lo.min(Vec3::from(*q)), hi.max(Vec3::from(*q))),
-            );
-            let centre = (lo + hi) * 0.5;
-            let patches = mesh
-                .triangles
-                .iter()
-                .map(|t| {
-                    let [a, b, c] = t.map(p);
-                    let n = (b - a).cross(c - a);
-                    let centroid = (a + b + c) / 3.0;
-                    let bounds = if n.length() > 1e-12 {
-                        PatchBounds {
-                            cone_axis: n.normalize().to_array(),
-                            cone_cos: 1.0,
-                            centre: centroid.to_array(),
-                            offset: 1e-4,
-                        }
-                    } else {
-                        PatchBounds {
-                            cone_axis: [0.0, 0.0, 1.0],
-                            cone_cos: -1.0,
-                            centre: centroid.to_array(),
-                            offset: 0.0,
-                        }
-                    };
-                    ModelPatch {
-                        triangle_count: 1,
-                        bounds,
-                        samples: (0..words).map(all).collect(),
-                    }
-                })
-                .collect();
-            ModelPatches {
-                centre: centre.to_array(),
-                radius: ((hi - lo).length() * 0.5).max(1e-3),
-                patches,
-                triangle_order: (0..mesh.triangles.len() as u32).collect(),
-            }
-        })
-        .collect();
-    PatchSet {
-        sample_level: level,
-        shell_radius: shells,
-        models,
-    }
-}
+use common::{open_player, per_triangle_patches};
 
 /// (hybrid triangles, hybrid frame, full frame) from a camera 3 radii in front of
 /// instance 0 (`close`: 0.6 radii, narrow, off-centre, so part of it is out of

@@ -42,7 +42,7 @@ pub struct StreamArgs {
 }
 
 /// `--cluster-tau`: a finite number of pixels ≥ 0.
-fn parse_tau(s: &str) -> Result<f32, String> {
+pub(crate) fn parse_tau(s: &str) -> Result<f32, String> {
     match s.parse::<f32>() {
         Ok(x) if x.is_finite() && x >= 0.0 => Ok(x),
         _ => Err(format!("{s:?} is not a finite number of pixels >= 0")),

@@ -6,7 +6,8 @@
 
 use super::args::{DrawArgs, PathArgs};
 use crate::frame::Mode;
-use crate::run::{CompareOptions, CompareReport, RunError};
+use crate::run::{CompareOptions, CompareReport, CompareRun, RunError};
+use crate::table::{MultiCompare, TableRow};
 use std::path::PathBuf;
 
 // The flags of `player compare` (its help text is the `Command::Compare` doc in
@@ -20,6 +21,23 @@ pub struct CompareArgs {
     /// cluster-lod (full and frustum work too).
     #[arg(long, default_value = "hybrid")]
     pub mode: Mode,
+    /// Compare several modes on one walk against one reference (comma-separated,
+    /// e.g. `hybrid,cluster-lod,lod`; each at most once): prints one markdown table
+    /// (a row per mode and sweep value) in place of the single report; with
+    /// `--json` an object with the table's `rows`, `reach` and every run's report.
+    #[arg(long, value_delimiter = ',', conflicts_with = "mode")]
+    pub modes: Vec<Mode>,
+    /// Also write the table (markdown) to this file (implies the table).
+    #[arg(long)]
+    pub table: Option<PathBuf>,
+    /// cluster-lod rows at each of these τ (pixels, comma-separated) in place of
+    /// `--cluster-tau`; the table interpolates the triangles cluster LOD needs to
+    /// reach the hybrid's object PSNR. Needs cluster-lod among the modes.
+    #[arg(long, value_delimiter = ',', value_parser = super::args::parse_tau)]
+    pub cluster_tau_sweep: Vec<f32>,
+    /// lod rows at each of these pixel errors, as `--cluster-tau-sweep` for lod.
+    #[arg(long, value_delimiter = ',', value_parser = super::args::parse_tau)]
+    pub lod_pixel_error_sweep: Vec<f32>,
     /// Print the report as JSON on stdout.
     #[arg(long)]
     pub json: bool,
@@ -56,27 +74,122 @@ pub struct CompareArgs {
     pub draw: DrawArgs,
 }
 
-/// Compares along the path of `args` and prints the report (JSON with `--json`).
+/// The runs `--modes` and the sweeps ask for, in the order of the modes (a swept
+/// mode's rows in the order of its sweep); `None` for a plain single-mode compare.
+/// Refuses a mode listed twice and a sweep whose mode is not listed.
+pub fn runs_of(args: &CompareArgs) -> Result<Option<Vec<CompareRun>>, RunError> {
+    if args.modes.is_empty()
+        && args.table.is_none()
+        && args.cluster_tau_sweep.is_empty()
+        && args.lod_pixel_error_sweep.is_empty()
+    {
+        return Ok(None);
+    }
+    let modes = if args.modes.is_empty() {
+        vec![args.mode]
+    } else {
+        args.modes.clone()
+    };
+    for (i, m) in modes.iter().enumerate() {
+        if modes[..i].contains(m) {
+            return Err(RunError::Runs(format!(
+                "{} listed more than once",
+                m.name()
+            )));
+        }
+    }
+    for (sweep, mode, flag) in [
+        (
+            &args.cluster_tau_sweep,
+            Mode::ClusterLod,
+            "--cluster-tau-sweep",
+        ),
+        (
+            &args.lod_pixel_error_sweep,
+            Mode::Lod,
+            "--lod-pixel-error-sweep",
+        ),
+    ] {
+        if !sweep.is_empty() && !modes.contains(&mode) {
+            return Err(RunError::Runs(format!(
+                "{flag} needs {} among the modes",
+                mode.name()
+            )));
+        }
+    }
+    let one = |m: Mode| CompareRun {
+        mode: m,
+        lod_pixel_error: args.walk.stream.lod_pixel_error,
+        cluster_tau: args.walk.stream.cluster_tau,
+    };
+    let or_one = |v: &[f32], x: f32| if v.is_empty() { vec![x] } else { v.to_vec() };
+    let mut runs = Vec::new();
+    for m in modes {
+        match m {
+            Mode::ClusterLod => {
+                for tau in or_one(&args.cluster_tau_sweep, args.walk.stream.cluster_tau) {
+                    runs.push(CompareRun {
+                        cluster_tau: tau,
+                        ..one(m)
+                    });
+                }
+            }
+            Mode::Lod => {
+                for px in or_one(
+                    &args.lod_pixel_error_sweep,
+                    args.walk.stream.lod_pixel_error,
+                ) {
+                    runs.push(CompareRun {
+                        lod_pixel_error: px,
+                        ..one(m)
+                    });
+                }
+            }
+            m => runs.push(one(m)),
+        }
+    }
+    Ok(Some(runs))
+}
+
+/// Compares along the path of `args` and prints the report (JSON with `--json`);
+/// with `--modes` (or a sweep, or `--table`) the table of every run instead.
 pub fn compare(args: CompareArgs) -> Result<(), RunError> {
     let path = format::path::CameraPath::load(&args.path)?;
-    let r = crate::run::compare(
-        &args.out,
-        &path,
-        &CompareOptions {
-            worst_dir: args.worst,
-            worst_count: args.worst_count,
-            size: args.walk.stream.size,
-            crossings: !args.no_crossings,
-            pops: args.pops,
-            stream: args.walk.path_config(&path),
-            mode: args.mode,
-            lod_pixel_error: args.walk.stream.lod_pixel_error,
-            cluster_tau: args.walk.stream.cluster_tau,
-            reference_ss: args.reference_ss,
-            repeat: args.repeat,
-            draw: args.draw.options(),
-        },
-    )?;
+    let runs = runs_of(&args)?;
+    let opts = CompareOptions {
+        worst_dir: args.worst,
+        worst_count: args.worst_count,
+        size: args.walk.stream.size,
+        crossings: !args.no_crossings,
+        pops: args.pops,
+        stream: args.walk.path_config(&path),
+        mode: args.mode,
+        lod_pixel_error: args.walk.stream.lod_pixel_error,
+        cluster_tau: args.walk.stream.cluster_tau,
+        reference_ss: args.reference_ss,
+        repeat: args.repeat,
+        draw: args.draw.options(),
+    };
+    if let Some(runs) = runs {
+        let m = multi_compare(&args.out, &path, &opts, &runs)?;
+        let table = crate::table::markdown(&m, &args.path.display().to_string());
+        if let Some(file) = &args.table {
+            std::fs::write(file, &table).map_err(|e| RunError::Write {
+                path: file.clone(),
+                what: e.to_string(),
+            })?;
+        }
+        if args.json {
+            println!(
+                "{}",
+                serde_json::to_string_pretty(&m).unwrap_or_else(|e| e.to_string())
+            );
+        } else {
+            print!("{table}");
+        }
+        return Ok(());
+    }
+    let r = crate::run::compare(&args.out, &path, &opts)?;
     if args.json {
         println!(
             "{}",
@@ -86,6 +199,31 @@ pub fn compare(args: CompareArgs) -> Result<(), RunError> {
         print_report(&r);
     }
     Ok(())
+}
+
+/// [`crate::run::compare_runs`] with the table's rows and reaches.
+pub fn multi_compare(
+    out: &std::path::Path,
+    path: &format::path::CameraPath,
+    opts: &CompareOptions,
+    runs: &[CompareRun],
+) -> Result<MultiCompare, RunError> {
+    let results = crate::run::compare_runs(out, path, opts, runs)?;
+    let rows: Vec<TableRow> = runs
+        .iter()
+        .zip(&results)
+        .map(|(run, (report, bytes))| TableRow::of(run, report, bytes))
+        .collect();
+    let first = &results[0].0;
+    Ok(MultiCompare {
+        adapter: first.adapter.clone(),
+        width: first.width,
+        height: first.height,
+        frames: first.frames,
+        reach: crate::table::reaches(&rows),
+        rows,
+        reports: results.into_iter().map(|(r, _)| r).collect(),
+    })
 }
 
 /// The report as text: one line per frame, then the summary lines.

@@ -71,3 +71,75 @@ pub fn renderer(w: u32, h: u32) -> Option<Renderer> {
         Err(e) => panic!("{e}"),
     }
 }
+
+/// Patch data for `base` written with format code only (the player never links the
+/// worker): one patch per triangle, its exact normal as a zero-width cone, every
+/// sample bit set (tests/patches.rs, tests/fair_culling.rs).
+pub fn per_triangle_patches(base: &format::pack::BasePack) -> format::pack::PatchSet {
+    use format::pack::{ModelPatch, ModelPatches, PatchSet};
+    use format::patch_visibility::{direction_count, PatchBounds};
+    use glam::Vec3;
+    let (level, shells) = (0u32, vec![1.5f32, 64.0]);
+    let samples = direction_count(level) * shells.len();
+    let words = samples.div_ceil(32);
+    let all = |w: usize| {
+        if w + 1 < words || samples.is_multiple_of(32) {
+            u32::MAX
+        } else {
+            u32::MAX >> (32 - samples % 32)
+        }
+    };
+    let models = base
+        .models
+        .iter()
+        .map(|m| {
+            let mesh = &m.mesh;
+            let p = |i: u32| Vec3::from(mesh.positions[i as usize]);
+            let (lo, hi) = mesh.positions.iter().fold(
+                (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
+                |(lo, hi), q| (lo.min(Vec3::from(*q)), hi.max(Vec3::from(*q))),
+            );
+            let centre = (lo + hi) * 0.5;
+            let patches = mesh
+                .triangles
+                .iter()
+                .map(|t| {
+                    let [a, b, c] = t.map(p);
+                    let n = (b - a).cross(c - a);
+                    let centroid = (a + b + c) / 3.0;
+                    let bounds = if n.length() > 1e-12 {
+                        PatchBounds {
+                            cone_axis: n.normalize().to_array(),
+                            cone_cos: 1.0,
+                            centre: centroid.to_array(),
+                            offset: 1e-4,
+                        }
+                    } else {
+                        PatchBounds {
+                            cone_axis: [0.0, 0.0, 1.0],
+                            cone_cos: -1.0,
+                            centre: centroid.to_array(),
+                            offset: 0.0,
+                        }
+                    };
+                    ModelPatch {
+                        triangle_count: 1,
+                        bounds,
+                        samples: (0..words).map(all).collect(),
+                    }
+                })
+                .collect();
+            ModelPatches {
+                centre: centre.to_array(),
+                radius: ((hi - lo).length() * 0.5).max(1e-3),
+                patches,
+                triangle_order: (0..mesh.triangles.len() as u32).collect(),
+            }
+        })
+        .collect();
+    PatchSet {
+        sample_level: level,
+        shell_radius: shells,
+        models,
+    }
+}
