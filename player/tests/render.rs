@@ -963,3 +963,55 @@ fn a_cells_far_field_group_is_drawn_with_it() {
     assert_eq!(tex, 0);
     assert_eq!(psnr_y(&hybrid, &frustum), f64::INFINITY);
 }
+
+/// Issue 31 item 3: walking at the path's own speed (frames paced at `1 / frame_rate`
+/// in real time, the prefetch thread running beside), the cell the viewer crosses
+/// into is already resident: the first frame in it finds its pack in the cache (no
+/// demand load) and draws no stand-in. Fails when prefetch is off (checked too).
+#[test]
+fn the_next_cell_is_resident_before_the_viewer_crosses_into_it() {
+    let dir = tempfile::tempdir().unwrap();
+    write_synthetic_bake(dir.path()).unwrap();
+    let path = demo_walk();
+    let Some(mut p) = open(dir.path(), (96, 96), &DrawOptions::default()) else {
+        return;
+    };
+    let frames = path.frames();
+    let period = std::time::Duration::from_secs_f32(1.0 / path.frame_rate);
+    // (crossings, crossings into a cell that was not resident)
+    let mut walk = |prefetch: bool| -> (usize, usize) {
+        let config = StreamConfig {
+            prefetch,
+            ..StreamConfig::default()
+        };
+        let mut s = Streamer::new(&p.bake, config);
+        let (mut crossings, mut missed) = (0, 0);
+        let (mut cell, mut misses) = (None, 0);
+        for f in &frames {
+            let start = std::time::Instant::now();
+            let cam = player::run::camera_for(f, &path, (96, 96), p.bake.extent);
+            let (_, _, _, stats) = p.draw(&cam, Mode::Hybrid, Some(&mut s));
+            if cell.is_some() && stats.cell != cell {
+                crossings += 1;
+                if stats.misses > misses || stats.fallback {
+                    missed += 1;
+                }
+            }
+            (cell, misses) = (stats.cell, stats.misses);
+            std::thread::sleep(period.saturating_sub(start.elapsed()));
+        }
+        (crossings, missed)
+    };
+    let (crossings, missed) = walk(true);
+    assert!(crossings >= 3, "{crossings} crossings");
+    assert_eq!(
+        missed, 0,
+        "{missed} of {crossings} crossings into a cell not resident"
+    );
+    // The test can fail: without prefetch every crossing is a demand load.
+    let (crossings, missed) = walk(false);
+    assert_eq!(
+        missed, crossings,
+        "without prefetch: {missed} of {crossings}"
+    );
+}
