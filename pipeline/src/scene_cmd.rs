@@ -34,6 +34,9 @@ pub struct SceneSummary {
     /// Far-field groups per level (issue 27; empty with `bake.far_field` off):
     /// `levels[k]` is the number of groups of level k + 1.
     pub far_levels: Vec<u32>,
+    /// Objects wider than two cells split into per-cell chunks (issue 29 item 2;
+    /// `split_wide_objects`): how many, into how many chunks.
+    pub chunks: scene::chunk::ChunkStats,
     /// A `Tiled` scene: tiles per side, the base manifest and the grid period.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub tiled: Option<TiledSummary>,
@@ -47,7 +50,7 @@ pub struct TiledSummary {
     pub period: [u32; 2],
 }
 
-pub fn summarize(plan: &Plan, scene: &Scene) -> SceneSummary {
+pub fn summarize(plan: &Plan, scene: &Scene, chunks: scene::chunk::ChunkStats) -> SceneSummary {
     let grid = HexGrid::new(scene.ground, plan.cells.cell_size);
     let models = scene
         .models
@@ -90,6 +93,7 @@ pub fn summarize(plan: &Plan, scene: &Scene) -> SceneSummary {
     SceneSummary {
         far_levels,
         tiled,
+        chunks,
         name: plan.name.clone(),
         instances: scene.instances.len(),
         triangles: scene.triangle_count(),
@@ -138,6 +142,13 @@ pub fn render_text(s: &SceneSummary) -> String {
         "grid       {} × {} cells of size {} ({} cells)",
         s.grid[0], s.grid[1], s.cell_size, s.cells
     );
+    if s.chunks.split_objects > 0 {
+        let _ = writeln!(
+            out,
+            "chunks     {} objects wider than two cells split into {} chunks (one per cell)",
+            s.chunks.split_objects, s.chunks.chunks
+        );
+    }
     if !s.far_levels.is_empty() {
         let per: Vec<String> = s.far_levels.iter().map(|n| n.to_string()).collect();
         let _ = writeln!(

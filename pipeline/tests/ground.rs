@@ -79,6 +79,8 @@ fn write_scene(dir: &Path) -> PathBuf {
     cells: (cell_size: 50.0, min_eye_height: 2.0, max_eye_height: 6.0),
     bake: (image_res: 64),
     cells_per_job: 4,
+    // Issue 29 item 1's rule on whole objects: no chunking here (tests/chunks).
+    split_wide_objects: false,
 )"#,
     )
     .unwrap();
@@ -184,6 +186,7 @@ fn issue29_a_failing_job_names_the_cell_the_object_and_what_to_change() {
     cells: (cell_size: 50.0, min_eye_height: 2.0, max_eye_height: 6.0),
     bake: (image_res: 8192),
     cells_per_job: 1,
+    split_wide_objects: false,
 )"#,
     )
     .unwrap();
@@ -212,4 +215,59 @@ fn issue29_a_failing_job_names_the_cell_the_object_and_what_to_change() {
         "{listed}"
     );
     assert!(!listed.contains("job 10: job 10"), "{listed}");
+}
+
+/// Issue 29 item 2: by default the terrain (300 × 260) and the wall (220 wide) are
+/// wider than two cells (200) and are split into one chunk per cell; the deck (200)
+/// stays whole. The bake succeeds, `pipeline scene` says what was split, and every
+/// cell draws the terrain chunk under it as an original while the far chunks are
+/// proxied like any other object.
+#[test]
+fn issue29_wide_objects_are_baked_as_one_chunk_per_cell() {
+    let tmp = tempfile::tempdir().unwrap();
+    let manifest = write_scene(tmp.path());
+    let text_of = std::fs::read_to_string(&manifest).unwrap();
+    std::fs::write(
+        &manifest,
+        text_of.replace("    split_wide_objects: false,\n", ""),
+    )
+    .unwrap();
+    let manifest = manifest.to_str().unwrap();
+    let summary = pipeline(&["scene", manifest, "--json"]);
+    assert!(summary.status.success(), "{}", text(&summary));
+    let summary: serde_json::Value = serde_json::from_slice(&summary.stdout).unwrap();
+    assert_eq!(summary["chunks"]["split_objects"], 2, "{summary}");
+    let chunks = summary["chunks"]["chunks"].as_u64().unwrap();
+    assert!(chunks >= 16, "{chunks} chunks");
+
+    let out = tmp.path().join("chunked");
+    let o = run_quiet(manifest, &out, &["--threads", "1"]);
+    assert!(o.status.success(), "{}", text(&o));
+    let plan = format::manifest::parse_manifest(Path::new(manifest)).unwrap();
+    let scene = scene::build_scene(&plan).unwrap();
+    let terrain: Vec<u32> = (0..scene.instances.len() as u32)
+        .filter(|&i| {
+            scene.models[scene.instances[i as usize].model as usize]
+                .name
+                .starts_with("terrain@")
+        })
+        .collect();
+    assert!(terrain.len() >= 12, "{} terrain chunks", terrain.len());
+    let index = Index::read(&out.join("index.pack")).unwrap();
+    let mut proxied = 0;
+    for e in &index.cells {
+        let cell = CellPack::read(&out.join(&e.file)).unwrap();
+        assert!(
+            cell.originals.iter().any(|o| terrain.contains(o)),
+            "cell {} draws no terrain chunk as an original",
+            e.cell_id
+        );
+        proxied += cell
+            .proxies
+            .iter()
+            .flat_map(|p| &p.members)
+            .filter(|m| terrain.contains(&m.instance))
+            .count();
+    }
+    assert!(proxied > 0, "no terrain chunk is ever proxied");
 }

@@ -157,7 +157,22 @@ fn key(source: &ModelSource, pre_rotation_deg: [f32; 3], target_height: f32) -> 
 
 /// Builds the scene of `plan` (steps in the module docs). Deterministic.
 pub fn build_scene(plan: &Plan) -> Result<Scene, SceneError> {
-    Ok(build_with_placements(plan)?.0)
+    Ok(build_scene_with_chunks(plan)?.0)
+}
+
+/// [`build_scene`], also saying how many objects were split into how many chunks
+/// (`pipeline scene`).
+pub fn build_scene_with_chunks(
+    plan: &Plan,
+) -> Result<(Scene, crate::chunk::ChunkStats), SceneError> {
+    let mut scene = build_with_placements(plan)?.0;
+    let mut stats = crate::chunk::ChunkStats::default();
+    // Objects wider than a cell become one chunk per cell (issue 29 item 2).
+    let grid = format::grid::HexGrid::try_new(scene.ground, plan.cells.cell_size);
+    if let (true, Ok(grid)) = (plan.split_wide_objects, grid) {
+        stats = crate::chunk::split_large_objects(&mut scene, &grid);
+    }
+    Ok((scene, stats))
 }
 
 /// A `Tiled` scene ([`format::manifest::TiledSpec`]): the base manifest's scene, its

@@ -11,9 +11,11 @@
 //! - [`park`] and [`city`]: the generated layouts (the paper's statuary parks, issue
 //!   17's city);
 //! - [`build`]: `build_scene(plan) -> Scene` (normalise each model, place the
-//!   instances, tile).
+//!   instances, tile), then [`chunk`]: objects wider than two cells split into one
+//!   chunk per cell.
 
 pub mod build;
+pub mod chunk;
 pub mod city;
 pub mod cleanup;
 pub mod load;

@@ -54,6 +54,8 @@
 //!     //        the floor a cheaper candidate must reach to replace a mesh proxy (not a
 //!     //        guarantee on the mesh proxy); `quality: ()` for the defaults */
 //!     cells_per_job: 4,                                // optional, default 4
+//!     split_wide_objects: true,                        // optional, default true: objects
+//!     //   wider than two cells become one chunk per cell (scene::chunk, issue 29)
 //!     output: "../out/demo",                           // optional, default ../out/<name>
 //! )
 //! ```

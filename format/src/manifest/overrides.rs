@@ -59,6 +59,7 @@ pub const KEYS: &[(&str, &[&str])] = &[
     ("cells.min_eye_height", &[]),
     ("cells.max_eye_height", &[]),
     ("cells_per_job", &[]),
+    ("split_wide_objects", &[]),
 ];
 
 /// Parses one `KEY=VALUE` (the value is checked when applied and validated).
@@ -173,6 +174,7 @@ pub(super) fn apply(raw: &mut RawManifest, o: &Override) -> Result<(), String> {
         "cells.min_eye_height" => raw.cells.min_eye_height = o.number()?,
         "cells.max_eye_height" => raw.cells.max_eye_height = o.number()?,
         "cells_per_job" => raw.cells_per_job = Some(o.integer()?),
+        "split_wide_objects" => raw.split_wide_objects = Some(o.boolean()?),
         other => unreachable!("parse_override only yields known keys, got {other}"),
     }
     Ok(())

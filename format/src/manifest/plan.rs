@@ -192,6 +192,9 @@ pub struct Plan {
     pub cells: CellParams,
     pub bake: BakeParams,
     pub cells_per_job: u32,
+    /// Objects wider than two cells are split into one chunk per cell at import
+    /// (`scene::chunk`, issue 29 item 2); manifest `split_wide_objects`, default true.
+    pub split_wide_objects: bool,
     /// Output directory, resolved against the manifest's folder.
     pub output: PathBuf,
 }

@@ -30,6 +30,14 @@ pub(super) struct RawManifest {
         serialize_with = "bare"
     )]
     pub(super) cells_per_job: Option<u32>,
+    /// Objects wider than two cells split into per-cell chunks (`scene::chunk`);
+    /// default true.
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        serialize_with = "bare"
+    )]
+    pub(super) split_wide_objects: Option<bool>,
     #[serde(
         default,
         skip_serializing_if = "Option::is_none",
@@ -360,6 +368,7 @@ pub fn write_instances_manifest(plan: &Plan, instances: &[InstanceSpec], comment
         cells,
         bake,
         cells_per_job,
+        split_wide_objects,
         output,
     } = plan;
     let CellParams {
@@ -381,6 +390,7 @@ pub fn write_instances_manifest(plan: &Plan, instances: &[InstanceSpec], comment
         },
         bake: RawBake::from(bake),
         cells_per_job: Some(*cells_per_job),
+        split_wide_objects: (!split_wide_objects).then_some(false),
         output: Some(absolute_text(output)),
     };
     // Depth 2: each instance, and `quality`, on one line; every other field on its own.

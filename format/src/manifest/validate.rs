@@ -603,6 +603,7 @@ impl Validator<'_> {
             cells,
             bake,
             cells_per_job,
+            split_wide_objects: raw.split_wide_objects.unwrap_or(true),
             output,
         })
     }

@@ -28,8 +28,8 @@ pub fn run(args: Args) -> Result<(), Failure> {
         );
         return Ok(());
     }
-    let scene = ::scene::build_scene(&plan).map_err(bad_input)?;
-    let summary = pipeline::scene_cmd::summarize(&plan, &scene);
+    let (scene, chunks) = ::scene::build::build_scene_with_chunks(&plan).map_err(bad_input)?;
+    let summary = pipeline::scene_cmd::summarize(&plan, &scene, chunks);
     print_json_or_text(json, &summary, || {
         pipeline::scene_cmd::render_text(&summary)
     });
