@@ -18,7 +18,7 @@
 //! 5. Streaming: [`stream`] (current cell, prefetch thread, priority queue, upload
 //!    budget, LRU eviction; uploads through the renderer).
 //! 6. Frames: [`frame`] (the draw list of each configuration).
-//! 7. Commands: [`run`] (`render`/`compare`), [`view`] (the window), [`overlay`]
+//! 7. Commands: [`run`] (`render`), [`compare`] (`compare`, with [`table`]), [`view`] (the window), [`overlay`]
 //!    (the view's text panel), [`cmd`] (one function per `player` subcommand, with
 //!    its flags), [`testdata`] (synthetic bakes for tests).
 //!
@@ -53,6 +53,7 @@ pub mod bake;
 pub mod camera;
 pub mod clusterlod;
 pub mod cmd;
+pub mod compare;
 pub mod frame;
 pub mod gpu;
 pub mod grid;

@@ -520,7 +520,7 @@ impl Streamer {
     /// `cell`'s packs as a viewer settled in it would draw them, whatever the
     /// camera: the cell and its whole chain of far-field groups resident with every
     /// texture uploaded (outside any budget), no stand-ins. The crossing pop metric
-    /// (issue 31, `run::compare`) draws one pose with the outgoing and the incoming
+    /// (issue 31, `compare::compare`) draws one pose with the outgoing and the incoming
     /// cell this way. `None` when the cell's pack cannot be loaded.
     pub fn settled(
         &mut self,

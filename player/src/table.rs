@@ -2,9 +2,10 @@
 //! the comparison table built from each run's report ([`TableRow::of`]), the
 //! triangles each LOD mode needs to reach the hybrid's object PSNR, interpolated
 //! over a threshold sweep ([`triangles_to_reach`]), and the table as markdown
-//! ([`markdown`]). Plain data: the walk is [`crate::run::compare_runs`].
+//! ([`markdown`]). Plain data: the walk is [`crate::compare::compare_runs`].
 
-use crate::run::{CompareReport, CompareRun, RunBytes};
+use crate::compare::{CompareRun, RunBytes};
+use crate::run::CompareReport;
 use serde::Serialize;
 
 /// One row of the table: a run's figures per frame over the walk.

@@ -8,8 +8,9 @@ mod common;
 use common::{demo_walk, open_player};
 use player::bake::Bake;
 use player::clusterlod::{build_dag, cache_path, ClusterSet, CACHE_DIR};
+use player::compare::{compare, CompareOptions};
 use player::frame::{cluster_list, originals_list, Mode};
-use player::run::{camera_for, compare, CompareOptions, PSNR_CAP};
+use player::run::{camera_for, PSNR_CAP};
 use player::testdata::write_synthetic_bake;
 
 fn demo_bake(dir: &std::path::Path) -> Bake {

@@ -6,9 +6,10 @@
 mod common;
 use common::{assert_has_keys, demo_walk, renderer, COMPARE_KEYS};
 use player::bake::Bake;
+use player::compare::{compare, CompareOptions};
 use player::frame::Mode;
 use player::lod::{build_chain, lod_groups, lod_triangles, LodChain, LodSet};
-use player::run::{camera_for, compare, CompareOptions};
+use player::run::camera_for;
 use player::testdata::write_synthetic_bake;
 
 /// A chain's figures level by level: `triangles [..], errors [..]`.

@@ -8,10 +8,11 @@ use common::{assert_has_keys, demo_walk, open_player as open, renderer, COMPARE_
 use format::pack::{Texture, TextureEncoding};
 use glam::{Vec2, Vec3};
 use player::camera::Camera;
+use player::compare::{compare, CompareOptions};
 use player::frame::Mode;
 use player::gpu::SKY;
 use player::metrics::psnr_y;
-use player::run::{compare, render, CompareOptions, Player, RenderOptions, FRAMES_CSV_HEADER};
+use player::run::{render, Player, RenderOptions, FRAMES_CSV_HEADER};
 use player::stream::{PendingDraw, StreamConfig, Streamer};
 use player::testdata::{capture_camera, quad_in_front, write_quad_bake, write_synthetic_bake};
 use player::DrawOptions;

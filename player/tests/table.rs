@@ -8,9 +8,9 @@ use clap::Parser;
 use common::demo_walk;
 use player::cmd::compare::{multi_compare, runs_of};
 use player::cmd::CompareArgs;
+use player::compare::{compare, CompareOptions, CompareRun};
 use player::frame::Mode;
 use player::metrics::PSNR_CAP;
-use player::run::{compare, CompareOptions, CompareRun};
 use player::table::{reaches, triangles_to_reach, Reach, TableRow};
 use player::testdata::write_synthetic_bake;
 

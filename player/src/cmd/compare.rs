@@ -1,12 +1,13 @@
 //! `player compare`: the hybrid (or the distance-LOD baseline) against the
-//! full-geometry reference along a camera path ([`crate::run::compare`]): PSNR on
+//! full-geometry reference along a camera path ([`crate::compare::compare`]): PSNR on
 //! luminance and SSIM over whole frames and object pixels, also against an
 //! anti-aliased reference; triangle and frame-time ratios; crossing spikes and, with
 //! `--pops`, the pop at each crossing. Prints the report as text or as JSON.
 
 use super::args::{DrawArgs, PathArgs};
+use crate::compare::{CompareOptions, CompareRun};
 use crate::frame::Mode;
-use crate::run::{CompareOptions, CompareReport, CompareRun, RunError};
+use crate::run::{CompareReport, RunError};
 use crate::table::{MultiCompare, TableRow};
 use std::path::PathBuf;
 
@@ -189,7 +190,7 @@ pub fn compare(args: CompareArgs) -> Result<(), RunError> {
         }
         return Ok(());
     }
-    let r = crate::run::compare(&args.out, &path, &opts)?;
+    let r = crate::compare::compare(&args.out, &path, &opts)?;
     if args.json {
         println!(
             "{}",
@@ -201,14 +202,14 @@ pub fn compare(args: CompareArgs) -> Result<(), RunError> {
     Ok(())
 }
 
-/// [`crate::run::compare_runs`] with the table's rows and reaches.
+/// [`crate::compare::compare_runs`] with the table's rows and reaches.
 pub fn multi_compare(
     out: &std::path::Path,
     path: &format::path::CameraPath,
     opts: &CompareOptions,
     runs: &[CompareRun],
 ) -> Result<MultiCompare, RunError> {
-    let results = crate::run::compare_runs(out, path, opts, runs)?;
+    let results = crate::compare::compare_runs(out, path, opts, runs)?;
     let rows: Vec<TableRow> = runs
         .iter()
         .zip(&results)
