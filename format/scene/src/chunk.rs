@@ -19,8 +19,8 @@
 //! every instance of a scene without a grid to split along.
 //!
 //! Determinism: chunks are formed in ascending cell order, vertices in ascending
-//! original order; models no instance uses any more are dropped and the rest keep
-//! their order.
+//! original order; a split model no instance uses any more is dropped and the rest
+//! keep their order. A scene with nothing to split is left exactly as it was.
 
 use format::albedo::AlbedoMap;
 use format::grid::HexGrid;
@@ -54,6 +54,7 @@ pub fn split_large_objects(scene: &mut Scene, grid: &HexGrid) -> ChunkStats {
     let old_labels = std::mem::take(&mut scene.instance_labels);
     let mut instances = Vec::with_capacity(old_instances.len());
     let mut labels = Vec::new();
+    let mut split_models = Vec::new();
     for (i, inst) in old_instances.iter().enumerate() {
         let label = old_labels.get(i).map(str::to_string);
         let chunks = models
@@ -70,6 +71,7 @@ pub fn split_large_objects(scene: &mut Scene, grid: &HexGrid) -> ChunkStats {
         };
         stats.split_objects += 1;
         stats.chunks += chunks.len() as u32;
+        split_models.push(inst.model);
         for (cell, model) in chunks {
             instances.push(Instance {
                 model: models.len() as u32,
@@ -84,8 +86,12 @@ pub fn split_large_objects(scene: &mut Scene, grid: &HexGrid) -> ChunkStats {
             }
         }
     }
-    // Drop the models no instance uses any more (split ones), keeping the order.
-    let mut used = vec![false; models.len()];
+    // Drop the split models no instance uses any more, keeping the order (a model
+    // the manifest lists with no instances stays, as without splitting).
+    let mut used = vec![true; models.len()];
+    for &m in &split_models {
+        used[m as usize] = false;
+    }
     for inst in &instances {
         used[inst.model as usize] = true;
     }
