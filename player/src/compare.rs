@@ -18,7 +18,10 @@ use format::schema::compare::{
     CrossingStats, PopReport,
 };
 // `frames.csv`: one row type, also read by the benchmark tool (issue 28).
-use crate::run::*;
+use crate::run::{
+    camera_for, crossing_stats, frame_row, write_err, write_png, Player, RunError,
+    DEFAULT_REFERENCE_SS, MAX_REFERENCE_SS, PSNR_CAP,
+};
 use format::schema::frames::FrameRow;
 use std::path::{Path, PathBuf};
 

@@ -63,16 +63,30 @@ pub fn originals_list<'a>(bake: &Bake, camera: &Camera, cull: bool) -> DrawList<
     // Issue 30 item 2, fair culling: the per-tile normal-cone and frustum tests the
     // hybrid's originals get (exact: no pixel changes; not the patch bitfields).
     if let Some(runtime) = &bake.exact_patches {
-        list.patched = crate::patches::apply(
-            runtime,
-            &bake.base,
-            &shown,
-            (camera.eye, &f),
-            &bake.instances,
-            &mut list.originals,
-        );
+        patch_originals(&mut list, runtime, bake, &shown, camera, &f);
     }
     list
+}
+
+/// Replaces `list`'s originals of the `shown` instances by their patches that pass
+/// `runtime`'s tests from `camera` (bitfields and normal cones, or the exact tests
+/// alone; `patches::apply`).
+fn patch_originals(
+    list: &mut DrawList<'_>,
+    runtime: &crate::patches::PatchRuntime,
+    bake: &Bake,
+    shown: &[u32],
+    camera: &Camera,
+    f: &Frustum,
+) {
+    list.patched = crate::patches::apply(
+        runtime,
+        &bake.base,
+        shown,
+        (camera.eye, f),
+        &bake.instances,
+        &mut list.originals,
+    );
 }
 
 /// The draw list of the LOD baseline.
@@ -190,14 +204,7 @@ fn cell_list<'a>(
     };
     // Issue 17: the originals' visible patches only (bitfields and normal cones).
     if let Some(runtime) = &bake.patches {
-        list.patched = crate::patches::apply(
-            runtime,
-            &bake.base,
-            &shown,
-            (camera.eye, &f),
-            &bake.instances,
-            &mut list.originals,
-        );
+        patch_originals(&mut list, runtime, bake, &shown, camera, &f);
     }
     list
 }

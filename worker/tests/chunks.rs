@@ -46,7 +46,7 @@ fn a_terrain_becomes_one_chunk_per_cell_and_draws_the_same_pixels() {
     let scene = terrain_scene();
     let grid = HexGrid::new(scene.ground, 20.0);
     let mut split = scene.clone();
-    let stats = scene::chunk::split_large_objects(&mut split, &grid);
+    let stats = scene::chunk::split_wide_objects(&mut split, &grid);
     assert_eq!(
         stats.split_objects, 1,
         "only the terrain is wider than two cells"
@@ -86,7 +86,7 @@ fn a_terrain_becomes_one_chunk_per_cell_and_draws_the_same_pixels() {
     }
     // The same split again: the same scene.
     let mut again = scene.clone();
-    scene::chunk::split_large_objects(&mut again, &grid);
+    scene::chunk::split_wide_objects(&mut again, &grid);
     assert_eq!(again, split);
 
     // No crack: both scenes draw the same colour and depth in every pixel.
@@ -125,7 +125,7 @@ fn objects_of_a_cell_or_two_stay_whole() {
     scene.instances[0].transform = Mat4::from_scale(Vec3::new(70.0, 40.0, 70.0));
     let before = scene.clone();
     let grid = HexGrid::new(scene.ground, 20.0);
-    let stats = scene::chunk::split_large_objects(&mut scene, &grid);
+    let stats = scene::chunk::split_wide_objects(&mut scene, &grid);
     assert_eq!(stats, scene::chunk::ChunkStats::default());
     assert_eq!(scene, before);
 }

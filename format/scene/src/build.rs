@@ -170,7 +170,7 @@ pub fn build_scene_with_chunks(
     // Objects wider than a cell become one chunk per cell (issue 29 item 2).
     let grid = format::grid::HexGrid::try_new(scene.ground, plan.cells.cell_size);
     if let (true, Ok(grid)) = (plan.split_wide_objects, grid) {
-        stats = crate::chunk::split_large_objects(&mut scene, &grid);
+        stats = crate::chunk::split_wide_objects(&mut scene, &grid);
     }
     Ok((scene, stats))
 }

@@ -34,7 +34,7 @@ use std::collections::BTreeMap;
 /// and the city's buildings are.
 pub const MAX_OBJECT_WIDTH_CELLS: f32 = 2.0;
 
-/// What [`split_large_objects`] did, for `pipeline scene` and reports.
+/// What [`split_wide_objects`] did, for `pipeline scene` and reports.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
 pub struct ChunkStats {
     /// Instances split.
@@ -46,7 +46,7 @@ pub struct ChunkStats {
 /// Splits every instance of `scene` wider than [`MAX_OBJECT_WIDTH_CELLS`] cells of
 /// `grid` into one chunk per cell (module docs). Instances keep their order, a split
 /// one replaced in place by its chunks; labels follow (`… chunk of cell N`).
-pub fn split_large_objects(scene: &mut Scene, grid: &HexGrid) -> ChunkStats {
+pub fn split_wide_objects(scene: &mut Scene, grid: &HexGrid) -> ChunkStats {
     let max_width = MAX_OBJECT_WIDTH_CELLS * 2.0 * grid.cell_size();
     let mut stats = ChunkStats::default();
     let mut models = std::mem::take(&mut scene.models);
