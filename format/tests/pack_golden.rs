@@ -4,7 +4,9 @@
 //! (deterministic writer).
 //! Regenerate deliberately with `HEXBAKE_BLESS=1 cargo test -p format --test pack_golden`.
 
-use format::pack::{sample, BasePack, CellPack, Index, PackFile, TextureEncoding, FORMAT_VERSION};
+use format::pack::{
+    sample, BasePack, CellPack, Index, PackFile, SectionKind, TextureEncoding, FORMAT_VERSION,
+};
 use std::path::PathBuf;
 
 fn golden(name: &str) -> PathBuf {
@@ -175,16 +177,102 @@ fn golden_v5_packs_decode_to_the_samples() {
 #[test]
 fn regenerating_the_golden_packs_gives_the_same_bytes() {
     assert_eq!(
-        FORMAT_VERSION, 5,
+        FORMAT_VERSION, 6,
         "a new version needs new golden files; keep the old ones"
     );
-    check_or_bless("base-v5.pack", sample::small_base().encode().unwrap());
-    check_or_bless("cell-v5.pack", sample::small_cell_v4().encode().unwrap());
+    check_or_bless("base-v6.pack", sample::small_base().encode().unwrap());
+    check_or_bless("cell-v6.pack", sample::small_cell_v4().encode().unwrap());
     check_or_bless(
-        "group-v5.pack",
+        "group-v6.pack",
         sample::small_group_v5().encode_group().unwrap(),
     );
-    check_or_bless("index-v5.pack", sample::small_index_v5().encode().unwrap());
+    check_or_bless("index-v6.pack", sample::small_index_v5().encode().unwrap());
+    // The texture store (version 6): a cell and a group naming their textures, and
+    // the store's files, in a bake directory of their own.
+    let tmp = std::env::temp_dir().join(format!("hexbake-golden-store-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&tmp);
+    let cell = sample::small_cell_v4()
+        .encode_reusing(false, None, Some(&tmp))
+        .unwrap();
+    let group = sample::small_group_v5()
+        .encode_reusing(true, None, Some(&tmp))
+        .unwrap();
+    check_or_bless("store-v6/cells/5.pack", cell);
+    check_or_bless("store-v6/groups/1.pack", group);
+    let files = store_files(&tmp);
+    assert_eq!(
+        files.len(),
+        7,
+        "the samples' views hold seven distinct textures"
+    );
+    for (name, bytes) in &files {
+        check_or_bless(&format!("store-v6/{name}"), bytes.clone());
+    }
+    if std::env::var_os("HEXBAKE_BLESS").is_none() {
+        assert_eq!(
+            store_files(&golden("store-v6")).len(),
+            files.len(),
+            "the golden store holds other textures"
+        );
+    }
+    std::fs::remove_dir_all(&tmp).ok();
+}
+
+/// Every file under `<dir>/textures/`, by path relative to `dir`, sorted.
+fn store_files(dir: &std::path::Path) -> Vec<(String, Vec<u8>)> {
+    let mut out = Vec::new();
+    for sub in std::fs::read_dir(dir.join("textures")).unwrap() {
+        for f in std::fs::read_dir(sub.unwrap().path()).unwrap() {
+            let path = f.unwrap().path();
+            let name = path
+                .strip_prefix(dir)
+                .unwrap()
+                .to_string_lossy()
+                .into_owned();
+            out.push((name, std::fs::read(&path).unwrap()));
+        }
+    }
+    out.sort();
+    out
+}
+
+/// Version 6 (issue 27 item 3): the base, index, group and inline cell files hold the
+/// version-5 samples; a cell and a group of `store-v6/` name their textures in the
+/// store, decode to the same samples, and every texture is checked against its name.
+#[test]
+fn golden_v6_packs_decode_to_the_samples() {
+    let open = |name: &str| PackFile::open(&golden(name)).unwrap();
+    assert_eq!(
+        CellPack::read(&golden("cell-v6.pack")).unwrap(),
+        sample::small_cell_v4()
+    );
+    assert_eq!(
+        BasePack::decode(&open("base-v6.pack")).unwrap(),
+        sample::small_base()
+    );
+    assert_eq!(
+        CellPack::decode_group(&open("group-v6.pack")).unwrap(),
+        sample::small_group_v5()
+    );
+    assert_eq!(
+        Index::decode(&open("index-v6.pack")).unwrap(),
+        sample::small_index_v5()
+    );
+    let cell = open("store-v6/cells/5.pack");
+    assert!(cell.section_info(SectionKind::TEXTURES).is_none());
+    assert!(cell.section_info(SectionKind::TEXTURE_REFS).is_some());
+    assert_eq!(CellPack::decode(&cell).unwrap(), sample::small_cell_v4());
+    assert_eq!(
+        CellPack::decode_group(&open("store-v6/groups/1.pack")).unwrap(),
+        sample::small_group_v5()
+    );
+    // The same bytes read from memory have no bake directory to read the store of.
+    let bytes = std::fs::read(golden("store-v6/cells/5.pack")).unwrap();
+    let err = CellPack::from_bytes(&bytes).unwrap_err().to_string();
+    assert!(
+        err.contains("texture-refs") && err.contains("<bake>/cells/"),
+        "{err}"
+    );
 }
 
 /// Issue 16: a cell pack with a layered impostor (section `layered-impostors`)
@@ -196,10 +284,10 @@ fn golden_layered_impostor_pack() {
         CellPack::read(&golden("cell-impostor-v3.pack")).unwrap(),
         sample::small_cell_impostor()
     );
-    let path = golden("cell-impostor-v5.pack");
-    if FORMAT_VERSION == 5 {
+    let path = golden("cell-impostor-v6.pack");
+    if FORMAT_VERSION == 6 {
         check_or_bless(
-            "cell-impostor-v5.pack",
+            "cell-impostor-v6.pack",
             sample::small_cell_impostor().encode().unwrap(),
         );
     }
@@ -227,10 +315,10 @@ fn golden_packs_exercise_every_codec() {
     use format::pack::Codec;
     let mut seen = std::collections::BTreeSet::new();
     for name in [
-        "base-v5.pack",
-        "cell-v5.pack",
-        "group-v5.pack",
-        "index-v5.pack",
+        "base-v6.pack",
+        "cell-v6.pack",
+        "group-v6.pack",
+        "index-v6.pack",
     ] {
         for s in PackFile::read(&golden(name)).unwrap().sections() {
             seen.insert(s.codec as u32);
@@ -254,22 +342,27 @@ fn encoding_reusing_an_earlier_pack_gives_the_same_bytes() {
     let cell = sample::small_cell_v2();
     let fresh = cell.encode().unwrap();
     let prev = PackFile::from_bytes(&fresh).unwrap();
-    assert_eq!(cell.encode_reusing(false, Some(&prev)).unwrap(), fresh);
+    assert_eq!(
+        cell.encode_reusing(false, Some(&prev), None).unwrap(),
+        fresh
+    );
     let mut changed = cell.clone();
     changed.fingerprint = [9; 32];
     assert_eq!(
-        changed.encode_reusing(false, Some(&prev)).unwrap(),
+        changed.encode_reusing(false, Some(&prev), None).unwrap(),
         changed.encode().unwrap()
     );
     changed.proxies.pop();
     assert_eq!(
-        changed.encode_reusing(false, Some(&prev)).unwrap(),
+        changed.encode_reusing(false, Some(&prev), None).unwrap(),
         changed.encode().unwrap()
     );
     let group = sample::small_group();
     assert_eq!(
-        group.encode_reusing(true, Some(&prev)).unwrap(),
+        group.encode_reusing(true, Some(&prev), None).unwrap(),
         group.encode_group().unwrap()
     );
-    assert!(sample::small_cell_v2().encode_reusing(true, None).is_err());
+    assert!(sample::small_cell_v2()
+        .encode_reusing(true, None, None)
+        .is_err());
 }

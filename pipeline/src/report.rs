@@ -11,26 +11,69 @@
 //! The report's schema is `format::schema::report` (re-exported here); this module
 //! builds and renders it.
 
+use format::pack::texture_store::{self, TextureRef};
 use format::pack::{BasePack, PackFile, SectionKind};
 use format::schema::job::error_path;
 use format::schema::plan::{plan_path, read_partial, PlanFile};
 pub use format::schema::report::{
     CellLine, FarFieldStats, FarLevelStats, PaperTable, Report, Storage, WORST_CELLS,
 };
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 use worker::job::{done_record, CellReport};
 
-/// Stored bytes of a pack's `textures` section, from its own section table (0 for a
-/// pack that does not open).
-fn stored_texture_bytes(path: &Path) -> u64 {
-    PackFile::read(path).map_or(0, |pack| {
-        pack.sections()
-            .iter()
-            .filter(|s| s.kind == SectionKind::TEXTURES)
-            .map(|s| s.stored_len)
-            .sum()
-    })
+/// The textures a cell or group pack holds or names: its inline `textures` section's
+/// stored bytes, and (format version 6) each texture of the bake's store it names
+/// with that file's bytes. Nothing for a pack that does not open.
+fn pack_textures(path: &Path) -> (u64, Vec<(TextureRef, u64)>) {
+    let Ok(pack) = PackFile::read(path) else {
+        return (0, Vec::new());
+    };
+    let inline = pack
+        .sections()
+        .iter()
+        .filter(|s| s.kind == SectionKind::TEXTURES)
+        .map(|s| s.stored_len)
+        .sum();
+    let bake = texture_store::bake_dir_of(path);
+    let refs = texture_store::pack_refs(&pack)
+        .unwrap_or_default()
+        .into_iter()
+        .map(|r| {
+            let bytes = bake.map_or(0, |b| {
+                std::fs::metadata(texture_store::texture_path(b, &r)).map_or(0, |m| m.len())
+            });
+            (r, bytes)
+        })
+        .collect();
+    (inline, refs)
+}
+
+/// Adds a pack's textures to `storage` (a store file only the first time `seen`
+/// meets it) and returns the pack's inline texture bytes.
+fn count_textures(
+    storage: &mut Storage,
+    seen: &mut BTreeSet<TextureRef>,
+    path: &Path,
+    group: bool,
+) -> u64 {
+    let (inline, refs) = pack_textures(path);
+    let mut distinct = inline;
+    for (r, bytes) in refs {
+        storage.texture_uses += 1;
+        storage.texture_bytes_per_use += bytes;
+        if seen.insert(r) {
+            storage.store_textures += 1;
+            storage.store_bytes += bytes;
+            distinct += bytes;
+        }
+    }
+    if group {
+        storage.group_texture_bytes += distinct;
+    } else {
+        storage.texture_bytes += distinct;
+    }
+    inline
 }
 
 /// Builds the report of a finished (or partly finished) bake from its files.
@@ -69,6 +112,7 @@ pub fn build_report(out: &Path) -> anyhow::Result<Report> {
     // cell draws).
     let mut groups: BTreeMap<u32, CellReport> = BTreeMap::new();
     let mut far = FarFieldStats::default();
+    let (mut seen, mut inline_cell_textures) = (BTreeSet::new(), 0u64);
     // Only valid done records count (a stale or torn record is not a baked cell);
     // each is checked once (it reads and hashes every pack it lists).
     let records: Vec<Option<worker::job::JobRecord>> =
@@ -84,7 +128,7 @@ pub fn build_report(out: &Path) -> anyhow::Result<Report> {
             for (k, ms) in r.stage_ms.entries() {
                 *report.stage_s.entry(k.to_string()).or_default() += ms / 1000.0;
             }
-            report.storage.group_texture_bytes += stored_texture_bytes(&out.join(&g.file));
+            count_textures(&mut report.storage, &mut seen, &out.join(&g.file), true);
             report.storage.group_bytes += g.bytes;
             groups.insert(g.cell, r.clone());
         }
@@ -174,7 +218,8 @@ pub fn build_report(out: &Path) -> anyhow::Result<Report> {
                 line.bake_ms += ms;
                 *report.stage_s.entry(k.to_string()).or_default() += ms / 1000.0;
             }
-            report.storage.texture_bytes += stored_texture_bytes(&out.join(&c.file));
+            inline_cell_textures +=
+                count_textures(&mut report.storage, &mut seen, &out.join(&c.file), false);
             report.proxies += r.proxy_keys.len() as u64;
             report.proxies_reused += u64::from(r.reused_proxies);
             report.storage.cell_bytes += c.bytes;
@@ -190,11 +235,11 @@ pub fn build_report(out: &Path) -> anyhow::Result<Report> {
         report.far_field = Some(far);
     }
     let s = &mut report.storage;
-    s.mesh_bytes = s.cell_bytes - s.texture_bytes.min(s.cell_bytes);
-    s.total_bytes = s.base_bytes + s.index_bytes + s.cell_bytes + s.group_bytes;
+    s.mesh_bytes = s.cell_bytes - inline_cell_textures.min(s.cell_bytes);
+    s.total_bytes = s.base_bytes + s.index_bytes + s.cell_bytes + s.group_bytes + s.store_bytes;
     // Averages over the baked cells; over none there are none.
     s.per_cell_bytes = if report.cells > 0 {
-        (s.cell_bytes + s.group_bytes) as f64 / report.cells as f64
+        (s.cell_bytes + s.group_bytes + s.store_bytes) as f64 / report.cells as f64
     } else {
         0.0
     };
@@ -335,9 +380,12 @@ pub fn to_markdown(r: &Report) -> String {
     for (k, v) in [
         ("base (models, instances)", s.base_bytes),
         ("cell meshes (indices, masks, tables)", s.mesh_bytes),
-        ("cell textures", s.texture_bytes),
-        ("far-field group packs (all)", s.group_bytes),
-        ("of which textures", s.group_texture_bytes),
+        ("cell textures (each stored once)", s.texture_bytes),
+        ("far-field group packs", s.group_bytes),
+        (
+            "far-field textures (each stored once)",
+            s.group_texture_bytes,
+        ),
         ("index", s.index_bytes),
         ("total", s.total_bytes),
     ] {
@@ -345,6 +393,19 @@ pub fn to_markdown(r: &Report) -> String {
     }
     if r.cells > 0 {
         let _ = writeln!(m, "| per cell (average) | {:.0} |", s.per_cell_bytes);
+    }
+    if s.store_textures > 0 {
+        let _ = writeln!(
+            m,
+            "\nCaptures are stored once (`textures/`, format version 6): {} distinct textures, \
+             {} bytes, for {} uses by cells and groups; a copy per use would take {} bytes \
+             ({:.2}×).",
+            s.store_textures,
+            s.store_bytes,
+            s.texture_uses,
+            s.texture_bytes_per_use,
+            s.texture_bytes_per_use as f64 / s.store_bytes.max(1) as f64
+        );
     }
     if let Some(f) = &r.far_field {
         let _ = writeln!(

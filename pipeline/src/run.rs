@@ -332,6 +332,11 @@ fn write_index(l: &Loaded, done: &[(&Job, JobRecord)]) -> Result<Index, RunError
     };
     let bytes = index.encode().map_err(failed)?;
     format::pack::write_atomic(&l.out.join("index.pack"), &bytes).map_err(failed)?;
+    // Captures no pack names any more (an incremental rebake changed them) leave the
+    // store; the output lock keeps every job of this bake out meanwhile.
+    format::pack::texture_store::sweep_unreferenced(&l.out)
+        .with_context(|| format!("{}: sweeping the texture store", l.out.display()))
+        .map_err(failed)?;
     Ok(index)
 }
 
@@ -424,8 +429,8 @@ const STALE_TEMP_AGE: std::time::Duration = std::time::Duration::from_secs(3600)
 
 /// Takes the output lock, refuses while Slurm tasks of an earlier submission still
 /// write into the output ([`crate::lock::refuse_while_queued`]), and removes the temp
-/// files an interrupted run left in the output, its `cells/`, `jobs/` and `lod/`
-/// ([`format::pack::remove_stale_temps`]).
+/// files an interrupted run left in the output, its `cells/`, `jobs/`, `lod/` and
+/// `textures/` ([`format::pack::remove_stale_temps`]).
 pub fn lock_output(out: &Path) -> Result<OutputLock, RunError> {
     std::fs::create_dir_all(out).map_err(failed)?;
     let lock = OutputLock::acquire(out).map_err(failed)?;
@@ -445,6 +450,14 @@ pub fn lock_output(out: &Path) -> Result<OutputLock, RunError> {
             })
             .map_err(failed)?;
     }
+    format::pack::texture_store::remove_stale_temps(out, STALE_TEMP_AGE)
+        .with_context(|| {
+            format!(
+                "{}: removing temp files of the texture store",
+                out.display()
+            )
+        })
+        .map_err(failed)?;
     Ok(lock)
 }
 

@@ -139,7 +139,13 @@ pub fn done_record(out: &Path, job: &Job) -> Option<JobRecord> {
         // with the recorded size and blake3 is the pack this job wrote for this cell
         // with this fingerprint (checked above), so it is not decoded again here
         // (decoding every pack three times per run cost ~17 CPU s on park-2m).
-        recorded_pack(out, c)?;
+        let bytes = recorded_pack(out, c)?;
+        // Version 6: the pack's textures live in the bake's store, written without
+        // fsync before the pack; the job is only done when each is there and whole.
+        let pack = format::pack::PackFile::from_bytes_named(&bytes, &out.join(&c.file)).ok()?;
+        if format::pack::texture_store::missing_texture(&pack).is_some() {
+            return None;
+        }
     }
     Some(record)
 }
@@ -224,7 +230,7 @@ where
             .ok()
             .and_then(|b| format::pack::PackFile::from_bytes(&b).ok());
         let bytes = pack
-            .encode_reusing(matches!(unit, Unit::Group(_)), previous.as_ref())
+            .encode_reusing(matches!(unit, Unit::Group(_)), previous.as_ref(), Some(out))
             .map_err(|e| failed(e.to_string()))?;
         if let Some(dir) = path.parent() {
             std::fs::create_dir_all(dir).map_err(|e| io(dir, &e))?;
@@ -310,10 +316,14 @@ pub fn previous_proxies(out: &Path, job: &Job) -> std::collections::BTreeMap<Uni
         let Some(bytes) = recorded_pack(out, c) else {
             continue;
         };
-        let pack = match unit {
-            Unit::Cell(_) => CellPack::from_bytes(&bytes),
-            Unit::Group(_) => CellPack::group_from_bytes(&bytes),
-        };
+        // Named by its path, so that a version-6 pack finds its textures in the store.
+        let pack =
+            format::pack::PackFile::from_bytes_named(&bytes, &out.join(&c.file)).and_then(|file| {
+                match unit {
+                    Unit::Cell(_) => CellPack::decode(&file),
+                    Unit::Group(_) => CellPack::decode_group(&file),
+                }
+            });
         let Ok(pack) = pack else {
             continue;
         };

@@ -13,12 +13,14 @@ use super::error::PackError;
 use super::layout::{FileKind, SectionKind};
 use super::reader::PackFile;
 use super::texture::{Texture, TextureEncoding};
+use super::texture_store;
 use super::writer::{
     assemble_reusing, SectionData, RAW_ONLY, TRY_INDICES, TRY_TRIANGLES, TRY_ZSTD,
 };
 use super::{invalid, malformed};
 pub use crate::limits::MAX_MV_VIEWS;
 use bytemuck::{Pod, Zeroable};
+use std::borrow::Cow;
 use std::path::Path;
 
 super::code_enum! {
@@ -333,26 +335,78 @@ fn check_masks(kind: ProxyKind, member: &ProxyMember, view_count: usize) -> Resu
     }
 }
 
+/// The encoded bytes of every view's texture, concatenated in view order: the
+/// `textures` section, or (version 6) the textures `texture-refs` names, read from
+/// the store of the bake directory the pack lies in ([`texture_store`]).
+fn view_textures<'a>(pack: &'a PackFile, views: &[ViewRecord]) -> Result<Cow<'a, [u8]>, PackError> {
+    let file = pack.path();
+    if pack.section_info(SectionKind::TEXTURE_REFS).is_none() {
+        return pack.section(SectionKind::TEXTURES);
+    }
+    if pack.version() < 6 || pack.section_info(SectionKind::TEXTURES).is_some() {
+        return Err(malformed(
+            file,
+            SectionKind::TEXTURE_REFS,
+            0,
+            "texture-refs needs format version 6 and a pack without a textures section",
+        ));
+    }
+    let refs = texture_store::pack_refs(pack)?;
+    if refs.len() != views.len() {
+        return Err(malformed(
+            file,
+            SectionKind::TEXTURE_REFS,
+            0,
+            format!("{} references for {} views", refs.len(), views.len()),
+        ));
+    }
+    let bake = texture_store::bake_dir_of(file).ok_or_else(|| {
+        malformed(
+            file,
+            SectionKind::TEXTURE_REFS,
+            0,
+            "textures in the store can only be read from a pack at <bake>/cells/ or <bake>/groups/",
+        )
+    })?;
+    let mut out = Vec::new();
+    for (r, v) in refs.iter().zip(views) {
+        out.extend_from_slice(&texture_store::read_texture(bake, r, v.data_len)?);
+    }
+    Ok(Cow::Owned(out))
+}
+
+/// Each view's `data_len` (its encoded texture's bytes), in view order.
+pub(crate) fn view_data_lens(pack: &PackFile) -> Result<Vec<u64>, PackError> {
+    let views: Vec<ViewRecord> = pack.section_vec(SectionKind::VIEWS)?;
+    Ok(views.iter().map(|v| v.data_len).collect())
+}
+
 impl CellPack {
     /// The pack's bytes (deterministic).
     pub fn encode(&self) -> Result<Vec<u8>, PackError> {
-        self.encode_as(FileKind::Cell, None)
+        self.encode_as(FileKind::Cell, None, None)
     }
 
     /// [`CellPack::encode`] (or, for a group, [`CellPack::encode_group`]) copying
     /// every section whose content is unchanged from `previous`, an earlier pack of
     /// the same cell or group, instead of compressing it again
     /// ([`super::writer::assemble_reusing`]): the same bytes, faster.
+    ///
+    /// `store`: the bake directory whose texture store ([`super::texture_store`])
+    /// receives the views' textures, which the pack then names in `texture-refs`
+    /// (format version 6, what the worker writes); `None` keeps them inline in
+    /// `textures`.
     pub fn encode_reusing(
         &self,
         group: bool,
         previous: Option<&PackFile>,
+        store: Option<&Path>,
     ) -> Result<Vec<u8>, PackError> {
         if group {
             self.check_group()?;
-            self.encode_as(FileKind::Group, previous)
+            self.encode_as(FileKind::Group, previous, store)
         } else {
-            self.encode_as(FileKind::Cell, previous)
+            self.encode_as(FileKind::Cell, previous, store)
         }
     }
 
@@ -360,7 +414,7 @@ impl CellPack {
     /// a cell pack with file kind `group`; `cell_id` is the group id. A group has no
     /// originals and no group of its own.
     pub fn encode_group(&self) -> Result<Vec<u8>, PackError> {
-        self.encode_reusing(true, None)
+        self.encode_reusing(true, None, None)
     }
 
     fn check_group(&self) -> Result<(), PackError> {
@@ -384,6 +438,7 @@ impl CellPack {
         &self,
         file_kind: FileKind,
         previous: Option<&PackFile>,
+        store: Option<&Path>,
     ) -> Result<Vec<u8>, PackError> {
         if self.far_group == Some(NO_FAR_GROUP) {
             return Err(invalid(format!(
@@ -400,6 +455,7 @@ impl CellPack {
         let mut triangles: Vec<u8> = Vec::new();
         let mut masks = Vec::new();
         let mut textures = Vec::new();
+        let mut refs = Vec::new();
         let mut impostors: Vec<u8> = Vec::new();
         for (p, proxy) in self.proxies.iter().enumerate() {
             check_layers(proxy).map_err(|e| invalid(format!("proxy {p}: {e}")))?;
@@ -452,7 +508,13 @@ impl CellPack {
                     encoding: view.texture.encoding as u32,
                     data_len: view.texture.data.len() as u64,
                 });
-                textures.extend_from_slice(&view.texture.data);
+                match store {
+                    Some(bake) => refs.extend_from_slice(&texture_store::write_texture(
+                        bake,
+                        &view.texture.data,
+                    )?),
+                    None => textures.extend_from_slice(&view.texture.data),
+                }
             }
         }
         let meta = CellMetaRecord {
@@ -473,7 +535,10 @@ impl CellPack {
             SectionData::new(SectionKind::MEMBER_TRIANGLES, triangles, TRY_TRIANGLES),
             SectionData::new(SectionKind::VIEW_MASKS, masks, TRY_ZSTD),
             SectionData::of_records(SectionKind::VIEWS, &views, TRY_ZSTD),
-            SectionData::new(SectionKind::TEXTURES, textures, TRY_ZSTD),
+            match store {
+                Some(_) => SectionData::new(SectionKind::TEXTURE_REFS, refs, RAW_ONLY),
+                None => SectionData::new(SectionKind::TEXTURES, textures, TRY_ZSTD),
+            },
         ];
         // Only packs with layered impostors carry the section, so packs without
         // them stay byte-identical to those of writers that never knew it.
@@ -577,7 +642,7 @@ impl CellPack {
         }
         let triangles = pack_triangles(pack, SectionKind::MEMBER_TRIANGLES)?;
         let masks = pack.section(SectionKind::VIEW_MASKS)?;
-        let textures = pack.section(SectionKind::TEXTURES)?;
+        let textures = view_textures(pack, &views)?;
         let impostors = match pack.section_info(SectionKind::LAYERED_IMPOSTORS) {
             Some(_) => pack.section(SectionKind::LAYERED_IMPOSTORS)?.into_owned(),
             None => Vec::new(),

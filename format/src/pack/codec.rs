@@ -23,7 +23,9 @@ fn pays(raw: usize, stored: usize, prefer_raw: bool) -> bool {
         && (stored as u64).saturating_mul(MAX_EXPANSION) >= raw as u64
 }
 
-fn zstd_compress(bytes: &[u8]) -> Vec<u8> {
+/// One zstd frame of `bytes` at [`ZSTD_LEVEL`] (deterministic): the texture store's
+/// files (`super::texture_store`).
+pub fn zstd_compress(bytes: &[u8]) -> Vec<u8> {
     // Level and parameters fixed; `bulk` compresses in one call without threads.
     zstd::bulk::compress(bytes, ZSTD_LEVEL).expect("zstd compression of an in-memory buffer")
 }

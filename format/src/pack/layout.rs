@@ -11,7 +11,7 @@ use std::fmt;
 /// First 8 bytes of every pack.
 pub const MAGIC: [u8; 8] = *b"HEXBAKE\0";
 /// The format version this crate writes (and the newest it reads).
-pub const FORMAT_VERSION: u32 = 5;
+pub const FORMAT_VERSION: u32 = 6;
 /// Every section starts at a multiple of this many bytes from the file start, so a
 /// memory-mapped (page-aligned) raw section can be viewed as `&[f32]`, `&[[u32; 3]]`...
 pub const SECTION_ALIGN: u64 = 64;
@@ -149,6 +149,9 @@ impl SectionKind {
     pub const LAYERED_IMPOSTORS: SectionKind = SectionKind(0x0209);
     /// Reserved for patch visibility bitfields (paper 002); no v1 writer emits it.
     pub const PATCH_BITFIELDS: SectionKind = SectionKind(0x020a);
+    /// Version 6 (issue 27 item 3): per view, the 32-byte blake3 name of its texture
+    /// in the bake's store (`texture_store`); a pack has this or `textures`, not both.
+    pub const TEXTURE_REFS: SectionKind = SectionKind(0x020b);
     // index.pack
     pub const INDEX_META: SectionKind = SectionKind(0x0301);
     pub const INDEX_CELLS: SectionKind = SectionKind(0x0302);
@@ -185,6 +188,7 @@ impl SectionKind {
             SectionKind::TEXTURES => "textures",
             SectionKind::LAYERED_IMPOSTORS => "layered-impostors",
             SectionKind::PATCH_BITFIELDS => "patch-bitfields",
+            SectionKind::TEXTURE_REFS => "texture-refs",
             SectionKind::INDEX_META => "index-meta",
             SectionKind::INDEX_CELLS => "index-cells",
             SectionKind::INDEX_FILE_NAMES => "index-file-names",

@@ -7,6 +7,7 @@
 //! - [`reader`]: [`PackFile`] — mmap or read, validated before use, lazy sections.
 //! - [`base`], [`cell`], [`index`]: the three files' contents.
 //! - [`texture`]: capture texture encodings.
+//! - [`texture_store`]: the bake's shared store of capture textures (version 6).
 
 pub mod albedo_maps;
 pub mod base;
@@ -19,6 +20,7 @@ pub mod patches;
 pub mod reader;
 pub mod sample;
 pub mod texture;
+pub mod texture_store;
 pub mod writer;
 
 pub use base::{BasePack, GridParams, PackedInstance, PackedModel};

@@ -261,7 +261,7 @@ pub fn remove_stale_temps(
 
 /// `path`'s directory and this process's next temp file for it there
 /// ([`temp_name`]); `None` when `path` names no file.
-fn temp_file_for(path: &Path) -> Option<(PathBuf, PathBuf)> {
+pub(crate) fn temp_file_for(path: &Path) -> Option<(PathBuf, PathBuf)> {
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
         _ => PathBuf::from("."),

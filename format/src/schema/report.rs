@@ -55,17 +55,29 @@ pub struct CellLine {
 pub struct Storage {
     pub base_bytes: u64,
     pub index_bytes: u64,
-    /// Cell-pack bytes holding textures (stored, i.e. after compression).
+    /// Bytes of the cells' textures (stored, i.e. after compression): the `textures`
+    /// sections of cell packs (versions 1–5), or the store's files the cells name and
+    /// no group does, each counted once (version 6).
     pub texture_bytes: u64,
-    /// Cell-pack bytes holding everything else (proxy indices, view masks, tables).
+    /// Cell-pack bytes holding everything but inline textures (proxy indices, view
+    /// masks, tables, texture references).
     pub mesh_bytes: u64,
     pub cell_bytes: u64,
-    /// Far-field group packs (`groups/<id>.pack`), and the part of them holding
-    /// textures (issue 13).
+    /// Far-field group packs (`groups/<id>.pack`), and their textures (issue 13): the
+    /// inline sections, or the store's files the groups name, each counted once.
     pub group_bytes: u64,
     pub group_texture_bytes: u64,
+    /// Format version 6 (issue 27 item 3): distinct textures in the bake's store that
+    /// the packs name, their file bytes (already in `texture_bytes` and
+    /// `group_texture_bytes`, each counted once), how many references the packs make
+    /// to them, and the file bytes of every reference counted again (what inline
+    /// textures, a copy per cell, would have taken).
+    pub store_textures: u64,
+    pub store_bytes: u64,
+    pub texture_uses: u64,
+    pub texture_bytes_per_use: u64,
     pub total_bytes: u64,
-    /// (cell + group pack bytes) / cells.
+    /// (cell + group pack bytes + store bytes) / cells.
     pub per_cell_bytes: f64,
 }
 

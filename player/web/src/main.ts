@@ -13,7 +13,23 @@
 // 1024x768, the native `player view`'s), `path=URL` (a camera path .ron to walk),
 // `budget=MiB` (texture bytes uploaded per frame, default 8), `prefetch=0|1`.
 
-import { decodeBase, decodeCell, decodeIndex, NONE, PackError, PackFile, rgba8 } from "./pack";
+import {
+  decodeBase,
+  decodeCell,
+  decodeIndex,
+  decodeTextureFile,
+  NONE,
+  PackError,
+  PackFile,
+  rgba8,
+  texturePath,
+  textureRefs,
+} from "./pack";
+
+/** Store textures kept decoded between cells (a crossing re-uses the neighbours'
+ * shared captures); cleared whole past this many. */
+const MAX_CACHED_TEXTURES = 4096;
+const textureCache = new Map<string, Promise<Uint8Array>>();
 import type { Base, CellPack, Index, IndexEntry } from "./pack";
 import {
   clipFromWorld,
@@ -469,6 +485,34 @@ function chain(cell: number): { key: string; entry: IndexEntry }[] {
   return out;
 }
 
+/** A version-6 pack's textures from the bake's store (format/README.md
+ * "textures/"), concatenated in view order; `undefined` for inline packs. A texture
+ * shared by neighbouring cells is fetched once while it is cached here. */
+async function storeTextures(file: PackFile): Promise<Uint8Array | undefined> {
+  const refs = textureRefs(file);
+  if (refs.length === 0) return undefined;
+  const parts = await Promise.all(
+    refs.map((r) => {
+      let t = textureCache.get(r);
+      if (!t) {
+        const path = texturePath(r);
+        t = fetchBytes(bakeUrl + path).then((b) => decodeTextureFile(path, b));
+        textureCache.set(r, t);
+        t.catch(() => textureCache.delete(r));
+      }
+      return t;
+    }),
+  );
+  const out = new Uint8Array(parts.reduce((n, p) => n + p.length, 0));
+  let o = 0;
+  for (const p of parts) {
+    out.set(p, o);
+    o += p.length;
+  }
+  if (textureCache.size > MAX_CACHED_TEXTURES) textureCache.clear();
+  return out;
+}
+
 function request(key: string, entry: IndexEntry, priority: boolean) {
   const r = resident.get(key);
   if (r) {
@@ -482,9 +526,9 @@ function request(key: string, entry: IndexEntry, priority: boolean) {
   const bytes = early.get(key) ?? fetchBytes(bakeUrl + entry.file);
   early.delete(key);
   bytes
-    .then((bytes) => {
+    .then(async (bytes) => {
       const file = new PackFile(entry.file, bytes);
-      const pack = decodeCell(file, base);
+      const pack = decodeCell(file, base, await storeTextures(file));
       if (pack.id !== entry.id) throw new PackError(`${entry.file}: holds cell ${pack.id}, index.pack lists ${entry.id}`);
       res.pack = pack;
       res.bytes = bytes.length;

@@ -16,7 +16,7 @@ import { decompress } from "fzstd";
 export class PackError extends Error {}
 
 const MAGIC = [0x48, 0x45, 0x58, 0x42, 0x41, 0x4b, 0x45, 0x00];
-export const MAX_VERSION = 5;
+export const MAX_VERSION = 6;
 export const KIND = { base: 1, cell: 2, index: 3, group: 4 } as const;
 
 interface Section {
@@ -458,7 +458,36 @@ export interface CellPack {
   proxies: Proxy[];
 }
 
-export function decodeCell(file: PackFile, base: Base): CellPack {
+/** Version 6 (format/README.md "textures/"): the 32-byte blake3 names of the
+ * views' textures in the bake's store, in view order; empty for a pack that keeps
+ * them inline (section `textures`). */
+export function textureRefs(file: PackFile): string[] {
+  const refs = file.section(0x020b, true);
+  if (refs.length % 32 !== 0) throw new PackError(`${file.name}: texture-refs: ${refs.length} bytes, not 32-byte references`);
+  const out: string[] = [];
+  for (let o = 0; o < refs.length; o += 32)
+    out.push(Array.from(refs.subarray(o, o + 32), (b) => b.toString(16).padStart(2, "0")).join(""));
+  return out;
+}
+
+/** The store path of a texture reference, relative to the bake folder. */
+export function texturePath(ref: string): string {
+  return `textures/${ref.slice(0, 2)}/${ref}.tex`;
+}
+
+/** A store file's encoded texture bytes (one zstd frame). Not hash-checked here:
+ * the native reader does (module notes). */
+export function decodeTextureFile(name: string, bytes: Uint8Array): Uint8Array {
+  try {
+    return decompress(bytes);
+  } catch (e) {
+    throw new PackError(`${name}: not a zstd frame: ${e}`);
+  }
+}
+
+/** `textures`: the textures of a version-6 pack fetched from the store, concatenated
+ * in view order (what its `textures` section would hold); omitted for inline packs. */
+export function decodeCell(file: PackFile, base: Base, textures?: Uint8Array): CellPack {
   if (file.fileKind !== KIND.cell && file.fileKind !== KIND.group)
     throw new PackError(`${file.name}: file kind ${file.fileKind}, not a cell or group pack`);
   const n = file.name;
@@ -477,7 +506,7 @@ export function decodeCell(file: PackFile, base: Base): CellPack {
   const tris = new Reader(file.section(0x0205), `${n}: member-triangles`);
   const masks = file.section(0x0206);
   const views = new Reader(file.section(0x0207), `${n}: views`);
-  const tex = file.section(0x0208);
+  const tex = textures ?? file.section(0x0208);
   const lay = new Reader(file.section(0x0209, true), `${n}: layered-impostors`);
   let mi = 0,
     ti = 0,
