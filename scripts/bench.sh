@@ -47,7 +47,7 @@
 #   BENCH_DEVIATIONS / BENCH_BASE_DEV                 (defaults "0 0.5 1 2" / the manifest's 0.5)
 #   BENCH_OUT           bake outputs: $BENCH_OUT/<scene> (default out)
 #   BENCH_RESULTS       run files and plots            (default docs/bench)
-#   BENCH_DOC           document to regenerate         (default BENCHMARKS.md)
+#   BENCH_DOC           document to regenerate         (default docs/bench/paper.md)
 #   BENCH_SIZE          player frame size, e.g. 512x512 (default: the path's, 1024²)
 #   BENCH_LOD_ERRORS    --lod-pixel-error values for the lod baseline (default "1 4";
 #                       --full "0.0625 0.125 0.25 0.5 1 2 4"; "default": the player's
@@ -116,7 +116,7 @@ fi
 : "${BENCH_BASE_DEV:=0.5}"
 : "${BENCH_OUT:=out}"
 : "${BENCH_RESULTS:=docs/bench}"
-: "${BENCH_DOC:=BENCHMARKS.md}"
+: "${BENCH_DOC:=docs/bench/paper.md}"
 : "${BENCH_SIZE:=}"
 : "${BENCH_THREADS:=}"
 : "${BENCH_FETCH:=1}"
@@ -385,7 +385,8 @@ RESULT=$BENCH_RESULTS/run-$RUN_ID.json
 say "collecting $RESULT"
 "$BENCH" collect "$WORK" --out "$RESULT" || FAILED+=("collect")
 say "regenerating $BENCH_DOC"
-"$BENCH" tables --results "$BENCH_RESULTS" --write "$BENCH_DOC" || FAILED+=("tables")
+"$BENCH" tables --results "$BENCH_RESULTS" --write "$BENCH_DOC" \
+    --plot-prefix "$(realpath --relative-to "$(dirname "$BENCH_DOC")" "$BENCH_RESULTS")" || FAILED+=("tables")
 
 if [ "${#FAILED[@]}" -gt 0 ]; then
     printf '\nbench.sh: finished with failures:\n' >&2

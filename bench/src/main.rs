@@ -60,9 +60,10 @@ enum Command {
         #[arg(long, default_value = "docs/bench")]
         results: PathBuf,
         /// The document to rewrite between its `<!-- bench:NAME -->` markers.
-        #[arg(long, default_value = "BENCHMARKS.md")]
+        #[arg(long, default_value = "docs/bench/paper.md")]
         write: PathBuf,
-        /// How the document links the plots (default: --results as given).
+        /// How the document links the plots (default: "." when the document lies in
+        /// --results, else --results as given).
         #[arg(long)]
         plot_prefix: Option<String>,
     },
@@ -128,7 +129,13 @@ fn run(cmd: Command) -> anyhow::Result<()> {
             write,
             plot_prefix,
         } => {
-            let prefix = plot_prefix.unwrap_or_else(|| results.display().to_string());
+            let prefix = plot_prefix.unwrap_or_else(|| {
+                if write.parent() == Some(results.as_path()) {
+                    ".".to_string()
+                } else {
+                    results.display().to_string()
+                }
+            });
             let r = hexbake_bench::tables::regenerate(&results, &write, &prefix)?;
             println!(
                 "{}: {} sections from {} run file(s) in {}; {} plot(s)",

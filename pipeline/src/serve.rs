@@ -6,7 +6,7 @@
 //! Mounts (all `GET` or `HEAD`):
 //!
 //! - `/bake/<path>`: files of the bake folder (`index.pack`, `base.pack`,
-//!   `cells/<id>.pack`, `groups/<id>.pack`, …);
+//!   `cells/<id>.pack`, `groups/<id>.pack`, `textures/<h>/<h>.tex`, …);
 //! - `/shader.wgsl`: the player's WGSL exactly as the native player compiles it
 //!   (`format::shading::wgsl_constants()` then `player/src/shader.wgsl`, included at
 //!   build time: the same text as `player::gpu::shader_source()`, so the two viewers

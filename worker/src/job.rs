@@ -12,6 +12,9 @@
 //!                            written atomically AFTER all its packs (the journal's "end")
 //! <out>/index.pack           assembled once every job is done
 //! <out>/lod/<hash>.lod       per-model LOD chains (crate::lod_chain), a cache
+//! <out>/textures/<h>/<h>.tex the captures, each stored once under its content hash
+//!                            and named by the packs (format version 6), written
+//!                            before the pack that names them
 //! ```
 //!
 //! The record, the job list and these paths are `format::schema::job` (one schema
@@ -22,7 +25,8 @@
 //! proxy whose key is unchanged is taken from the previous pack instead of derived
 //! ([`previous_proxies`]).
 //!
-//! A job is done when its record exists with the job's current fingerprint and every
+//! A job is done when its record exists with the job's current fingerprint, every
+//! texture its packs name is in the store and whole, and every
 //! cell pack it lists has the size and blake3 checksum in the record (the record is
 //! written after the packs, so that is the pack the job wrote). Anything else (a crash at any moment, a changed model or parameter,
 //! a corrupt pack) means the job is run again, from scratch. Since packs are written
