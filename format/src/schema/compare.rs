@@ -333,7 +333,7 @@ impl PopReport {
 }
 
 /// serde_json writes a non-finite f64 as `null`: read it back as NaN.
-fn is_zero_u64(v: &u64) -> bool {
+pub(super) fn is_zero_u64(v: &u64) -> bool {
     *v == 0
 }
 

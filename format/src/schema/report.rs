@@ -72,9 +72,14 @@ pub struct Storage {
     /// `group_texture_bytes`, each counted once), how many references the packs make
     /// to them, and the file bytes of every reference counted again (what inline
     /// textures, a copy per cell, would have taken).
+    /// (Absent, i.e. 0, in reports of bakes before version 6: they round-trip.)
+    #[serde(skip_serializing_if = "super::compare::is_zero_u64")]
     pub store_textures: u64,
+    #[serde(skip_serializing_if = "super::compare::is_zero_u64")]
     pub store_bytes: u64,
+    #[serde(skip_serializing_if = "super::compare::is_zero_u64")]
     pub texture_uses: u64,
+    #[serde(skip_serializing_if = "super::compare::is_zero_u64")]
     pub texture_bytes_per_use: u64,
     pub total_bytes: u64,
     /// (cell + group pack bytes + store bytes) / cells.

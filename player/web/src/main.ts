@@ -490,7 +490,7 @@ function chain(cell: number): { key: string; entry: IndexEntry }[] {
  * shared by neighbouring cells is fetched once while it is cached here. */
 async function storeTextures(file: PackFile): Promise<Uint8Array | undefined> {
   const refs = textureRefs(file);
-  if (refs.length === 0) return undefined;
+  if (refs === null) return undefined;
   const parts = await Promise.all(
     refs.map((r) => {
       let t = textureCache.get(r);

@@ -459,9 +459,10 @@ export interface CellPack {
 }
 
 /** Version 6 (format/README.md "textures/"): the 32-byte blake3 names of the
- * views' textures in the bake's store, in view order; empty for a pack that keeps
+ * views' textures in the bake's store, in view order; `null` for a pack that keeps
  * them inline (section `textures`). */
-export function textureRefs(file: PackFile): string[] {
+export function textureRefs(file: PackFile): string[] | null {
+  if (!file.has(0x020b)) return null;
   const refs = file.section(0x020b, true);
   if (refs.length % 32 !== 0) throw new PackError(`${file.name}: texture-refs: ${refs.length} bytes, not 32-byte references`);
   const out: string[] = [];
