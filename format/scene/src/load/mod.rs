@@ -24,6 +24,7 @@ mod stl;
 
 use crate::cleanup::{finish_mesh, CleanupError, CleanupStats, RawMesh};
 use format::mesh::Mesh;
+pub use gltf::GltfCaps;
 pub use gltf_scene::{
     load_gltf_scene, load_gltf_scene_with, parse_gltf_scene, GltfInstance, GltfModel, GltfObjects,
     GltfOptions, GltfScene,
