@@ -763,3 +763,34 @@ fn issue32_gltf_strides_and_sparse_accessors_are_checked() {
         "{e}"
     );
 }
+
+/// Issue 32 item 4, the structure-aware fuzz mode as a test: 600 random node graphs
+/// (`gltf_sample::node_graph`) each get the verdict their structure calls for, and
+/// the generator reaches every kind of graph (accepted, and each refusal).
+#[test]
+fn issue32_random_node_graphs_get_the_expected_verdict() {
+    use format::pack::sample::SplitMix;
+    use scene::load::gltf_sample::{check_node_graph, node_graph, GraphFault};
+    let mut rng = SplitMix(32);
+    let mut seen = std::collections::BTreeSet::new();
+    for run in 0..600 {
+        let choices: Vec<u8> = (0..512).map(|_| rng.next_u64() as u8).collect();
+        let graph = node_graph(&choices);
+        if let Err(what) = check_node_graph(&graph) {
+            panic!("graph {run}: {what}\n{}", graph.json);
+        }
+        seen.insert(format!("{:?}", graph.expected.map(|_| ())));
+    }
+    for fault in [
+        GraphFault::TwoParents,
+        GraphFault::RootWithParent,
+        GraphFault::ZeroRotation,
+        GraphFault::VisitedTwice,
+        GraphFault::TooDeep,
+        GraphFault::NoMesh,
+    ] {
+        let key = format!("{:?}", Err::<(), _>(fault));
+        assert!(seen.contains(&key), "no graph was {fault:?}: {seen:?}");
+    }
+    assert!(seen.contains("Ok(())"), "{seen:?}");
+}

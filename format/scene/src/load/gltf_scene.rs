@@ -371,9 +371,16 @@ pub fn load_gltf_scene_with(path: &Path, options: GltfOptions) -> Result<GltfSce
 /// [`load_gltf_scene`] of `bytes` already read from `path` (external buffers and
 /// images resolve against `path`'s folder); what the fuzz targets call.
 pub fn parse_gltf_scene(path: &Path, bytes: &[u8]) -> Result<GltfScene, LoadError> {
-    super::guarded(path, FORMAT, || {
-        parse_scene(path, bytes, GltfOptions::default())
-    })
+    parse_gltf_scene_with(path, bytes, GltfOptions::default())
+}
+
+/// [`parse_gltf_scene`] with options (the structure-aware fuzzers read both ways).
+pub fn parse_gltf_scene_with(
+    path: &Path,
+    bytes: &[u8],
+    options: GltfOptions,
+) -> Result<GltfScene, LoadError> {
+    super::guarded(path, FORMAT, || parse_scene(path, bytes, options))
 }
 
 /// Refuses a file that requires extensions hexbake does not read (any but
