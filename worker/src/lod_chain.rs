@@ -226,17 +226,19 @@ impl LodChain {
     ///
     /// 1. [`CHAIN_LEVELS`] levels (none for a model without triangles or extent),
     ///    level k's bound exactly [`level_bound`]`(diag, k)`;
-    /// 2. a simplification of the model ([`crate::simplify::validate`]: only vertices
-    ///    the model's triangles use, no degenerate or repeated triangle, manifold
-    ///    wherever the model is, consistently wound there) with no more triangles
-    ///    than the finer level and only vertices the finer level keeps (nested);
+    /// 2. a simplification of the finer level, the model for level 1
+    ///    ([`crate::simplify::validate`]: only vertices the finer level uses, no
+    ///    degenerate or repeated triangle, manifold wherever the finer level is,
+    ///    consistently wound there), with no more triangles than it;
     /// 3. every vertex the model's triangles use either on the level or carried by
     ///    exactly one of its triangles, and no other vertex carried;
     /// 4. `max_error` exactly the largest distance of a carried vertex from its
     ///    carrying triangle, recomputed ([`max_carried_distance`]).
     ///
     /// A chain rewritten with other valid vertex ids breaks one of them; the caller
-    /// then rebuilds it. Costs a sort of each level's edges: far less than a build.
+    /// then rebuilds it. Costs a sort of each level's edges: on the demo's 11 models
+    /// (218k triangles, 2 threads) loading takes 0.3–0.45 s instead of 0.07 s, a
+    /// build 3.8–4.3 s.
     pub fn from_file(file: LodChainFile, model: &Model) -> Result<LodChain, ChainMismatch> {
         let mesh = &model.mesh;
         if file.revision != CHAIN_REVISION {
@@ -318,7 +320,7 @@ fn check_levels(levels: &[LodLevelData], mesh: &Mesh) -> Result<(), ChainMismatc
     }
     // Level 0 is the model.
     let mut on_finer = used.clone();
-    let mut finer_triangles = mesh.triangles.len();
+    let mut finer: &[[u32; 3]] = &mesh.triangles;
     for (k, level) in levels.iter().enumerate() {
         let bad = |what: String| ChainMismatch::Level { level: k + 1, what };
         let bound = level_bound(diag, k as u32);
@@ -329,18 +331,25 @@ fn check_levels(levels: &[LodLevelData], mesh: &Mesh) -> Result<(), ChainMismatc
             )));
         }
         // 2. A nested simplification of the model.
-        if level.triangles.len() > finer_triangles {
+        if level.triangles.len() > finer.len() {
             return Err(bad(format!(
-                "{} triangles, more than the {finer_triangles} of the finer level",
-                level.triangles.len()
+                "{} triangles, more than the {} of the finer level",
+                level.triangles.len(),
+                finer.len()
             )));
         }
+        // Against the finer level, the input of its collapse (each level is
+        // validated against the one it continues: cheaper than the model 12 times,
+        // and the same rules hold from the model down).
         let simplified = crate::simplify::Simplified {
             triangles: level.triangles.clone(),
             ..Default::default()
         };
-        crate::simplify::validate(n, &mesh.triangles, &simplified)
-            .map_err(|e| bad(format!("not a simplification of the model: {e}")))?;
+        crate::simplify::validate(n, finer, &simplified).map_err(|e| {
+            bad(format!(
+                "not a simplification of the finer level (or the model): {e}"
+            ))
+        })?;
         let mut on = vec![false; n];
         for &v in level.triangles.iter().flatten() {
             if !on_finer[v as usize] {
@@ -390,7 +399,7 @@ fn check_levels(levels: &[LodLevelData], mesh: &Mesh) -> Result<(), ChainMismatc
             )));
         }
         on_finer = on;
-        finer_triangles = level.triangles.len();
+        finer = &level.triangles;
     }
     Ok(())
 }
