@@ -7,19 +7,22 @@
 # With `cargo fuzz` and a nightly toolchain: runs the libFuzzer targets of fuzz/
 # (pack_base, pack_cell, pack_index, seeded with the golden packs of tests/data/;
 # gltf_scene, the glTF scene reader of issue 18, seeded with the textured sample
-# scene of scene::load::gltf_sample).
+# scene of scene::load::gltf_sample; gltf_graph, structure-aware (issue 32): the
+# bytes spell a node graph, scene::load::gltf_sample::node_graph, whose verdict the
+# reader must reach).
 # Otherwise (no nightly or no cargo-fuzz; fuzz/ is then not built), the stable fallback driver
 # (format/examples/fuzz_packs.rs: seeded random mutations of the sample packs,
 # checksums resealed half the time) runs for SECONDS per target-equivalent instead,
 # and format/scene/examples/fuzz_gltf.rs (mutations of the sample glTF scene, JSON and GLB)
-# for SECONDS.
+# for SECONDS, then its graph mode (random node graphs against their verdicts) for
+# SECONDS.
 # Exit status: non-zero on any crash/panic or build failure.
 set -euo pipefail
 
 repo=$(cd "$(dirname "$0")/.." && pwd)
 cd "$repo"
 arg=${1:-60}
-targets=(pack_base pack_cell pack_index gltf_scene)
+targets=(pack_base pack_cell pack_index gltf_scene gltf_graph)
 
 have_cargo_fuzz() {
     command -v cargo-fuzz >/dev/null 2>&1 || cargo fuzz --version >/dev/null 2>&1
@@ -39,6 +42,8 @@ if have_cargo_fuzz && have_nightly; then
         mkdir -p "$corpus"
         if [ "$t" = gltf_scene ]; then
             cargo run -q -p scene --example write_gltf_sample -- "$corpus" >/dev/null
+        elif [ "$t" = gltf_graph ]; then
+            : # any bytes spell a graph: libFuzzer starts from nothing
         else
             cp tests/data/*.pack "$corpus"/
         fi
@@ -58,4 +63,5 @@ else
         cargo run -q -p format --example fuzz_packs -- "$arg" "$((i + 1))"
     done
     cargo run -q -p scene --example fuzz_gltf -- "$arg" 1
+    cargo run -q -p scene --example fuzz_gltf -- "$arg" 1 graph
 fi

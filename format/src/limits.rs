@@ -35,3 +35,19 @@ pub const MAX_BLOCKS: u64 = 100_000;
 
 /// Most windows one façade of one building may have.
 pub const MAX_WINDOWS_PER_FACADE: u64 = 20_000;
+
+/// Most instances one glTF scene may place (issue 32 item 4; `scene::load`'s
+/// `GltfCaps`): a node is placed once per base-colour texture of its mesh, and a
+/// file of a few megabytes can list millions of nodes.
+pub const MAX_GLTF_INSTANCES: u64 = 1 << 24;
+
+/// Most triangles read from one glTF file, over every primitive read (issue 32 item
+/// 4): a mesh that nodes place at several non-uniform scales is read once per scale
+/// (the scale is baked into a model each time), so a small file can make one mesh's
+/// triangles many times over. 2²⁷ ≈ 134M: ten times the largest scenes we read.
+pub const MAX_GLTF_TRIANGLES: u64 = 1 << 27;
+
+/// Most vertices (POSITION elements) read from one glTF file, counted as
+/// [`MAX_GLTF_TRIANGLES`] are; it also bounds a sparse accessor without a buffer
+/// view, whose count no bytes bound.
+pub const MAX_GLTF_VERTICES: u64 = 1 << 27;

@@ -2,8 +2,11 @@
 //! the worker's per-model chains of coarser levels (`worker::lod_chain`, DESIGN.md
 //! "Cost structure"). A chain depends only on the model's mesh and the chain
 //! parameters, so it is computed once per model and reused by every cell and every
-//! rerun; a file that does not decode, or was made for another model or chain
-//! revision, is simply rebuilt (it is a cache, never an input of record).
+//! rerun; a file that does not decode, was made for another model or chain
+//! revision, or is not a chain of the model it names (every level checked against
+//! the model: `worker::lod_chain::LodChain::from_file`, issue 32 item 2), is simply
+//! rebuilt (it is a cache, never an input of record; its checksum says only that
+//! the payload is whole).
 //!
 //! Layout (little-endian; `format/README.md` "LOD chain files"):
 //!

@@ -1186,6 +1186,48 @@ fn degenerate_values_are_refused_by_name() {
     );
 }
 
+/// Issue 32 item 3: the same degenerate values are refused when a pack that holds
+/// them is read (written by another writer, checksums valid), naming the section and
+/// the record's offset: an all-zero instance transform, one whose y column is zero
+/// (scale 0 along y), and a proxy view's matrix of zeros.
+#[test]
+fn issue32_degenerate_values_are_refused_at_decode() {
+    let base = sample::small_base().encode().unwrap();
+    let zeros = |n: usize| vec![0u8; n];
+    assert_refused(
+        FileKind::Base,
+        &base,
+        vec![
+            (
+                SectionKind::INSTANCES,
+                0,
+                zeros(64),
+                0,
+                "instance 0: transform",
+            ),
+            (
+                SectionKind::INSTANCES,
+                80 + 16,
+                zeros(12),
+                80,
+                "is singular",
+            ),
+        ],
+    );
+    let cell = sample::small_cell().encode().unwrap();
+    assert_refused(
+        FileKind::Cell,
+        &cell,
+        vec![(
+            SectionKind::VIEWS,
+            96,
+            zeros(64),
+            96,
+            "texture matrix is all zeros",
+        )],
+    );
+}
+
 /// Issue 32: the index is checked against the base pack it is read with: a cell
 /// past the grid and a neighbour that is not adjacent are refused, naming both.
 #[test]

@@ -180,6 +180,68 @@ fn demo_bake_from_lod_chains_is_valid_deterministic_and_close() {
     assert!(with > without - 1.0, "{with} vs {without}");
 }
 
+/// Issue 32 item 2: a LOD chain in `lod/` rewritten with other valid vertex ids and
+/// re-sealed (its checksum recomputed, as `LodChainFile::encode` does) was loaded and
+/// changed the cell's pack. A chain is now checked against the model it names
+/// (`LodChain::from_file`): this one does not match, so it is rebuilt (and the cache
+/// rewritten), and the cell's pack is the clean bake's byte for byte.
+#[test]
+fn issue32_a_forged_lod_chain_is_rebuilt_and_the_pack_unchanged() {
+    use format::lod::LodChainFile;
+    use worker::lod_chain::chain_path;
+    let (scene, grid, cells, params, cell) = demo_at_busy_cell();
+    let cache = tempfile::tempdir().unwrap();
+    let (chains, _) = LodChains::prepare(&scene, Some(cache.path())).unwrap();
+    let pack = |chains: &LodChains| {
+        let reuse = worker::bake::ProxyReuse::new();
+        bake_cell_with(&scene, chains, &reuse, &grid, cell, &cells, &params, None)
+            .unwrap()
+            .to_pack([7u8; 32])
+            .unwrap()
+            .encode()
+            .unwrap()
+    };
+    let clean = pack(&chains);
+    // Every level of every chain: each vertex id of the level's triangles moved to
+    // the next id the level uses (all ids stay valid, every count stays), sealed anew.
+    let mut forged = 0;
+    for model in &scene.models {
+        let path = chain_path(cache.path(), &model.content_hash);
+        let mut file = LodChainFile::decode(&std::fs::read(&path).unwrap()).unwrap();
+        for level in &mut file.levels {
+            let mut ids: Vec<u32> = level.triangles.iter().flatten().copied().collect();
+            ids.sort_unstable();
+            ids.dedup();
+            let next = |v: u32| {
+                let k = ids.binary_search(&v).unwrap();
+                ids[(k + 1) % ids.len()]
+            };
+            for t in &mut level.triangles {
+                *t = t.map(next);
+            }
+        }
+        if file.levels.iter().any(|l| !l.triangles.is_empty()) {
+            std::fs::write(&path, file.encode()).unwrap();
+            assert!(LodChainFile::decode(&std::fs::read(&path).unwrap()).is_ok());
+            forged += 1;
+        }
+    }
+    assert!(forged > 0);
+    let (again, stats) = LodChains::prepare(&scene, Some(cache.path())).unwrap();
+    assert_eq!(
+        stats.built, forged,
+        "every forged chain is rebuilt: {stats:?}"
+    );
+    assert_eq!(stats.loaded as usize, scene.models.len() - forged as usize);
+    for m in 0..scene.models.len() as u32 {
+        assert_eq!(again.get(m), chains.get(m), "model {m}");
+    }
+    assert!(pack(&again) == clean, "the cell's pack changed");
+    // The rebuilt chains were written back: the next run loads them all.
+    let (_, stats) = LodChains::prepare(&scene, Some(cache.path())).unwrap();
+    assert_eq!(stats.loaded as usize, scene.models.len());
+}
+
 #[test]
 fn demo_check_cell_gives_a_good_psnr() {
     let (scene, grid, cells, params, cell) = demo_at_busy_cell();

@@ -1160,6 +1160,11 @@ proptest! {
                 prop_assert_eq!(count[v as usize], 1, "level {}: vertex {}", k, v);
             }
         }
+        // Issue 32 item 2: the chain, written and read back, matches its model (a
+        // cached chain that failed the check would be rebuilt on every run).
+        let file = format::lod::LodChainFile::decode(&chain.to_file(mesh.positions.len() as u32).encode()).unwrap();
+        let back = worker::lod_chain::LodChain::from_file(file, &model);
+        prop_assert_eq!(back.as_ref(), Ok(&chain));
     }
 
     /// End to end: a cell's bounded collapse that starts from any chain level, with
@@ -1233,7 +1238,7 @@ fn lod_chain_file_round_trips_and_refuses_damage() {
         content_hash: [2; 32],
         ..model.clone()
     };
-    assert!(worker::lod_chain::LodChain::from_file(file, &other).is_none());
+    assert!(worker::lod_chain::LodChain::from_file(file, &other).is_err());
     for cut in [0, 10, 95, bytes.len() - 1] {
         assert!(
             format::lod::LodChainFile::decode(&bytes[..cut]).is_err(),
@@ -1244,6 +1249,96 @@ fn lod_chain_file_round_trips_and_refuses_damage() {
     let last = flipped.len() - 1;
     flipped[last] ^= 1;
     assert!(format::lod::LodChainFile::decode(&flipped).is_err());
+}
+
+/// Issue 32 item 2: a chain file whose seal is valid but whose content is not the
+/// chain of the model it names is refused by [`LodChain::from_file`], saying which
+/// level breaks which rule: each forgery below keeps every vertex id valid.
+#[test]
+fn issue32_lod_chain_files_that_do_not_match_their_model_are_refused() {
+    use worker::lod_chain::{ChainMismatch, LodChain};
+    let mesh = icosphere(3, Vec3::ZERO, 3.0, &[0.3, -0.2, 0.1, 0.05]);
+    let model = model_of(&mesh);
+    let chain = LodChain::build(&model).unwrap();
+    let file = chain.to_file(mesh.positions.len() as u32);
+    let refused = |edit: &dyn Fn(&mut format::lod::LodChainFile)| -> ChainMismatch {
+        let mut forged = file.clone();
+        edit(&mut forged);
+        // Sealed anew: the forgery decodes.
+        let forged = format::lod::LodChainFile::decode(&forged.encode()).unwrap();
+        LodChain::from_file(forged, &model).unwrap_err()
+    };
+    let level = |e: &ChainMismatch| match e {
+        ChainMismatch::Level { level, what } => (*level, what.clone()),
+        other => panic!("not a level's mismatch: {other}"),
+    };
+    // A triangle of level 3 wound the other way.
+    let e = refused(&|f| f.levels[2].triangles[0].swap(1, 2));
+    let (k, what) = level(&e);
+    assert!(k == 3 && what.contains("not a simplification"), "{e}");
+    // One corner moved to another vertex of the level.
+    let e = refused(&|f| {
+        let t = &mut f.levels[5].triangles;
+        let other = t
+            .iter()
+            .flatten()
+            .copied()
+            .find(|v| !t[0].contains(v))
+            .unwrap();
+        t[0][0] = other;
+    });
+    assert_eq!(level(&e).0, 6, "{e}");
+    // The coarsest level replaced by a finer one (its own carriers and error, all
+    // consistent) under the coarse bound: not nested below level 11.
+    let e = refused(&|f| {
+        let bound = f.levels[11].bound;
+        f.levels[11] = format::lod::LodLevelData {
+            bound,
+            ..f.levels[0].clone()
+        };
+    });
+    let (k, what) = level(&e);
+    assert!(k == 12 && what.contains("triangles, more than"), "{e}");
+    // A recorded error smaller than the carriers' distance.
+    let e = refused(&|f| f.levels[4].max_error *= 0.5);
+    let (k, what) = level(&e);
+    assert!(k == 5 && what.contains("max_error"), "{e}");
+    // A carried vertex dropped, and one carried twice.
+    let carrier = |f: &format::lod::LodChainFile| {
+        f.levels[7]
+            .carried
+            .iter()
+            .position(|c| !c.is_empty())
+            .unwrap()
+    };
+    let e = refused(&|f| {
+        let c = carrier(f);
+        f.levels[7].carried[c].pop();
+    });
+    let (k, what) = level(&e);
+    assert!(
+        k == 8 && what.contains("neither on the level nor carried"),
+        "{e}"
+    );
+    let e = refused(&|f| {
+        let c = carrier(f);
+        let v = f.levels[7].carried[c][0];
+        f.levels[7].carried[c].push(v);
+    });
+    assert!(level(&e).1.contains("carried twice"), "{e}");
+    // A bound that is not the builder's, and a level missing.
+    let e = refused(&|f| f.levels[0].bound *= 1.5);
+    assert!(level(&e).1.contains("bound"), "{e}");
+    let e = refused(&|f| {
+        f.levels.pop();
+    });
+    assert_eq!(
+        e,
+        ChainMismatch::LevelCount {
+            expected: 12,
+            found: 11
+        }
+    );
 }
 
 // ---------------------------------------------------------------- UV seams (issue 18)

@@ -4,7 +4,14 @@
 //! (`scene::load::gltf_sample`) and of the same document as a GLB, each parsed by
 //! `scene::load::parse_gltf_scene`. A panic is a failure (exit status non-zero).
 //!
-//!   cargo run -p scene --example fuzz_gltf -- SECONDS SEED
+//! Mode `graph` (issue 32 item 4) is structure-aware: each run spells a random node
+//! graph from random bytes (`scene::load::gltf_sample::node_graph`: trees, DAGs,
+//! cycles, chains around the depth limit, random edges, roots listed twice) and
+//! checks the reader's verdict against the graph's (accepted with one instance per
+//! reachable mesh node, or refused naming a node); a wrong verdict, a panic or a
+//! read slower than a second is a failure.
+//!
+//!   cargo run -p scene --example fuzz_gltf -- SECONDS SEED [bytes|graph]
 
 use format::pack::sample::SplitMix;
 use std::time::{Duration, Instant};
@@ -13,6 +20,53 @@ fn main() {
     let mut args = std::env::args().skip(1);
     let seconds: u64 = args.next().and_then(|s| s.parse().ok()).unwrap_or(10);
     let seed: u64 = args.next().and_then(|s| s.parse().ok()).unwrap_or(1);
+    match args.next().as_deref() {
+        None | Some("bytes") => mutate_bytes(seconds, seed),
+        Some("graph") => graphs(seconds, seed),
+        Some(other) => {
+            eprintln!("fuzz_gltf: unknown mode {other:?} (bytes or graph)");
+            std::process::exit(2);
+        }
+    }
+}
+
+/// The structure-aware mode: random node graphs against their expected verdicts.
+fn graphs(seconds: u64, seed: u64) {
+    use scene::load::gltf_sample::{check_node_graph, node_graph};
+    let mut rng = SplitMix(seed);
+    let deadline = Instant::now() + Duration::from_secs(seconds);
+    let (mut runs, mut accepted) = (0u64, 0u64);
+    while Instant::now() < deadline {
+        let choices: Vec<u8> = (0..512).map(|_| rng.next_u64() as u8).collect();
+        let graph = node_graph(&choices);
+        let start = Instant::now();
+        let verdict = check_node_graph(&graph);
+        let took = start.elapsed();
+        if let Err(what) = verdict {
+            eprintln!(
+                "fuzz_gltf graph: seed {seed}, run {runs}: {what}\n{}",
+                graph.json
+            );
+            std::process::exit(1);
+        }
+        if took > Duration::from_secs(1) {
+            eprintln!(
+                "fuzz_gltf graph: seed {seed}, run {runs}: {took:?}\n{}",
+                graph.json
+            );
+            std::process::exit(1);
+        }
+        accepted += u64::from(graph.expected.is_ok());
+        runs += 1;
+    }
+    println!(
+        "fuzz_gltf graph: seed {seed}: {runs} graphs in {seconds} s, {accepted} accepted, \
+         every verdict as expected"
+    );
+}
+
+/// Seeded byte mutations of the textured sample, JSON and GLB.
+fn mutate_bytes(seconds: u64, seed: u64) {
     let dir = std::env::temp_dir().join(format!("hexbake-fuzz-gltf-{}", std::process::id()));
     let path = scene::load::gltf_sample::write_textured_sample(&dir).expect("sample scene");
     let json = std::fs::read(&path).expect("sample json");

@@ -512,6 +512,7 @@ fn build_gltf_scene(plan: &Plan, spec: &format::manifest::GltfSpec) -> Result<Sc
     let options = crate::load::GltfOptions {
         objects: spec.objects,
         max_object_extent: plan.cells.cell_size,
+        ..crate::load::GltfOptions::default()
     };
     let gltf = crate::load::load_gltf_scene_with(file, options)?;
     if !gltf.notes.is_empty() {

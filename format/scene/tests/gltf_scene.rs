@@ -346,6 +346,7 @@ fn issue29_gltf_instances_stay_instances_and_objects_follow_the_hierarchy() {
     let options = GltfOptions {
         objects: GltfObjects::Hierarchy,
         max_object_extent: 10.0,
+        ..GltfOptions::default()
     };
     let scene = load_gltf_scene_with(&path, options).unwrap();
     let named: Vec<(&str, u32)> = scene
@@ -513,4 +514,283 @@ fn hostile_gltf_node_graphs_are_refused_naming_the_node() {
             "{e}"
         );
     }
+}
+
+/// A glTF file `name` in `dir` over one triangle (`tri.bin`: three VEC3 float
+/// positions, bytes 0..36; three u16 indices, bytes 36..42): scene roots `roots`,
+/// `nodes`, one mesh of one TRIANGLES primitive (POSITION accessor 0, indices
+/// accessor 1). `accessors` and `views` replace the default JSON arrays when given.
+fn write_triangle_gltf(
+    dir: &std::path::Path,
+    name: &str,
+    roots: &str,
+    nodes: &[String],
+    accessors: Option<&str>,
+    views: Option<&str>,
+) -> std::path::PathBuf {
+    let positions: [[f32; 3]; 3] = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]];
+    let mut bytes: Vec<u8> = positions
+        .iter()
+        .flatten()
+        .flat_map(|x| x.to_le_bytes())
+        .collect();
+    bytes.extend([0u16, 1, 2, 0].iter().flat_map(|i| i.to_le_bytes()));
+    std::fs::write(dir.join("tri.bin"), &bytes).unwrap();
+    let accessors = accessors.unwrap_or(
+        r#"[{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3"},
+            {"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"}]"#,
+    );
+    let views = views.unwrap_or(
+        r#"[{"buffer": 0, "byteLength": 36}, {"buffer": 0, "byteOffset": 36, "byteLength": 6}]"#,
+    );
+    let json = format!(
+        r#"{{"asset": {{"version": "2.0"}}, "scene": 0, "scenes": [{{"nodes": [{roots}]}}],
+            "nodes": [{}],
+            "meshes": [{{"name": "tri", "primitives": [{{"attributes": {{"POSITION": 0}}, "indices": 1}}]}}],
+            "accessors": {accessors}, "bufferViews": {views},
+            "buffers": [{{"uri": "tri.bin", "byteLength": {}}}]}}"#,
+        nodes.join(", "),
+        bytes.len()
+    );
+    let path = dir.join(name);
+    std::fs::write(&path, json).unwrap();
+    path
+}
+
+/// Issue 32 item 4: the walk visits each node once. A scene that lists a root twice
+/// (which the parent checks do not see: a scene's root list is no parent) was read
+/// as two instances of it; it is refused, naming the node.
+#[test]
+fn issue32_gltf_walk_visits_each_node_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let nodes = [r#"{"name": "twice", "mesh": 0}"#.to_string()];
+    let once = write_triangle_gltf(dir.path(), "once.gltf", "0", &nodes, None, None);
+    assert_eq!(load_gltf_scene(&once).unwrap().instances.len(), 1);
+    let path = write_triangle_gltf(dir.path(), "twice.gltf", "0, 0", &nodes, None, None);
+    let e = load_gltf_scene(&path).unwrap_err().to_string();
+    assert!(
+        e.contains(r#"node 0 ("twice")"#)
+            && e.contains("visited twice")
+            && e.contains("twice.gltf"),
+        "{e}"
+    );
+    // Through a parent too: the subtree of a root listed twice.
+    let nodes = [
+        r#"{"children": [1]}"#.to_string(),
+        r#"{"mesh": 0}"#.to_string(),
+    ];
+    let path = write_triangle_gltf(dir.path(), "subtree.gltf", "0, 0", &nodes, None, None);
+    let e = load_gltf_scene(&path).unwrap_err().to_string();
+    assert!(e.contains("node 0") && e.contains("visited twice"), "{e}");
+    // The model loader walks the same way.
+    let e = scene::load::load_model(&path).unwrap_err().to_string();
+    assert!(e.contains("node 0") && e.contains("visited twice"), "{e}");
+}
+
+/// Issue 32 item 4: caps on what one glTF file makes, each refusal positioned. Five
+/// nodes that scale one mesh non-uniformly make five models (the scale is baked into
+/// each: a small file can make a mesh's triangles many times over); with a cap of
+/// four triangles the fifth read is refused naming the mesh, the primitive and the
+/// cap; with a cap of four instances the fifth node is refused by name.
+#[test]
+fn issue32_gltf_caps_on_triangles_and_instances_are_positioned() {
+    use scene::load::{load_gltf_scene_with, GltfCaps, GltfOptions};
+    let dir = tempfile::tempdir().unwrap();
+    let nodes: Vec<String> = (1..=5)
+        .map(|k| format!(r#"{{"name": "n{k}", "mesh": 0, "scale": [1.0, {k}.0, 1.0]}}"#))
+        .collect();
+    let path = write_triangle_gltf(dir.path(), "five.gltf", "0, 1, 2, 3, 4", &nodes, None, None);
+    let read = |caps: GltfCaps| {
+        load_gltf_scene_with(
+            &path,
+            GltfOptions {
+                caps,
+                ..GltfOptions::default()
+            },
+        )
+    };
+    let all = read(GltfCaps::default()).unwrap();
+    assert_eq!((all.models.len(), all.instances.len()), (5, 5));
+    let e = read(GltfCaps {
+        triangles: 4,
+        ..GltfCaps::default()
+    })
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains("mesh 0 primitive 0") && e.contains("5 triangles") && e.contains("cap of 4"),
+        "{e}"
+    );
+    let e = read(GltfCaps {
+        instances: 4,
+        ..GltfCaps::default()
+    })
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains(r#"node 4 ("n5")"#) && e.contains("5 instances") && e.contains("cap of 4"),
+        "{e}"
+    );
+    // Vertices count as read, too: each primitive read adds its POSITION count.
+    let e = read(GltfCaps {
+        vertices: 14,
+        ..GltfCaps::default()
+    })
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains("mesh 0 primitive 0") && e.contains("15 vertices") && e.contains("cap of 14"),
+        "{e}"
+    );
+}
+
+/// Issue 32 item 4: accessor strides and sparse accessors are checked before the
+/// gltf crate reads them, each refusal naming the accessor and what was expected.
+#[test]
+fn issue32_gltf_strides_and_sparse_accessors_are_checked() {
+    use scene::load::{load_gltf_scene_with, GltfCaps, GltfOptions};
+    let dir = tempfile::tempdir().unwrap();
+    let nodes = [r#"{"mesh": 0}"#.to_string()];
+    let refused = |name: &str, accessors: &str, views: Option<&str>| -> String {
+        let path = write_triangle_gltf(dir.path(), name, "0", &nodes, Some(accessors), views);
+        match load_gltf_scene(&path) {
+            Ok(s) => panic!("{name} accepted: {} instances", s.instances.len()),
+            Err(e) => e.to_string(),
+        }
+    };
+    let indices = r#"{"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"}"#;
+    // A stride shorter than the element: elements would overlap.
+    let e = refused(
+        "stride.gltf",
+        &format!(
+            r#"[{{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3"}}, {indices}]"#
+        ),
+        Some(
+            r#"[{"buffer": 0, "byteLength": 36, "byteStride": 4}, {"buffer": 0, "byteOffset": 36, "byteLength": 6}]"#,
+        ),
+    );
+    assert!(
+        e.contains("accessor 0") && e.contains("stride 4") && e.contains("12 bytes"),
+        "{e}"
+    );
+    // Sparse: more substitutions than elements.
+    let sparse = |count: u32, index_view_offset: u32| {
+        format!(
+            r#"[{{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                  "sparse": {{"count": {count},
+                             "indices": {{"bufferView": 1, "byteOffset": {index_view_offset}, "componentType": 5123}},
+                             "values": {{"bufferView": 0, "byteOffset": 12}}}}}}, {indices}]"#
+        )
+    };
+    let e = refused("sparse-count.gltf", &sparse(5, 0), None);
+    assert!(
+        e.contains("accessor 0") && e.contains("sparse count 5") && e.contains("3 elements"),
+        "{e}"
+    );
+    // Sparse indices past their view (view 1 has 6 bytes: 2 + 2·2 = 6 fits, 4 + 4 does not).
+    let e = refused("sparse-view.gltf", &sparse(2, 4), None);
+    assert!(
+        e.contains("accessor 0") && e.contains("sparse indices") && e.contains("bufferView 1"),
+        "{e}"
+    );
+    // Sparse indices must increase and stay below the count: view 1 holds 0, 1, 2
+    // as u16; read as two u16 from byte 2 they are 1, 2 (fine: positions 1 and 2
+    // replaced by themselves, the values at byte 12); the positions' bytes
+    // 8..16 read as u32 are 0 and 1065353216 (the bits of 0.0 and 1.0): not below 3.
+    let path = write_triangle_gltf(
+        dir.path(),
+        "sparse-ok.gltf",
+        "0",
+        &nodes,
+        Some(&sparse(2, 2)),
+        None,
+    );
+    load_gltf_scene(&path).unwrap();
+    let bad_indices = format!(
+        r#"[{{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+              "sparse": {{"count": 2,
+                         "indices": {{"bufferView": 0, "byteOffset": 8, "componentType": 5125}},
+                         "values": {{"bufferView": 0}}}}}}, {indices}]"#
+    );
+    let e = refused("sparse-index.gltf", &bad_indices, None);
+    assert!(
+        e.contains("accessor 0") && e.contains("sparse index") && e.contains("below 3"),
+        "{e}"
+    );
+    // An accessor with no view has no bytes to bound its count: the caps do. A sparse
+    // POSITION of 1,000 (zero) elements is refused under a cap of 30 vertices.
+    let zeros = format!(
+        r#"[{{"componentType": 5126, "count": 1000, "type": "VEC3",
+              "sparse": {{"count": 1,
+                         "indices": {{"bufferView": 1, "componentType": 5123}},
+                         "values": {{"bufferView": 0}}}}}}, {indices}]"#
+    );
+    let path = write_triangle_gltf(dir.path(), "zeros.gltf", "0", &nodes, Some(&zeros), None);
+    let capped = load_gltf_scene_with(
+        &path,
+        GltfOptions {
+            caps: GltfCaps {
+                vertices: 30,
+                ..GltfCaps::default()
+            },
+            ..GltfOptions::default()
+        },
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        capped.contains("mesh 0 primitive 0")
+            && capped.contains("1000 vertices")
+            && capped.contains("cap of 30"),
+        "{capped}"
+    );
+    // Every attribute of a primitive has POSITION's count (glTF 2.0 §3.7.2.1): a
+    // COLOR_0 of another count is refused before it is read.
+    let colours = r#"[{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3"},
+                      {"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"},
+                      {"bufferView": 0, "componentType": 5126, "count": 2, "type": "VEC3"}]"#;
+    let path = write_triangle_gltf(dir.path(), "colours.gltf", "0", &nodes, Some(colours), None);
+    let text = std::fs::read_to_string(&path)
+        .unwrap()
+        .replace(r#"{"POSITION": 0}"#, r#"{"POSITION": 0, "COLOR_0": 2}"#);
+    std::fs::write(&path, text).unwrap();
+    let e = load_gltf_scene(&path).unwrap_err().to_string();
+    assert!(
+        e.contains("mesh 0 primitive 0")
+            && e.contains("COLOR_0")
+            && e.contains("2 elements")
+            && e.contains("3"),
+        "{e}"
+    );
+}
+
+/// Issue 32 item 4, the structure-aware fuzz mode as a test: 600 random node graphs
+/// (`gltf_sample::node_graph`) each get the verdict their structure calls for, and
+/// the generator reaches every kind of graph (accepted, and each refusal).
+#[test]
+fn issue32_random_node_graphs_get_the_expected_verdict() {
+    use format::pack::sample::SplitMix;
+    use scene::load::gltf_sample::{check_node_graph, node_graph, GraphFault};
+    let mut rng = SplitMix(32);
+    let mut seen = std::collections::BTreeSet::new();
+    for run in 0..600 {
+        let choices: Vec<u8> = (0..512).map(|_| rng.next_u64() as u8).collect();
+        let graph = node_graph(&choices);
+        if let Err(what) = check_node_graph(&graph) {
+            panic!("graph {run}: {what}\n{}", graph.json);
+        }
+        seen.insert(format!("{:?}", graph.expected.map(|_| ())));
+    }
+    for fault in [
+        GraphFault::TwoParents,
+        GraphFault::RootWithParent,
+        GraphFault::ZeroRotation,
+        GraphFault::VisitedTwice,
+        GraphFault::TooDeep,
+        GraphFault::NoMesh,
+    ] {
+        let key = format!("{:?}", Err::<(), _>(fault));
+        assert!(seen.contains(&key), "no graph was {fault:?}: {seen:?}");
+    }
+    assert!(seen.contains("Ok(())"), "{seen:?}");
 }

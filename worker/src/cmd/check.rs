@@ -74,8 +74,9 @@ pub fn run(args: Args) -> Result<(), Failure> {
         )
         .map_err(failed)?;
         eprintln!(
-            "lod chains: {} built, {} loaded in {:.1} s",
+            "lod chains: {} built ({} of them refused from the cache), {} loaded in {:.1} s",
             stats.built,
+            stats.refused,
             stats.loaded,
             t.elapsed().as_secs_f64()
         );

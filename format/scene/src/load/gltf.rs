@@ -1,8 +1,10 @@
 //! glTF 2.0 (`.gltf` + buffers, or `.glb`) through the `gltf` crate: every triangle
 //! primitive (modes TRIANGLES, TRIANGLE_STRIP, TRIANGLE_FAN) of every node of the
 //! default scene (else the first scene), with node transforms composed from the root
-//! (a node with two parents, a root with one — hence any cycle — or a hierarchy
-//! deeper than [`MAX_DEPTH`] is an error). Mirroring transforms flip the winding so triangles stay CCW. Colours:
+//! (a node with two parents, a root with one — hence any cycle —, a node the walk
+//! meets twice or a hierarchy deeper than [`MAX_DEPTH`] is an error). Mirroring
+//! transforms flip the winding so triangles stay CCW. What one file may make is
+//! capped ([`GltfCaps`]). Colours:
 //! `COLOR_0` × the material's base colour factor (both linear, converted to sRGB8)
 //! when any primitive has `COLOR_0` or a non-white factor; else the procedural
 //! albedo. Textures are not read (images are never decoded).
@@ -18,6 +20,84 @@ const FORMAT: ModelFormat = ModelFormat::Gltf;
 
 /// Deepest node hierarchy accepted.
 pub const MAX_DEPTH: usize = 256;
+
+/// Caps on what one glTF file may make (issue 32 item 4), each refusal naming where
+/// it was passed; the defaults are `format::limits`' `MAX_GLTF_*`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct GltfCaps {
+    /// Instances a scene places (the scene reader; refused at the node that passes it).
+    pub instances: u64,
+    /// Triangles read, over every primitive read: a primitive read again for another
+    /// model (a mesh at another non-uniform scale) counts again. Checked on the
+    /// counts the accessors announce, before the primitive is read.
+    pub triangles: u64,
+    /// Vertices (POSITION elements) read, counted alike.
+    pub vertices: u64,
+}
+
+impl Default for GltfCaps {
+    fn default() -> Self {
+        GltfCaps {
+            instances: format::limits::MAX_GLTF_INSTANCES,
+            triangles: format::limits::MAX_GLTF_TRIANGLES,
+            vertices: format::limits::MAX_GLTF_VERTICES,
+        }
+    }
+}
+
+/// What has been read from one file so far, against its [`GltfCaps`].
+pub(crate) struct Budget {
+    pub(crate) caps: GltfCaps,
+    vertices: u64,
+    triangles: u64,
+}
+
+impl Budget {
+    pub(crate) fn new(caps: GltfCaps) -> Budget {
+        Budget {
+            caps,
+            vertices: 0,
+            triangles: 0,
+        }
+    }
+
+    /// Counts a primitive of `vertices` and `triangles` about to be read, or refuses
+    /// it when the file's total would pass a cap.
+    fn take(
+        &mut self,
+        vertices: u64,
+        triangles: u64,
+        err: &dyn Fn(String) -> LoadError,
+    ) -> Result<(), LoadError> {
+        let v = self.vertices.saturating_add(vertices);
+        if v > self.caps.vertices {
+            return Err(err(format!(
+                "{v} vertices read from this file ({vertices} in this primitive) would pass \
+                 the cap of {} vertices for one glTF file",
+                self.caps.vertices
+            )));
+        }
+        let t = self.triangles.saturating_add(triangles);
+        if t > self.caps.triangles {
+            return Err(err(format!(
+                "{t} triangles read from this file ({triangles} in this primitive) would \
+                 pass the cap of {} triangles for one glTF file",
+                self.caps.triangles
+            )));
+        }
+        (self.vertices, self.triangles) = (v, t);
+        Ok(())
+    }
+}
+
+/// `node 3`, or `node 3 ("name")` when the node has a name: how every message names a
+/// node.
+pub(super) fn node_label(index: usize, name: Option<&str>) -> String {
+    match name {
+        Some(name) => format!("node {index} ({name:?})"),
+        None => format!("node {index}"),
+    }
+}
 
 struct Prim {
     positions: Vec<[f32; 3]>,
@@ -74,11 +154,14 @@ pub(crate) fn parse(path: &Path, bytes: &[u8]) -> Result<Parsed, LoadError> {
     // Walk the node tree depth-first, composing transforms.
     let mut prims: Vec<Prim> = Vec::new();
     let mut nodes_with_geometry = 0usize;
+    let mut budget = Budget::new(GltfCaps::default());
     walk_nodes(path, &scene, |node, world, _| {
         if let Some(mesh) = node.mesh() {
             let before = prims.len();
             for primitive in mesh.primitives() {
-                if let Some(p) = read_primitive(path, &buffers, &mesh, &primitive, world)? {
+                if let Some(p) =
+                    read_primitive(path, &buffers, &mut budget, &mesh, &primitive, world)?
+                {
                     prims.push(p);
                 }
             }
@@ -126,8 +209,17 @@ pub(crate) fn parse(path: &Path, bytes: &[u8]) -> Result<Parsed, LoadError> {
 /// item 4: its reader stops silently at the end of a short view, so an index accessor
 /// whose count exceeds its view gave 2 of 12 triangles). glTF 2.0 §3.6.2.4: an
 /// element `i` starts at `byteOffset + i · stride`, `stride` the view's
-/// `byteStride` or the element's size. Accessors without a view (all zeros, or
-/// sparse) hold no bytes to check.
+/// `byteStride` or the element's size. Also:
+///
+/// - a count of at least 1 (§5.1.2; the crate computes `count − 1`);
+/// - a stride no shorter than the element (elements would overlap; the crate only
+///   debug-asserts it);
+/// - a sparse accessor (§3.6.2.3): `1 ≤ sparse.count ≤ count`, its indices and
+///   values in their views, and the indices strictly increasing and below `count`
+///   (the crate drops a substitution whose index it never meets, silently).
+///
+/// An accessor without a view is all zeros but for its sparse substitutions: no bytes
+/// bound its count, the caps on what a primitive reads do ([`GltfCaps`]).
 fn check_accessors(
     path: &Path,
     root: &gltf::json::Root,
@@ -153,21 +245,24 @@ fn check_accessors(
             ));
         }
     }
-    for (a, accessor) in root.accessors.iter().enumerate() {
-        let (Some(view_index), Checked::Valid(component), Checked::Valid(kind)) = (
-            accessor.buffer_view,
-            &accessor.component_type,
-            &accessor.type_,
-        ) else {
-            continue;
+    // The bytes `count` elements of `element` bytes from `offset` need in view
+    // `index` (its stride or the element's size), or why they do not fit.
+    let fits = |what: &str,
+                index: usize,
+                count: u64,
+                element: u64,
+                offset: u64|
+     -> Result<&gltf::json::buffer::View, String> {
+        let Some(view) = root.buffer_views.get(index) else {
+            return Err(format!("{what}: no bufferView {index}"));
         };
-        let Some(view) = root.buffer_views.get(view_index.value()) else {
-            continue; // the crate's validation names a missing view
-        };
-        let element = (component.0.size() * kind.multiplicity()) as u64;
         let stride = view.byte_stride.map_or(element, |s| s.0 as u64);
-        let count = accessor.count.0;
-        let offset = accessor.byte_offset.map_or(0, |o| o.0);
+        if stride < element {
+            return Err(format!(
+                "{what}: stride {stride} of bufferView {index} is shorter than the \
+                 elements of {element} bytes: they would overlap"
+            ));
+        }
         let need = if count == 0 {
             offset
         } else {
@@ -176,15 +271,105 @@ fn check_accessors(
                 .saturating_add(element)
         };
         if need > view.byte_length.0 {
+            return Err(format!(
+                "{what}: {count} elements of {element} bytes (stride {stride}, offset \
+                 {offset}) need {need} bytes of bufferView {index}, which has {}",
+                view.byte_length.0
+            ));
+        }
+        Ok(view)
+    };
+    for (a, accessor) in root.accessors.iter().enumerate() {
+        let at = || format!("accessor {a}");
+        let count = accessor.count.0;
+        if count == 0 {
+            return Err(err(
+                "count 0: an accessor has at least one element (glTF 2.0 §5.1.2)".into(),
+                at(),
+            ));
+        }
+        let (Checked::Valid(component), Checked::Valid(kind)) =
+            (&accessor.component_type, &accessor.type_)
+        else {
+            continue; // the crate's validation named it
+        };
+        let element = (component.0.size() * kind.multiplicity()) as u64;
+        if let Some(view) = accessor.buffer_view {
+            let offset = accessor.byte_offset.map_or(0, |o| o.0);
+            fits("elements", view.value(), count, element, offset)
+                .map_err(|what| err(what, at()))?;
+        }
+        let Some(sparse) = &accessor.sparse else {
+            continue;
+        };
+        let n = sparse.count.0;
+        if n == 0 || n > count {
             return Err(err(
                 format!(
-                    "{count} elements of {element} bytes (stride {stride}, offset {offset}) \
-                     need {need} bytes of bufferView {}, which has {}",
-                    view_index.value(),
-                    view.byte_length.0
+                    "sparse count {n}, the accessor has {count} elements (glTF 2.0 \
+                     §3.6.2.3: 1 ..= count substitutions)"
                 ),
-                format!("accessor {a}"),
+                at(),
             ));
+        }
+        let Checked::Valid(index_type) = &sparse.indices.component_type else {
+            continue;
+        };
+        let index_size = index_type.0.size() as u64;
+        let index_offset = sparse.indices.byte_offset.0;
+        let index_view = fits(
+            "sparse indices",
+            sparse.indices.buffer_view.value(),
+            n,
+            index_size,
+            index_offset,
+        )
+        .map_err(|what| err(what, at()))?;
+        fits(
+            "sparse values",
+            sparse.values.buffer_view.value(),
+            n,
+            element,
+            sparse.values.byte_offset.0,
+        )
+        .map_err(|what| err(what, at()))?;
+        // The indices themselves: in range of the buffer (the view fits it, checked
+        // above), strictly increasing, below the count.
+        let Some(bytes) = buffers.get(index_view.buffer.value()) else {
+            continue;
+        };
+        let stride = index_view.byte_stride.map_or(index_size, |s| s.0 as u64);
+        let start = index_view
+            .byte_offset
+            .map_or(0, |o| o.0)
+            .saturating_add(index_offset);
+        let mut previous: Option<u64> = None;
+        for k in 0..n {
+            let at_byte = (start + k * stride) as usize;
+            let b = bytes
+                .get(at_byte..at_byte + index_size as usize)
+                .ok_or_else(|| err(format!("sparse index {k} is past its buffer"), at()))?;
+            let value = b
+                .iter()
+                .rev()
+                .fold(0u64, |acc, &byte| (acc << 8) | u64::from(byte));
+            if value >= count {
+                return Err(err(
+                    format!("sparse index {k} is {value}: not below {count}, the accessor's count"),
+                    at(),
+                ));
+            }
+            if previous.is_some_and(|p| value <= p) {
+                return Err(err(
+                    format!(
+                        "sparse index {k} is {value}, not above the one before ({}): sparse \
+                         indices strictly increase (glTF 2.0 §3.6.2.3)",
+                        previous.unwrap_or(0)
+                    ),
+                    at(),
+                ));
+            }
+            previous = Some(value);
         }
     }
     Ok(())
@@ -209,12 +394,7 @@ fn check_structure(path: &Path, root: &gltf::json::Root) -> Result<(), LoadError
             Location::Element("asset".into()),
         ));
     }
-    let node_name = |i: usize| {
-        root.nodes
-            .get(i)
-            .and_then(|n| n.name.as_deref())
-            .map_or(format!("node {i}"), |name| format!("node {i} ({name:?})"))
-    };
+    let node_name = |i: usize| node_label(i, root.nodes.get(i).and_then(|n| n.name.as_deref()));
     let mut parent: Vec<Option<usize>> = vec![None; root.nodes.len()];
     for (p, node) in root.nodes.iter().enumerate() {
         for child in node.children.iter().flatten() {
@@ -274,33 +454,84 @@ fn check_structure(path: &Path, root: &gltf::json::Root) -> Result<(), LoadError
 /// transforms, and calls `visit` with each node, its world transform and its parent
 /// (index and world transform; `None` for a root node). The hierarchy is a set of
 /// trees ([`check_structure`] ran in [`open_document`]: no node has two parents, no
-/// root has one, so no cycle is reachable); refuses one deeper than [`MAX_DEPTH`]
-/// and a transform that is not finite, where it meets them. Shared by the model
-/// loader and the scene loader (`gltf_scene.rs`).
+/// root has one, so no cycle is reachable), and the walk meets each node once: a node
+/// met again (a scene listing a root twice) is refused, as are a hierarchy deeper
+/// than [`MAX_DEPTH`] and a transform that is not finite, where the walk meets them.
+/// Memory is one frame per level (each holding its node's child iterator), whatever
+/// the width. Shared by the model loader and the scene loader (`gltf_scene.rs`).
 pub(super) fn walk_nodes<'a>(
     path: &Path,
     scene: &gltf::Scene<'a>,
     mut visit: impl FnMut(&gltf::Node<'a>, Mat4, Option<(usize, Mat4)>) -> Result<(), LoadError>,
 ) -> Result<(), LoadError> {
-    let err = |what: String, at: Location| parse_error(path, FORMAT, what, at);
-    // (node, its parent's index and world transform, depth).
-    type Parent = Option<(usize, Mat4)>;
-    let mut stack: Vec<(gltf::Node, Parent, usize)> = scene.nodes().map(|n| (n, None, 0)).collect();
-    stack.reverse();
-    while let Some((node, parent, depth)) = stack.pop() {
-        let at = || Location::Element(format!("node {}", node.index()));
+    let err = |what: String, node: &gltf::Node| {
+        parse_error(
+            path,
+            FORMAT,
+            what,
+            Location::Element(format!("node {}", node.index())),
+        )
+    };
+    // One level of the walk: a node, its world transform, its children to visit.
+    struct Frame<'a> {
+        index: usize,
+        world: Mat4,
+        children: gltf::scene::iter::Children<'a>,
+    }
+    let mut visited: Vec<bool> = Vec::new();
+    let mut stack: Vec<Frame<'a>> = Vec::new();
+    let mut enter = |node: gltf::Node<'a>,
+                     parent: Option<(usize, Mat4)>,
+                     depth: usize,
+                     stack: &mut Vec<Frame<'a>>|
+     -> Result<(), LoadError> {
+        let i = node.index();
+        if i >= visited.len() {
+            visited.resize(i + 1, false);
+        }
+        if std::mem::replace(&mut visited[i], true) {
+            return Err(err(
+                format!(
+                    "{} is visited twice in the walk of scene {}: each node is one place \
+                     in the hierarchy (a scene lists it twice among its roots)",
+                    node_label(i, node.name()),
+                    scene.index()
+                ),
+                &node,
+            ));
+        }
         if depth >= MAX_DEPTH {
-            return Err(err(format!("node hierarchy deeper than {MAX_DEPTH}"), at()));
+            return Err(err(
+                format!("node hierarchy deeper than {MAX_DEPTH}"),
+                &node,
+            ));
         }
         let local = Mat4::from_cols_array_2d(&node.transform().matrix());
         let world = parent.map_or(Mat4::IDENTITY, |(_, w)| w) * local;
         if !world.is_finite() {
-            return Err(err("node transform is not finite".into(), at()));
+            return Err(err("node transform is not finite".into(), &node));
         }
         visit(&node, world, parent)?;
-        let children: Vec<_> = node.children().collect();
-        for child in children.into_iter().rev() {
-            stack.push((child, Some((node.index(), world)), depth + 1));
+        stack.push(Frame {
+            index: i,
+            world,
+            children: node.children(),
+        });
+        Ok(())
+    };
+    for root in scene.nodes() {
+        enter(root, None, 0, &mut stack)?;
+        while let Some(frame) = stack.last_mut() {
+            match frame.children.next() {
+                Some(child) => {
+                    let parent = Some((frame.index, frame.world));
+                    let depth = stack.len();
+                    enter(child, parent, depth, &mut stack)?;
+                }
+                None => {
+                    stack.pop();
+                }
+            }
         }
     }
     Ok(())
@@ -380,10 +611,14 @@ pub(super) fn primitive_error<'p>(
 
 /// How every primitive reader starts: `None` for points and lines; for a triangle
 /// primitive its mode, its attribute reader and its POSITION attribute (mesh space).
+/// Before anything is read, every attribute must have POSITION's count (glTF 2.0
+/// §3.7.2.1: a shorter COLOR_0 was read as white past its end) and the primitive's
+/// vertices and triangles, as its accessors announce them, must fit `budget`.
 /// Shared by the model loader and the scene loader (`gltf_scene.rs`).
 #[allow(clippy::type_complexity)]
 pub(super) fn open_triangle_primitive<'a, 's>(
     buffers: &'s [gltf::buffer::Data],
+    budget: &mut Budget,
     primitive: &'a gltf::Primitive<'a>,
     err: &dyn Fn(String) -> LoadError,
 ) -> Result<
@@ -402,6 +637,28 @@ pub(super) fn open_triangle_primitive<'a, 's>(
     ) {
         return Ok(None);
     }
+    let position = primitive
+        .get(&gltf::Semantic::Positions)
+        .ok_or_else(|| err("no POSITION attribute".into()))?;
+    let n = position.count();
+    for (semantic, accessor) in primitive.attributes() {
+        if accessor.count() != n {
+            return Err(err(format!(
+                "{} (accessor {}) has {} elements, POSITION (accessor {}) has {n}: a \
+                 primitive's attributes have one count (glTF 2.0 §3.7.2.1)",
+                semantic.to_string(),
+                accessor.index(),
+                accessor.count(),
+                position.index()
+            )));
+        }
+    }
+    let corners = primitive.indices().map_or(n, |a| a.count()) as u64;
+    let triangles = match mode {
+        Mode::Triangles => corners / 3,
+        _ => corners.saturating_sub(2),
+    };
+    budget.take(n as u64, triangles, err)?;
     let reader = primitive.reader(move |b| buffers.get(b.index()).map(|d| &d.0[..]));
     let positions: Vec<[f32; 3]> = reader
         .read_positions()
@@ -433,12 +690,14 @@ pub(super) fn vertex_srgb8(
 fn read_primitive(
     path: &Path,
     buffers: &[gltf::buffer::Data],
+    budget: &mut Budget,
     mesh: &gltf::Mesh,
     primitive: &gltf::Primitive,
     world: Mat4,
 ) -> Result<Option<Prim>, LoadError> {
     let err = primitive_error(path, mesh, primitive);
-    let Some((mode, reader, mut positions)) = open_triangle_primitive(buffers, primitive, &err)?
+    let Some((mode, reader, mut positions)) =
+        open_triangle_primitive(buffers, budget, primitive, &err)?
     else {
         return Ok(None);
     };

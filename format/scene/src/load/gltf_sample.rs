@@ -11,6 +11,10 @@
 //! therefore has four models (textured / plain × as is / mirrored: the reader puts
 //! uniform scales in the instances and bakes mirrors into models, `gltf_scene.rs`)
 //! and six instances.
+//!
+//! [`node_graph`] spells a random node graph (tree, DAG, cycles, deep chain, random
+//! edges) from bytes, with the verdict the reader must reach on it
+//! ([`check_node_graph`]): the structure-aware mode of the glTF fuzzers (issue 32).
 
 use std::path::{Path, PathBuf};
 
@@ -234,4 +238,220 @@ fn encode_png_rgba(side: u32, rgba: &[u8]) -> Vec<u8> {
     chunk(&mut out, b"IDAT", &z);
     chunk(&mut out, b"IEND", &[]);
     out
+}
+
+// ------------------------------------------------------------------------------------
+// Random node graphs (issue 32 item 4): the structure-aware mode of the glTF fuzzers.
+// ------------------------------------------------------------------------------------
+
+/// One triangle (positions (0,0,0), (1,0,0), (0,0,−1)) as a base64 data URI, so that
+/// a generated document needs no file beside it.
+const TRIANGLE_DATA_URI: &str =
+    "data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAAAAAAIC/";
+
+/// Why a generated graph must be refused ([`NodeGraph::expected`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GraphFault {
+    /// A node listed twice as a child (by one parent or two; every cycle that the
+    /// walk can reach has one, or a root with a parent).
+    TwoParents,
+    /// A scene root that is also a child.
+    RootWithParent,
+    /// A node rotated by the zero quaternion.
+    ZeroRotation,
+    /// A root listed twice by the scene: the walk would meet it twice.
+    VisitedTwice,
+    /// A node at depth [`MAX_DEPTH`](super::gltf::MAX_DEPTH) or deeper.
+    TooDeep,
+    /// No mesh node is reachable from the scene's roots.
+    NoMesh,
+}
+
+/// A generated glTF document of one scene over a random node graph — a tree, a DAG,
+/// a graph with cycles, a deep chain, or random edges; roots listed twice or children
+/// listed as roots now and then; half the nodes place mesh 0 (one triangle) — with
+/// what the reader must do with it under `objects: Nodes`.
+#[derive(Clone, Debug)]
+pub struct NodeGraph {
+    pub json: String,
+    /// `Ok(instances)`: the reader accepts it with one instance per mesh node
+    /// reachable from the roots; `Err(fault)`: it refuses it, naming a node (but for
+    /// [`GraphFault::NoMesh`]).
+    pub expected: Result<usize, GraphFault>,
+}
+
+/// The node graph that `choices` spell (any bytes make a graph; bytes past the end
+/// read as 0), for the stable fuzz driver (`examples/fuzz_gltf.rs graph`) and the
+/// libFuzzer target `gltf_graph`.
+pub fn node_graph(choices: &[u8]) -> NodeGraph {
+    let mut at = 0usize;
+    let mut next = || {
+        let b = choices.get(at).copied().unwrap_or(0);
+        at += 1;
+        b as usize
+    };
+    // 1. The shape and the edges: children[p] in listing order.
+    let shape = next() % 5;
+    let n = if shape == 3 {
+        200 + next() % 100 // a chain around MAX_DEPTH
+    } else {
+        1 + next() % 48
+    };
+    let mut children: Vec<Vec<usize>> = vec![Vec::new(); n];
+    match shape {
+        // A tree (each node below a random earlier one), then 1: extra edges down
+        // (a DAG, a node with two parents or listed twice), 2: an edge back up (a
+        // cycle).
+        0..=2 => {
+            for c in 1..n {
+                let p = next() % c;
+                children[p].push(c);
+            }
+            for _ in 0..(if shape == 0 { 0 } else { 1 + next() % 3 }) {
+                let (a, b) = (next() % n, next() % n);
+                let (p, c) = if (shape == 1) == (a < b) {
+                    (a, b)
+                } else {
+                    (b, a)
+                };
+                children[p].push(c);
+            }
+        }
+        3 => {
+            for c in 1..n {
+                children[c - 1].push(c);
+            }
+        }
+        _ => {
+            for list in children.iter_mut() {
+                for _ in 0..next() % 3 {
+                    list.push(next() % n);
+                }
+            }
+        }
+    }
+    // 2. Roots: the nodes nobody lists, sometimes one twice or a child as well.
+    let mut listed = vec![0usize; n];
+    for &c in children.iter().flatten() {
+        listed[c] += 1;
+    }
+    let mut roots: Vec<usize> = (0..n).filter(|&i| listed[i] == 0).collect();
+    match next() % 8 {
+        0 if !roots.is_empty() => roots.push(roots[next() % roots.len()]),
+        1 => roots.push(next() % n),
+        _ => {}
+    }
+    if roots.is_empty() {
+        roots.push(0);
+    }
+    // 3. Meshes and one zero quaternion now and then.
+    let mesh: Vec<bool> = (0..n).map(|_| next() % 2 == 0).collect();
+    let zero_rotation = (next() % 16 == 0).then(|| next() % n);
+
+    // The reader's verdict, in the order it checks.
+    let expected = (|| {
+        if listed.iter().any(|&k| k > 1) {
+            return Err(GraphFault::TwoParents);
+        }
+        if zero_rotation.is_some() {
+            return Err(GraphFault::ZeroRotation);
+        }
+        if roots.iter().any(|&r| listed[r] > 0) {
+            return Err(GraphFault::RootWithParent);
+        }
+        // A forest now: walk it from the roots in order.
+        let mut seen = vec![false; n];
+        let mut instances = 0usize;
+        for &r in &roots {
+            let mut stack = vec![(r, 0usize)];
+            while let Some((v, depth)) = stack.pop() {
+                if std::mem::replace(&mut seen[v], true) {
+                    return Err(GraphFault::VisitedTwice);
+                }
+                if depth >= super::gltf::MAX_DEPTH {
+                    return Err(GraphFault::TooDeep);
+                }
+                instances += usize::from(mesh[v]);
+                stack.extend(children[v].iter().rev().map(|&c| (c, depth + 1)));
+            }
+        }
+        if instances == 0 {
+            return Err(GraphFault::NoMesh);
+        }
+        Ok(instances)
+    })();
+
+    let nodes: Vec<String> = (0..n)
+        .map(|i| {
+            let mut fields = vec![format!(r#""name": "n{i}""#)];
+            if mesh[i] {
+                fields.push(r#""mesh": 0"#.into());
+            }
+            if !children[i].is_empty() {
+                let list: Vec<String> = children[i].iter().map(|c| c.to_string()).collect();
+                fields.push(format!(r#""children": [{}]"#, list.join(", ")));
+            }
+            if zero_rotation == Some(i) {
+                fields.push(r#""rotation": [0.0, 0.0, 0.0, 0.0]"#.into());
+            } else {
+                fields.push(format!(r#""translation": [{}.0, 0.0, 0.0]"#, i % 7));
+            }
+            format!("{{{}}}", fields.join(", "))
+        })
+        .collect();
+    let roots: Vec<String> = roots.iter().map(|r| r.to_string()).collect();
+    let json = format!(
+        r#"{{"asset": {{"version": "2.0"}}, "scene": 0, "scenes": [{{"nodes": [{}]}}],
+  "nodes": [{}],
+  "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0}}}}]}}],
+  "accessors": [{{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                  "min": [0.0, 0.0, -1.0], "max": [1.0, 0.0, 0.0]}}],
+  "bufferViews": [{{"buffer": 0, "byteLength": 36}}],
+  "buffers": [{{"byteLength": 36, "uri": "{TRIANGLE_DATA_URI}"}}]}}"#,
+        roots.join(", "),
+        nodes.join(",\n    ")
+    );
+    NodeGraph { json, expected }
+}
+
+/// Reads `graph` under `objects: Nodes` and checks the reader's verdict against the
+/// graph's ([`NodeGraph::expected`]); with the default `objects: Hierarchy`, it must
+/// accept and refuse alike, with no more instances. `Err` says what differed.
+pub fn check_node_graph(graph: &NodeGraph) -> Result<(), String> {
+    use super::{parse_gltf_scene_with, GltfObjects, GltfOptions};
+    let path = Path::new("/nonexistent/graph.gltf");
+    let read = |objects| {
+        parse_gltf_scene_with(
+            path,
+            graph.json.as_bytes(),
+            GltfOptions {
+                objects,
+                ..GltfOptions::default()
+            },
+        )
+    };
+    let nodes = read(GltfObjects::Nodes);
+    let hierarchy = read(GltfObjects::Hierarchy);
+    match (&graph.expected, &nodes, &hierarchy) {
+        (Ok(n), Ok(a), Ok(b)) if a.instances.len() == *n && b.instances.len() <= *n => Ok(()),
+        (Err(GraphFault::NoMesh), Err(a), Err(_)) if !a.to_string().contains("panicked") => Ok(()),
+        (Err(_), Err(a), Err(b))
+            if a.to_string().contains("(node ") && b.to_string() == a.to_string() =>
+        {
+            Ok(())
+        }
+        _ => Err(format!(
+            "expected {:?}; objects: Nodes gave {}; Hierarchy gave {}",
+            graph.expected,
+            describe(&nodes),
+            describe(&hierarchy)
+        )),
+    }
+}
+
+fn describe(r: &Result<super::GltfScene, super::LoadError>) -> String {
+    match r {
+        Ok(s) => format!("{} instances", s.instances.len()),
+        Err(e) => format!("error: {e}"),
+    }
 }

@@ -10,7 +10,8 @@
 //! 2. walk the default scene's node tree depth-first (children in file order),
 //!    composing transforms (a node with two parents — hence any cycle — or a
 //!    hierarchy deeper than
-//!    [`MAX_DEPTH`](super::gltf::MAX_DEPTH) is an error); skins and morph targets are
+//!    [`MAX_DEPTH`](super::gltf::MAX_DEPTH) is an error, and the walk visits each
+//!    node once: a scene listing a root twice is refused); skins and morph targets are
 //!    ignored with a note (the mesh is drawn in its bind pose / base shape);
 //! 3. per node with a mesh, split the mesh's triangle primitives by base-colour
 //!    texture: each (mesh, texture or none, mirror) is one model, created at first
@@ -23,7 +24,10 @@
 //!    (non-uniform scale, shear) is baked whole into the model and the instance only
 //!    translates. So nodes using one mesh at any uniform scales share one model
 //!    (issue 29). A mirrored model has flipped winding, so triangles stay
-//!    counter-clockwise in the world.
+//!    counter-clockwise in the world. What one file makes is capped
+//!    ([`GltfCaps`]: instances placed, triangles and vertices read — a mesh read
+//!    again for another model counts again), each refusal naming the node or the
+//!    mesh and primitive that passes the cap.
 //!
 //!    **Objects** ([`GltfObjects`], manifest `objects`). A group of mesh nodes that
 //!    forms one object is merged into one model per base-colour texture, in the
@@ -56,8 +60,8 @@
 //! nothing is normalised. Cameras, lights and animations are not read.
 
 use super::gltf::{
-    open_document, open_triangle_primitive, primitive_error, primitive_triangles, vertex_srgb8,
-    walk_nodes,
+    node_label, open_document, open_triangle_primitive, primitive_error, primitive_triangles,
+    vertex_srgb8, walk_nodes, Budget, GltfCaps,
 };
 use super::{parse_error, LoadError, Location, ModelFormat};
 use crate::cleanup::{finish_mesh_with_uvs, RawMesh};
@@ -104,6 +108,9 @@ pub struct GltfOptions {
     /// (world units), to be one object; the manifest passes its cell size, since an
     /// object wider than a cell is drawn whole by every cell it overlaps.
     pub max_object_extent: f32,
+    /// What one file may make (issue 32 item 4): instances, triangles and vertices
+    /// read.
+    pub caps: GltfCaps,
 }
 
 impl Default for GltfOptions {
@@ -111,8 +118,35 @@ impl Default for GltfOptions {
         GltfOptions {
             objects: GltfObjects::Hierarchy,
             max_object_extent: f32::INFINITY,
+            caps: GltfCaps::default(),
         }
     }
+}
+
+/// Places one instance, or refuses it when the scene would pass the cap on
+/// instances, naming the node that places it.
+fn place(
+    path: &Path,
+    budget: &Budget,
+    instances: &mut Vec<GltfInstance>,
+    instance: GltfInstance,
+    node: &gltf::Node,
+) -> Result<(), LoadError> {
+    let placed = instances.len() as u64 + 1;
+    if placed > budget.caps.instances {
+        return Err(parse_error(
+            path,
+            FORMAT,
+            format!(
+                "{}: {placed} instances would pass the cap of {} instances for one glTF scene",
+                node_label(node.index(), node.name()),
+                budget.caps.instances
+            ),
+            Location::Element(format!("node {}", node.index())),
+        ));
+    }
+    instances.push(instance);
+    Ok(())
 }
 
 /// A glTF file as a scene.
@@ -151,7 +185,11 @@ type GroupKey = (Option<usize>, Vec<(usize, [u32; 12])>);
 /// no wider than `max_object_extent` (else their children, tried alike); under
 /// [`GltfObjects::Parents`], the mesh children of one node when two or more;
 /// under [`GltfObjects::Nodes`], none. Mesh nodes in no group stand alone.
-fn object_groups(visits: &[Visit], options: GltfOptions) -> BTreeMap<usize, Group> {
+fn object_groups(
+    visits: &[Visit],
+    buffers: &[gltf::buffer::Data],
+    options: GltfOptions,
+) -> BTreeMap<usize, Group> {
     let n = visits.len();
     let mut children: Vec<Vec<usize>> = vec![Vec::new(); n];
     for (k, v) in visits.iter().enumerate() {
@@ -181,13 +219,15 @@ fn object_groups(visits: &[Visit], options: GltfOptions) -> BTreeMap<usize, Grou
             // (children come after their parent in the walk: fold in reverse).
             let mut meshes = vec![0usize; n];
             let mut boxes: Vec<Option<(glam::Vec3, glam::Vec3)>> = vec![None; n];
+            let mut position_boxes = BTreeMap::new();
             for k in (0..n).rev() {
                 let v = &visits[k];
                 if let Some(mesh) = v.node.mesh() {
                     meshes[k] += 1;
                     for p in mesh.primitives() {
-                        let b = p.bounding_box();
-                        let (lo, hi) = (glam::Vec3::from(b.min), glam::Vec3::from(b.max));
+                        let Some((lo, hi)) = position_box(&p, buffers, &mut position_boxes) else {
+                            continue;
+                        };
                         for c in 0..8 {
                             let corner = glam::Vec3::new(
                                 if c & 1 == 0 { lo.x } else { hi.x },
@@ -263,6 +303,38 @@ fn object_groups(visits: &[Visit], options: GltfOptions) -> BTreeMap<usize, Grou
     groups
 }
 
+/// The mesh-space box of a primitive's POSITION: its accessor's `min` and `max` when
+/// the file gives them (glTF requires them, many exporters omit them; the gltf
+/// crate's `bounding_box` panics then), else the box of its elements, read once per
+/// accessor (`cache`). `None` without a POSITION, or for an accessor without a
+/// buffer view (no bytes bound what reading it would make; the primitive's read is
+/// capped later, [`GltfCaps`]).
+fn position_box(
+    primitive: &gltf::Primitive,
+    buffers: &[gltf::buffer::Data],
+    cache: &mut BTreeMap<usize, Option<(glam::Vec3, glam::Vec3)>>,
+) -> Option<(glam::Vec3, glam::Vec3)> {
+    let accessor = primitive.get(&gltf::Semantic::Positions)?;
+    let bound = |v: Option<gltf::json::Value>| -> Option<glam::Vec3> {
+        let a: [f32; 3] = gltf::json::deserialize::from_value(v?).ok()?;
+        Some(glam::Vec3::from(a)).filter(|v| v.is_finite())
+    };
+    if let (Some(lo), Some(hi)) = (bound(accessor.min()), bound(accessor.max())) {
+        return Some((lo, hi));
+    }
+    *cache.entry(accessor.index()).or_insert_with(|| {
+        accessor.view()?;
+        let reader = primitive.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+        reader.read_positions()?.fold(None, |acc, p| {
+            let p = glam::Vec3::from(p);
+            Some(match acc {
+                Some((lo, hi)) => (p.min(lo), p.max(hi)),
+                None => (p, p),
+            })
+        })
+    })
+}
+
 /// One mesh's primitives placed in a model: `offset + linear · p`, winding flipped
 /// when `mirrored` (the linear part's determinant is negative).
 struct Part<'a> {
@@ -299,9 +371,16 @@ pub fn load_gltf_scene_with(path: &Path, options: GltfOptions) -> Result<GltfSce
 /// [`load_gltf_scene`] of `bytes` already read from `path` (external buffers and
 /// images resolve against `path`'s folder); what the fuzz targets call.
 pub fn parse_gltf_scene(path: &Path, bytes: &[u8]) -> Result<GltfScene, LoadError> {
-    super::guarded(path, FORMAT, || {
-        parse_scene(path, bytes, GltfOptions::default())
-    })
+    parse_gltf_scene_with(path, bytes, GltfOptions::default())
+}
+
+/// [`parse_gltf_scene`] with options (the structure-aware fuzzers read both ways).
+pub fn parse_gltf_scene_with(
+    path: &Path,
+    bytes: &[u8],
+    options: GltfOptions,
+) -> Result<GltfScene, LoadError> {
+    super::guarded(path, FORMAT, || parse_scene(path, bytes, options))
 }
 
 /// Refuses a file that requires extensions hexbake does not read (any but
@@ -351,6 +430,7 @@ fn parse_scene(path: &Path, bytes: &[u8], options: GltfOptions) -> Result<GltfSc
         .ok_or_else(|| err("no scene".into(), Location::Unknown))?;
 
     // Step 2: walk the nodes.
+    let mut budget = Budget::new(options.caps);
     let mut models: Vec<GltfModel> = Vec::new();
     let mut instances: Vec<GltfInstance> = Vec::new();
     // (mesh, texture, baked linear part's bits, mirrored) → model index.
@@ -376,7 +456,7 @@ fn parse_scene(path: &Path, bytes: &[u8], options: GltfOptions) -> Result<GltfSc
         });
         Ok(())
     })?;
-    let groups = object_groups(&visits, options);
+    let groups = object_groups(&visits, &buffers, options);
     // Member visit → its group's root visit (a group is placed at its first member).
     let grouped: BTreeMap<usize, usize> = groups
         .iter()
@@ -413,6 +493,7 @@ fn parse_scene(path: &Path, bytes: &[u8], options: GltfOptions) -> Result<GltfSc
                     path,
                     &document,
                     &buffers,
+                    &mut budget,
                     &visits,
                     root,
                     group,
@@ -466,6 +547,7 @@ fn parse_scene(path: &Path, bytes: &[u8], options: GltfOptions) -> Result<GltfSc
                             path,
                             &document,
                             &buffers,
+                            &mut budget,
                             &[part],
                             texture,
                             name,
@@ -484,11 +566,12 @@ fn parse_scene(path: &Path, bytes: &[u8], options: GltfOptions) -> Result<GltfSc
                     }
                 };
                 if let Some(model) = id {
-                    instances.push(GltfInstance {
+                    let instance = GltfInstance {
                         model,
                         transform: instance_transform,
                         node: node.index() as u32,
-                    });
+                    };
+                    place(path, &budget, &mut instances, instance, node)?;
                 }
             }
         }
@@ -532,6 +615,7 @@ fn place_group(
     path: &Path,
     document: &gltf::Document,
     buffers: &[gltf::buffer::Data],
+    budget: &mut Budget,
     visits: &[Visit],
     root: usize,
     group: &Group,
@@ -611,7 +695,9 @@ fn place_group(
                     split,
                     false,
                 );
-                match build_model(path, document, buffers, &parts, texture, name, textures)? {
+                match build_model(
+                    path, document, buffers, budget, &parts, texture, name, textures,
+                )? {
                     Some(m) => {
                         let id = u32::try_from(models.len()).map_err(|_| {
                             parse_error(path, FORMAT, "too many models".to_string(), at())
@@ -625,11 +711,12 @@ fn place_group(
             }
         };
         if let Some(model) = id {
-            instances.push(GltfInstance {
+            let instance = GltfInstance {
                 model,
                 transform: instance_transform,
                 node: root_node.index() as u32,
-            });
+            };
+            place(path, budget, instances, instance, root_node)?;
         }
     }
     Ok(())
@@ -674,11 +761,13 @@ fn model_name(
 
 /// One model named `name`: the primitives of `parts` (all using `texture`), each
 /// part's positions transformed and its winding flipped when it mirrors; `None`
-/// when none of them has triangles.
+/// when none of them has triangles. Each primitive read is counted in `budget`.
+#[allow(clippy::too_many_arguments)]
 fn build_model(
     path: &Path,
     document: &gltf::Document,
     buffers: &[gltf::buffer::Data],
+    budget: &mut Budget,
     parts: &[Part],
     texture: Option<usize>,
     name: String,
@@ -695,7 +784,7 @@ fn build_model(
     for part in parts {
         for p in &part.prims {
             if let Some(prim) =
-                read_scene_primitive(path, buffers, &part.mesh, p, texture.is_some())?
+                read_scene_primitive(path, buffers, budget, &part.mesh, p, texture.is_some())?
             {
                 read.push((prim, part));
             }
@@ -801,12 +890,15 @@ pub(crate) fn split_transform(world: Mat4) -> (Mat3, Mat4) {
 fn read_scene_primitive(
     path: &Path,
     buffers: &[gltf::buffer::Data],
+    budget: &mut Budget,
     mesh: &gltf::Mesh,
     primitive: &gltf::Primitive,
     textured: bool,
 ) -> Result<Option<ScenePrim>, LoadError> {
     let err = primitive_error(path, mesh, primitive);
-    let Some((mode, reader, positions)) = open_triangle_primitive(buffers, primitive, &err)? else {
+    let Some((mode, reader, positions)) =
+        open_triangle_primitive(buffers, budget, primitive, &err)?
+    else {
         return Ok(None);
     };
     let n = positions.len();

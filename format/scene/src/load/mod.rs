@@ -24,9 +24,10 @@ mod stl;
 
 use crate::cleanup::{finish_mesh, CleanupError, CleanupStats, RawMesh};
 use format::mesh::Mesh;
+pub use gltf::GltfCaps;
 pub use gltf_scene::{
-    load_gltf_scene, load_gltf_scene_with, parse_gltf_scene, GltfInstance, GltfModel, GltfObjects,
-    GltfOptions, GltfScene,
+    load_gltf_scene, load_gltf_scene_with, parse_gltf_scene, parse_gltf_scene_with, GltfInstance,
+    GltfModel, GltfObjects, GltfOptions, GltfScene,
 };
 use std::fmt;
 use std::path::{Path, PathBuf};
