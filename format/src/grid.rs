@@ -277,6 +277,23 @@ impl HexGrid {
         d.y <= SQRT3 * c / 2.0 + tol && SQRT3 * d.x + d.y <= SQRT3 * c + tol
     }
 
+    /// The distance from `p` (x, z) to the nearest edge of the hexagon of its cell
+    /// ([`HexGrid::cell_at`]): how far the viewer is from crossing into another
+    /// cell (issue 31's "frames near a border"). 0 on an edge, at most the apothem
+    /// √3c/2 at the centre; `None` off the grid. In a border notch (outside every
+    /// hexagon) it is 0.
+    pub fn distance_to_border(&self, p: Vec2) -> Option<f32> {
+        let id = self.cell_at(p)?;
+        let d = p - self.centre(id);
+        let apothem = SQRT3 * self.cell_size / 2.0;
+        // Flat-top hexagon: edge normals at 90° and ±30° from +x.
+        let reach =
+            d.y.abs()
+                .max((SQRT3 / 2.0 * d.x + 0.5 * d.y).abs())
+                .max((SQRT3 / 2.0 * d.x - 0.5 * d.y).abs());
+        Some((apothem - reach).max(0.0))
+    }
+
     /// Whether the point (x, z) belongs to the cell: its hexagon, or for a border
     /// cell the part of a border notch nearest to it. Points on a shared edge
     /// belong to both hexagons; [`HexGrid::cell_at`] picks one of them.

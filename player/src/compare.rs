@@ -14,8 +14,8 @@ use format::path::{CameraPath, PathFrame};
 // The `--json` report: its schema lives in format (issue 14 item 2), read by the
 // benchmark tool.
 use format::schema::compare::{
-    AaFrame, AaQuality, AaReference, ClusterLodSummary, CompareFrame, CompareReport, CrossingPop,
-    CrossingStats, PopReport,
+    AaFrame, AaQuality, AaReference, BorderQuality, ClusterLodSummary, CompareFrame, CompareReport,
+    CrossingPop, CrossingStats, PopReport, BORDER_RADIUS,
 };
 // `frames.csv`: one row type, also read by the benchmark tool (issue 28).
 use crate::run::{
@@ -420,6 +420,12 @@ pub fn compare_runs(
                 frame_ms: ms,
                 reference_frame_ms: ref_ms,
                 frustum_frame_ms: fr_ms,
+                border_distance: player
+                    .bake
+                    .grid
+                    .hex()
+                    .distance_to_border(glam::Vec2::new(cam.eye.x, cam.eye.z))
+                    .map(f64::from),
             });
             acc.records.push(frame_row(
                 i,
@@ -542,6 +548,7 @@ pub fn compare_runs(
             crossing_no_prefetch,
             pops,
             fallback_cells: acc.fallback_cells.into_iter().collect(),
+            near_border: near_border(&per_frame, &acc.quality),
             per_frame,
         };
         reports.push((report, bytes));
@@ -549,17 +556,60 @@ pub fn compare_runs(
     Ok(reports)
 }
 
-/// Bytes of the bake's packs as on disk: every `*.pack` in `out` and in its
-/// `cells/` and `groups/` folders (base, index, cell and far-field group packs).
-pub fn pack_bytes(out: &Path) -> u64 {
-    [out.to_path_buf(), out.join("cells"), out.join("groups")]
+/// The frames within [`BORDER_RADIUS`] of a border against the whole walk (issue
+/// 31); `None` when no frame is that near.
+fn near_border(per_frame: &[CompareFrame], quality: &[FrameQuality]) -> Option<BorderQuality> {
+    let near: Vec<bool> = per_frame
         .iter()
-        .flat_map(|d| std::fs::read_dir(d).into_iter().flatten().flatten())
-        .filter(|e| e.path().extension().is_some_and(|x| x == "pack"))
-        .filter_map(|e| e.metadata().ok())
-        .filter(|m| m.is_file())
-        .map(|m| m.len())
-        .sum()
+        .map(|f| f.border_distance.is_some_and(|d| d <= BORDER_RADIUS))
+        .collect();
+    let frames = near.iter().filter(|&&n| n).count();
+    if frames == 0 {
+        return None;
+    }
+    let near_quality = quality
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| near.get(*i).copied().unwrap_or(false));
+    Some(BorderQuality {
+        radius: BORDER_RADIUS,
+        frames,
+        mean_psnr_y: mean(
+            per_frame
+                .iter()
+                .zip(&near)
+                .filter(|(_, &n)| n)
+                .map(|(f, _)| f.psnr_y),
+        ),
+        walk_mean_psnr_y: mean(per_frame.iter().map(|f| f.psnr_y)),
+        object_psnr_y_db: summarize_objects(near_quality).object_psnr_y_db,
+        walk_object_psnr_y_db: summarize_objects(quality.iter().enumerate()).object_psnr_y_db,
+    })
+}
+
+/// Bytes of the bake's packs as on disk: every `*.pack` in `out` and in its
+/// `cells/` and `groups/` folders (base, index, cell and far-field group packs), and
+/// the captures of its texture store (`textures/`, format version 6).
+pub fn pack_bytes(out: &Path) -> u64 {
+    let files = |dirs: Vec<PathBuf>, ext: &'static str| {
+        dirs.into_iter()
+            .flat_map(|d| std::fs::read_dir(d).into_iter().flatten().flatten())
+            .filter(move |e| e.path().extension().is_some_and(|x| x == ext))
+            .filter_map(|e| e.metadata().ok())
+            .filter(|m| m.is_file())
+            .map(|m| m.len())
+            .sum::<u64>()
+    };
+    let store: Vec<PathBuf> = std::fs::read_dir(out.join("textures"))
+        .into_iter()
+        .flatten()
+        .flatten()
+        .map(|e| e.path())
+        .collect();
+    files(
+        vec![out.to_path_buf(), out.join("cells"), out.join("groups")],
+        "pack",
+    ) + files(store, "tex")
 }
 
 /// Step 3 of [`compare`]: the hybrid walked again with the prefetch thread off, for

@@ -155,6 +155,31 @@ fn prism_aabb_test_matches_sampling() {
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(256))]
 
+    /// `distance_to_border` (issue 31, frames near a border): the distance from a point
+    /// inside a hexagon to the nearest of its six edges, by brute force over the
+    /// edges as segments; a point that far along any direction stays in the cell.
+    #[test]
+    fn distance_to_border_is_the_distance_to_the_nearest_hexagon_edge(
+        x in 200.0f32..1400.0, z in 200.0f32..1800.0,
+    ) {
+        let g = park();
+        let p = Vec2::new(x, z);
+        let id = g.cell_at(p).unwrap();
+        prop_assume!(g.in_hexagon(id, p));
+        let d = g.distance_to_border(p).unwrap();
+        let c = g.corners(id);
+        let brute = (0..6)
+            .map(|k| {
+                let (a, b) = (c[k], c[(k + 1) % 6]);
+                let t = ((p - a).dot(b - a) / (b - a).length_squared()).clamp(0.0, 1.0);
+                p.distance(a + t * (b - a))
+            })
+            .fold(f32::INFINITY, f32::min);
+        prop_assert!((d - brute).abs() < 1e-3, "{d} vs brute force {brute}");
+        let centre = g.centre(id);
+        prop_assert!((g.distance_to_border(centre).unwrap() - 50.0 * 3f32.sqrt() / 2.0).abs() < 1e-3);
+    }
+
     /// `Prism::closest_point` (the MVMesh's l′ looks from it): in the prism, the point
     /// itself when inside, and no sampled point of the prism is nearer.
     #[test]

@@ -93,6 +93,10 @@ pub struct ObjectQuality {
     pub object_pixel_fraction: f64,
 }
 
+/// Frames whose eye is at most this far (ground units) from a cell border count as
+/// "near a border" (issue 31's 5 units).
+pub const BORDER_RADIUS: f64 = 5.0;
+
 /// One frame of `player compare`.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
@@ -125,6 +129,31 @@ pub struct CompareFrame {
     pub reference_frame_ms: f64,
     #[serde(deserialize_with = "nan_if_null")]
     pub frustum_frame_ms: f64,
+    /// Ground distance from the eye to the nearest edge of its cell's hexagon (issue
+    /// 31: image quality near borders); `None` off the grid and in older reports.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub border_distance: Option<f64>,
+}
+
+/// The frames of a walk near cell borders against the whole walk (issue 31: "over
+/// every walk, the mean PSNR(Y) of frames within 5 units of a border is within 1 dB
+/// of the walk's mean").
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct BorderQuality {
+    /// Frames whose eye is at most this far from its hexagon's edge (ground units).
+    pub radius: f64,
+    pub frames: usize,
+    /// Mean full-frame PSNR(Y) of those frames and of the whole walk, dB.
+    #[serde(deserialize_with = "nan_if_null")]
+    pub mean_psnr_y: f64,
+    #[serde(deserialize_with = "nan_if_null")]
+    pub walk_mean_psnr_y: f64,
+    /// Object-pixel PSNR(Y), pooled over those frames and over the whole walk, dB.
+    #[serde(deserialize_with = "nan_if_null")]
+    pub object_psnr_y_db: f64,
+    #[serde(deserialize_with = "nan_if_null")]
+    pub walk_object_psnr_y_db: f64,
 }
 
 /// One frame against the anti-aliased reference.
@@ -237,6 +266,10 @@ pub struct CompareReport {
     /// Those frames' figures count full geometry as the hybrid.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub fallback_cells: Vec<u32>,
+    /// The frames within [`BORDER_RADIUS`] of a cell border against the whole walk
+    /// (issue 31); `None` when no frame is that near or in older reports.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub near_border: Option<BorderQuality>,
     pub per_frame: Vec<CompareFrame>,
 }
 

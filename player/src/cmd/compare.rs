@@ -293,6 +293,19 @@ fn print_report(r: &CompareReport) {
                 r.fallback_cells
             );
     }
+    if let Some(b) = &r.near_border {
+        println!(
+            "near borders ({} frames within {} units of a cell border): mean PSNR(Y) {:.2} dB (walk {:.2}, {:+.2} dB), object pixels {:.2} dB (walk {:.2}, {:+.2} dB)",
+            b.frames,
+            b.radius,
+            b.mean_psnr_y,
+            b.walk_mean_psnr_y,
+            b.mean_psnr_y - b.walk_mean_psnr_y,
+            b.object_psnr_y_db,
+            b.walk_object_psnr_y_db,
+            b.object_psnr_y_db - b.walk_object_psnr_y_db
+        );
+    }
     if let Some(p) = &r.pops {
         println!(
                 "pops at {} crossings: object-pixel PSNR(Y) of outgoing vs incoming cell mean {:.2} dB, worst {:.2} dB (frame {}); a one-pixel turn: mean {:.2} dB; {} crossings no larger than the turn",
