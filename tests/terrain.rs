@@ -422,16 +422,13 @@ fn issue29_terrain_example_bakes_draws_its_ground_in_every_frame_and_matches_the
 /// view (pixels whose 5 × 5 neighbourhood is all terrain in the CPU rasterizer's
 /// render of the same camera), no frame of the walk shows sky or the flat ground.
 ///
-/// **Fails today (issue 29, known):** where two *proxied* terrain chunks meet, their
-/// proxies (simplified and captured one chunk at a time, borders not locked) leave
-/// one-pixel lines of sky near the horizon — 80 of the 317 frames, at most 23
-/// pixels in one. Chunks drawn as originals meet exactly
-/// (`issue29_terrain_example_chunks_draw_the_pixels_of_the_unsplit_meshes`), and
-/// the ground near the eye is whole (the test above). Run with `--ignored`; each
-/// cracked frame is written to `target/terrain-walk/crack-NNNNN-{hybrid,cpu}.png`,
-/// the crack pixels in red.
+/// Where two *proxied* terrain chunks meet, each simplified on its own, their
+/// proxies left one-pixel lines of sky near the horizon (80 of the 317 frames, at
+/// most 23 pixels in one) until each chunk's cut border was locked in
+/// simplification (issue 29, `scene::chunk`; worker `tests/chunks.rs` checks the
+/// proxies of two chunks keep their shared border). Each cracked frame is written
+/// to `target/terrain-walk/crack-NNNNN-{hybrid,cpu}.png`, the crack pixels in red.
 #[test]
-#[ignore = "known: proxies of neighbouring terrain chunks leave 1-pixel cracks (issue 29)"]
 fn issue29_terrain_example_hybrid_has_no_crack_between_chunks() {
     if !terrain_scene_built() {
         return;

@@ -17,12 +17,21 @@ pub struct Model {
     pub source: String,
     pub mesh: Mesh,
     /// blake3 of the loaded mesh's bytes (positions, normals, albedo, triangles);
-    /// for a textured model, [`AlbedoMap::model_hash`] of that and the texture.
+    /// for a textured model, [`AlbedoMap::model_hash`] of that and the texture; with
+    /// `locked_vertices`, that hash and the locked ids ([`Model::with_locked_vertices`]).
     pub content_hash: [u8; 32],
     /// Base-colour texture and UVs (models of glTF scenes, issue 18); `None`: the
     /// vertex albedo alone.
     #[serde(default)]
     pub albedo_map: Option<AlbedoMap>,
+    /// Vertices (ascending ids) that simplification never removes: no collapse of
+    /// the worker's (its LOD chains, SV and MV proxies) moves them, so they stay where
+    /// the model puts them in every proxy. A chunk of a split object (`scene::chunk`,
+    /// issue 29) locks its cut border, the vertices it shares with the object's other
+    /// chunks, so proxies of two neighbouring chunks still meet without a crack.
+    /// Empty for every other model.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub locked_vertices: Vec<u32>,
 }
 
 impl Model {
@@ -41,7 +50,30 @@ impl Model {
             mesh,
             content_hash,
             albedo_map,
+            locked_vertices: Vec::new(),
         }
+    }
+
+    /// The model with `locked` (vertex ids, any order, repeats allowed) as its
+    /// [`Model::locked_vertices`], and its content hash extended by them: what a
+    /// model's LOD chain and proxies are keyed by changes with what they may move.
+    /// No locked vertex leaves the model as it was.
+    pub fn with_locked_vertices(mut self, mut locked: Vec<u32>) -> Model {
+        locked.sort_unstable();
+        locked.dedup();
+        if locked.is_empty() {
+            return self;
+        }
+        let mut h = blake3::Hasher::new();
+        h.update(b"hexbake locked vertices v1\0");
+        h.update(&self.content_hash);
+        h.update(&(locked.len() as u64).to_le_bytes());
+        for v in &locked {
+            h.update(&v.to_le_bytes());
+        }
+        self.content_hash = *h.finalize().as_bytes();
+        self.locked_vertices = locked;
+        self
     }
 }
 

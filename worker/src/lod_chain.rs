@@ -15,6 +15,7 @@
 //!   never more than √2 finer than its budget allows). Each level continues from the previous one,
 //!   so the chain is nested. Half-edge collapses keep original vertices: every level
 //!   indexes the model's own vertex ids.
+//!   A model's locked vertices (a chunk's cut border, issue 29) stay in every level.
 //! - **Conservative error.** Every removed original vertex is carried by the
 //!   surviving triangle nearest to it and re-assigned on every collapse that touches
 //!   that triangle (the deviation bookkeeping of `simplify.rs`); a collapse is
@@ -43,7 +44,7 @@
 //! ([`LodChains::prepare`]) and shared by all cells.
 
 use crate::grid::Prism;
-use crate::simplify::{collapse_within, SimplifyError, SimplifyInput};
+use crate::simplify::{collapse_within, locked_mask, SimplifyError, SimplifyInput};
 use format::lod::{LodChainFile, LodLevelData};
 use format::{Mesh, Model, Scene};
 use glam::{Mat3, Mat4, Vec3};
@@ -129,6 +130,8 @@ impl LodChain {
         let mesh = &model.mesh;
         let (positions, normals) = object_vertices(mesh);
         let weights = vec![1.0f32; positions.len()];
+        // A chunk's cut border stays in every level (issue 29, simplify.rs).
+        let locked = locked_mask(positions.len(), &model.locked_vertices);
         let diag = diagonal(mesh);
         let mut levels: Vec<LodLevel> = Vec::new();
         let mut triangles = mesh.triangles.clone();
@@ -147,6 +150,7 @@ impl LodChain {
                 triangles: &triangles,
                 weights: &weights,
                 view_sets: None,
+                locked: locked.as_deref(),
             };
             let length = |a: u32, b: u32| positions[a as usize].distance(positions[b as usize]);
             let tracked = collapse_within(

@@ -232,6 +232,7 @@ fn bunny_scene() -> Option<(Scene, HexGrid, CellParams)> {
             mesh,
             content_hash: [0; 32],
             albedo_map: None,
+            locked_vertices: Vec::new(),
         }],
         instances: vec![Instance {
             model: 0,
