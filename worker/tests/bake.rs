@@ -233,6 +233,7 @@ fn bunny_scene() -> Option<(Scene, HexGrid, CellParams)> {
             content_hash: [0; 32],
             albedo_map: None,
             locked_vertices: Vec::new(),
+            chunk_cell: None,
         }],
         instances: vec![Instance {
             model: 0,

@@ -1154,6 +1154,7 @@ fn model_of(mesh: &TestMesh) -> format::Model {
         mesh: m,
         albedo_map: None,
         locked_vertices: Vec::new(),
+        chunk_cell: None,
     }
 }
 

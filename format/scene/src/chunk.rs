@@ -30,6 +30,13 @@
 //! bit. Open boundaries the object had before the split (a terrain's outer edge)
 //! stay free, as they are for any other model.
 //!
+//! **Chunks near a cell (issue 29).** A chunk's footprint may stop a sliver short
+//! of a neighbouring cell's hexagon (its triangles are those whose centroids lie in
+//! its own cell); a chunk records its cell ([`Model::chunk_cell`]) and the worker's
+//! split draws it as an original in every cell it comes within half a cell of
+//! (worker `grid::instance_draws_as_original`), so the ground next to the viewer is
+//! never a proxy.
+//!
 //! Determinism: chunks are formed in ascending cell order, vertices in ascending
 //! original order; a split model no instance uses any more is dropped and the rest
 //! keep their order. A scene with nothing to split is left exactly as it was.
@@ -229,5 +236,5 @@ fn sub_model(model: &Model, triangles: &[[u32; 3]], border: &[bool], cell: u32, 
         sub,
         albedo_map,
     )
-    .with_locked_vertices(locked)
+    .into_chunk(cell, locked)
 }
