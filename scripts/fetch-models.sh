@@ -6,8 +6,9 @@
 #
 # Idempotent: a model already present with the right checksum is left alone.
 # Every output file is verified against scripts/models.sha256. Then builds the
-# textured example scene (scripts/build-textured-scene.sh, issue 18) into
-# DEST/textured-plaza/ unless it is there.
+# textured example scenes unless they are there: the plaza
+# (scripts/build-textured-scene.sh, issue 18) into DEST/textured-plaza/ and the
+# terrain (scripts/build-terrain-scene.sh, issue 29) into DEST/terrain/.
 set -euo pipefail
 
 repo=$(cd "$(dirname "$0")/.." && pwd)
@@ -20,7 +21,10 @@ die() { echo "fetch-models: $*" >&2; exit 1; }
 verify() { (cd "$dest" && sha256sum --quiet -c "$sums" >/dev/null 2>&1); }
 
 mkdir -p "$dest"
-textured_scene() { "$repo/scripts/build-textured-scene.sh" "$dest/textured-plaza"; }
+textured_scene() {
+    "$repo/scripts/build-textured-scene.sh" "$dest/textured-plaza"
+    "$repo/scripts/build-terrain-scene.sh" "$dest/terrain"
+}
 
 if [ -f "$sums" ] && verify; then
     echo "fetch-models: $dest is complete ($(wc -l <"$sums") files verified)"

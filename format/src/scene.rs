@@ -17,12 +17,27 @@ pub struct Model {
     pub source: String,
     pub mesh: Mesh,
     /// blake3 of the loaded mesh's bytes (positions, normals, albedo, triangles);
-    /// for a textured model, [`AlbedoMap::model_hash`] of that and the texture.
+    /// for a textured model, [`AlbedoMap::model_hash`] of that and the texture; with
+    /// a chunk, that hash with its cell and locked ids ([`Model::into_chunk`]).
     pub content_hash: [u8; 32],
     /// Base-colour texture and UVs (models of glTF scenes, issue 18); `None`: the
     /// vertex albedo alone.
     #[serde(default)]
     pub albedo_map: Option<AlbedoMap>,
+    /// Vertices (ascending ids) that simplification never removes: no collapse of
+    /// the worker's (its LOD chains, SV and MV proxies) moves them, so they stay where
+    /// the model puts them in every proxy. A chunk of a split object (`scene::chunk`,
+    /// issue 29) locks its cut border, the vertices it shares with the object's other
+    /// chunks, so proxies of two neighbouring chunks still meet without a crack.
+    /// Empty for every other model.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub locked_vertices: Vec<u32>,
+    /// For a chunk of a split object (`scene::chunk`, issue 29): the cell it was cut
+    /// for. The split draws a chunk as an original in every cell its footprint
+    /// comes near, not only in those it overlaps (worker `grid::
+    /// instance_draws_as_original`). `None` for every other model.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub chunk_cell: Option<u32>,
 }
 
 impl Model {
@@ -41,7 +56,31 @@ impl Model {
             mesh,
             content_hash,
             albedo_map,
+            locked_vertices: Vec::new(),
+            chunk_cell: None,
         }
+    }
+
+    /// The model as the chunk of a split object cut for `cell`, with `locked`
+    /// (vertex ids, any order, repeats allowed: its cut border) as its
+    /// [`Model::locked_vertices`], and its content hash extended by both: a model's
+    /// LOD chain and proxies are keyed by the hash, and change with what they may
+    /// move.
+    pub fn into_chunk(mut self, cell: u32, mut locked: Vec<u32>) -> Model {
+        locked.sort_unstable();
+        locked.dedup();
+        let mut h = blake3::Hasher::new();
+        h.update(b"hexbake chunk v1\0");
+        h.update(&self.content_hash);
+        h.update(&cell.to_le_bytes());
+        h.update(&(locked.len() as u64).to_le_bytes());
+        for v in &locked {
+            h.update(&v.to_le_bytes());
+        }
+        self.content_hash = *h.finalize().as_bytes();
+        self.locked_vertices = locked;
+        self.chunk_cell = Some(cell);
+        self
     }
 }
 

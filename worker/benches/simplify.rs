@@ -78,6 +78,7 @@ fn bench_simplify(c: &mut Criterion) {
         triangles: &sv_tris,
         weights: &weights,
         view_sets: None,
+        locked: None,
     };
     c.bench_function("sv_front_7cells", |b| {
         b.iter(|| simplify(black_box(&sv), &sv_params).unwrap())
@@ -141,6 +142,7 @@ fn bench_simplify(c: &mut Criterion) {
         triangles: &mv_tris,
         weights: &weights,
         view_sets: Some(&sets),
+        locked: None,
     };
     c.bench_function("mv_front_1cell", |b| {
         b.iter(|| simplify(black_box(&mv), &mv_params).unwrap())

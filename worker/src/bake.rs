@@ -15,7 +15,10 @@
 //!    special case of objects reaching the eye heights. An outside object's box
 //!    misses the vertical column over the hexagon, so the cell centre lies outside
 //!    it and a capture from there sees all of it in front of the eye
-//!    ([`crate::view`]).
+//!    ([`crate::view`]). A chunk of a split object (`scene::chunk`) is inside
+//!    when its footprint comes within half a cell of the hexagon
+//!    ([`instance_draws_as_original`]): the chunks of the cell's neighbours are
+//!    drawn as they are, not as proxies smeared at the viewer's feet.
 //! 2. **Regional back-face culling** (§3.1.5): an outside instance all of whose
 //!    triangles face away from the whole prism is Culled (an instance without
 //!    triangles too).
@@ -58,7 +61,7 @@ use crate::derive::{derive_region, selection_culled, Region};
 pub use crate::error::BakeError;
 use crate::far_field::FarField;
 use crate::grid::HexGrid;
-pub use crate::grid::{cell_eye, draws_as_original};
+pub use crate::grid::{cell_eye, draws_as_original, instance_draws_as_original};
 use crate::lod_chain::LodChains;
 pub use crate::proxy::{proxy_key, BakedMember, BakedProxy, ProxyKey, ProxyReuse};
 use crate::select::subpixel_from_region;
@@ -212,6 +215,7 @@ pub fn bake_cell_with(
     let mut times = CellTimes::default();
     let prism = grid.prism(cell, cells.min_eye_height, cells.max_eye_height);
     let corners = prism.corners();
+    let chunk_margin = crate::grid::CHUNK_MARGIN_CELLS * grid.cell_size();
     let centre = cell_eye(grid, cell, cells);
 
     // Steps 1–3: split, cull, self-occluding error (parallel, collected in order).
@@ -232,7 +236,8 @@ pub fn bake_cell_with(
                 return (None, Assignment::Far, false);
             }
             let (lo, hi) = scene.instance_bounds(i);
-            if draws_as_original(&prism, lo, hi) {
+            let chunk = model.chunk_cell.is_some();
+            if instance_draws_as_original(&prism, lo, hi, chunk, chunk_margin) {
                 return (None, Assignment::Original, false);
             }
             // Culled by size (004, issue 16): with objective selection, an object

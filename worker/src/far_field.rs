@@ -25,6 +25,8 @@
 //! - **outside** ([`crate::bake::draws_as_original`], issue 29): an instance whose
 //!   box's footprint misses the group's hexagon misses every cell's hexagon, and
 //!   one that overlaps it — a ground mesh under the group — is never far for it;
+//!   nor is a chunk any of its cells draws as an original for the cells' margin
+//!   ([`crate::grid::instance_draws_as_original`]);
 //! - **self-occluding error** (000 §3.1.2) from the group centre with c = the group
 //!   prism's size (the farthest viewpoint |VV'| of its region): below T_s, the object
 //!   is a single-view object for the whole group;
@@ -316,11 +318,16 @@ struct FarTest {
     eye: glam::Vec3,
     /// At a merged level: [`crate::levels::merged_min_distance`].
     min_distance: Option<f32>,
+    /// The cells' margin for chunks ([`crate::grid::CHUNK_MARGIN_CELLS`] × the
+    /// cell's c, not the group's): a chunk any cell of the group draws as an
+    /// original is never far for the group.
+    chunk_margin: f32,
 }
 
 impl FarTest {
-    fn new(prism: Prism, merged: bool, params: &BakeParams) -> FarTest {
+    fn new(prism: Prism, merged: bool, params: &BakeParams, chunk_margin: f32) -> FarTest {
         FarTest {
+            chunk_margin,
             corners: prism.corners(),
             eye: prism.centre3(),
             min_distance: merged
@@ -337,7 +344,13 @@ impl FarTest {
         params: &BakeParams,
     ) -> FarTest {
         let merged = groups.level(group) >= params.merge_level;
-        FarTest::new(groups.prism(grid, group, cells), merged, params)
+        let chunk_margin = crate::grid::CHUNK_MARGIN_CELLS * grid.cell_size();
+        FarTest::new(
+            groups.prism(grid, group, cells),
+            merged,
+            params,
+            chunk_margin,
+        )
     }
 
     fn far(&self, scene: &Scene, i: usize, params: &BakeParams) -> bool {
@@ -349,7 +362,8 @@ impl FarTest {
             return false;
         }
         let (lo, hi) = scene.instance_bounds(i);
-        if crate::grid::draws_as_original(&self.prism, lo, hi) {
+        let chunk = model.chunk_cell.is_some();
+        if crate::grid::instance_draws_as_original(&self.prism, lo, hi, chunk, self.chunk_margin) {
             return false;
         }
         let error =

@@ -15,6 +15,7 @@
 //!   never more than √2 finer than its budget allows). Each level continues from the previous one,
 //!   so the chain is nested. Half-edge collapses keep original vertices: every level
 //!   indexes the model's own vertex ids.
+//!   A model's locked vertices (a chunk's cut border, issue 29) stay in every level.
 //! - **Conservative error.** Every removed original vertex is carried by the
 //!   surviving triangle nearest to it and re-assigned on every collapse that touches
 //!   that triangle (the deviation bookkeeping of `simplify.rs`); a collapse is
@@ -45,7 +46,7 @@
 //! ([`LodChain::from_file`], issue 32 item 2); any other is rebuilt.
 
 use crate::grid::Prism;
-use crate::simplify::{collapse_within, SimplifyError, SimplifyInput};
+use crate::simplify::{collapse_within, locked_mask, SimplifyError, SimplifyInput};
 use format::lod::{LodChainFile, LodLevelData};
 use format::{Mesh, Model, Scene};
 use glam::{Mat3, Mat4, Vec3};
@@ -131,6 +132,8 @@ impl LodChain {
         let mesh = &model.mesh;
         let (positions, normals) = object_vertices(mesh);
         let weights = vec![1.0f32; positions.len()];
+        // A chunk's cut border stays in every level (issue 29, simplify.rs).
+        let locked = locked_mask(positions.len(), &model.locked_vertices);
         let diag = diagonal(mesh);
         let mut levels: Vec<LodLevel> = Vec::new();
         let mut triangles = mesh.triangles.clone();
@@ -149,6 +152,7 @@ impl LodChain {
                 triangles: &triangles,
                 weights: &weights,
                 view_sets: None,
+                locked: locked.as_deref(),
             };
             let length = |a: u32, b: u32| positions[a as usize].distance(positions[b as usize]);
             let tracked = collapse_within(

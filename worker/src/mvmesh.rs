@@ -175,6 +175,7 @@ pub fn derive_mvmesh(
             triangles: &input_triangles,
             weights: &weight,
             view_sets: Some(&view_sets),
+            locked: start.locked.as_deref(),
         },
         &SimplifyParams {
             edge_length_tolerance_px: settings.edge_length_tolerance_px,

@@ -49,7 +49,17 @@
 //!   - no triangle's normal may turn by 90° or more ([`MIN_NORMAL_TURN_COS`]);
 //!   - a vertex whose neighbourhood is not one disc or half-disc (a non-manifold
 //!     vertex, e.g. a bow-tie where a triangle subset touches itself) is not
-//!     removed while it stays so.
+//!     removed while it stays so;
+//!   - a *locked* vertex ([`SimplifyInput::locked`]) is never removed (it may be the
+//!     survivor). The worker locks the cut border of every chunk of a split object
+//!     (`format::Model::locked_vertices`, `scene::chunk`; issue 29): each chunk is
+//!     simplified on its own, and the boundary condition above still lets a border
+//!     vertex merge along the border, or go into an interior vertex of higher
+//!     weight, in one chunk and not in its neighbour, which left one-pixel cracks
+//!     of sky between the proxies of two terrain chunks (80 of the terrain walk's
+//!     317 frames). With the border locked, two chunks' proxies share every border
+//!     vertex, in the LOD chain levels as in every cell's collapse. A locked vertex
+//!     group (welding, below) is locked when one of its copies is.
 //! - **Retrying.** A rejected edge leaves the heap and is pushed again when a
 //!   collapse changes the neighbourhood of one of its vertices.
 //! - **Heap.** Since the survivor keeps its attributes, an edge's cost never
@@ -237,6 +247,27 @@ pub struct SimplifyInput<'a> {
     pub weights: &'a [f32],
     /// MVMesh only: per-vertex view set, bit k = visible from view k (k < 7).
     pub view_sets: Option<&'a [u8]>,
+    /// Vertices no collapse may remove (`true`), one per position; `None`: none.
+    /// A locked vertex never moves, though others may collapse into it: the cut
+    /// border of a chunk of a split object (module docs, "Rejected collapses";
+    /// `format::Model::locked_vertices`, issue 29).
+    pub locked: Option<&'a [bool]>,
+}
+
+/// The per-vertex mask of [`SimplifyInput::locked`] for a model of `vertex_count`
+/// vertices whose [`format::Model::locked_vertices`] are `locked` (ids past the
+/// end lock nothing); `None` when nothing is locked.
+pub fn locked_mask(vertex_count: usize, locked: &[u32]) -> Option<Vec<bool>> {
+    if locked.is_empty() {
+        return None;
+    }
+    let mut mask = vec![false; vertex_count];
+    for &v in locked {
+        if let Some(m) = mask.get_mut(v as usize) {
+            *m = true;
+        }
+    }
+    Some(mask)
 }
 
 /// Parameters of one simplification.
@@ -582,6 +613,7 @@ struct Weld {
     normals: Vec<Vec3>,
     weights: Vec<f32>,
     view_sets: Option<Vec<u8>>,
+    locked: Option<Vec<bool>>,
     /// Input triangles on representatives (or their own ids, see the docs).
     triangles: Vec<[u32; 3]>,
     /// Per representative with more than one copy: its copies, ascending (only ids
@@ -653,6 +685,7 @@ impl Weld {
         let mut normals = input.normals.to_vec();
         let mut weights = input.weights.to_vec();
         let mut view_sets = input.view_sets.map(<[u8]>::to_vec);
+        let mut locked = input.locked.map(<[bool]>::to_vec);
         for (r, group) in copies.iter_mut().enumerate() {
             if group.len() < 2 {
                 group.clear();
@@ -668,11 +701,15 @@ impl Weld {
             if let (Some(out), Some(sets)) = (view_sets.as_mut(), input.view_sets) {
                 out[r] = group.iter().fold(0, |acc, &v| acc | sets[v as usize]);
             }
+            if let (Some(out), Some(lock)) = (locked.as_mut(), input.locked) {
+                out[r] = group.iter().any(|&v| lock[v as usize]);
+            }
         }
         Some(Weld {
             normals,
             weights,
             view_sets,
+            locked,
             triangles,
             copies,
         })
@@ -750,6 +787,7 @@ fn collapse_welded(
         triangles: &weld.triangles,
         weights: &weld.weights,
         view_sets: weld.view_sets.as_deref(),
+        locked: weld.locked.as_deref(),
     };
     let mut collapser = Collapser::new(&welded);
     collapser.deviation = deviation;
@@ -801,6 +839,7 @@ fn check_input(input: &SimplifyInput, tolerance: f32) -> Result<(), SimplifyErro
         ("normals", input.normals.len()),
         ("weights", input.weights.len()),
         ("view_sets", input.view_sets.map_or(n, <[u8]>::len)),
+        ("locked", input.locked.map_or(n, <[bool]>::len)),
     ];
     for (what, found) in lengths {
         if found != n {
@@ -993,9 +1032,11 @@ impl<'a> Collapser<'a> {
         // An edge is worth a heap entry only if one direction passes the static
         // rules: the weight order and, for MV, the view-set constraint (§3.1.4).
         let view_sets = self.input.view_sets;
+        let locked = self.input.locked;
         let may_collapse = |u: u32, v: u32| -> bool {
             let (ui, vi) = (u as usize, v as usize);
             weights[ui] <= weights[vi]
+                && locked.is_none_or(|locked| !locked[ui])
                 && view_sets.is_none_or(|sets| {
                     let (su, sv) = (sets[ui], sets[vi]);
                     su & sv != 0 || (su == 0 && sv == 0)
@@ -1191,6 +1232,10 @@ impl<'a> Collapser<'a> {
     /// All the tests a half-edge collapse u → v must pass (see the module docs).
     fn can_collapse(&mut self, u: u32, v: u32) -> bool {
         let (ui, vi) = (u as usize, v as usize);
+        // A locked vertex (a chunk's cut border, issue 29) is never removed.
+        if self.input.locked.is_some_and(|locked| locked[ui]) {
+            return false;
+        }
         // MV constraint (§3.1.4): a common view, or both sets empty.
         if let Some(sets) = self.input.view_sets {
             let (su, sv) = (sets[ui], sets[vi]);

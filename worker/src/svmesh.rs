@@ -33,8 +33,8 @@ use crate::grid::Prism;
 use crate::lod_chain::{LodChains, START_FRACTION, UNBOUNDED_START_PX};
 use crate::raster::{DrawItem, ProjectedTexture, BACKGROUND_ID};
 use crate::simplify::{
-    pixels_per_radian, simplify_seeded, DeviationBound, ProjectedLength, Simplified, SimplifyError,
-    SimplifyInput, SimplifyParams,
+    locked_mask, pixels_per_radian, simplify_seeded, DeviationBound, ProjectedLength, Simplified,
+    SimplifyError, SimplifyInput, SimplifyParams,
 };
 use crate::visibility::DepthTolerance;
 use crate::weights::{vertex_states_captured, VertexState};
@@ -125,6 +125,9 @@ pub(crate) struct StartMesh<'a> {
     pub mesh: &'a format::Mesh,
     /// Per triangle of `mesh`, the original vertices it carries (chain levels only).
     pub carried: Option<&'a [Vec<u32>]>,
+    /// The model's locked vertices as [`SimplifyInput::locked`] (a chunk's cut
+    /// border, issue 29); `None` for other models.
+    pub locked: Option<Vec<bool>>,
 }
 
 impl<'a> StartMesh<'a> {
@@ -147,14 +150,21 @@ impl<'a> StartMesh<'a> {
                 pixels_per_radian(settings.image_res),
             )
         });
+        let locked = scene
+            .instances
+            .get(item.object_id as usize)
+            .and_then(|inst| scene.models.get(inst.model as usize))
+            .and_then(|model| locked_mask(item.mesh.positions.len(), &model.locked_vertices));
         match level {
             Some(l) => StartMesh {
                 mesh: &l.mesh,
                 carried: Some(&l.carried),
+                locked,
             },
             None => StartMesh {
                 mesh: item.mesh,
                 carried: None,
+                locked,
             },
         }
     }
@@ -411,6 +421,7 @@ pub fn derive_svmesh(
                 triangles: &input_triangles,
                 weights: &weights,
                 view_sets: None,
+                locked: start.locked.as_deref(),
             },
             &SimplifyParams {
                 edge_length_tolerance_px: settings.edge_length_tolerance_px,

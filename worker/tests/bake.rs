@@ -294,6 +294,8 @@ fn bunny_scene() -> Option<(Scene, HexGrid, CellParams)> {
             mesh,
             content_hash: [0; 32],
             albedo_map: None,
+            locked_vertices: Vec::new(),
+            chunk_cell: None,
         }],
         instances: vec![Instance {
             model: 0,

@@ -102,6 +102,7 @@ fn input_of<'a>(mesh: &'a TestMesh, w: &'a [f32]) -> SimplifyInput<'a> {
         triangles: &mesh.triangles,
         weights: w,
         view_sets: None,
+        locked: None,
     }
 }
 
@@ -301,6 +302,7 @@ proptest! {
             triangles: &mesh.triangles,
             weights: &w,
             view_sets: Some(&s),
+            locked: None,
         };
         let params = SimplifyParams {
             edge_length_tolerance_px: tolerance,
@@ -313,6 +315,34 @@ proptest! {
         for c in &out.log {
             let (su, sv) = (s[c.from as usize], s[c.into as usize]);
             prop_assert!(su & sv != 0 || (su == 0 && sv == 0), "{:?} sets {:#x} {:#x}", c, su, sv);
+        }
+    }
+
+    /// Issue 29: a locked vertex (a chunk's cut border) is never removed, so every
+    /// locked position the input uses is still used by the output; the collapse
+    /// keeps every other rule.
+    #[test]
+    fn locked_vertices_are_never_removed(
+        mesh in arb_mesh(),
+        weights in prop::collection::vec(prop::sample::select(vec![0.05f32, 0.125, 0.5]), 1..8),
+        lock in prop::collection::vec(any::<bool>(), 1..16),
+        eye in arb_eye(),
+        tolerance in 0.0f32..300.0,
+    ) {
+        let n = mesh.positions.len();
+        let w: Vec<f32> = (0..n).map(|i| weights[i % weights.len()]).collect();
+        let locked: Vec<bool> = (0..n).map(|i| lock[(i * 5 + i / 3) % lock.len()]).collect();
+        let input = SimplifyInput { locked: Some(&locked), ..input_of(&mesh, &w) };
+        let out = simplify(&input, &sv_params(eye, tolerance)).unwrap();
+        check_log(&mesh, &w, tolerance, &out);
+        for c in &out.log {
+            prop_assert!(!locked[c.from as usize], "{:?} removes a locked vertex", c);
+        }
+        let key = |v: u32| mesh.positions[v as usize].to_array().map(f32::to_bits);
+        let kept: std::collections::HashSet<[u32; 3]> =
+            out.triangles.iter().flatten().map(|&v| key(v)).collect();
+        for &v in mesh.triangles.iter().flatten().filter(|&&v| locked[v as usize]) {
+            prop_assert!(kept.contains(&key(v)), "locked vertex {} is gone", v);
         }
     }
 }
@@ -563,6 +593,7 @@ fn cost_follows_the_paper() {
         triangles: &m.triangles,
         weights: &weights,
         view_sets: None,
+        locked: None,
     };
     let params = sv_params(eye, 1e9);
     let out = simplify(&input, &params).unwrap();
@@ -689,6 +720,7 @@ fn bad_input_is_an_error_not_a_panic() {
         triangles: &m.triangles,
         weights: &w,
         view_sets: None,
+        locked: None,
     };
     let params = sv_params(Vec3::new(0.0, 10.0, 0.0), 4.5);
     let short = vec![0.125; n - 1];
@@ -775,6 +807,7 @@ fn degenerate_and_repeated_input_triangles_are_dropped() {
         triangles: &tris,
         weights: &w,
         view_sets: None,
+        locked: None,
     };
     let out = simplify(&input, &sv_params(Vec3::new(0.0, 10.0, 0.0), 0.0)).unwrap();
     validate(m.positions.len(), &tris, &out).unwrap();
@@ -973,6 +1006,7 @@ fn bunny_sv(mesh: &TestMesh, k: u32, variant: Variant) -> BunnyRun {
         triangles: &triangles,
         weights: &weights,
         view_sets: None,
+        locked: None,
     };
     let out = simplify(&input, &sv_params(centre, 4.5)).unwrap();
     validate(n, &triangles, &out).unwrap();
@@ -1028,6 +1062,7 @@ fn bunny_mv(mesh: &TestMesh, k: u32, variant: Variant) -> BunnyRun {
         triangles: &triangles,
         weights: &weights,
         view_sets: Some(&sets),
+        locked: None,
     };
     let params = SimplifyParams {
         edge_length_tolerance_px: 4.5,
@@ -1118,6 +1153,8 @@ fn model_of(mesh: &TestMesh) -> format::Model {
         content_hash: [1; 32],
         mesh: m,
         albedo_map: None,
+        locked_vertices: Vec::new(),
+        chunk_cell: None,
     }
 }
 

@@ -18,6 +18,25 @@
 //! the far field. An instance that would make a single chunk is left alone, as is
 //! every instance of a scene without a grid to split along.
 //!
+//! **Locked cut borders (issue 29).** Each chunk is simplified on its own, for its
+//! proxies and its LOD chain. Were its border free, a border vertex could merge
+//! along the border or into an interior vertex of lower weight in one chunk and not
+//! in its neighbour, and two proxied chunks would no longer share their border:
+//! one-pixel cracks of sky between them (80 of the terrain walk's 317 frames). So a
+//! chunk's vertices on the cut, those whose position the triangles of another chunk
+//! of the same object also use, are its [`Model::locked_vertices`]: the worker's
+//! simplification never removes them (`worker/src/simplify.rs`, "Rejected
+//! collapses"), and every representation of a chunk keeps its cut border bit for
+//! bit. Open boundaries the object had before the split (a terrain's outer edge)
+//! stay free, as they are for any other model.
+//!
+//! **Chunks near a cell (issue 29).** A chunk's footprint may stop a sliver short
+//! of a neighbouring cell's hexagon (its triangles are those whose centroids lie in
+//! its own cell); a chunk records its cell ([`Model::chunk_cell`]) and the worker's
+//! split draws it as an original in every cell it comes within half a cell of
+//! (worker `grid::instance_draws_as_original`), so the ground next to the viewer is
+//! never a proxy.
+//!
 //! Determinism: chunks are formed in ascending cell order, vertices in ascending
 //! original order; a split model no instance uses any more is dropped and the rest
 //! keep their order. A scene with nothing to split is left exactly as it was.
@@ -26,7 +45,7 @@ use format::albedo::AlbedoMap;
 use format::grid::HexGrid;
 use format::{Instance, InstanceLabels, Mesh, Model, Scene};
 use glam::{Vec2, Vec3};
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashMap};
 
 /// An instance wider than this many cell widths (2c, the hexagon's corner-to-corner
 /// width) in x or z is split. One cell width would split most objects that straddle
@@ -150,15 +169,34 @@ fn chunk_model(model: &Model, inst: &Instance, grid: &HexGrid, i: usize) -> Vec<
             .unwrap_or(0);
         by_cell.entry(cell).or_default().push(t);
     }
+    let border = cut_border(mesh, &by_cell);
     by_cell
         .into_iter()
-        .map(|(cell, triangles)| (cell, sub_model(model, &triangles, cell, i)))
+        .map(|(cell, triangles)| (cell, sub_model(model, &triangles, &border, cell, i)))
+        .collect()
+}
+
+/// Per vertex of `mesh`: whether it lies on a cut, i.e. the triangles of more than one
+/// chunk use its position (bit-equal, −0 = +0, so a UV seam along the cut counts).
+fn cut_border(mesh: &Mesh, by_cell: &BTreeMap<u32, Vec<[u32; 3]>>) -> Vec<bool> {
+    let key = |v: u32| mesh.positions[v as usize].map(|x| (x + 0.0).to_bits());
+    // Per position: the first chunk that uses it, and whether another one does.
+    let mut users: HashMap<[u32; 3], (u32, bool)> = HashMap::new();
+    for (&cell, triangles) in by_cell {
+        for &v in triangles.iter().flatten() {
+            let entry = users.entry(key(v)).or_insert((cell, false));
+            entry.1 |= entry.0 != cell;
+        }
+    }
+    (0..mesh.positions.len() as u32)
+        .map(|v| users.get(&key(v)).is_some_and(|&(_, shared)| shared))
         .collect()
 }
 
 /// The model of `triangles` of `model`: the vertices they use, in ascending original
-/// order, copied bit for bit (with their UVs when textured).
-fn sub_model(model: &Model, triangles: &[[u32; 3]], cell: u32, i: usize) -> Model {
+/// order, copied bit for bit (with their UVs when textured), those on the cut
+/// (`border`, by original id) locked.
+fn sub_model(model: &Model, triangles: &[[u32; 3]], border: &[bool], cell: u32, i: usize) -> Model {
     let mesh = &model.mesh;
     let mut remap = vec![u32::MAX; mesh.positions.len()];
     for t in triangles {
@@ -189,10 +227,14 @@ fn sub_model(model: &Model, triangles: &[[u32; 3]], cell: u32, i: usize) -> Mode
             .collect(),
         texture: m.texture.clone(),
     });
+    let locked = (0..kept.len() as u32)
+        .filter(|&k| border[kept[k as usize]])
+        .collect();
     Model::new(
         format!("{}@{i}#{cell}", model.name),
         model.source.clone(),
         sub,
         albedo_map,
     )
+    .into_chunk(cell, locked)
 }
