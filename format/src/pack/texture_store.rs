@@ -27,6 +27,7 @@
 //! ([`missing_texture`]), so a texture lost in a crash makes the job run again.
 
 use super::codec;
+use crate::fingerprint::{from_hex, to_hex};
 use super::layout::Codec;
 use super::{PackError, PackFile, SectionKind};
 use std::path::{Path, PathBuf};
@@ -45,14 +46,9 @@ pub fn texture_ref(data: &[u8]) -> TextureRef {
     *blake3::hash(data).as_bytes()
 }
 
-/// Lower-case hex of a reference.
-pub fn ref_hex(r: &TextureRef) -> String {
-    r.iter().map(|b| format!("{b:02x}")).collect()
-}
-
 /// `<bake>/textures/<h[0..2]>/<h>.tex`.
 pub fn texture_path(bake: &Path, r: &TextureRef) -> PathBuf {
-    let hex = ref_hex(r);
+    let hex = to_hex(r);
     bake.join(TEXTURES_DIR)
         .join(&hex[..2])
         .join(format!("{hex}.tex"))
@@ -108,7 +104,7 @@ fn read_texture_at(path: &Path, r: &TextureRef, len: u64) -> Result<Vec<u8>, Pac
     if texture_ref(&data) != *r {
         return Err(bad(format!(
             "content hash {} differs from its name (a damaged or substituted texture)",
-            ref_hex(&texture_ref(&data))
+            to_hex(&texture_ref(&data))
         )));
     }
     Ok(data)
@@ -229,7 +225,7 @@ pub fn sweep_unreferenced(bake: &Path) -> std::io::Result<(u64, u64)> {
             if path.extension().is_none_or(|x| x != "tex") {
                 continue;
             }
-            if !parse_hex(name).is_some_and(|r| keep.contains(&r)) {
+            if !from_hex(name).is_some_and(|r| keep.contains(&r)) {
                 bytes += e.metadata().map_or(0, |m| m.len());
                 std::fs::remove_file(&path)?;
                 files += 1;
@@ -237,16 +233,4 @@ pub fn sweep_unreferenced(bake: &Path) -> std::io::Result<(u64, u64)> {
         }
     }
     Ok((files, bytes))
-}
-
-/// The reference a 64-digit hex name stands for.
-pub fn parse_hex(name: &str) -> Option<TextureRef> {
-    if name.len() != 2 * REF_LEN {
-        return None;
-    }
-    let mut r = [0u8; REF_LEN];
-    for (i, b) in r.iter_mut().enumerate() {
-        *b = u8::from_str_radix(name.get(2 * i..2 * i + 2)?, 16).ok()?;
-    }
-    Some(r)
 }
