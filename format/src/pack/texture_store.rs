@@ -27,9 +27,9 @@
 //! ([`missing_texture`]), so a texture lost in a crash makes the job run again.
 
 use super::codec;
-use crate::fingerprint::{from_hex, to_hex};
 use super::layout::Codec;
 use super::{PackError, PackFile, SectionKind};
+use crate::fingerprint::{from_hex, to_hex};
 use std::path::{Path, PathBuf};
 
 /// The store's directory inside a bake directory.
