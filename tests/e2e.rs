@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 mod common;
-use common::{bin_dir, repo, run, stderr, stdout};
+use common::{bin_dir, generation_files, repo, run, stderr, stdout};
 
 /// Whether `models/` was fetched (the parks read it); a skip when not.
 #[track_caller]
@@ -150,28 +150,7 @@ fn player_prints_its_version() {
 /// thread counts: base, index and cell packs (the report and job records hold
 /// times and are excluded).
 fn bake_files(out: &Path) -> Vec<(String, Vec<u8>)> {
-    let mut files = vec![
-        (
-            "base.pack".to_string(),
-            std::fs::read(out.join("base.pack")).unwrap(),
-        ),
-        (
-            "index.pack".to_string(),
-            std::fs::read(out.join("index.pack")).unwrap(),
-        ),
-    ];
-    // Cell packs and far-field group packs (a bake without groups has no folder).
-    for dir in ["cells", "groups"] {
-        let mut packs: Vec<_> = std::fs::read_dir(out.join(dir))
-            .map(|d| d.map(|e| e.unwrap().path()).collect())
-            .unwrap_or_default();
-        packs.sort();
-        for c in packs {
-            let name = format!("{dir}/{}", c.file_name().unwrap().to_string_lossy());
-            files.push((name, std::fs::read(&c).unwrap()));
-        }
-    }
-    files
+    generation_files(out)
 }
 
 fn assert_same_bake(a: &Path, b: &Path) {
@@ -344,7 +323,10 @@ fn moving_one_instance_rebakes_only_its_proxies_identically() {
     // Per cell at most the moved object's proxy and a cluster it left change;
     // some cells' proxies of it changed, so not everything is reused.
     assert!(reused > 0 && reused < all, "{reused} of {all}");
-    let cells = std::fs::read_dir(inc.join("cells")).unwrap().count() as u64;
+    let cells = format::pack::Index::read(&inc.join("index.pack"))
+        .unwrap()
+        .cells
+        .len() as u64;
     assert!(
         all - reused <= 2 * cells,
         "{} derived in {cells} cells",
@@ -1077,7 +1059,8 @@ fn player_compare_on_the_demo_bake() {
     // pack of a cell the walk visits removed, the report names that cell.
     assert!(v.get("fallback_cells").is_none(), "{v}");
     let visited = cells.iter().flatten().copied().max().unwrap();
-    std::fs::remove_file(out.join(format!("cells/{visited}.pack"))).unwrap();
+    let index = format::pack::Index::read(&out.join("index.pack")).unwrap();
+    std::fs::remove_file(out.join(&index.cell(visited as u32).unwrap().file)).unwrap();
     let o = run(
         "player",
         &[

@@ -177,17 +177,17 @@ fn golden_v5_packs_decode_to_the_samples() {
 #[test]
 fn regenerating_the_golden_packs_gives_the_same_bytes() {
     assert_eq!(
-        FORMAT_VERSION, 6,
+        FORMAT_VERSION, 7,
         "a new version needs new golden files; keep the old ones"
     );
-    check_or_bless("base-v6.pack", sample::small_base().encode().unwrap());
-    check_or_bless("cell-v6.pack", sample::small_cell_v4().encode().unwrap());
+    check_or_bless("base-v7.pack", sample::small_base().encode().unwrap());
+    check_or_bless("cell-v7.pack", sample::small_cell_v4().encode().unwrap());
     check_or_bless(
-        "group-v6.pack",
+        "group-v7.pack",
         sample::small_group_v5().encode_group().unwrap(),
     );
-    check_or_bless("index-v6.pack", sample::small_index_v5().encode().unwrap());
-    // The texture store (version 6): a cell and a group naming their textures, and
+    check_or_bless("index-v7.pack", sample::small_index_v7().encode().unwrap());
+    // The texture store (version 6, unchanged in 7): a cell and a group naming their textures, and
     // the store's files, in a bake directory of their own.
     let tmp = std::env::temp_dir().join(format!("hexbake-golden-store-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&tmp);
@@ -197,8 +197,8 @@ fn regenerating_the_golden_packs_gives_the_same_bytes() {
     let group = sample::small_group_v5()
         .encode_reusing(true, None, Some(&tmp))
         .unwrap();
-    check_or_bless("store-v6/cells/5.pack", cell);
-    check_or_bless("store-v6/groups/1.pack", group);
+    check_or_bless("store-v7/cells/5.pack", cell);
+    check_or_bless("store-v7/groups/1.pack", group);
     let files = store_files(&tmp);
     assert_eq!(
         files.len(),
@@ -206,11 +206,11 @@ fn regenerating_the_golden_packs_gives_the_same_bytes() {
         "the samples' views hold seven distinct textures"
     );
     for (name, bytes) in &files {
-        check_or_bless(&format!("store-v6/{name}"), bytes.clone());
+        check_or_bless(&format!("store-v7/{name}"), bytes.clone());
     }
     if std::env::var_os("HEXBAKE_BLESS").is_none() {
         assert_eq!(
-            store_files(&golden("store-v6")).len(),
+            store_files(&golden("store-v7")).len(),
             files.len(),
             "the golden store holds other textures"
         );
@@ -275,6 +275,43 @@ fn golden_v6_packs_decode_to_the_samples() {
     );
 }
 
+/// Version 7 (issue 32): the index names its generation's base pack (section
+/// `index-base`, its name, size and blake3); the other kinds hold the version-6
+/// samples, and a version-6 index decodes with no base entry (`base.pack`).
+#[test]
+fn golden_v7_packs_decode_to_the_samples() {
+    let open = |name: &str| PackFile::open(&golden(name)).unwrap();
+    assert_eq!(
+        CellPack::read(&golden("cell-v7.pack")).unwrap(),
+        sample::small_cell_v4()
+    );
+    assert_eq!(
+        BasePack::decode(&open("base-v7.pack")).unwrap(),
+        sample::small_base()
+    );
+    assert_eq!(
+        CellPack::decode_group(&open("group-v7.pack")).unwrap(),
+        sample::small_group_v5()
+    );
+    let index = Index::decode(&open("index-v7.pack")).unwrap();
+    assert_eq!(index, sample::small_index_v7());
+    let base = index.base.as_ref().unwrap();
+    assert!(base.file.starts_with("base-") && base.file.ends_with(".pack"));
+    assert_eq!(index.base_file(), base.file);
+    // The base entry binds the base pack: its bytes verify, another's do not.
+    let bytes = std::fs::read(golden("base-v7.pack")).unwrap();
+    base.verify_bytes(&golden("base-v7.pack"), &bytes).unwrap();
+    let mut other = bytes.clone();
+    *other.last_mut().unwrap() ^= 1;
+    assert!(base.verify_bytes(&golden("base-v7.pack"), &other).is_err());
+    let v6 = Index::decode(&open("index-v6.pack")).unwrap();
+    assert_eq!(v6.base, None);
+    assert_eq!(v6.base_file(), "base.pack");
+    let cell = open("store-v7/cells/5.pack");
+    assert!(cell.section_info(SectionKind::TEXTURE_REFS).is_some());
+    assert_eq!(CellPack::decode(&cell).unwrap(), sample::small_cell_v4());
+}
+
 /// Issue 16: a cell pack with a layered impostor (section `layered-impostors`)
 /// decodes to the sample, re-encodes to the same bytes, and a reader that skips the
 /// section still sees the cell's other proxies unchanged.
@@ -284,10 +321,14 @@ fn golden_layered_impostor_pack() {
         CellPack::read(&golden("cell-impostor-v3.pack")).unwrap(),
         sample::small_cell_impostor()
     );
-    let path = golden("cell-impostor-v6.pack");
-    if FORMAT_VERSION == 6 {
+    assert_eq!(
+        CellPack::read(&golden("cell-impostor-v6.pack")).unwrap(),
+        sample::small_cell_impostor()
+    );
+    let path = golden("cell-impostor-v7.pack");
+    if FORMAT_VERSION == 7 {
         check_or_bless(
-            "cell-impostor-v6.pack",
+            "cell-impostor-v7.pack",
             sample::small_cell_impostor().encode().unwrap(),
         );
     }
@@ -315,10 +356,10 @@ fn golden_packs_exercise_every_codec() {
     use format::pack::Codec;
     let mut seen = std::collections::BTreeSet::new();
     for name in [
-        "base-v6.pack",
-        "cell-v6.pack",
-        "group-v6.pack",
-        "index-v6.pack",
+        "base-v7.pack",
+        "cell-v7.pack",
+        "group-v7.pack",
+        "index-v7.pack",
     ] {
         for s in PackFile::read(&golden(name)).unwrap().sections() {
             seen.insert(s.codec as u32);

@@ -1018,6 +1018,12 @@ fn arb_index() -> impl Strategy<Value = Index> {
                             .filter(|_| cell_id % 3 != 0),
                     })
                     .collect(),
+                // Version 7: a generation's base pack, named by half the indexes.
+                base: (build_fingerprint[0] % 2 == 0).then(|| format::pack::index::BaseEntry {
+                    file: format!("base-{:02x}.pack", build_fingerprint[1]),
+                    bytes: 64 + u64::from(build_fingerprint[2]),
+                    checksum: build_fingerprint,
+                }),
             }
         })
 }

@@ -138,20 +138,25 @@ pub fn export_cell(out: &Path, cell_id: u32, dest: &Path) -> Result<ExportSummar
             out.display()
         )));
     }
-    for name in ["base.pack", "index.pack"] {
-        if !out.join(name).is_file() {
-            return Err(bad(anyhow!(
-                "{}: no {name} — not a finished bake (`pipeline status {}` says what is missing)",
-                out.display(),
-                out.display()
-            )));
-        }
+    if !out.join("index.pack").is_file() {
+        return Err(bad(anyhow!(
+            "{}: no index.pack — not a finished bake (`pipeline status {}` says what is missing)",
+            out.display(),
+            out.display()
+        )));
     }
-    let base = BasePack::read(&out.join("base.pack"))
-        .with_context(|| format!("{}: cannot read the base pack", out.display()))
-        .map_err(failed)?;
+    // The index first, then only the files it names (issue 32: one generation whole).
     let index = Index::read(&out.join("index.pack"))
         .with_context(|| format!("{}: cannot read the index", out.display()))
+        .map_err(failed)?;
+    let base = index
+        .read_base(out)
+        .with_context(|| {
+            format!(
+                "{}: cannot read the base pack the index names",
+                out.join(index.base_file()).display()
+            )
+        })
         .map_err(failed)?;
 
     // 2. The cell: in the grid, baked, and the pack the index lists.

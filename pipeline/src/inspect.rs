@@ -312,15 +312,21 @@ pub struct BakeCheck {
     pub problems: Vec<String>,
 }
 
-/// Verifies a whole bake (issue 19): `base.pack` and `index.pack` decode, the index's
+/// Verifies a whole bake (issue 19): `index.pack` and the base pack it names decode
+/// (the base's size and blake3 as the index records them, format version 7), the index's
 /// cells and neighbours lie in the base pack's grid, every cell the index lists exists with the listed size, checksum and job fingerprint, decodes,
 /// holds that cell and references only instances and vertices of the base pack.
 /// Returns the report; the caller exits non-zero when `problems` is not empty.
 pub fn check_bake(dir: &Path) -> anyhow::Result<BakeCheck> {
-    let base = BasePack::read(&dir.join("base.pack"))
-        .with_context(|| format!("{}: cannot read the base pack", dir.display()))?;
+    // The index first, then only what it names (issue 32: one generation whole).
     let index = Index::read(&dir.join("index.pack"))
         .with_context(|| format!("{}: cannot read the index", dir.display()))?;
+    let base = index.read_base(dir).with_context(|| {
+        format!(
+            "{}: cannot read the base pack the index names",
+            dir.join(index.base_file()).display()
+        )
+    })?;
     let mut problems = Vec::new();
     let (mut ok, mut groups_ok) = (0, 0);
     // The index against the base pack: every listed cell is a cell of the base pack's

@@ -11,8 +11,9 @@
 //! The report's schema is `format::schema::report` (re-exported here); this module
 //! builds and renders it.
 
+use format::pack::index::LEGACY_BASE_FILE;
 use format::pack::texture_store::{self, TextureRef};
-use format::pack::{BasePack, PackFile, SectionKind};
+use format::pack::{BasePack, Index, PackFile, SectionKind};
 use format::schema::job::error_path;
 use format::schema::plan::{plan_path, read_partial, PlanFile};
 pub use format::schema::report::{
@@ -84,8 +85,18 @@ pub fn build_report(out: &Path) -> anyhow::Result<Report> {
             .with_context(|| format!("{}: no plan.json: is this a bake output?", out.display()))?,
     )
     .with_context(|| format!("{}/plan.json", out.display()))?;
-    let base_path = out.join("base.pack");
-    let base = BasePack::read(&base_path).with_context(|| base_path.display().to_string())?;
+    // Issue 32: the index first, then the base pack it names; records of another
+    // generation than the index are refused, not mixed in.
+    let index = Index::read(&out.join("index.pack")).ok();
+    if let Some(index) = &index {
+        same_generation(out, &plan, index)?;
+    }
+    let base_path = out.join(index.as_ref().map_or(LEGACY_BASE_FILE, |i| i.base_file()));
+    let base = match &index {
+        Some(i) => i.read_base(out),
+        None => BasePack::read(&base_path),
+    }
+    .with_context(|| base_path.display().to_string())?;
     let scene_triangles = base
         .instances
         .iter()
@@ -582,12 +593,42 @@ fn time_section(m: &mut String, r: &Report) {
     );
 }
 
+/// Whether `index` lists the jobs `plan` holds (issue 32): every cell and group it
+/// lists was baked by the job of the same fingerprint that `plan.json` has now. After
+/// a rebake was interrupted, or while one runs, `plan.json` is the new generation's
+/// and `index.pack` the old one's: the report refuses rather than mixing them.
+fn same_generation(out: &Path, plan: &PlanFile, index: &Index) -> anyhow::Result<()> {
+    let mut planned = BTreeMap::new();
+    for job in &plan.jobs {
+        planned.extend(job.cells.iter().map(|&c| ((false, c), job.fingerprint)));
+        planned.extend(job.groups.iter().map(|&g| ((true, g), job.fingerprint)));
+    }
+    let listed =
+        (index.cells.iter().map(|e| (false, e))).chain(index.groups.iter().map(|e| (true, e)));
+    for (is_group, e) in listed {
+        if planned.get(&(is_group, e.cell_id)) != Some(&e.fingerprint) {
+            anyhow::bail!(
+                "{}: index.pack is of another generation than plan.json ({} {} was baked by \
+                 a job the plan no longer has): a rebake is running or was interrupted; \
+                 `pipeline run` finishes it, then the report describes the new bake",
+                out.display(),
+                if is_group { "far-field group" } else { "cell" },
+                e.cell_id
+            );
+        }
+    }
+    Ok(())
+}
+
 /// Writes `report.json`, `report.md` and `report.png` into `out`.
 pub fn write_report(out: &Path) -> anyhow::Result<Report> {
     let r = build_report(out)?;
     format::pack::write_atomic(&out.join("report.json"), &serde_json::to_vec_pretty(&r)?)?;
     format::pack::write_atomic(&out.join("report.md"), to_markdown(&r).as_bytes())?;
-    let base = BasePack::read(&out.join("base.pack"))?;
+    let base = match Index::read(&out.join("index.pack")) {
+        Ok(i) => i.read_base(out)?,
+        Err(_) => BasePack::read(&out.join(LEGACY_BASE_FILE))?,
+    };
     let png = crate::heatmap::render(&base.grid, &r.cell_lines)?;
     format::pack::write_atomic(&out.join("report.png"), &png)?;
     Ok(r)

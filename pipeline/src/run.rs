@@ -9,7 +9,8 @@ use crate::lock::OutputLock;
 use anyhow::Context;
 use format::fingerprint::build_fingerprint;
 use format::manifest::Plan;
-use format::pack::{BasePack, GridParams, Index, IndexEntry};
+use format::pack::index::LEGACY_BASE_FILE;
+use format::pack::{generation, BaseEntry, BasePack, GridParams, Index, IndexEntry};
 pub use format::schema::job::error_path;
 use format::schema::plan::plan_path;
 pub use format::schema::plan::{partial_path, read_partial, Partial, PlanFile};
@@ -101,7 +102,7 @@ pub fn write_plan_and_base(l: &Loaded) -> Result<(), RunError> {
     let text = serde_json::to_vec_pretty(&plan_file).expect("plan serializes");
     format::pack::write_atomic(&plan_path(&l.out), &text).map_err(failed)?;
     let mut base = BasePack::from_scene(&l.scene, grid_params(l), l.build.scene_fingerprint);
-    let path = l.out.join("base.pack");
+    let path = l.out.join(LEGACY_BASE_FILE);
     // Issue 17: per-model patch tiling, bitfields and normal cones (worker
     // `patches.rs`), taken from the existing base pack when its models are the same
     // and it was made with the same preset (the bake is deterministic).
@@ -325,13 +326,44 @@ fn write_index(l: &Loaded, done: &[(&Job, JobRecord)]) -> Result<Index, RunError
         }
     }
     entries.sort_by_key(|e| e.cell_id);
+    // Issue 32: the index is the commit point of a generation. Every file it names is
+    // published under a name of its content first (never written again), then the
+    // index replaces the old one by one rename (format::pack::generation).
+    let out = &l.out;
+    let previous = Index::read(&out.join("index.pack")).ok();
+    let publish = |file: &str, checksum: &[u8; 32]| {
+        generation::publish(out, file, checksum)
+            .with_context(|| format!("{}: publishing {file}", out.display()))
+            .map_err(failed)
+    };
+    for e in entries.iter_mut().chain(groups.iter_mut()) {
+        e.file = publish(&e.file, &e.checksum)?;
+    }
+    let mut base = BaseEntry::for_file(out, LEGACY_BASE_FILE).map_err(failed)?;
+    let base_pack = BasePack::read(&out.join(LEGACY_BASE_FILE)).map_err(failed)?;
+    if base_pack.scene_fingerprint != l.build.scene_fingerprint {
+        return Err(failed(anyhow::anyhow!(
+            "{}: its scene fingerprint is not the plan's: it was written for another \
+             scene; run `pipeline run` again to rewrite it",
+            out.join(LEGACY_BASE_FILE).display()
+        )));
+    }
+    base.file = publish(&base.file, &base.checksum)?;
     let index = Index {
         build_fingerprint: build_fingerprint(&fps),
         cells: entries,
         groups,
+        base: Some(base),
     };
     let bytes = index.encode().map_err(failed)?;
-    format::pack::write_atomic(&l.out.join("index.pack"), &bytes).map_err(failed)?;
+    format::pack::write_atomic(&out.join("index.pack"), &bytes).map_err(failed)?;
+    // Published files of older generations go; the previous generation's stay for
+    // readers still on it.
+    let mut keep = generation::named_files(&index);
+    keep.extend(previous.iter().flat_map(generation::named_files));
+    generation::sweep(out, &keep)
+        .with_context(|| format!("{}: sweeping old generations", out.display()))
+        .map_err(failed)?;
     // Captures no pack names any more (an incremental rebake changed them) leave the
     // store; the output lock keeps every job of this bake out meanwhile.
     format::pack::texture_store::sweep_unreferenced(&l.out)

@@ -10,6 +10,7 @@
 use crate::camera::Aabb;
 use crate::grid::CellGrid;
 use crate::vertex::{normal_matrix, InstanceRaw, ProxyVertex, MAX_VIEWS};
+use format::pack::index::LEGACY_BASE_FILE;
 use format::pack::{BasePack, CellPack, Index, PackError, PackFile, ProxyKind, TextureEncoding};
 use glam::{Mat4, Vec3};
 use std::path::{Path, PathBuf};
@@ -82,19 +83,26 @@ pub struct Bake {
 }
 
 impl Bake {
-    /// Reads `<dir>/base.pack` (required) and `<dir>/index.pack` (logged if bad);
-    /// its patches are tiled and tested as `options` say.
+    /// Reads `<dir>/index.pack` (logged if bad) and the base pack it names
+    /// (required; `base.pack` for an index before format version 7, or without a
+    /// good index); its patches are tiled and tested as `options` say. The index is
+    /// read first and only the files it names after it (issue 32), so a bake being
+    /// rebaked meanwhile is seen as one generation whole.
     pub fn open(dir: &Path, options: &crate::DrawOptions) -> Result<Bake, BakeError> {
-        let base_path = dir.join("base.pack");
-        let base = BasePack::read(&base_path).map_err(|source| BakeError::Base {
+        let index_path = dir.join("index.pack");
+        let index = Index::read(&index_path);
+        let base_path = dir.join(index.as_ref().map_or(LEGACY_BASE_FILE, |i| i.base_file()));
+        let base = match &index {
+            Ok(i) => i.read_base(dir),
+            Err(_) => BasePack::read(&base_path),
+        }
+        .map_err(|source| BakeError::Base {
             path: base_path,
             source,
         })?;
-        let index_path = dir.join("index.pack");
         // An index that does not belong to the base pack's grid is as bad as a
         // corrupt one (issue 32: a neighbour that is not adjacent, a cell past the grid).
-        let index = match Index::read(&index_path).and_then(|i| i.check_against(&base).map(|()| i))
-        {
+        let index = match index.and_then(|i| i.check_against(&base).map(|()| i)) {
             Ok(i) => Some(Arc::new(i)),
             Err(source) => {
                 let e = BakeError::Index {

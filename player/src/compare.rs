@@ -587,9 +587,10 @@ fn near_border(per_frame: &[CompareFrame], quality: &[FrameQuality]) -> Option<B
     })
 }
 
-/// Bytes of the bake's packs as on disk: every `*.pack` in `out` and in its
-/// `cells/` and `groups/` folders (base, index, cell and far-field group packs), and
-/// the captures of its texture store (`textures/`, format version 6).
+/// Bytes of the bake's packs as on disk: `index.pack` and the files it names (base,
+/// cell and far-field group packs of this generation, issue 32; a bake without an
+/// index: every `*.pack` in `out`, `cells/` and `groups/`), and the captures of its
+/// texture store (`textures/`, format version 6).
 pub fn pack_bytes(out: &Path) -> u64 {
     let files = |dirs: Vec<PathBuf>, ext: &'static str| {
         dirs.into_iter()
@@ -606,10 +607,24 @@ pub fn pack_bytes(out: &Path) -> u64 {
         .flatten()
         .map(|e| e.path())
         .collect();
-    files(
-        vec![out.to_path_buf(), out.join("cells"), out.join("groups")],
-        "pack",
-    ) + files(store, "tex")
+    let packs = match format::pack::Index::read(&out.join("index.pack")) {
+        Ok(index) => {
+            let len = |p: &Path| std::fs::metadata(p).map_or(0, |m| m.len());
+            len(&out.join("index.pack"))
+                + len(&out.join(index.base_file()))
+                + index
+                    .cells
+                    .iter()
+                    .chain(&index.groups)
+                    .map(|e| e.bytes)
+                    .sum::<u64>()
+        }
+        Err(_) => files(
+            vec![out.to_path_buf(), out.join("cells"), out.join("groups")],
+            "pack",
+        ),
+    };
+    packs + files(store, "tex")
 }
 
 /// Step 3 of [`compare`]: the hybrid walked again with the prefetch thread off, for

@@ -140,6 +140,7 @@ fn write_index(dir: &Path, grid: &GridParams, fingerprint: [u8; 32]) -> Result<(
         build_fingerprint: fingerprint,
         cells,
         groups: Vec::new(),
+        base: None,
     }
     .write(&dir.join("index.pack"))?;
     Ok(())

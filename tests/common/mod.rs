@@ -61,3 +61,20 @@ pub fn stdout(o: &Output) -> String {
 pub fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
+
+/// A bake's current generation (issue 32): `index.pack` and every file it names (its
+/// base, cell and far-field group packs), by name, sorted by name after the index.
+/// This is what a reader sees; working files and the previous generation's files,
+/// kept for readers still on it, are not part of it.
+pub fn generation_files(out: &Path) -> Vec<(String, Vec<u8>)> {
+    let read = |p: PathBuf| std::fs::read(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+    let index_bytes = read(out.join("index.pack"));
+    let index = format::pack::Index::from_bytes(&index_bytes)
+        .unwrap_or_else(|e| panic!("{}: {e}", out.join("index.pack").display()));
+    let mut files = vec![("index.pack".to_string(), index_bytes)];
+    for name in format::pack::generation::named_files(&index) {
+        let bytes = read(out.join(&name));
+        files.push((name, bytes));
+    }
+    files
+}

@@ -36,11 +36,65 @@ pub struct IndexEntry {
 /// The content of `index.pack`. Cells are sorted by id, ids unique; so are the
 /// far-field groups (version 2: `groups/<id>.pack`, each shared by the cells whose
 /// `group` names it; their entries have no neighbours).
+///
+/// Version 7 (issue 32): the index is the commit point of a bake's generation. It
+/// names the base pack too ([`Index::base`]), with its size and blake3, so that a
+/// reader that opens `index.pack` first and then only the files it names sees one
+/// generation whole (`pipeline` publishes each file under a name of its content and
+/// never rewrites a published file).
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Index {
     pub build_fingerprint: [u8; 32],
     pub cells: Vec<IndexEntry>,
     pub groups: Vec<IndexEntry>,
+    /// The base pack of this generation (section `index-base`, version 7); `None`:
+    /// the base pack is [`LEGACY_BASE_FILE`], not bound to this index.
+    pub base: Option<BaseEntry>,
+}
+
+/// The base pack an index names (version 7).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct BaseEntry {
+    /// Path relative to the bake directory, e.g. `base-0123456789abcdef.pack`.
+    pub file: String,
+    /// Size of that file in bytes.
+    pub bytes: u64,
+    /// blake3 of the whole file.
+    pub checksum: [u8; 32],
+}
+
+/// The base pack of an index without an `index-base` section (versions 1–6), and the
+/// name `pipeline run` writes the base pack under before publishing it.
+pub const LEGACY_BASE_FILE: &str = "base.pack";
+
+impl BaseEntry {
+    /// The entry of the base pack at `dir/file`, its size and blake3 read from disk.
+    pub fn for_file(dir: &Path, file: &str) -> Result<BaseEntry, PackError> {
+        let e = IndexEntry::for_file(dir, file, 0, Vec::new(), [0; 32])?;
+        Ok(BaseEntry {
+            file: e.file,
+            bytes: e.bytes,
+            checksum: e.checksum,
+        })
+    }
+
+    /// Checks that `data`, the content of the base pack at `path`, has the recorded
+    /// size and blake3.
+    pub fn verify_bytes(&self, path: &Path, data: &[u8]) -> Result<(), PackError> {
+        self.as_entry().verify_bytes(path, data)
+    }
+
+    fn as_entry(&self) -> IndexEntry {
+        IndexEntry {
+            cell_id: 0,
+            file: self.file.clone(),
+            bytes: self.bytes,
+            checksum: self.checksum,
+            neighbours: Vec::new(),
+            fingerprint: [0; 32],
+            group: None,
+        }
+    }
 }
 
 super::pod_records! {
@@ -250,6 +304,30 @@ impl IndexEntry {
 }
 
 impl Index {
+    /// The base pack's path relative to the bake directory: the one this index names
+    /// (version 7), else `base.pack`.
+    pub fn base_file(&self) -> &str {
+        self.base
+            .as_ref()
+            .map_or(LEGACY_BASE_FILE, |b| b.file.as_str())
+    }
+
+    /// Reads the base pack this index names from the bake directory `dir`, checking
+    /// its size and blake3 against the index when it names one (version 7): a base
+    /// pack of another generation is refused, naming both files.
+    pub fn read_base(&self, dir: &Path) -> Result<super::BasePack, PackError> {
+        let path = dir.join(self.base_file());
+        if let Some(b) = &self.base {
+            let data = std::fs::read(&path).map_err(|source| PackError::Io {
+                file: path.clone(),
+                source,
+            })?;
+            b.verify_bytes(&path, &data)?;
+            return super::BasePack::decode(&PackFile::from_bytes_named(&data, &path)?);
+        }
+        super::BasePack::read(&path)
+    }
+
     /// The entry of `cell_id`, if the index has one.
     pub fn cell(&self, cell_id: u32) -> Option<&IndexEntry> {
         self.cells
@@ -323,6 +401,12 @@ impl Index {
             group_records.push(entry_record(g, &mut names)?);
             cell_groups.push(g.group.unwrap_or(NO_GROUP));
         }
+        let mut base_records = Vec::new();
+        if let Some(b) = &self.base {
+            let e = b.as_entry();
+            check_relative_path(&e.file).map_err(|err| invalid(format!("base pack: {err}")))?;
+            base_records.push(entry_record(&e, &mut names)?);
+        }
         let meta = IndexMetaRecord {
             build_fingerprint: self.build_fingerprint,
             cell_count: u32::try_from(self.cells.len()).map_err(|_| invalid("too many cells"))?,
@@ -339,7 +423,14 @@ impl Index {
                 SectionData::of_records(SectionKind::INDEX_NEIGHBOURS, &neighbours, TRY_INDICES),
                 SectionData::of_records(SectionKind::INDEX_GROUPS, &group_records, TRY_ZSTD),
                 SectionData::of_records(SectionKind::INDEX_CELL_GROUPS, &cell_groups, TRY_INDICES),
-            ],
+            ]
+            .into_iter()
+            .chain(
+                (!base_records.is_empty()).then(|| {
+                    SectionData::of_records(SectionKind::INDEX_BASE, &base_records, RAW_ONLY)
+                }),
+            )
+            .collect::<Vec<_>>(),
         )
     }
 
@@ -447,11 +538,53 @@ impl Index {
                 ),
             ));
         }
+        let base = Index::decode_base(pack, &names)?;
         Ok(Index {
             build_fingerprint: meta.build_fingerprint,
             cells,
             groups,
+            base,
         })
+    }
+
+    /// Version 7: the base pack's entry, when the index has an `index-base` section.
+    fn decode_base(pack: &PackFile, names: &[u8]) -> Result<Option<BaseEntry>, PackError> {
+        let file = pack.path();
+        if pack.section_info(SectionKind::INDEX_BASE).is_none() {
+            return Ok(None);
+        }
+        let bad = |off: u64, what: String| malformed(file, SectionKind::INDEX_BASE, off, what);
+        if pack.version() < 7 {
+            return Err(bad(0, "index-base needs format version 7".into()));
+        }
+        let records: Vec<CellRecord> = pack.section_vec(SectionKind::INDEX_BASE)?;
+        let [r] = records[..] else {
+            return Err(bad(0, format!("{} records, expected 1", records.len())));
+        };
+        if r.cell_id != 0 || r.neighbour_count != 0 || r.fingerprint != [0; 32] {
+            return Err(bad(
+                0,
+                "cell id, neighbour count and fingerprint of the base entry must be 0".into(),
+            ));
+        }
+        let name = super::range_of(names, r.name_offset as usize, r.name_len as usize)
+            .and_then(|n| std::str::from_utf8(n).ok())
+            .ok_or_else(|| bad(32, "name outside index-file-names or not UTF-8".into()))?;
+        check_relative_path(name).map_err(|e| bad(32, e))?;
+        if r.bytes < super::layout::HEADER_SIZE as u64 {
+            return Err(bad(
+                8,
+                format!(
+                    "a base pack of {} bytes is shorter than its header",
+                    r.bytes
+                ),
+            ));
+        }
+        Ok(Some(BaseEntry {
+            file: name.to_string(),
+            bytes: r.bytes,
+            checksum: r.checksum,
+        }))
     }
 
     /// Version 2: the group entries and each cell's group.

@@ -11,7 +11,7 @@ use std::fmt;
 /// First 8 bytes of every pack.
 pub const MAGIC: [u8; 8] = *b"HEXBAKE\0";
 /// The format version this crate writes (and the newest it reads).
-pub const FORMAT_VERSION: u32 = 6;
+pub const FORMAT_VERSION: u32 = 7;
 /// Every section starts at a multiple of this many bytes from the file start, so a
 /// memory-mapped (page-aligned) raw section can be viewed as `&[f32]`, `&[[u32; 3]]`...
 pub const SECTION_ALIGN: u64 = 64;
@@ -161,6 +161,10 @@ impl SectionKind {
     pub const INDEX_GROUPS: SectionKind = SectionKind(0x0305);
     /// Version 2: per cell (in `index-cells` order), its far-field group or u32::MAX.
     pub const INDEX_CELL_GROUPS: SectionKind = SectionKind(0x0306);
+    /// Version 7 (issue 32): the base pack of this generation, one record in the
+    /// layout of `index-cells` (its file name in `index-file-names`, its size and
+    /// blake3); without it the base pack is `base.pack`.
+    pub const INDEX_BASE: SectionKind = SectionKind(0x0307);
 
     /// The spec's name of a known kind, `None` for kinds this reader does not know.
     pub fn name(self) -> Option<&'static str> {
@@ -195,6 +199,7 @@ impl SectionKind {
             SectionKind::INDEX_NEIGHBOURS => "index-neighbours",
             SectionKind::INDEX_GROUPS => "index-groups",
             SectionKind::INDEX_CELL_GROUPS => "index-cell-groups",
+            SectionKind::INDEX_BASE => "index-base",
             _ => return None,
         })
     }

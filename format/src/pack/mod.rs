@@ -14,6 +14,7 @@ pub mod base;
 pub mod cell;
 pub mod codec;
 pub mod error;
+pub mod generation;
 pub mod index;
 pub mod layout;
 pub mod patches;
@@ -29,7 +30,7 @@ pub use cell::{
     ProxyMember, ProxyView, MAX_IMPOSTOR_LAYERS,
 };
 pub use error::PackError;
-pub use index::{Index, IndexEntry};
+pub use index::{BaseEntry, Index, IndexEntry};
 pub use layout::{Codec, FileKind, SectionKind, FORMAT_VERSION};
 pub use patches::{ModelPatch, ModelPatches, PatchSet};
 pub use reader::{scan, PackFile, PackScan, SectionInfo};

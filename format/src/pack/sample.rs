@@ -339,6 +339,7 @@ pub fn small_index() -> Index {
             entry(13, vec![]),
         ],
         groups: Vec::new(),
+        base: None,
     }
 }
 
@@ -485,6 +486,22 @@ pub fn small_index_v5() -> Index {
         group: None,
     });
     index
+}
+
+/// The content of `tests/data/index-v7.pack`: [`small_index_v5`] naming its
+/// generation's base pack, [`small_base`] published under a name of its content
+/// (format version 7, issue 32).
+pub fn small_index_v7() -> Index {
+    let base = small_base().encode().expect("the sample base encodes");
+    let checksum = *blake3::hash(&base).as_bytes();
+    Index {
+        base: Some(super::BaseEntry {
+            file: format!("base-{}.pack", &crate::fingerprint::to_hex(&checksum)[..16]),
+            bytes: base.len() as u64,
+            checksum,
+        }),
+        ..small_index_v5()
+    }
 }
 
 /// The content of `tests/data/index-v2.pack`: [`small_index`] plus far-field groups

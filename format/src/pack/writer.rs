@@ -276,7 +276,7 @@ pub(crate) fn temp_file_for(path: &Path) -> Option<(PathBuf, PathBuf)> {
 }
 
 /// Creates the new file `tmp` holding `bytes`, synced to disk.
-fn write_synced(tmp: &Path, bytes: &[u8]) -> std::io::Result<()> {
+pub(crate) fn write_synced(tmp: &Path, bytes: &[u8]) -> std::io::Result<()> {
     let mut f = std::fs::OpenOptions::new()
         .write(true)
         .create_new(true)
@@ -287,7 +287,7 @@ fn write_synced(tmp: &Path, bytes: &[u8]) -> std::io::Result<()> {
 
 /// Makes a rename or link in `dir` durable. Directories cannot be opened on every
 /// platform; where they can, sync them.
-fn sync_dir(dir: &Path) {
+pub(crate) fn sync_dir(dir: &Path) {
     if let Ok(d) = std::fs::File::open(dir) {
         let _ = d.sync_all();
     }
