@@ -430,6 +430,175 @@ fn killed_runs_resume_to_identical_output() {
     }
 }
 
+/// Issue 32 item 1, a bake is one snapshot: 100 SIGKILLs at random moments of
+/// incremental rebakes (one instance moved back and forth between two manifests).
+/// While each run goes, and after each kill, a reader sees one clean bake's
+/// generation whole: `index.pack` and every file it names equal those of a clean
+/// bake of one manifest or the other. After each kill `pipeline inspect` verifies
+/// the bake, and after every tenth the player's hybrid frame is one of the two clean
+/// bakes' frames. Then a run to the end gives the clean bake's generation and report
+/// (times aside). Before version 7 a kill after the rebake wrote `base.pack` left
+/// the old cells over the new scene, and `inspect` passed.
+#[test]
+fn killed_rebakes_leave_one_generation_whole() {
+    let dir = tempfile::tempdir().unwrap();
+    let manifests = [dir.path().join("a.ron"), dir.path().join("b.ron")];
+    std::fs::write(&manifests[0], instances_manifest(80.0)).unwrap();
+    std::fs::write(&manifests[1], instances_manifest(95.0)).unwrap();
+    let manifest = |k: usize| manifests[k].to_str().unwrap().to_string();
+    // The two clean bakes: their generations, reports and frames.
+    let mut clean = Vec::new();
+    for k in 0..2 {
+        let out = dir.path().join(format!("clean{k}"));
+        let o = run_manifest(&manifest(k), &out, &[]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        clean.push(out);
+    }
+    let gens: Vec<_> = clean.iter().map(|c| generation_files(c)).collect();
+    assert_ne!(gens[0], gens[1], "moving the instance changes the bake");
+    let frames: Vec<Option<Vec<u8>>> = clean.iter().map(|c| hybrid_frame(c)).collect();
+    if let [Some(a), Some(b)] = &frames[..] {
+        assert_ne!(a, b, "the frame shows the moved instance");
+        eprintln!("frames of both clean bakes differ; every tenth kill is drawn");
+    }
+    let which = |out: &Path| -> usize {
+        let g = generation_files(out);
+        gens.iter().position(|x| *x == g).unwrap_or_else(|| {
+            let names: Vec<&String> = g.iter().map(|f| &f.0).collect();
+            panic!(
+                "{}: a generation of neither clean bake: {names:?}",
+                out.display()
+            )
+        })
+    };
+    // The output starts as a bake of manifest 0; a rebake of 1 is timed whole.
+    let out = dir.path().join("out");
+    assert!(run_manifest(&manifest(0), &out, &[]).status.success());
+    let start = std::time::Instant::now();
+    assert!(run_manifest(&manifest(1), &out, &[]).status.success());
+    let whole_ms = start.elapsed().as_millis() as u64;
+    assert_eq!(which(&out), 1);
+    let (mut target, mut seed, mut killed, mut reads) = (0usize, 0x2545_f491_4f6c_dd1du64, 0, 0u64);
+    let mut seen = [0usize; 2];
+    while killed < 100 {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        // Up to 1.2 whole rebakes: most runs are killed, some finish.
+        let delay = std::time::Duration::from_millis(seed % (whole_ms * 6 / 5 + 1));
+        let mut child = Command::new(bin_dir().join("pipeline"))
+            .args([
+                "run",
+                &manifest(target),
+                "--quiet",
+                "--threads",
+                "2",
+                "--out",
+            ])
+            .arg(&out)
+            .current_dir(repo())
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::null())
+            .spawn()
+            .unwrap();
+        let start = std::time::Instant::now();
+        let mut finished = false;
+        // A reader beside the run: whatever it reads is one generation whole.
+        while start.elapsed() < delay {
+            if child.try_wait().unwrap().is_some() {
+                finished = true;
+                break;
+            }
+            seen[which(&out)] += 1;
+            reads += 1;
+        }
+        if finished {
+            assert_eq!(
+                which(&out),
+                target,
+                "a finished run committed its generation"
+            );
+            target = 1 - target;
+            continue;
+        }
+        let _ = child.kill(); // SIGKILL
+        let _ = child.wait();
+        killed += 1;
+        let now = which(&out);
+        let o = run("pipeline", &["inspect", out.to_str().unwrap()], &repo());
+        assert!(o.status.success(), "kill {killed}: inspect: {}", stderr(&o));
+        if killed % 10 == 0 {
+            if let (Some(frame), Some(expected)) = (hybrid_frame(&out), &frames[now]) {
+                assert!(
+                    frame == *expected,
+                    "kill {killed}: the player's frame is not generation {now}'s"
+                );
+            }
+        }
+    }
+    eprintln!(
+        "100 kills; {reads} reads beside the runs saw generation 0 {} and 1 {} times",
+        seen[0], seen[1]
+    );
+    // Resumed to the end: the clean bake's generation and report.
+    let o = run_manifest(&manifest(target), &out, &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(which(&out), target);
+    let report = |d: &Path| {
+        let mut r: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(d.join("report.json")).unwrap()).unwrap();
+        strip_times(&mut r);
+        r
+    };
+    assert_eq!(report(&out), report(&clean[target]));
+}
+
+/// Removes every time (keys ending `_ms` or `_s`, stage times) and reuse count from a
+/// report, which differ between a resumed and a clean bake of the same packs.
+fn strip_times(v: &mut serde_json::Value) {
+    match v {
+        serde_json::Value::Object(m) => {
+            m.retain(|k, _| {
+                !(k.ends_with("_ms")
+                    || k.ends_with("_s")
+                    || k.contains("reused")
+                    || k == "wall"
+                    || k == "cpu")
+            });
+            m.values_mut().for_each(strip_times);
+        }
+        serde_json::Value::Array(a) => a.iter_mut().for_each(strip_times),
+        _ => {}
+    }
+}
+
+/// The player's hybrid frame of the bake at `out` (96², looking at the moved
+/// instance from the first cell), or `None` without a GPU adapter.
+fn hybrid_frame(out: &Path) -> Option<Vec<u8>> {
+    use player::camera::Camera;
+    use player::stream::{StreamConfig, Streamer};
+    let mut p = open_player(out, (96, 96))?;
+    let cam = Camera {
+        eye: glam::Vec3::new(40.0, 6.0, 50.0),
+        dir: glam::Vec3::new(50.0, -2.0, 50.0),
+        fov_y_deg: 60.0,
+        width: 96,
+        height: 96,
+        near: 0.25,
+        far: p.bake.extent,
+    };
+    let mut s = Streamer::new(
+        &p.bake,
+        StreamConfig {
+            prefetch: false,
+            upload_budget_bytes: 1 << 30,
+            ..Default::default()
+        },
+    );
+    p.draw(&cam, player::frame::Mode::Hybrid, Some(&mut s));
+    Some(p.renderer.read_pixels().unwrap())
+}
+
 #[test]
 fn a_second_run_on_the_same_output_is_refused() {
     let dir = tempfile::tempdir().unwrap();
