@@ -16,7 +16,7 @@ import { decompress } from "fzstd";
 export class PackError extends Error {}
 
 const MAGIC = [0x48, 0x45, 0x58, 0x42, 0x41, 0x4b, 0x45, 0x00];
-export const MAX_VERSION = 6;
+export const MAX_VERSION = 7;
 export const KIND = { base: 1, cell: 2, index: 3, group: 4 } as const;
 
 interface Section {
@@ -376,6 +376,8 @@ export const NONE = 0xffffffff;
 export interface Index {
   cells: Map<number, IndexEntry>;
   groups: Map<number, IndexEntry>;
+  /** The base pack this index names (version 7, `index-base`), else `base.pack`. */
+  baseFile: string;
 }
 
 export function decodeIndex(file: PackFile): Index {
@@ -419,7 +421,13 @@ export function decodeIndex(file: PackFile): Index {
     if (file.version >= 5 && cg.bytes.length >= at + 4) e.group = cg.u32(at);
     groups.set(e.id, e);
   }
-  return { cells, groups };
+  // Version 7 (issue 32): the base pack of this generation, named by the index.
+  let baseFile = "base.pack";
+  if (file.version >= 7 && file.section(0x0307, true).length > 0) {
+    const [e] = entry(new Reader(file.section(0x0307), `${file.name}: index-base`), 0, 0);
+    baseFile = e.file;
+  }
+  return { cells, groups, baseFile };
 }
 
 // ---- cells/<id>.pack and groups/<id>.pack ----
