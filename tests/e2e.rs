@@ -471,6 +471,12 @@ fn killed_rebakes_leave_one_generation_whole() {
             )
         })
     };
+    let report = |d: &Path| {
+        let mut r: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(d.join("report.json")).unwrap()).unwrap();
+        strip_times(&mut r);
+        r
+    };
     // The output starts as a bake of manifest 0; a rebake of 1 is timed whole.
     let out = dir.path().join("out");
     assert!(run_manifest(&manifest(0), &out, &[]).status.success());
@@ -478,6 +484,7 @@ fn killed_rebakes_leave_one_generation_whole() {
     assert!(run_manifest(&manifest(1), &out, &[]).status.success());
     let whole_ms = start.elapsed().as_millis() as u64;
     assert_eq!(which(&out), 1);
+    assert_eq!(report(&out), report(&clean[1]));
     let (mut target, mut seed, mut killed, mut reads) = (0usize, 0x2545_f491_4f6c_dd1du64, 0, 0u64);
     let mut seen = [0usize; 2];
     while killed < 100 {
@@ -518,6 +525,11 @@ fn killed_rebakes_leave_one_generation_whole() {
                 target,
                 "a finished run committed its generation"
             );
+            assert_eq!(
+                report(&out),
+                report(&clean[target]),
+                "a resumed rebake's report is the clean bake's (times aside)"
+            );
             target = 1 - target;
             continue;
         }
@@ -544,12 +556,6 @@ fn killed_rebakes_leave_one_generation_whole() {
     let o = run_manifest(&manifest(target), &out, &[]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert_eq!(which(&out), target);
-    let report = |d: &Path| {
-        let mut r: serde_json::Value =
-            serde_json::from_slice(&std::fs::read(d.join("report.json")).unwrap()).unwrap();
-        strip_times(&mut r);
-        r
-    };
     assert_eq!(report(&out), report(&clean[target]));
 }
 

@@ -54,9 +54,24 @@ fn golden_base_v1_decodes_to_the_sample() {
 fn golden_cell_v1_decodes_to_the_sample() {
     let cell = CellPack::read(&golden("cell-v1.pack")).unwrap();
     assert_eq!(cell, sample::small_cell());
-    cell.check_against(&sample::small_base()).unwrap();
+    assert_checks_but_for_the_overlap(&cell);
     let rgba = cell.proxies[0].views[0].texture.to_rgba8().unwrap();
     assert_eq!(rgba, sample::capture_like_rgba(16, 16, 1));
+}
+
+/// The shipped sample cells pass every check against the sample base but one: their
+/// instance 0 is an original and a cluster member, refused since issue 32.
+#[track_caller]
+fn assert_checks_but_for_the_overlap(cell: &CellPack) {
+    let base = sample::small_base();
+    let e = cell.check_against(&base).unwrap_err().to_string();
+    assert!(
+        e.contains("instance 0 is an original of the cell and a member"),
+        "{e}"
+    );
+    sample::without_overlap(cell.clone())
+        .check_against(&base)
+        .unwrap();
 }
 
 #[test]
@@ -71,7 +86,7 @@ fn golden_index_v1_decodes_to_the_sample() {
 fn golden_v2_packs_decode_to_the_samples() {
     let cell = CellPack::read(&golden("cell-v2.pack")).unwrap();
     assert_eq!(cell, sample::small_cell_v2());
-    cell.check_against(&sample::small_base()).unwrap();
+    assert_checks_but_for_the_overlap(&cell);
     assert_eq!(
         (
             cell.proxies[0].views[0].texture.encoding,
@@ -334,7 +349,7 @@ fn golden_layered_impostor_pack() {
     }
     let cell = CellPack::read(&path).unwrap();
     assert_eq!(cell, sample::small_cell_impostor());
-    cell.check_against(&sample::small_base()).unwrap();
+    assert_checks_but_for_the_overlap(&cell);
     let impostor = cell.proxies.last().unwrap();
     let layers = impostor.layers.as_ref().unwrap();
     assert_eq!(layers.layers.len(), 3);

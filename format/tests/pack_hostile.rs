@@ -507,7 +507,7 @@ fn cell_pack_values_are_validated() {
     assert!(matches!(cell.encode(), Err(PackError::Invalid { .. })));
     // 7 × 6 cells: 41 is the last, 42 is outside.
     let base = sample::small_base();
-    let mut cell = sample::small_cell();
+    let mut cell = sample::without_overlap(sample::small_cell());
     cell.cell_id = 41;
     cell.check_against(&base).unwrap();
     cell.cell_id = 42;
@@ -1167,7 +1167,14 @@ fn degenerate_values_are_refused_by_name() {
     assert!(flat.encode().is_err());
 
     let base = sample::small_base();
-    let cell = sample::small_cell();
+    // Issue 32: an original that is also a member of one of the cell's proxies.
+    let overlap = sample::small_cell();
+    let e = overlap.check_against(&base).unwrap_err().to_string();
+    assert!(
+        e.contains("cell 12 proxy 1: instance 0 is an original of the cell and a member"),
+        "{e}"
+    );
+    let cell = sample::without_overlap(overlap);
     cell.check_against(&base).unwrap();
     let mut zero_view = cell.clone();
     let view = zero_view

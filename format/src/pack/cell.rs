@@ -867,11 +867,12 @@ impl CellPack {
                 .ok_or_else(|| invalid(format!("instance {id}: bad model")))?;
             Ok(model.mesh.positions.len() as u32)
         };
-        // An original is listed once (issue 32 item 3; the player would draw it
-        // twice). An instance that is both an original and a proxy member is not
-        // refused: the shipped sample packs (tests/data, format version 1 on) have
-        // one, and no bake writes one (`pipeline inspect` on park-2m, the demo and
-        // the demo world).
+        // An original is listed once, and is no member of the cell's proxies (issue
+        // 32 item 3; the player would draw it twice). No bake writes either: a cell's
+        // originals are the objects of its own region, its proxies those outside
+        // (checked on the park-2m, park-other, plaza and demo bakes). The sample
+        // packs shipped for versions 1–7 (tests/data) list instance 0 both ways and
+        // are refused here, by design.
         let mut originals = std::collections::BTreeSet::new();
         for &o in &self.originals {
             instance(o, "an original")?;
@@ -885,6 +886,13 @@ impl CellPack {
         for (p, proxy) in self.proxies.iter().enumerate() {
             for m in &proxy.members {
                 let vertices = instance(m.instance, "a proxy member")?;
+                if originals.contains(&m.instance) {
+                    return Err(invalid(format!(
+                        "cell {} proxy {p}: instance {} is an original of the cell and a \
+                         member of this proxy (it would be drawn twice)",
+                        self.cell_id, m.instance
+                    )));
+                }
 
                 if let Some(t) = m
                     .triangles
