@@ -977,10 +977,12 @@ fn the_next_cell_is_resident_before_the_viewer_crosses_into_it() {
     let Some(mut p) = open(dir.path(), (96, 96), &DrawOptions::default()) else {
         return;
     };
-    let frames = path.frames();
+    let all_frames = path.frames();
     let period = std::time::Duration::from_secs_f32(1.0 / path.frame_rate);
-    // (crossings, crossings into a cell that was not resident)
-    let mut walk = |prefetch: bool| -> (usize, usize) {
+    // (crossings, crossings into a cell that was not resident), walking at `speed`
+    // times the path's speed (every `speed`-th frame, paced the same).
+    let mut walk = |prefetch: bool, speed: usize| -> (usize, usize) {
+        let frames: Vec<_> = all_frames.iter().step_by(speed).collect();
         let config = StreamConfig {
             prefetch,
             ..StreamConfig::default()
@@ -988,7 +990,7 @@ fn the_next_cell_is_resident_before_the_viewer_crosses_into_it() {
         let mut s = Streamer::new(&p.bake, config);
         let (mut crossings, mut missed) = (0, 0);
         let (mut cell, mut misses) = (None, 0);
-        for f in &frames {
+        for f in frames {
             let start = std::time::Instant::now();
             let cam = player::run::camera_for(f, &path, (96, 96), p.bake.extent);
             let (_, _, _, stats) = p.draw(&cam, Mode::Hybrid, Some(&mut s));
@@ -1003,14 +1005,16 @@ fn the_next_cell_is_resident_before_the_viewer_crosses_into_it() {
         }
         (crossings, missed)
     };
-    let (crossings, missed) = walk(true);
-    assert!(crossings >= 3, "{crossings} crossings");
-    assert_eq!(
-        missed, 0,
-        "{missed} of {crossings} crossings into a cell not resident"
-    );
+    for speed in [1, 3] {
+        let (crossings, missed) = walk(true, speed);
+        assert!(crossings >= 3, "{crossings} crossings");
+        assert_eq!(
+            missed, 0,
+            "at {speed}× walking speed, {missed} of {crossings} crossings into a cell not resident"
+        );
+    }
     // The test can fail: without prefetch every crossing is a demand load.
-    let (crossings, missed) = walk(false);
+    let (crossings, missed) = walk(false, 1);
     assert_eq!(
         missed, crossings,
         "without prefetch: {missed} of {crossings}"
