@@ -346,18 +346,23 @@ fn job_records(out: &Path) -> usize {
     })
 }
 
-/// Starts `pipeline run` of the tiny scene into `out` and SIGKILLs it after
-/// `delay_ms`, or as soon as `out` holds more than `records` job records, whichever
-/// comes first. Returns whether the run was still going when killed.
-fn kill_tiny_run(out: &Path, delay_ms: u64, records: usize) -> bool {
-    let mut child = Command::new(bin_dir().join("pipeline"))
-        .args(["run", TINY, "--quiet", "--threads", "2", "--out"])
+/// Starts `pipeline run manifest --out out` on 2 threads, quietly, in the background.
+fn spawn_run(manifest: &str, out: &Path) -> std::process::Child {
+    Command::new(bin_dir().join("pipeline"))
+        .args(["run", manifest, "--quiet", "--threads", "2", "--out"])
         .arg(out)
         .current_dir(repo())
         .stdout(std::process::Stdio::null())
         .stderr(std::process::Stdio::null())
         .spawn()
-        .unwrap();
+        .unwrap()
+}
+
+/// Starts `pipeline run` of the tiny scene into `out` and SIGKILLs it after
+/// `delay_ms`, or as soon as `out` holds more than `records` job records, whichever
+/// comes first. Returns whether the run was still going when killed.
+fn kill_tiny_run(out: &Path, delay_ms: u64, records: usize) -> bool {
+    let mut child = spawn_run(TINY, out);
     let start = std::time::Instant::now();
     while start.elapsed() < std::time::Duration::from_millis(delay_ms)
         && job_records(out) <= records
@@ -493,21 +498,7 @@ fn killed_rebakes_leave_one_generation_whole() {
         seed ^= seed << 17;
         // Up to 1.2 whole rebakes: most runs are killed, some finish.
         let delay = std::time::Duration::from_millis(seed % (whole_ms * 6 / 5 + 1));
-        let mut child = Command::new(bin_dir().join("pipeline"))
-            .args([
-                "run",
-                &manifest(target),
-                "--quiet",
-                "--threads",
-                "2",
-                "--out",
-            ])
-            .arg(&out)
-            .current_dir(repo())
-            .stdout(std::process::Stdio::null())
-            .stderr(std::process::Stdio::null())
-            .spawn()
-            .unwrap();
+        let mut child = spawn_run(&manifest(target), &out);
         let start = std::time::Instant::now();
         let mut finished = false;
         // A reader beside the run: whatever it reads is one generation whole.
