@@ -229,6 +229,20 @@ fn connection(stream: TcpStream, roots: &Roots) -> std::io::Result<()> {
     }
 }
 
+/// `Cache-Control` of a file whose name is its content (issue 32): a published pack
+/// (`cells/<id>-<h>.pack`, `base-<h>.pack`, format::pack::generation) or a capture
+/// of the texture store (`textures/<h[0..2]>/<h>.tex`). Everything else, `index.pack`
+/// first, is `no-cache`: a rebake replaces it.
+const IMMUTABLE: &str = "public, max-age=31536000, immutable";
+
+fn immutable(path: &Path) -> bool {
+    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("");
+    format::pack::generation::is_published_file_name(name)
+        || (name.ends_with(".tex")
+            && name.len() == 64 + 4
+            && name[..64].bytes().all(|b| b.is_ascii_hexdigit()))
+}
+
 fn reason(code: u16) -> &'static str {
     match code {
         200 => "OK",
@@ -258,7 +272,10 @@ fn write_head(
     for (k, v) in headers {
         h.push_str(&format!("{k}: {v}\r\n"));
     }
-    h.push_str("Access-Control-Allow-Origin: *\r\nCache-Control: no-cache\r\n");
+    h.push_str("Access-Control-Allow-Origin: *\r\n");
+    if !headers.iter().any(|(k, _)| *k == "Cache-Control") {
+        h.push_str("Cache-Control: no-cache\r\n");
+    }
     if close {
         h.push_str("Connection: close\r\n");
     }
@@ -468,6 +485,9 @@ fn respond(out: &mut TcpStream, req: &Request, roots: &Roots) -> std::io::Result
         },
     };
     let mut headers = vec![ctype, ranges];
+    if immutable(&path) {
+        headers.push(("Cache-Control", IMMUTABLE.to_string()));
+    }
     if code == 206 {
         headers.push(("Content-Range", format!("bytes {start}-{}/{len}", end - 1)));
     }
@@ -637,7 +657,19 @@ mod tests {
         )));
         assert!(h.starts_with("HTTP/1.1 206"), "{h}");
         assert!(h.contains("Content-Range: bytes 10-19/200"), "{h}");
+        assert!(h.contains("Cache-Control: no-cache"), "a working file: {h}");
         assert_eq!(b, &data[10..20]);
+        // A published pack is immutable (its name is its content, issue 32).
+        std::fs::write(bake.join("cells/1-0123456789abcdef.pack"), &data).unwrap();
+        let (h, _) = split(&get(&format!(
+            "GET /bake/cells/1-0123456789abcdef.pack HTTP/1.1\r\n{close}"
+        )));
+        assert!(h.starts_with("HTTP/1.1 200"), "{h}");
+        assert!(
+            h.contains("Cache-Control: public, max-age=31536000, immutable"),
+            "{h}"
+        );
+        assert_eq!(h.matches("Cache-Control").count(), 1, "{h}");
         let (h, b) = split(&get(&format!("GET /bake/cells/1.pack HTTP/1.1\r\n{close}")));
         assert!(h.starts_with("HTTP/1.1 200"), "{h}");
         assert_eq!(b, data);
