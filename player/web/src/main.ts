@@ -263,9 +263,10 @@ async function init() {
       mark("pipelines");
     });
   pipelinesReady.catch(() => {}); // awaited below; no unhandled rejection meanwhile
-  const [indexBytes, baseBytes] = await Promise.all([fetchBytes(bakeUrl + "index.pack"), fetchBytes(bakeUrl + "base.pack")]);
-  index = decodeIndex(new PackFile("index.pack", indexBytes));
-  base = decodeBase(new PackFile("base.pack", baseBytes));
+  // The index first, then the base pack it names (format 7, issue 32: a rebake on the
+  // server never mixes two generations in one session).
+  index = decodeIndex(new PackFile("index.pack", await fetchBytes(bakeUrl + "index.pack")));
+  base = decodeBase(new PackFile(index.baseFile, await fetchBytes(bakeUrl + index.baseFile)));
   grid = new HexGrid(base.grid);
   mark("base decoded");
   const g = base.grid;
