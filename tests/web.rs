@@ -175,6 +175,58 @@ fn web_viewer_draws_the_demo_like_the_player() {
     distinct.dedup();
     assert!(distinct.len() >= 3, "the overlay showed cells {cells:?}");
 
+    // A tour through ≥ 10 cells: every frame drew its own cell's pack (no stand-in
+    // frame), and the viewer went through every cell the path crosses, as the native
+    // player does (the path's frames' cells on the bake's grid).
+    std::fs::copy(
+        repo().join("manifests/paths/demo-tour.ron"),
+        out.join("demo-tour.ron"),
+    )
+    .unwrap();
+    let path =
+        format::path::CameraPath::load(&repo().join("manifests/paths/demo-tour.ron")).unwrap();
+    let base = format::pack::Index::read(&out.join("index.pack"))
+        .unwrap()
+        .read_base(&out)
+        .unwrap();
+    let grid = format::grid::HexGrid::from_params(&base.grid).unwrap();
+    let mut expected: Vec<u64> = path
+        .frames()
+        .iter()
+        .filter_map(|f| grid.cell_at(glam::Vec2::new(f.eye.x, f.eye.z)))
+        .map(u64::from)
+        .collect();
+    expected.dedup();
+    let url = format!("{}&path=/bake/demo-tour.ron&size=256x192", server.url);
+    let (v, ok) = drive(&["walk", &url, "600"]);
+    std::fs::write(art.join("tour.json"), v.to_string()).unwrap();
+    assert!(ok, "tour: {v}");
+    let visited: Vec<u64> = v["stats"]["cellsVisited"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter_map(|c| c.as_u64())
+        .collect();
+    let mut distinct = visited.clone();
+    distinct.sort();
+    distinct.dedup();
+    eprintln!(
+        "tour: {} cells {visited:?} (the path's: {expected:?}); stats {}",
+        distinct.len(),
+        v["stats"]
+    );
+    assert!(distinct.len() >= 10, "the tour streamed cells {visited:?}");
+    assert_eq!(
+        v["stats"]["standInFrames"], 0,
+        "frames drawn without their cell's pack: {v}"
+    );
+    for c in &expected {
+        assert!(
+            visited.contains(c),
+            "cell {c} of the path was never drawn: {visited:?}"
+        );
+    }
+
     // A truncated pack: a clear message in the page.
     let index = std::fs::read_dir(out.join("cells")).unwrap();
     for f in index {
