@@ -8,6 +8,8 @@
 //! - [`base`], [`cell`], [`index`]: the three files' contents.
 //! - [`texture`]: capture texture encodings.
 //! - [`texture_store`]: the bake's shared store of capture textures (version 6).
+//! - [`generation`]: publishing a bake's packs under names of their content and the
+//!   index as the commit point (version 7, issue 32).
 
 pub mod albedo_maps;
 pub mod base;
