@@ -77,6 +77,10 @@ interface Stats {
   // members as originals while its textures waited.
   standInFrames: number;
   pendingFrames: number;
+  // Per frame drawn during a ?path= walk (which starts once the first frame is
+  // drawn): [the camera's cell, the cell whose pack was drawn (-1: none), its far
+  // field drawn from its packs (1/0), proxies waiting for textures].
+  walkLog: number[][];
 }
 
 const stats: Stats = {
@@ -100,6 +104,7 @@ const stats: Stats = {
   phases: {},
   standInFrames: 0,
   pendingFrames: 0,
+  walkLog: [],
 };
 const mark = (name: string) => (stats.phases[name] ??= Math.round(performance.now()));
 (window as any).hexbake = { stats, setPose: (p: number[]) => setPose(p) };
@@ -695,8 +700,9 @@ async function frame(now: number) {
   stats.fps = stats.frames > 1 ? 0.9 * stats.fps + 0.1 * (1000 / Math.max(1e-3, now - last)) : 0;
   last = now;
   if (walk) {
-    walkStart ??= now;
-    const p = walkPose(walk, (now - walkStart) / 1000);
+    // The walk starts once its start cell is drawn (a cold start is timed apart).
+    if (stats.firstFrameMs !== null) walkStart ??= now;
+    const p = walkPose(walk, walkStart === null ? 0 : (now - walkStart) / 1000);
     cam.eye = p.eye;
     cam.yaw = p.yaw;
     cam.pitch = 0;
@@ -808,8 +814,11 @@ function draw(): boolean {
       for (let i = 0; i < base.instances.length; i++) if (!proxied.has(i)) originals.add(i);
     }
   }
+  const waiting = packs.reduce((s, r) => s + (r?.proxies.length ?? 0), 0) - proxies.length;
   if (stats.firstFrameMs !== null && cell !== null && !current) stats.standInFrames++;
-  if (stats.firstFrameMs !== null && current && proxies.length < packs.reduce((s, r) => s + (r?.proxies.length ?? 0), 0)) stats.pendingFrames++;
+  if (stats.firstFrameMs !== null && current && waiting > 0) stats.pendingFrames++;
+  const drawnCell = cellPack?.pack?.id ?? -1;
+  if (walk && walkStart !== null && stats.walkLog.length < 100000) stats.walkLog.push([cell ?? -1, drawnCell, farReady ? 1 : 0, waiting]);
   if (cellPack) mark("first frame with a cell pack");
   stats.settled = current && !!cellPack && farReady && proxies.length === packs.reduce((s, r) => s + (r?.proxies.length ?? 0), 0);
   if (stats.firstFrameMs === null && stats.settled) {
@@ -907,7 +916,8 @@ function draw(): boolean {
     const mib = (stats.fetched / (1 << 20)).toFixed(2);
     overlay.textContent =
       `FPS ${stats.fps.toFixed(1)}  frame ${stats.frameMs.toFixed(1)} ms  triangles ${tris}\n` +
-      `cell ${cell ?? "-"}  resident packs ${stats.resident}  uploads queued ${stats.queuedUploads}\n` +
+      `cell ${cell ?? "-"} ${drawnCell === cell && farReady ? "drawn from its packs" : drawnCell >= 0 ? `stand-in: cell ${drawnCell}'s packs` : "not in yet"}` +
+      `  resident packs ${stats.resident}  uploads queued ${stats.queuedUploads}\n` +
       `downloaded ${mib} MiB in ${stats.requests} requests  pose ${stats.pose.map((v) => v.toFixed(1)).join(",")}`;
   }
   return true;
