@@ -13,10 +13,11 @@
 // 1024x768, the native `player view`'s), `path=URL` (a camera path .ron to walk),
 // `budget=MiB` (texture bytes uploaded per frame, default 8), `prefetch=0|1`.
 
+import { BaseStream } from "./base";
 import {
-  decodeBase,
   decodeCell,
   decodeIndex,
+  packModels,
   decodeTextureFile,
   NONE,
   PackError,
@@ -76,6 +77,10 @@ interface Stats {
   // members as originals while its textures waited.
   standInFrames: number;
   pendingFrames: number;
+  // Per frame drawn during a ?path= walk (which starts once the first frame is
+  // drawn): [the camera's cell, the cell whose pack was drawn (-1: none), its far
+  // field drawn from its packs (1/0), proxies waiting for textures].
+  walkLog: number[][];
 }
 
 const stats: Stats = {
@@ -99,6 +104,7 @@ const stats: Stats = {
   phases: {},
   standInFrames: 0,
   pendingFrames: 0,
+  walkLog: [],
 };
 const mark = (name: string) => (stats.phases[name] ??= Math.round(performance.now()));
 (window as any).hexbake = { stats, setPose: (p: number[]) => setPose(p) };
@@ -114,17 +120,24 @@ function fail(msg: string) {
 }
 
 async function fetchBytes(url: string): Promise<Uint8Array> {
+  return (await fetchRange(url)).bytes;
+}
+
+/** `url`, or its bytes `start..end` (end exclusive) by a `Range` request: `partial`
+ * when the server answered 206 with them, not 200 with the whole file. */
+async function fetchRange(url: string, start?: number, end?: number): Promise<{ bytes: Uint8Array; partial: boolean }> {
   let r: Response;
+  const ranged = start !== undefined && end !== undefined;
   try {
-    r = await fetch(url);
+    r = await fetch(url, ranged ? { headers: { Range: `bytes=${start}-${end - 1}` } } : undefined);
   } catch (e) {
     throw new PackError(`${url}: ${e}`);
   }
-  if (!r.ok) throw new PackError(`${url}: HTTP ${r.status} ${r.statusText}`);
+  if (!r.ok) throw new PackError(`${url}${ranged ? ` bytes ${start}-${end - 1}` : ""}: HTTP ${r.status} ${r.statusText}`);
   const b = new Uint8Array(await r.arrayBuffer());
   stats.fetched += b.length;
   stats.requests++;
-  return b;
+  return { bytes: b, partial: r.status === 206 };
 }
 
 // ---- GPU state ----
@@ -161,6 +174,7 @@ let colourTex: GPUTexture;
 let readBuf: GPUBuffer;
 let rowBytes = 0;
 let base: Base;
+let baseStream: BaseStream;
 let index: Index;
 let grid: HexGrid;
 let bakeUrl = "/bake/";
@@ -181,7 +195,9 @@ let dummyView: GPUTextureView;
 let depthTex: GPUTexture;
 let groundBuf: GPUBuffer;
 let instBuf: GPUBuffer;
-let models: { vbuf: GPUBuffer; ibuf: GPUBuffer; indexCount: number; tris: number; albedo: GPUBindGroup }[] = [];
+/** Models' GPU buffers, made once base.pack's ranges for them are in. */
+let models: ({ vbuf: GPUBuffer; ibuf: GPUBuffer; indexCount: number; tris: number; albedo: GPUBindGroup } | undefined)[] = [];
+const albedoGroups: GPUBindGroup[] = [];
 const resident = new Map<string, Resident>();
 const uploads: { res: Resident; proxy: GpuProxy; view: number; w: number; h: number; enc: number; data: Uint8Array }[] = [];
 let uploadBudget = 8 << 20;
@@ -264,11 +280,13 @@ async function init() {
     });
   pipelinesReady.catch(() => {}); // awaited below; no unhandled rejection meanwhile
   // The index first, then the base pack it names (format 7, issue 32: a rebake on the
-  // server never mixes two generations in one session).
+  // server never mixes two generations in one session), by range: its table and
+  // small sections now, the models' vertices as the packs drawn need them (src/base.ts).
   index = decodeIndex(new PackFile("index.pack", await fetchBytes(bakeUrl + "index.pack")));
-  base = decodeBase(new PackFile(index.baseFile, await fetchBytes(bakeUrl + index.baseFile)));
+  baseStream = await BaseStream.open(bakeUrl + index.baseFile, fetchRange);
+  base = baseStream.base;
   grid = new HexGrid(base.grid);
-  mark("base decoded");
+  mark("base table decoded");
   const g = base.grid;
   const diag = Math.hypot(g.groundMax[0] - g.groundMin[0], Math.max(g.maxEye, 1), g.groundMax[1] - g.groundMin[1]);
   cam.far = diag * 2 + 100; // Bake::extent (the scene's diagonal is within the ground's for parks)
@@ -292,29 +310,17 @@ async function init() {
 
   // The start cell's packs are fetched while the pipelines compile.
   const start = grid.cellAt(cam.eye[0], cam.eye[2]);
-  if (start !== null) for (const w of chain(start)) early.set(w.key, fetchBytes(bakeUrl + w.entry.file));
+  if (start !== null)
+    for (const w of chain(start)) {
+      const p = load(w.key, w.entry);
+      p.catch(() => {}); // reported when request() takes it
+      early.set(w.key, p);
+    }
   await pipelinesReady;
 
-  const albedoGroups: GPUBindGroup[] = [];
-  models = base.models.map((m) => ({
-    vbuf: buffer(modelVertices(m), GPUBufferUsage.VERTEX),
-    ibuf: buffer(m.triangles, GPUBufferUsage.INDEX),
-    indexCount: m.triangles.length,
-    tris: m.triangleCount,
-    albedo: m.texture !== null ? (albedoGroups[m.texture] ??= albedoGroup(base.textures[m.texture])) : whiteBg,
-  }));
+  models = base.models.map(() => undefined);
   groundBuf = buffer(groundVertices(g), GPUBufferUsage.VERTEX);
-  instanceBounds = base.instances.map((inst) => {
-    const m = base.models[inst.model];
-    const lo = [Infinity, Infinity, Infinity];
-    const hi = [-Infinity, -Infinity, -Infinity];
-    for (let v = 0; v < m.vertexCount; v++)
-      for (let k = 0; k < 3; k++) {
-        lo[k] = Math.min(lo[k], m.positions[3 * v + k]);
-        hi[k] = Math.max(hi[k], m.positions[3 * v + k]);
-      }
-    return transformBox(lo, hi, inst.transform);
-  });
+  instanceBounds = base.instances.map(() => undefined);
   instBuf = device.createBuffer({ size: INSTANCE_RAW * (base.instances.length + 1), usage: GPUBufferUsage.VERTEX | GPUBufferUsage.COPY_DST });
   depthTex = device.createTexture({ size: [cam.width, cam.height], format: "depth32float", usage: GPUTextureUsage.RENDER_ATTACHMENT });
   mark("models uploaded");
@@ -428,7 +434,39 @@ function albedoGroup(t: Base["textures"][number]): GPUBindGroup {
 // ---- frustum culling (player/src/camera.rs Frustum; conservative, so the image is
 // the same with or without it) ----
 
-let instanceBounds: { min: number[]; max: number[] }[] = [];
+let instanceBounds: ({ min: number[]; max: number[] } | undefined)[] = [];
+
+/** Model `m`'s GPU buffers, or `undefined` while base.pack's ranges for it are out
+ * (a pack's originals are fetched with the pack; the rest after the first frame). */
+function gpuModel(m: number) {
+  const have = models[m];
+  if (have) return have;
+  if (!baseStream.ready(m, true)) return undefined;
+  const model = base.models[m];
+  return (models[m] = {
+    vbuf: buffer(modelVertices(model), GPUBufferUsage.VERTEX),
+    ibuf: buffer(model.triangles, GPUBufferUsage.INDEX),
+    indexCount: model.triangles.length,
+    tris: model.triangleCount,
+    albedo: model.texture !== null ? (albedoGroups[model.texture] ??= albedoGroup(base.textures[model.texture])) : whiteBg,
+  });
+}
+
+/** Instance `i`'s world bounds (its model's vertices must be in). */
+function bounds(i: number) {
+  return (instanceBounds[i] ??= (() => {
+    const inst = base.instances[i];
+    const m = base.models[inst.model];
+    const lo = [Infinity, Infinity, Infinity];
+    const hi = [-Infinity, -Infinity, -Infinity];
+    for (let v = 0; v < m.vertexCount; v++)
+      for (let k = 0; k < 3; k++) {
+        lo[k] = Math.min(lo[k], m.positions[3 * v + k]);
+        hi[k] = Math.max(hi[k], m.positions[3 * v + k]);
+      }
+    return transformBox(lo, hi, inst.transform);
+  })());
+}
 
 function transformBox(lo: number[], hi: number[], t: ArrayLike<number>) {
   const min = [Infinity, Infinity, Infinity];
@@ -466,7 +504,7 @@ function inside(ps: number[][], b: { min: number[]; max: number[] }): boolean {
 
 // ---- streaming ----
 
-const early = new Map<string, Promise<Uint8Array>>();
+const early = new Map<string, Promise<Loaded>>();
 const keyOf = (kind: "c" | "g", id: number) => `${kind}${id}`;
 
 /** The packs a cell draws: itself, then its far-field group and each parent. */
@@ -514,6 +552,28 @@ async function storeTextures(file: PackFile): Promise<Uint8Array | undefined> {
   return out;
 }
 
+interface Loaded {
+  pack: CellPack;
+  bytes: number;
+}
+
+/** Fetches and decodes a cell or group pack with what it draws with: its store
+ * textures and the base.pack ranges of its models (its proxies' members' vertices,
+ * its originals' whole models), those two at once. */
+async function load(key: string, entry: IndexEntry): Promise<Loaded> {
+  const bytes = await fetchBytes(bakeUrl + entry.file);
+  mark(`${key} fetched`);
+  const file = new PackFile(entry.file, bytes);
+  const { vertices, full } = packModels(file, base);
+  const [tex] = await Promise.all([
+    storeTextures(file).then((t) => (mark(`${key} textures fetched`), t)),
+    baseStream.ensure(vertices, full).then(() => mark(`${key} models fetched`)),
+  ]);
+    const pack = decodeCell(file, base, tex);
+  if (pack.id !== entry.id) throw new PackError(`${entry.file}: holds cell ${pack.id}, index.pack lists ${entry.id}`);
+  return { pack, bytes: bytes.length };
+}
+
 function request(key: string, entry: IndexEntry, priority: boolean) {
   const r = resident.get(key);
   if (r) {
@@ -524,15 +584,12 @@ function request(key: string, entry: IndexEntry, priority: boolean) {
   const res: Resident = { key, entry, state: "loading", proxies: [], lastUsed: stats.frames, bytes: 0 };
   resident.set(key, res);
   inflight++;
-  const bytes = early.get(key) ?? fetchBytes(bakeUrl + entry.file);
+  const loading = early.get(key) ?? load(key, entry);
   early.delete(key);
-  bytes
-    .then(async (bytes) => {
-      const file = new PackFile(entry.file, bytes);
-      const pack = decodeCell(file, base, await storeTextures(file));
-      if (pack.id !== entry.id) throw new PackError(`${entry.file}: holds cell ${pack.id}, index.pack lists ${entry.id}`);
+  loading
+    .then(({ pack, bytes }) => {
       res.pack = pack;
-      res.bytes = bytes.length;
+      res.bytes = bytes;
       res.proxies = pack.proxies.map((p) => makeProxy(res, p));
       res.state = "ready";
       mark(`first pack decoded`);
@@ -643,21 +700,23 @@ async function frame(now: number) {
   stats.fps = stats.frames > 1 ? 0.9 * stats.fps + 0.1 * (1000 / Math.max(1e-3, now - last)) : 0;
   last = now;
   if (walk) {
-    walkStart ??= now;
-    const p = walkPose(walk, (now - walkStart) / 1000);
+    // The walk starts once its start cell is drawn (a cold start is timed apart).
+    if (stats.firstFrameMs !== null) walkStart ??= now;
+    const p = walkPose(walk, walkStart === null ? 0 : (now - walkStart) / 1000);
     cam.eye = p.eye;
     cam.yaw = p.yaw;
     cam.pitch = 0;
     cam.fovYDeg = walk.fovYDeg;
     stats.walkDone = p.done;
   } else move(dt);
+  let drawn: boolean;
   try {
-    draw();
+    drawn = draw();
   } catch (e: any) {
     fail(`${e.message ?? e}`);
     return;
   }
-  if (readback) {
+  if (readback && drawn) {
     try {
       await present();
     } catch (e: any) {
@@ -665,7 +724,7 @@ async function frame(now: number) {
       return;
     }
   }
-  stats.frames++;
+  if (drawn) stats.frames++;
   requestAnimationFrame(frame);
 }
 
@@ -701,14 +760,19 @@ function installControls(canvas: HTMLCanvasElement) {
   });
 }
 
-function draw() {
+/** Draws a frame; `false` when it did not: during a cold start, after one frame of
+ * ground and sky, until the start cell's packs are in (the CPU goes to fetching
+ * and decoding them, not to redrawing the same frame on SwiftShader). */
+function draw(): boolean {
   const cell = grid.cellAt(cam.eye[0], cam.eye[2]);
   stats.cell = cell;
   if (cell !== null && stats.cellsVisited[stats.cellsVisited.length - 1] !== cell) stats.cellsVisited.push(cell);
   const want = cell !== null ? chain(cell) : [];
   const keep = new Set(want.map((w) => w.key));
   for (const w of want) request(w.key, w.entry, true);
-  if (prefetch && cell !== null) {
+  // Neighbours once the first frame is drawn: before it, the start cell has the
+  // connection and the bytes to itself.
+  if (prefetch && cell !== null && stats.firstFrameMs !== null) {
     for (const n of index.cells.get(cell)?.neighbours ?? []) {
       for (const w of chain(n)) {
         keep.add(w.key);
@@ -729,6 +793,7 @@ function draw() {
     // player's fallback does, takes seconds per frame on SwiftShader).
     packs = shownChain.map((k) => resident.get(k));
   }
+  if (stats.firstFrameMs === null && !current && stats.frames > 0) return false;
   const cellPack = packs[0]?.state === "ready" ? packs[0] : undefined;
   const farReady = packs.slice(1).every((p) => p?.state === "ready");
   const originals = new Set<number>();
@@ -749,12 +814,19 @@ function draw() {
       for (let i = 0; i < base.instances.length; i++) if (!proxied.has(i)) originals.add(i);
     }
   }
+  const waiting = packs.reduce((s, r) => s + (r?.proxies.length ?? 0), 0) - proxies.length;
   if (stats.firstFrameMs !== null && cell !== null && !current) stats.standInFrames++;
-  if (stats.firstFrameMs !== null && current && proxies.length < packs.reduce((s, r) => s + (r?.proxies.length ?? 0), 0)) stats.pendingFrames++;
+  if (stats.firstFrameMs !== null && current && waiting > 0) stats.pendingFrames++;
+  const drawnCell = cellPack?.pack?.id ?? -1;
+  if (walk && walkStart !== null && stats.walkLog.length < 100000) stats.walkLog.push([cell ?? -1, drawnCell, farReady ? 1 : 0, waiting]);
+  if (cellPack) mark("first frame with a cell pack");
   stats.settled = current && !!cellPack && farReady && proxies.length === packs.reduce((s, r) => s + (r?.proxies.length ?? 0), 0);
   if (stats.firstFrameMs === null && stats.settled) {
     stats.firstFrameMs = performance.now();
     stats.firstFrameBytes = stats.fetched;
+    // The rest of base.pack in the background (the next cells' models).
+    baseStream.ensureAll().catch((e) => fail(`${e.message ?? e}`));
+    (stats as any).firstFrameNo = stats.frames;
   }
 
   const clip = clipFromWorld(cam);
@@ -762,8 +834,10 @@ function draw() {
   // Instances by model (ascending, as the native BTreeMap), then the ground's.
   const byModel = new Map<number, number[]>();
   for (const i of [...originals].sort((a, b) => a - b)) {
-    if (!inside(fr, instanceBounds[i])) continue;
     const m = base.instances[i].model;
+    // A model whose base.pack ranges are still out is not drawn (only stand-ins
+    // and proxies waiting for textures draw instances their packs do not list).
+    if (!gpuModel(m) || !inside(fr, bounds(i))) continue;
     if (!byModel.has(m)) byModel.set(m, []);
     byModel.get(m)!.push(i);
   }
@@ -811,7 +885,7 @@ function draw() {
   let first = 0;
   for (const m of order) {
     const n = byModel.get(m)!.length;
-    const g = models[m];
+    const g = models[m]!;
     if (g.indexCount > 0) {
       pass.setBindGroup(2, g.albedo);
       pass.setVertexBuffer(0, g.vbuf);
@@ -842,9 +916,11 @@ function draw() {
     const mib = (stats.fetched / (1 << 20)).toFixed(2);
     overlay.textContent =
       `FPS ${stats.fps.toFixed(1)}  frame ${stats.frameMs.toFixed(1)} ms  triangles ${tris}\n` +
-      `cell ${cell ?? "-"}  resident packs ${stats.resident}  uploads queued ${stats.queuedUploads}\n` +
+      `cell ${cell ?? "-"} ${drawnCell === cell && farReady ? "drawn from its packs" : drawnCell >= 0 ? `stand-in: cell ${drawnCell}'s packs` : "not in yet"}` +
+      `  resident packs ${stats.resident}  uploads queued ${stats.queuedUploads}\n` +
       `downloaded ${mib} MiB in ${stats.requests} requests  pose ${stats.pose.map((v) => v.toFixed(1)).join(",")}`;
   }
+  return true;
 }
 
 init().catch((e) => fail(`${e?.message ?? e}`));

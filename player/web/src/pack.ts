@@ -19,7 +19,7 @@ const MAGIC = [0x48, 0x45, 0x58, 0x42, 0x41, 0x4b, 0x45, 0x00];
 export const MAX_VERSION = 7;
 export const KIND = { base: 1, cell: 2, index: 3, group: 4 } as const;
 
-interface Section {
+export interface Section {
   kind: number;
   codec: number;
   offset: number;
@@ -27,18 +27,41 @@ interface Section {
   raw: number;
 }
 
-export class PackFile {
+/** What `decodeBase` reads from: a whole pack (`PackFile`) or one whose sections
+ * arrive by range (`base.ts`). */
+export interface SectionSource {
+  readonly name: string;
+  readonly fileKind: number;
+  has(kind: number): boolean;
+  section(kind: number, optional?: boolean): Uint8Array;
+}
+
+/** A pack's header and section table, read from the first `64 + 64·n` bytes of the
+ * file (`fileLen` is the header's, not checked against anything here): enough to
+ * fetch single sections by HTTP range. */
+export class PackHead {
   readonly version: number;
   readonly fileKind: number;
-  private sections = new Map<number, Section>();
+  readonly fileLen: number;
+  /** Bytes the header and table take: a prefix at least this long parses. */
+  readonly tableEnd: number;
+  readonly sections = new Map<number, Section>();
+
+  /** The length of prefix `PackHead` needs, from the first 64 bytes (≥ 64). */
+  static need(name: string, head: Uint8Array): number {
+    if (head.length < 64) throw new PackError(`${name}: ${head.length} bytes, shorter than a pack header (64)`);
+    const n = new DataView(head.buffer, head.byteOffset, 64).getUint32(20, true);
+    return 64 + 64 * Math.min(n, 4097);
+  }
 
   constructor(
     readonly name: string,
-    readonly bytes: Uint8Array,
+    prefix: Uint8Array,
   ) {
     const fail = (what: string) => {
       throw new PackError(`${name}: ${what}`);
     };
+    const bytes = prefix;
     if (bytes.length < 64) fail(`${bytes.length} bytes, shorter than a pack header (64)`);
     for (let i = 0; i < 8; i++) if (bytes[i] !== MAGIC[i]) fail("not a hexbake pack (bad magic)");
     const dv = new DataView(bytes.buffer, bytes.byteOffset, bytes.byteLength);
@@ -48,10 +71,10 @@ export class PackFile {
       fail(`pack format version ${this.version} is not 1…${MAX_VERSION}`);
     const n = dv.getUint32(20, true);
     if (n > 4096) fail(`${n} sections (at most 4096)`);
-    const fileLen = Number(dv.getBigUint64(32, true));
-    if (fileLen !== bytes.length)
-      fail(`header says ${fileLen} bytes, got ${bytes.length} (truncated download?)`);
-    if (64 + 64 * n > bytes.length) fail("section table past the end");
+    this.fileLen = Number(dv.getBigUint64(32, true));
+    this.tableEnd = 64 + 64 * n;
+    if (this.tableEnd > this.fileLen) fail("section table past the end");
+    if (this.tableEnd > bytes.length) fail(`section table past the ${bytes.length} bytes read (truncated download?)`);
     for (let i = 0; i < n; i++) {
       const o = 64 + 64 * i;
       const s: Section = {
@@ -61,7 +84,7 @@ export class PackFile {
         stored: Number(dv.getBigUint64(o + 16, true)),
         raw: Number(dv.getBigUint64(o + 24, true)),
       };
-      if (s.offset + s.stored > bytes.length || s.offset < 64 + 64 * n)
+      if (s.offset + s.stored > this.fileLen || s.offset < this.tableEnd)
         fail(`section 0x${s.kind.toString(16)} out of bounds`);
       if (s.codec > 3) fail(`section 0x${s.kind.toString(16)}: unknown codec ${s.codec}`);
       if (s.codec === 0 && s.raw !== s.stored) fail(`section 0x${s.kind.toString(16)}: raw length mismatch`);
@@ -75,36 +98,72 @@ export class PackFile {
     return this.sections.has(kind);
   }
 
+  label(kind: number): string {
+    return `${this.name}: section 0x${kind.toString(16).padStart(4, "0")}`;
+  }
+
+  /** Section `kind`'s decoded bytes from its `stored` bytes. */
+  decode(kind: number, stored: Uint8Array): Uint8Array {
+    const s = this.sections.get(kind);
+    if (!s) throw new PackError(`${this.label(kind)} missing`);
+    return decodeStored(this.label(kind), s, stored);
+  }
+}
+
+export class PackFile implements SectionSource {
+  readonly version: number;
+  readonly fileKind: number;
+  readonly head: PackHead;
+
+  constructor(
+    readonly name: string,
+    readonly bytes: Uint8Array,
+  ) {
+    this.head = new PackHead(name, bytes);
+    this.version = this.head.version;
+    this.fileKind = this.head.fileKind;
+    if (this.head.fileLen !== bytes.length)
+      throw new PackError(`${name}: header says ${this.head.fileLen} bytes, got ${bytes.length} (truncated download?)`);
+  }
+
+  has(kind: number): boolean {
+    return this.head.has(kind);
+  }
+
   /** The decoded bytes of section `kind` (empty when absent and `optional`). */
   section(kind: number, optional = false): Uint8Array {
-    const s = this.sections.get(kind);
-    const label = `${this.name}: section 0x${kind.toString(16).padStart(4, "0")}`;
+    const s = this.head.sections.get(kind);
     if (!s) {
       if (optional) return new Uint8Array(0);
-      throw new PackError(`${label} missing`);
+      throw new PackError(`${this.head.label(kind)} missing`);
     }
-    const stored = this.bytes.subarray(s.offset, s.offset + s.stored);
-    if (s.codec === 0) return stored;
-    let out: Uint8Array;
-    try {
-      // A frame may not announce more than the section's bound (raw_len, or 1.5 ·
-      // raw_len pre-coded for codec 3), so a lying frame header cannot make the
-      // decoder allocate more (fzstd allocates the announced content size).
-      const announced = zstdContentSize(stored);
-      const bound = s.codec === 3 ? Math.ceil(1.5 * s.raw) + 16 : s.raw;
-      if (announced !== null && announced > bound)
-        throw new PackError(`${label}: zstd frame announces ${announced} bytes, more than ${bound}`);
-      out = decompress(stored);
-    } catch (e) {
-      throw new PackError(`${label}: zstd: ${e}`);
-    }
-    if (s.codec === 1) {
-      if (out.length !== s.raw) throw new PackError(`${label}: decoded ${out.length} bytes, expected ${s.raw}`);
-      return out;
-    }
-    if (s.codec === 2) return undelta(out, s.raw, label);
-    return unmtf(out, s.raw, label);
+    return decodeStored(this.head.label(kind), s, this.bytes.subarray(s.offset, s.offset + s.stored));
   }
+}
+
+/** A section's content from its stored bytes (codecs 0–3). */
+export function decodeStored(label: string, s: Section, stored: Uint8Array): Uint8Array {
+  if (stored.length !== s.stored) throw new PackError(`${label}: ${stored.length} stored bytes, expected ${s.stored}`);
+  if (s.codec === 0) return stored;
+  let out: Uint8Array;
+  try {
+    // A frame may not announce more than the section's bound (raw_len, or 1.5 ·
+    // raw_len pre-coded for codec 3), so a lying frame header cannot make the
+    // decoder allocate more (fzstd allocates the announced content size).
+    const announced = zstdContentSize(stored);
+    const bound = s.codec === 3 ? Math.ceil(1.5 * s.raw) + 16 : s.raw;
+    if (announced !== null && announced > bound)
+      throw new PackError(`${label}: zstd frame announces ${announced} bytes, more than ${bound}`);
+    out = decompress(stored);
+  } catch (e) {
+    throw new PackError(`${label}: zstd: ${e}`);
+  }
+  if (s.codec === 1) {
+    if (out.length !== s.raw) throw new PackError(`${label}: decoded ${out.length} bytes, expected ${s.raw}`);
+    return out;
+  }
+  if (s.codec === 2) return undelta(out, s.raw, label);
+  return unmtf(out, s.raw, label);
 }
 
 /** The Frame_Content_Size of a zstd frame header (RFC 8878 §3.1.1.1), if present. */
@@ -272,7 +331,7 @@ export interface Base {
   textures: AlbedoTexture[];
 }
 
-export function decodeBase(file: PackFile): Base {
+export function decodeBase(file: SectionSource): Base {
   if (file.fileKind !== KIND.base) throw new PackError(`${file.name}: file kind ${file.fileKind}, not a base pack`);
   const meta = new Reader(file.section(0x0101), `${file.name}: base-meta`);
   const grid: GridParams = {
@@ -308,7 +367,7 @@ export function decodeBase(file: PackFile): Base {
       triangleCount: tc,
       positions: pos.f32array(12 * v0, 3 * vc),
       normals: nor.f32array(12 * v0, 3 * vc),
-      colours: col.slice(4 * v0, 4 * (v0 + vc)),
+      colours: col.subarray(4 * v0, 4 * (v0 + vc)),
       triangles,
       uvs: null,
       texture: null,
@@ -333,7 +392,7 @@ export function decodeBase(file: PackFile): Base {
 }
 
 /** Sections 0x0109 albedo-textures and 0x010A texcoords (both or neither). */
-function decodeAlbedo(file: PackFile, models: Model[]): AlbedoTexture[] {
+function decodeAlbedo(file: SectionSource, models: Model[]): AlbedoTexture[] {
   if (!file.has(0x0109) && !file.has(0x010a)) return [];
   if (!file.has(0x0109) || !file.has(0x010a))
     throw new PackError(`${file.name}: albedo-textures and texcoords must both be present or neither`);
@@ -492,6 +551,28 @@ export function decodeTextureFile(name: string, bytes: Uint8Array): Uint8Array {
   } catch (e) {
     throw new PackError(`${name}: not a zstd frame: ${e}`);
   }
+}
+
+/** The models a cell or group pack draws with, read before its textures are in:
+ * its proxies' members' (`vertices`: positions, normals, colours) and its
+ * originals' (`full`: with triangles). Out-of-range instances are left out here;
+ * `decodeCell` refuses them. */
+export function packModels(file: PackFile, base: Base): { vertices: Set<number>; full: Set<number> } {
+  const vertices = new Set<number>();
+  const full = new Set<number>();
+  const model = (i: number) => (i < base.instances.length ? base.instances[i].model : null);
+  const meta = new Reader(file.section(0x0201), `${file.name}: cell-meta`);
+  const originals = new Reader(file.section(0x0202), `${file.name}: originals`);
+  for (let k = 0, n = Math.min(meta.u32(36), originals.bytes.length / 4); k < n; k++) {
+    const m = model(originals.u32(4 * k));
+    if (m !== null) full.add(m);
+  }
+  const mem = new Reader(file.section(0x0204), `${file.name}: members`);
+  for (let k = 0, n = Math.min(meta.u32(44), mem.bytes.length / 16); k < n; k++) {
+    const m = model(mem.u32(16 * k));
+    if (m !== null) vertices.add(m);
+  }
+  return { vertices, full };
 }
 
 /** `textures`: the textures of a version-6 pack fetched from the store, concatenated
