@@ -339,8 +339,13 @@ fn write_index(l: &Loaded, done: &[(&Job, JobRecord)]) -> Result<Index, RunError
     for e in entries.iter_mut().chain(groups.iter_mut()) {
         e.file = publish(&e.file, &e.checksum)?;
     }
-    let mut base = BaseEntry::for_file(out, LEGACY_BASE_FILE).map_err(failed)?;
-    let base_pack = BasePack::read(&out.join(LEGACY_BASE_FILE)).map_err(failed)?;
+    // The working base pack, read once: hashed for the index and decoded for its check.
+    let base_path = out.join(LEGACY_BASE_FILE);
+    let base_bytes = std::fs::read(&base_path)
+        .with_context(|| base_path.display().to_string())
+        .map_err(failed)?;
+    let base_pack = BasePack::from_bytes(&base_bytes).map_err(failed)?;
+    let base = BaseEntry::for_bytes(LEGACY_BASE_FILE, &base_bytes);
     if base_pack.scene_fingerprint != l.build.scene_fingerprint {
         return Err(failed(anyhow::anyhow!(
             "{}: its scene fingerprint is not the plan's: it was written for another \
@@ -348,7 +353,10 @@ fn write_index(l: &Loaded, done: &[(&Job, JobRecord)]) -> Result<Index, RunError
             out.join(LEGACY_BASE_FILE).display()
         )));
     }
-    base.file = publish(&base.file, &base.checksum)?;
+    let base = BaseEntry {
+        file: publish(&base.file, &base.checksum)?,
+        ..base
+    };
     let index = Index {
         build_fingerprint: build_fingerprint(&fps),
         cells: entries,

@@ -68,14 +68,13 @@ pub struct BaseEntry {
 pub const LEGACY_BASE_FILE: &str = "base.pack";
 
 impl BaseEntry {
-    /// The entry of the base pack at `dir/file`, its size and blake3 read from disk.
-    pub fn for_file(dir: &Path, file: &str) -> Result<BaseEntry, PackError> {
-        let e = IndexEntry::for_file(dir, file, 0, Vec::new(), [0; 32])?;
-        Ok(BaseEntry {
-            file: e.file,
-            bytes: e.bytes,
-            checksum: e.checksum,
-        })
+    /// The entry of a base pack named `file` whose content is `data`.
+    pub fn for_bytes(file: &str, data: &[u8]) -> BaseEntry {
+        BaseEntry {
+            file: file.to_string(),
+            bytes: data.len() as u64,
+            checksum: *blake3::hash(data).as_bytes(),
+        }
     }
 
     /// Checks that `data`, the content of the base pack at `path`, has the recorded
