@@ -158,17 +158,104 @@ pub fn masked_ssim_y(
     if width == 0 || height == 0 {
         return None;
     }
-    let (map, ow, oh, r) = ssim_map_y(a, b, width, height);
-    let (sum, n) = (0..oh)
-        .flat_map(|y| (0..ow).map(move |x| (x, y)))
-        .filter(|&(x, y)| mask[(y + r) * width + x + r])
-        .fold((0.0, 0usize), |(s, n), (x, y)| (s + map[y * ow + x], n + 1));
-    (n > 0).then(|| sum / n as f64)
+    // The SSIM map of `ssim_map_y` evaluated only where the mask asks for it: the
+    // horizontal pass on the rows some masked window covers, the vertical pass and
+    // the SSIM formula at the masked positions (the same sums in the same order, so
+    // the same values as the whole map).
+    let ya: Vec<f64> = luminance_f32(a).into_iter().map(f64::from).collect();
+    let yb: Vec<f64> = luminance_f32(b).into_iter().map(f64::from).collect();
+    let radius = 5.min((width.min(height) - 1) / 2);
+    let k = gaussian(radius, 1.5);
+    let n = k.len();
+    let (c1, c2) = ((0.01f64 * 255.0).powi(2), (0.03f64 * 255.0).powi(2));
+    let (ow, oh) = (width + 1 - n, height + 1 - n);
+    let masked = |x: usize, y: usize| mask[(y + radius) * width + x + radius];
+    let row_used: Vec<bool> = (0..oh).map(|y| (0..ow).any(|x| masked(x, y))).collect();
+    let mut tmp_needed = vec![false; height];
+    for y in (0..oh).filter(|&y| row_used[y]) {
+        tmp_needed[y..y + n].iter_mut().for_each(|t| *t = true);
+    }
+    // Horizontal pass of the five images (Y_a, Y_b, Y_a², Y_b², Y_a·Y_b) on the
+    // needed rows.
+    let images: [&dyn Fn(usize) -> f64; 5] = [
+        &|i| ya[i],
+        &|i| yb[i],
+        &|i| ya[i] * ya[i],
+        &|i| yb[i] * yb[i],
+        &|i| ya[i] * yb[i],
+    ];
+    let mut tmp = vec![[0.0f64; 5]; ow * height];
+    let mut row = vec![0.0f64; width];
+    for y in (0..height).filter(|&y| tmp_needed[y]) {
+        for (m, image) in images.iter().enumerate() {
+            for (x, r) in row.iter_mut().enumerate() {
+                *r = image(y * width + x);
+            }
+            for x in 0..ow {
+                tmp[y * ow + x][m] = k.iter().zip(&row[x..x + n]).map(|(a, b)| a * b).sum();
+            }
+        }
+    }
+    let (mut sum, mut count) = (0.0, 0usize);
+    for y in (0..oh).filter(|&y| row_used[y]) {
+        for x in (0..ow).filter(|&x| masked(x, y)) {
+            let v: [f64; 5] =
+                std::array::from_fn(|m| (0..n).map(|j| k[j] * tmp[(y + j) * ow + x][m]).sum());
+            let (ma, mb) = (v[0], v[1]);
+            let va = v[2] - ma * ma;
+            let vb = v[3] - mb * mb;
+            let cov = v[4] - ma * mb;
+            sum += ((2.0 * ma * mb + c1) * (2.0 * cov + c2))
+                / ((ma * ma + mb * mb + c1) * (va + vb + c2));
+            count += 1;
+        }
+    }
+    (count > 0).then(|| sum / count as f64)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `masked_ssim_y` as first written: the whole map, then the masked mean.
+    fn masked_ssim_by_map(a: &[u8], b: &[u8], w: usize, h: usize, mask: &[bool]) -> Option<f64> {
+        let (map, ow, oh, r) = ssim_map_y(a, b, w, h);
+        let (sum, n) = (0..oh)
+            .flat_map(|y| (0..ow).map(move |x| (x, y)))
+            .filter(|&(x, y)| mask[(y + r) * w + x + r])
+            .fold((0.0, 0usize), |(s, n), (x, y)| (s + map[y * ow + x], n + 1));
+        (n > 0).then(|| sum / n as f64)
+    }
+
+    #[test]
+    fn masked_ssim_equals_the_mean_over_the_whole_map() {
+        let mut seed = 99u64;
+        let mut next = move || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 33) as u32
+        };
+        for (w, h) in [(1, 1), (3, 9), (12, 11), (37, 29)] {
+            for density in [0, 5, 50, 100] {
+                let a: Vec<u8> = (0..w * h * 4).map(|_| next() as u8).collect();
+                let b: Vec<u8> = a
+                    .iter()
+                    .map(|&v| v.wrapping_add((next() % 9) as u8))
+                    .collect();
+                let mask: Vec<bool> = (0..w * h).map(|_| next() % 100 < density).collect();
+                let (x, y) = (
+                    masked_ssim_y(&a, &b, w, h, &mask),
+                    masked_ssim_by_map(&a, &b, w, h, &mask),
+                );
+                assert_eq!(
+                    x.map(f64::to_bits),
+                    y.map(f64::to_bits),
+                    "{w} × {h}, {density} %"
+                );
+            }
+        }
+    }
 
     #[test]
     fn f32_coefficients_are_the_f32_literals() {

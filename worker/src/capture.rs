@@ -114,7 +114,18 @@ pub fn capture_objects(
     items: &[DrawItem],
     image_res: u32,
 ) -> Result<ObjectCapture, CaptureError> {
-    let (lo, hi) = items_aabb(items).ok_or(CaptureError::Empty)?;
+    capture_objects_in(eye, items, items_aabb(items), image_res)
+}
+
+/// [`capture_objects`] with the items' box already known (`items_aabb(items)`), for
+/// callers that capture the same items from several eyes.
+pub fn capture_objects_in(
+    eye: Vec3,
+    items: &[DrawItem],
+    aabb: Option<(Vec3, Vec3)>,
+    image_res: u32,
+) -> Result<ObjectCapture, CaptureError> {
+    let (lo, hi) = aabb.ok_or(CaptureError::Empty)?;
     let view = capture_view(eye, lo, hi, image_res)?;
     let capture = render(&view, items, CullMode::Back);
     let member = |id: u32| id != BACKGROUND_ID && items.iter().any(|i| i.object_id == id);
@@ -357,35 +368,74 @@ fn crop_matrix(width: f32, height: f32, x0: f32, y0: f32, cw: f32, ch: f32) -> M
 /// [`TEXTURE_DILATE_PX`] passes: every unfilled texel with filled 4-neighbours takes
 /// their mean colour (alpha stays 0).
 fn dilate(rgba: &mut [u8], filled: &mut [bool], w: usize, h: usize) {
-    for _ in 0..TEXTURE_DILATE_PX {
-        let before = filled.to_vec();
-        for y in 0..h {
-            for x in 0..w {
-                let o = y * w + x;
-                if before[o] {
-                    continue;
-                }
-                let mut sum = [0u32; 3];
-                let mut n = 0;
-                let neighbours = [
-                    (x > 0).then(|| o - 1),
-                    (x + 1 < w).then(|| o + 1),
-                    (y > 0).then(|| o - w),
-                    (y + 1 < h).then(|| o + w),
-                ];
-                for q in neighbours.into_iter().flatten() {
-                    if before[q] {
-                        for k in 0..3 {
-                            sum[k] += rgba[q * 4 + k] as u32;
-                        }
-                        n += 1;
+    // Each pass fills the unfilled texels next to a texel filled before the pass,
+    // with the rounded mean of those neighbours. Only texels next to the previous
+    // pass's new ones can change in the next pass: the first pass scans the image,
+    // later ones only that frontier (same values as a full scan of every texel).
+    let mut frontier: Vec<usize> = Vec::new();
+    let mut updates: Vec<(usize, [u8; 3])> = Vec::new();
+    let mut queued = vec![false; w * h];
+    for pass in 0..TEXTURE_DILATE_PX {
+        updates.clear();
+        let fill = |o: usize, updates: &mut Vec<(usize, [u8; 3])>| {
+            let (x, y) = (o % w, o / w);
+            let mut sum = [0u32; 3];
+            let mut n = 0u32;
+            let mut add = |q: usize| {
+                if filled[q] {
+                    for k in 0..3 {
+                        sum[k] += rgba[q * 4 + k] as u32;
                     }
+                    n += 1;
                 }
-                for (k, total) in sum.iter().enumerate() {
-                    if let Some(mean) = (total + n / 2).checked_div(n) {
-                        rgba[o * 4 + k] = mean as u8;
-                        filled[o] = true;
-                    }
+            };
+            if x > 0 {
+                add(o - 1);
+            }
+            if x + 1 < w {
+                add(o + 1);
+            }
+            if y > 0 {
+                add(o - w);
+            }
+            if y + 1 < h {
+                add(o + w);
+            }
+            if n > 0 {
+                updates.push((o, sum.map(|s| ((s + n / 2) / n) as u8)));
+            }
+        };
+        if pass == 0 {
+            for o in (0..w * h).filter(|&o| !filled[o]) {
+                fill(o, &mut updates);
+            }
+        } else {
+            for &o in &frontier {
+                queued[o] = false;
+                if !filled[o] {
+                    fill(o, &mut updates);
+                }
+            }
+        }
+        for &(o, c) in &updates {
+            rgba[o * 4..o * 4 + 3].copy_from_slice(&c);
+            filled[o] = true;
+        }
+        if pass + 1 == TEXTURE_DILATE_PX {
+            break;
+        }
+        frontier.clear();
+        for &(o, _) in &updates {
+            let (x, y) = (o % w, o / w);
+            let near = [
+                (x > 0).then(|| o - 1),
+                (x + 1 < w).then(|| o + 1),
+                (y > 0).then(|| o - w),
+                (y + 1 < h).then(|| o + w),
+            ];
+            for q in near.into_iter().flatten() {
+                if !filled[q] && !std::mem::replace(&mut queued[q], true) {
+                    frontier.push(q);
                 }
             }
         }
@@ -420,4 +470,65 @@ pub fn pack_texture(
 /// The column-major matrix as stored in a pack.
 pub fn matrix_array(m: &Mat4) -> [f32; 16] {
     m.to_cols_array()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The plain definition of [`dilate`]: every pass scans every texel.
+    fn dilate_by_scan(rgba: &mut [u8], filled: &mut [bool], w: usize, h: usize) {
+        for _ in 0..TEXTURE_DILATE_PX {
+            let before = filled.to_vec();
+            for y in 0..h {
+                for x in 0..w {
+                    let o = y * w + x;
+                    if before[o] {
+                        continue;
+                    }
+                    let (mut sum, mut n) = ([0u32; 3], 0u32);
+                    let near = [
+                        (x > 0).then(|| o - 1),
+                        (x + 1 < w).then(|| o + 1),
+                        (y > 0).then(|| o - w),
+                        (y + 1 < h).then(|| o + w),
+                    ];
+                    for q in near.into_iter().flatten().filter(|&q| before[q]) {
+                        for k in 0..3 {
+                            sum[k] += rgba[q * 4 + k] as u32;
+                        }
+                        n += 1;
+                    }
+                    if n > 0 {
+                        for k in 0..3 {
+                            rgba[o * 4 + k] = ((sum[k] + n / 2) / n) as u8;
+                        }
+                        filled[o] = true;
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn dilate_equals_the_full_scan() {
+        let mut seed = 12345u64;
+        let mut next = move || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 33) as u32
+        };
+        for (w, h) in [(1, 1), (1, 7), (9, 1), (13, 11), (40, 33)] {
+            for density in [0, 3, 20, 60, 100] {
+                let filled: Vec<bool> = (0..w * h).map(|_| next() % 100 < density).collect();
+                let rgba: Vec<u8> = (0..w * h * 4).map(|_| next() as u8).collect();
+                let (mut a, mut fa) = (rgba.clone(), filled.clone());
+                let (mut b, mut fb) = (rgba, filled);
+                dilate(&mut a, &mut fa, w, h);
+                dilate_by_scan(&mut b, &mut fb, w, h);
+                assert_eq!((a, fa), (b, fb), "{w} × {h}, {density} % filled");
+            }
+        }
+    }
 }

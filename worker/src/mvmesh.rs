@@ -29,7 +29,7 @@
 //!    view order (the centre stays first when it is used).
 
 use crate::backface::regional_backface_cull;
-use crate::capture::{capture_objects, fit_texture, fitted_scale, items_aabb, CaptureError};
+use crate::capture::{capture_objects_in, fit_texture, fitted_scale, items_aabb, CaptureError};
 use crate::classify::{classify_objects, WindowDepth};
 use crate::grid::Prism;
 use crate::lod_chain::LodChains;
@@ -79,7 +79,8 @@ pub fn derive_mvmesh(
     let start = StartMesh::of(scene, chains, &item, settings);
     let mesh = start.mesh;
     let eyes = &eyes[..eyes.len().min(CELL_VIEWS as usize)];
-    let (object_lo, object_hi) = items_aabb(std::slice::from_ref(&item)).unwrap_or_default();
+    let aabb = items_aabb(std::slice::from_ref(&item));
+    let (object_lo, object_hi) = aabb.unwrap_or_default();
     let (region_lo, region_hi) = prism_corners
         .iter()
         .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &c| {
@@ -107,21 +108,22 @@ pub fn derive_mvmesh(
     let mut textures = Vec::with_capacity(eyes.len());
     for (i, &eye) in eyes.iter().enumerate() {
         let t = Instant::now();
-        let capture = match capture_objects(eye, std::slice::from_ref(&item), settings.image_res) {
-            Ok(c) => c,
-            // A neighbour's centre inside the object's box: no capture from there.
-            Err(CaptureError::View { .. }) if i > 0 => {
-                textures.push(None);
-                times.capture_ms += ms_since(t);
-                continue;
-            }
-            Err(source) => {
-                return Err(ProxyError::Capture {
-                    instances: vec![instance],
-                    source,
-                })
-            }
-        };
+        let capture =
+            match capture_objects_in(eye, std::slice::from_ref(&item), aabb, settings.image_res) {
+                Ok(c) => c,
+                // A neighbour's centre inside the object's box: no capture from there.
+                Err(CaptureError::View { .. }) if i > 0 => {
+                    textures.push(None);
+                    times.capture_ms += ms_since(t);
+                    continue;
+                }
+                Err(source) => {
+                    return Err(ProxyError::Capture {
+                        instances: vec![instance],
+                        source,
+                    })
+                }
+            };
         times.capture_ms += ms_since(t);
         let t = Instant::now();
         let classes = classify_objects(

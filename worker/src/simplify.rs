@@ -1213,6 +1213,22 @@ impl<'a> Collapser<'a> {
     /// Whether `v` lies on a boundary: some edge at `v` has a triangle on one side only.
     fn is_boundary(&self, v: u32) -> bool {
         let fan = &self.fans[v as usize];
+        // The fan's steps x → y looked up once (small fans: on the stack); v is on
+        // a boundary when some x is no y or some y is no x.
+        const SMALL: usize = 16;
+        if fan.len() <= SMALL {
+            let mut steps = [(0u32, 0u32); SMALL];
+            for (step, &t) in steps.iter_mut().zip(fan) {
+                *step = opposite_edge(&self.triangles[t as usize], v);
+            }
+            let steps = &steps[..fan.len()];
+            return steps
+                .iter()
+                .any(|&(x, _)| !steps.iter().any(|&(_, y)| y == x))
+                || steps
+                    .iter()
+                    .any(|&(_, y)| !steps.iter().any(|&(x, _)| x == y));
+        }
         fan.iter().any(|&t| {
             let (x, _) = opposite_edge(&self.triangles[t as usize], v);
             // Edge v→x needs a partner x→v in another triangle of the fan.
