@@ -4,6 +4,7 @@
 pub mod backface;
 pub mod bake;
 pub mod capture;
+pub mod capture_memo;
 pub mod check;
 pub mod classify;
 pub mod cli;

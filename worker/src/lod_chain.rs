@@ -45,6 +45,7 @@
 //! it is a chain of the model it names, checked level by level against the model
 //! ([`LodChain::from_file`], issue 32 item 2); any other is rebuilt.
 
+use crate::capture_memo::CaptureMemo;
 use crate::grid::Prism;
 use crate::simplify::{collapse_within, locked_mask, SimplifyError, SimplifyInput};
 use format::lod::{LodChainFile, LodLevelData};
@@ -474,10 +475,13 @@ fn box_distance(a: (Vec3, Vec3), b: (Vec3, Vec3)) -> f32 {
 }
 
 /// The chains of a scene's models, by model index (`None`: the model has no chain,
-/// cells start from its full mesh).
+/// cells start from its full mesh), and the memo of single-object captures that
+/// every cell and group baked with them shares ([`crate::capture_memo`]): both are
+/// what the cells of a run share about one scene's models.
 #[derive(Clone, Debug, Default)]
 pub struct LodChains {
     chains: Vec<Option<Arc<LodChain>>>,
+    captures: Arc<CaptureMemo>,
 }
 
 /// What [`LodChains::prepare`] did, for the run's report.
@@ -498,6 +502,11 @@ impl LodChains {
 
     pub fn get(&self, model: u32) -> Option<&LodChain> {
         self.chains.get(model as usize)?.as_deref()
+    }
+
+    /// The run's memo of single-object captures.
+    pub fn captures(&self) -> &CaptureMemo {
+        &self.captures
     }
 
     /// Chains of every model of `scene`, in parallel over models: loaded from
@@ -541,7 +550,13 @@ impl LodChains {
             }
             chains.push(Some(Arc::new(chain)));
         }
-        Ok((LodChains { chains }, stats))
+        Ok((
+            LodChains {
+                chains,
+                captures: Arc::default(),
+            },
+            stats,
+        ))
     }
 }
 

@@ -29,8 +29,7 @@
 //!    view order (the centre stays first when it is used).
 
 use crate::backface::regional_backface_cull;
-use crate::capture::{capture_objects_in, fit_texture, fitted_scale, items_aabb, CaptureError};
-use crate::classify::{classify_objects, WindowDepth};
+use crate::capture::{fit_texture, fitted_scale, items_aabb, CaptureError};
 use crate::grid::Prism;
 use crate::lod_chain::LodChains;
 use crate::raster::ProjectedTexture;
@@ -107,14 +106,15 @@ pub fn derive_mvmesh(
     let mut view_sets = vec![0u8; n];
     let mut textures = Vec::with_capacity(eyes.len());
     for (i, &eye) in eyes.iter().enumerate() {
-        let t = Instant::now();
-        let capture =
-            match capture_objects_in(eye, std::slice::from_ref(&item), aabb, settings.image_res) {
+        // The capture, classes and states from `eye`: from the run's memo when
+        // another cell of the run captured this object from there
+        // (crate::capture_memo), else computed and kept.
+        let (captured, states) =
+            match start.captured(scene, chains, &item, aabb, eye, settings, &mut times) {
                 Ok(c) => c,
                 // A neighbour's centre inside the object's box: no capture from there.
                 Err(CaptureError::View { .. }) if i > 0 => {
                     textures.push(None);
-                    times.capture_ms += ms_since(t);
                     continue;
                 }
                 Err(source) => {
@@ -124,22 +124,7 @@ pub fn derive_mvmesh(
                     })
                 }
             };
-        times.capture_ms += ms_since(t);
         let t = Instant::now();
-        let classes = classify_objects(
-            &capture.capture,
-            &[instance],
-            settings.t_c0,
-            settings.t_c1,
-            WindowDepth::paper(settings.cell_size),
-        );
-        let states = start.vertex_states(
-            &item,
-            &capture.capture,
-            &classes,
-            instance,
-            settings.depth_tolerance,
-        );
         for (v, state) in states.iter().enumerate() {
             match state {
                 VertexState::BackFacing => {}
@@ -158,7 +143,7 @@ pub fn derive_mvmesh(
         // a neighbour's centre may stand closer to the object than any point of the
         // cell; texels finer than the cell's nearest viewer can see are dropped.
         let scale = fitted_scale(eye, object_lo, object_hi, region_lo, region_hi);
-        textures.push(Some(fit_texture(capture.texture, scale)));
+        textures.push(Some(fit_texture(captured.texture.clone(), scale)));
         times.weights_ms += ms_since(t);
     }
     for (w, &back) in weight.iter_mut().zip(&back_everywhere) {

@@ -27,7 +27,8 @@
 //!    texture matrix.
 
 use crate::backface::front_facing_from;
-use crate::capture::{capture_objects, CaptureError};
+use crate::capture::{capture_objects, capture_objects_in, CaptureError};
+use crate::capture_memo::{CaptureKey, CaptureSettings, Captured};
 use crate::classify::{classify_objects, WindowDepth};
 use crate::grid::Prism;
 use crate::lod_chain::{LodChains, START_FRACTION, UNBOUNDED_START_PX};
@@ -37,7 +38,9 @@ use crate::simplify::{
     SimplifyError, SimplifyInput, SimplifyParams,
 };
 use crate::visibility::DepthTolerance;
-use crate::weights::{vertex_states_captured, VertexState};
+use crate::weights::{
+    vertex_states_captured, vertex_states_if_front, with_front_facing, VertexState,
+};
 use format::manifest::BakeParams;
 use format::Scene;
 use glam::{Mat3, Mat4, Vec3};
@@ -167,6 +170,82 @@ impl<'a> StartMesh<'a> {
                 locked,
             },
         }
+    }
+
+    /// What a derivation reads from the capture of `item` alone from `eye`: its
+    /// texture and covered pixels, from the run's memo ([`crate::capture_memo`]) or
+    /// computed and kept there, and this start mesh's vertex states in it (equal to
+    /// [`StartMesh::vertex_states`]). `aabb` is the item's box
+    /// ([`crate::capture::items_aabb`]); the capture and class times are added to
+    /// `times` when computed.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn captured(
+        &self,
+        scene: &Scene,
+        chains: &LodChains,
+        item: &DrawItem,
+        aabb: Option<(Vec3, Vec3)>,
+        eye: Vec3,
+        settings: &ProxySettings,
+        times: &mut StageTimes,
+    ) -> Result<(std::sync::Arc<Captured>, Vec<VertexState>), CaptureError> {
+        let compute = |times: &mut StageTimes| {
+            let t = Instant::now();
+            let capture =
+                capture_objects_in(eye, std::slice::from_ref(item), aabb, settings.image_res);
+            times.capture_ms += ms_since(t);
+            let capture = capture?;
+            let t = Instant::now();
+            let classes = classify_objects(
+                &capture.capture,
+                &[item.object_id],
+                settings.t_c0,
+                settings.t_c1,
+                WindowDepth::paper(settings.cell_size),
+            );
+            let if_front = vertex_states_if_front(
+                item.mesh,
+                item.transform,
+                &capture.capture,
+                &classes,
+                item.object_id,
+                settings.depth_tolerance,
+            );
+            times.weights_ms += ms_since(t);
+            Ok(Captured {
+                if_front,
+                texture: capture.texture,
+                covered_pixels: capture.covered_pixels,
+            })
+        };
+        let model_hash = scene
+            .instances
+            .get(item.object_id as usize)
+            .and_then(|inst| scene.models.get(inst.model as usize))
+            .map(|m| m.content_hash);
+        let key = model_hash.and_then(|hash| {
+            CaptureKey::new(
+                hash,
+                item,
+                eye,
+                &CaptureSettings {
+                    image_res: settings.image_res,
+                    t_c0: settings.t_c0,
+                    t_c1: settings.t_c1,
+                    cell_size: settings.cell_size,
+                    footprint_px: settings.depth_tolerance.footprint_px,
+                    neighbourhood_px: settings.depth_tolerance.neighbourhood_px,
+                },
+            )
+        });
+        let captured = match key {
+            Some(key) => chains.captures().get_or_compute(key, || compute(times))?,
+            None => std::sync::Arc::new(compute(times)?),
+        };
+        let t = Instant::now();
+        let states = with_front_facing(&captured.if_front, self.mesh, item.transform, eye);
+        times.weights_ms += ms_since(t);
+        Ok((captured, states))
     }
 
     /// The selected triangles and their carried lists, in mesh order.
@@ -317,6 +396,17 @@ pub(crate) fn draw_item(scene: &Scene, instance: u32) -> Result<DrawItem<'_>, Pr
     Ok(DrawItem::instance(scene, instance))
 }
 
+/// The centre capture of an SVMesh: one object's, from the run's memo, or a
+/// cluster's with the classes of its pixels.
+enum Shot {
+    /// The memo's capture and the start mesh's states in it.
+    One(std::sync::Arc<Captured>, Vec<VertexState>),
+    Cluster(
+        crate::capture::ObjectCapture,
+        Vec<crate::classify::PixelClass>,
+    ),
+}
+
 /// Derives the SVMesh of `instances` (one object, or a cluster) seen from the cell
 /// centre `centre` (module docs). Members come out in the order given.
 pub fn derive_svmesh(
@@ -332,26 +422,39 @@ pub fn derive_svmesh(
         .map(|&i| draw_item(scene, i))
         .collect::<Result<Vec<_>, _>>()?;
 
-    // Step 2: the capture of the object(s) alone from the centre.
-    let t = Instant::now();
-    let capture = capture_objects(centre, &items, settings.image_res).map_err(|source| {
-        ProxyError::Capture {
-            instances: instances.to_vec(),
-            source,
+    // Steps 2–3: the capture of the object(s) alone from the centre and the classes
+    // of its pixels. One object: from the run's memo (crate::capture_memo), shared
+    // with the MVMeshes of the neighbouring cells that capture it from this centre.
+    let capture_error = |source| ProxyError::Capture {
+        instances: instances.to_vec(),
+        source,
+    };
+    let shot = match items.as_slice() {
+        [item] => {
+            let start = StartMesh::of(scene, chains, item, settings);
+            let aabb = crate::capture::items_aabb(&items);
+            let (captured, states) = start
+                .captured(scene, chains, item, aabb, centre, settings, &mut times)
+                .map_err(capture_error)?;
+            Shot::One(captured, states)
         }
-    })?;
-    times.capture_ms += ms_since(t);
-
-    // Step 3: classes of the union's pixels.
-    let t = Instant::now();
-    let classes = classify_objects(
-        &capture.capture,
-        instances,
-        settings.t_c0,
-        settings.t_c1,
-        WindowDepth::paper(settings.cell_size),
-    );
-    times.weights_ms += ms_since(t);
+        _ => {
+            let t = Instant::now();
+            let capture =
+                capture_objects(centre, &items, settings.image_res).map_err(capture_error)?;
+            times.capture_ms += ms_since(t);
+            let t = Instant::now();
+            let classes = classify_objects(
+                &capture.capture,
+                instances,
+                settings.t_c0,
+                settings.t_c1,
+                WindowDepth::paper(settings.cell_size),
+            );
+            times.weights_ms += ms_since(t);
+            Shot::Cluster(capture, classes)
+        }
+    };
 
     let length = ProjectedLength::FromPoint {
         eye: centre,
@@ -362,13 +465,16 @@ pub fn derive_svmesh(
         let t = Instant::now();
         let start = StartMesh::of(scene, chains, item, settings);
         let mesh = start.mesh;
-        let states = start.vertex_states(
-            item,
-            &capture.capture,
-            &classes,
-            item.object_id,
-            settings.depth_tolerance,
-        );
+        let states = match &shot {
+            Shot::One(_, states) => states.clone(),
+            Shot::Cluster(capture, classes) => start.vertex_states(
+                item,
+                &capture.capture,
+                classes,
+                item.object_id,
+                settings.depth_tolerance,
+            ),
+        };
         let weights: Vec<f32> = states.iter().map(|s| s.weight()).collect();
         // Step 1 (and 4 for clusters): the triangles to simplify.
         let mut front = front_facing_from(mesh, item.transform, centre);
@@ -376,7 +482,11 @@ pub fn derive_svmesh(
         let welded = crate::simplify::welded_triangles(&mesh.positions, &mesh.triangles);
         let areas = projected_areas_px(mesh, item.transform, &[centre], settings.image_res);
         tidy_selection_sized(&welded, &mut front, settings.speck_triangles, Some(&areas));
-        let seen = (items.len() > 1).then(|| {
+        let cluster_capture = match &shot {
+            Shot::Cluster(capture, _) => Some(capture),
+            Shot::One(..) => None,
+        };
+        let seen = cluster_capture.map(|capture| {
             let seen = seen_triangles(&capture.capture, item);
             if start.carried.is_none() {
                 return seen;
@@ -441,10 +551,14 @@ pub fn derive_svmesh(
             simplified,
         });
     }
+    let (view, covered_pixels) = match shot {
+        Shot::One(captured, _) => (captured.texture.clone(), captured.covered_pixels),
+        Shot::Cluster(capture, _) => (capture.texture, capture.covered_pixels),
+    };
     Ok(SvMesh {
         members,
-        view: capture.texture,
-        covered_pixels: capture.covered_pixels,
+        view,
+        covered_pixels,
         times,
     })
 }

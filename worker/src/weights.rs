@@ -32,7 +32,7 @@ use crate::classify::PixelClass;
 use crate::raster::Capture;
 use crate::visibility::{depth_visibility_of, DepthTolerance, DepthVisibility};
 use format::Mesh;
-use glam::Mat4;
+use glam::{Mat4, Vec3};
 
 /// Weight of a vertex whose incident triangles all face away from the eye (000 §3.1.3.2).
 pub const BACK_FACING_WEIGHT: f32 = 0.5;
@@ -100,17 +100,83 @@ pub fn vertex_states_captured(
     // Step 1: per vertex, "some incident triangle is front-facing" from the eye.
     let world = world_positions(mesh, transform);
     let front_facing_vertex = front_facing_vertices_of(&world, &mesh.triangles, capture.view.eye);
-
-    // Step 2: depth-buffer visibility and the pixel each visible vertex projects to.
-    let visibility = depth_visibility_of(
+    // Steps 2–3: depth-buffer visibility of the front-facing vertices, combined.
+    states_gated(
         &world,
         &front_facing_vertex,
+        captured_triangles,
+        capture,
+        classes,
+        object_id,
+        depth_tolerance,
+    )
+}
+
+/// The state every vertex of the model (`mesh`: the captured mesh) would have if it
+/// were front-facing: [`vertex_states_captured`] before its front-facing test,
+/// which depends on the triangles of the start mesh (a level of the model's chain)
+/// while this does not. [`with_front_facing`] finishes it for a start mesh; so one
+/// capture serves every level ([`crate::capture_memo`]).
+pub fn vertex_states_if_front(
+    mesh: &Mesh,
+    transform: Mat4,
+    capture: &Capture,
+    classes: &[PixelClass],
+    object_id: u32,
+    depth_tolerance: DepthTolerance,
+) -> Vec<VertexState> {
+    let world = world_positions(mesh, transform);
+    let every = vec![true; world.len()];
+    states_gated(
+        &world,
+        &every,
+        &mesh.triangles,
+        capture,
+        classes,
+        object_id,
+        depth_tolerance,
+    )
+}
+
+/// [`vertex_states_captured`] from [`vertex_states_if_front`]'s states: a vertex of
+/// `start` (the model's vertices with a level's triangles) none of whose triangles
+/// faces `eye` is back-facing, any other keeps its state. Equal to
+/// [`vertex_states_captured`] of `start` in the same capture.
+pub fn with_front_facing(
+    if_front: &[VertexState],
+    start: &Mesh,
+    transform: Mat4,
+    eye: Vec3,
+) -> Vec<VertexState> {
+    let world = world_positions(start, transform);
+    let front = front_facing_vertices_of(&world, &start.triangles, eye);
+    front
+        .iter()
+        .zip(if_front)
+        .map(|(&f, &s)| if f { s } else { VertexState::BackFacing })
+        .collect()
+}
+
+/// Steps 2–3 of [`vertex_states_captured`] for the vertices at `world` whose
+/// `front_facing` flag is given.
+fn states_gated(
+    world: &[Vec3],
+    front_facing_vertex: &[bool],
+    captured_triangles: &[[u32; 3]],
+    capture: &Capture,
+    classes: &[PixelClass],
+    object_id: u32,
+    depth_tolerance: DepthTolerance,
+) -> Vec<VertexState> {
+    // Step 2: depth-buffer visibility and the pixel each visible vertex projects to.
+    let visibility = depth_visibility_of(
+        world,
+        front_facing_vertex,
         captured_triangles,
         capture,
         object_id,
         depth_tolerance,
     );
-
     // Step 3: combine.
     front_facing_vertex
         .iter()

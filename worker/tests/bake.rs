@@ -180,6 +180,95 @@ fn demo_bake_from_lod_chains_is_valid_deterministic_and_close() {
     assert!(with > without - 1.0, "{with} vs {without}");
 }
 
+/// Issue 27 item 3 (`worker::capture_memo`): one capture serves every start mesh.
+/// The states a memoised capture yields for a level of the model's LOD chain (the
+/// states as if front-facing, then the level's own front-facing test) equal the
+/// states computed on the capture for that level, for every level, the full mesh,
+/// and eyes around and inside the object's box.
+#[test]
+fn memoised_capture_states_equal_each_levels_own() {
+    use worker::classify::{classify_objects, WindowDepth};
+    use worker::lod_chain::LodChain;
+    use worker::visibility::DepthTolerance;
+    use worker::weights::{vertex_states_captured, vertex_states_if_front, with_front_facing};
+    let (scene, _, _, _) = demo();
+    let tol = DepthTolerance::default();
+    let mut compared = 0;
+    for instance in [0u32, 3, 7] {
+        let item = DrawItem::instance(&scene, instance);
+        let model = &scene.models[scene.instances[instance as usize].model as usize];
+        let chain = LodChain::build(model).unwrap();
+        let (lo, hi) = scene.instance_bounds(instance as usize);
+        let mid = (lo + hi) * 0.5;
+        let eyes = [
+            mid + Vec3::new(60.0, 25.0, -40.0),
+            mid + Vec3::new(-35.0, 8.0, 20.0),
+            mid + Vec3::new(5.0, 90.0, 5.0),
+        ];
+        for eye in eyes {
+            let cap = worker::capture::capture_objects(eye, &[item], 256).unwrap();
+            let classes = classify_objects(
+                &cap.capture,
+                &[instance],
+                3.4e-4,
+                1.28e-4,
+                WindowDepth::paper(50.0),
+            );
+            let if_front = vertex_states_if_front(
+                item.mesh,
+                item.transform,
+                &cap.capture,
+                &classes,
+                instance,
+                tol,
+            );
+            let levels = std::iter::once(item.mesh).chain(chain.levels.iter().map(|l| &l.mesh));
+            for mesh in levels {
+                let own = vertex_states_captured(
+                    mesh,
+                    &item.mesh.triangles,
+                    item.transform,
+                    &cap.capture,
+                    &classes,
+                    instance,
+                    tol,
+                );
+                assert_eq!(with_front_facing(&if_front, mesh, item.transform, eye), own);
+                compared += 1;
+            }
+        }
+    }
+    assert!(compared >= 9 * 2, "{compared} comparisons");
+}
+
+/// Issue 27 item 3: a cell baked with a memo that other cells filled (its
+/// neighbours' captures from shared centres are hits) is the cell baked alone,
+/// byte for byte, and the memo answered some of its lookups.
+#[test]
+fn a_cell_after_its_neighbours_is_the_cell_baked_alone() {
+    let (scene, grid, cells, params, cell) = demo_at_busy_cell();
+    let fp = [7u8; 32];
+    let reuse = worker::bake::ProxyReuse::new();
+    let bake = |chains: &LodChains, c: u32| {
+        bake_cell_with(&scene, chains, &reuse, &grid, c, &cells, &params, None)
+            .unwrap()
+            .to_pack(fp)
+            .unwrap()
+            .encode()
+            .unwrap()
+    };
+    let (alone, _) = LodChains::prepare(&scene, None).unwrap();
+    let expected = bake(&alone, cell);
+    let (shared, _) = LodChains::prepare(&scene, None).unwrap();
+    for n in grid.neighbours(cell) {
+        bake(&shared, n);
+    }
+    let (hits_before, _) = shared.captures().counts();
+    assert_eq!(bake(&shared, cell), expected);
+    let (hits, _) = shared.captures().counts();
+    assert!(hits > hits_before, "no lookup of the cell was a hit");
+}
+
 /// Issue 32 item 2: a LOD chain in `lod/` rewritten with other valid vertex ids and
 /// re-sealed (its checksum recomputed, as `LodChainFile::encode` does) was loaded and
 /// changed the cell's pack. A chain is now checked against the model it names
