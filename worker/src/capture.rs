@@ -501,7 +501,7 @@ mod tests {
                     }
                     if n > 0 {
                         for k in 0..3 {
-                            rgba[o * 4 + k] = ((sum[k] + n / 2) / n) as u8;
+                            rgba[o * 4 + k] = (sum[k] + n / 2).checked_div(n).unwrap_or(0) as u8;
                         }
                         filled[o] = true;
                     }

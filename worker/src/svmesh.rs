@@ -402,8 +402,10 @@ enum Shot {
     /// The memo's capture and the start mesh's states in it.
     One(std::sync::Arc<Captured>, Vec<VertexState>),
     Cluster(
-        crate::capture::ObjectCapture,
-        Vec<crate::classify::PixelClass>,
+        Box<(
+            crate::capture::ObjectCapture,
+            Vec<crate::classify::PixelClass>,
+        )>,
     ),
 }
 
@@ -452,7 +454,7 @@ pub fn derive_svmesh(
                 WindowDepth::paper(settings.cell_size),
             );
             times.weights_ms += ms_since(t);
-            Shot::Cluster(capture, classes)
+            Shot::Cluster(Box::new((capture, classes)))
         }
     };
 
@@ -467,10 +469,10 @@ pub fn derive_svmesh(
         let mesh = start.mesh;
         let states = match &shot {
             Shot::One(_, states) => states.clone(),
-            Shot::Cluster(capture, classes) => start.vertex_states(
+            Shot::Cluster(shot) => start.vertex_states(
                 item,
-                &capture.capture,
-                classes,
+                &shot.0.capture,
+                &shot.1,
                 item.object_id,
                 settings.depth_tolerance,
             ),
@@ -483,7 +485,7 @@ pub fn derive_svmesh(
         let areas = projected_areas_px(mesh, item.transform, &[centre], settings.image_res);
         tidy_selection_sized(&welded, &mut front, settings.speck_triangles, Some(&areas));
         let cluster_capture = match &shot {
-            Shot::Cluster(capture, _) => Some(capture),
+            Shot::Cluster(shot) => Some(&shot.0),
             Shot::One(..) => None,
         };
         let seen = cluster_capture.map(|capture| {
@@ -553,7 +555,10 @@ pub fn derive_svmesh(
     }
     let (view, covered_pixels) = match shot {
         Shot::One(captured, _) => (captured.texture.clone(), captured.covered_pixels),
-        Shot::Cluster(capture, _) => (capture.texture, capture.covered_pixels),
+        Shot::Cluster(shot) => {
+            let (capture, _) = *shot;
+            (capture.texture, capture.covered_pixels)
+        }
     };
     Ok(SvMesh {
         members,
