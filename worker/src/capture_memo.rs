@@ -36,8 +36,10 @@ use glam::Vec3;
 use std::collections::{HashMap, VecDeque};
 use std::sync::{Arc, Mutex};
 
-/// Bytes of states and textures the memo holds at most (per run).
-pub const MEMO_BYTES: usize = 96 << 20;
+/// Bytes of states and textures the memo holds at most (per run): a few jobs' worth
+/// (park-2m's cell-275 sample kept 6 MiB per 4-cell job), so that two jobs baking side
+/// by side find their neighbours' captures.
+pub const MEMO_BYTES: usize = 32 << 20;
 
 /// What a derivation reads from a single-object capture.
 #[derive(Debug)]
