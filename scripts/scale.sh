@@ -3,7 +3,7 @@
 # cell in the centre tile of park-2m tiled 3 × 3 (world-18m) and 7 × 7
 # (world-100m), baked with --cells (its job and every far-field group of its
 # chain), then 16 views within 15 units of its centre compared with full geometry
-# (player compare --reference-ss 1, 512²). Prints one JSON line per bake
+# (player compare --reference-ss $REF_SS, default 1; 512²). Prints one JSON line per bake
 # (scripts/scale-cell.py: bytes and bake ms with the groups amortised over their
 # cells, triangles, draw calls, PSNR).
 #   scripts/scale.sh [OUT] [--set key=value ...]   (binaries: $BIN or target/release)
@@ -23,6 +23,6 @@ for spec in $scenes; do
         "$bin/pipeline" run "manifests/$name.ron" --cells "$cell" --out "$dir" "$@" \
         >"$dir.bake.log" 2>&1
     "$bin/player" compare "$dir" --path "manifests/paths/$name-cell-$cell.ron" \
-        --reference-ss 1 --no-crossings --json >"$dir.compare.json" 2>"$dir.compare.log"
+        --reference-ss "${REF_SS:-1}" --no-crossings --json >"$dir.compare.json" 2>"$dir.compare.log"
     echo "{\"scene\": \"$name\", \"cell\": $cell, \"bake\": \"$(tail -1 "$dir.bake.log")\", \"figures\": $(scripts/scale-cell.py "$dir" "$cell" "$dir.compare.json")}"
 done

@@ -21,6 +21,7 @@ mod upload;
 
 pub use frame_model::DrawList;
 use frame_model::{FramePlan, Span};
+pub use upload::ViewInfo;
 
 use crate::camera::Camera;
 use crate::metrics::srgb_to_linear;
@@ -161,6 +162,23 @@ pub struct GpuProxy {
     pub view_slots: usize,
     /// World bounds of its vertices (the draw order: nearest first).
     pub bounds: crate::camera::Aabb,
+    /// Its views in one texture, drawn with `fs_proxy_atlas` (issue 30 item 7); `None`:
+    /// one texture per view.
+    atlas: Option<Atlas>,
+}
+
+/// A mesh proxy's views packed into one texture (issue 30 item 7): a fragment then
+/// samples only the two views it blends (shader.wgsl `fs_proxy_atlas`), where with a
+/// texture per view a CPU rasterizer samples every slot the shader may read. Made
+/// for a mesh proxy of two or more views that share one encoding and fit the
+/// device's largest texture side; the other proxies keep a texture per view.
+struct Atlas {
+    texture: wgpu::Texture,
+    view: wgpu::TextureView,
+    format: wgpu::TextureFormat,
+    /// Per view: its rectangle (x, y, width, height) in texels; x and y are
+    /// multiples of 4 (BC blocks).
+    rects: Vec<[u32; 4]>,
 }
 
 impl GpuProxy {
@@ -208,6 +226,8 @@ pub struct Renderer {
     /// Mesh proxies (`fs_proxy_mesh`, never discards: early depth test possible),
     /// one per `setup::MESH_VIEW_SLOTS` entry (`GpuProxy::view_slots`).
     proxy_mesh_pipelines: [wgpu::RenderPipeline; setup::MESH_VIEW_SLOTS.len()],
+    /// Mesh proxies with an atlas (`fs_proxy_atlas`, [`Atlas`]).
+    proxy_atlas_pipeline: wgpu::RenderPipeline,
     /// Layout of the lit pipeline's group 2 (albedo texture + sampler).
     albedo_bgl: wgpu::BindGroupLayout,
     /// Group 2 of untextured models and the ground: a white texel.
@@ -332,6 +352,7 @@ impl Renderer {
             ground_pipeline: pipelines.ground,
             proxy_pipeline: pipelines.proxy,
             proxy_mesh_pipelines: pipelines.proxy_mesh,
+            proxy_atlas_pipeline: pipelines.proxy_atlas,
             albedo_bgl,
             white_albedo: shared.white_albedo,
             globals: shared.globals,
@@ -628,20 +649,22 @@ impl Renderer {
 
     /// The plan's proxies in its order (nearest first, so that the depth test
     /// rejects more hidden proxy fragments before they are shaded): mesh proxies
-    /// with a discard-free pipeline (the one for their number of views), impostor
-    /// layers with the other, a pipeline switch only where that changes. Returns the
-    /// draw calls.
+    /// with a discard-free pipeline (the atlas one for proxies with an [`Atlas`],
+    /// else the one for their number of views), impostor layers with the other, a
+    /// pipeline switch only where that changes. Returns the draw calls.
     fn draw_proxies(&self, pass: &mut wgpu::RenderPass<'_>, plan: &FramePlan<'_>) -> u64 {
         let mut draws = 0u64;
         let frame_indices = self.frame_indices.as_ref();
         let mut bound = None;
         for d in &plan.proxies {
             let p = d.proxy;
-            let key = (p.layered, p.view_slots);
+            let key = (p.layered, p.atlas.is_some(), p.view_slots);
             if bound != Some(key) {
                 bound = Some(key);
                 pass.set_pipeline(if p.layered {
                     &self.proxy_pipeline
+                } else if p.atlas.is_some() {
+                    &self.proxy_atlas_pipeline
                 } else {
                     &self.proxy_mesh_pipelines[p.view_slots]
                 });

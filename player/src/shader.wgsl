@@ -113,8 +113,11 @@ fn fs_ground(i: LitOut) -> @location(0) vec4<f32> {
 struct Proxy {
     tex_from_world: array<mat4x4<f32>, MAX_VIEWS>,
     view_eye: array<vec4<f32>, MAX_VIEWS>,
-    // x: number of views; y: bit i = view i's colours are premultiplied by coverage
+    // x: number of views; y: bit i = view i's colours are premultiplied by coverage;
+    // z, w: the atlas's width and height in texels (0: one texture per view).
     counts: vec4<u32>,
+    // With an atlas (t0 holds every view): view i's rectangle in it, as fractions.
+    rects: array<vec4<f32>, MAX_VIEWS>,
 };
 @group(1) @binding(0) var<uniform> p: Proxy;
 @group(1) @binding(1) var samp: sampler;
@@ -366,14 +369,58 @@ fn mesh_colour(i: ProxyOut) -> vec4<f32> {
     if best1 != MAX_VIEWS && uv1.z != 0.0 {
         c1 = captured(best1, s1);
     }
+    return blend(lit, c0, c1, i.weights);
+}
+
+// The two views' texels c0 and c1 (alpha 0: no data) blended with `weights` where
+// both have data, else the one that has, else lit.
+fn blend(lit: vec3<f32>, c0: vec4<f32>, c1: vec4<f32>, weights: vec2<f32>) -> vec4<f32> {
     var w0 = c0.a;
     var w1 = c1.a;
     if w0 > 0.0 && w1 > 0.0 {
-        w0 = i.weights.x;
-        w1 = i.weights.y;
+        w0 = weights.x;
+        w1 = weights.y;
     }
     if w0 + w1 <= 0.0 {
         return vec4<f32>(lit, 1.0);
     }
     return vec4<f32>((c0.rgb * w0 + c1.rgb * w1) / (w0 + w1), 1.0);
+}
+
+// View i's texel at its own coordinates uv ∈ [0,1]² from the atlas t0 (issue 30
+// item 7): uv mapped into the view's rectangle and kept half a texel inside it, so
+// the bilinear taps never reach a neighbouring view — the same taps as the view's
+// own clamped texture gives.
+fn atlas_texel(i: u32, uv: vec2<f32>) -> vec4<f32> {
+    let r = p.rects[i];
+    let half = vec2<f32>(0.5) / vec2<f32>(f32(p.counts.z), f32(p.counts.w));
+    let a = clamp(r.xy + uv * r.zw, r.xy + half, r.xy + r.zw - half);
+    return textureSampleLevel(t0, samp, a, 0.0);
+}
+
+// A mesh proxy whose views share one atlas texture (t0): a fragment samples only the
+// two views it blends, where the per-view pipelines sample every slot (a CPU
+// rasterizer runs each branch under lane masks). Never discards, like fs_proxy_mesh.
+@fragment
+fn fs_proxy_atlas(i: ProxyOut) -> @location(0) vec4<f32> {
+    let lit = shade(i.albedo, i.normal);
+    if g.debug.x != 0u {
+        return vec4<f32>(lit, 1.0);
+    }
+    let best0 = i.views & 0xffu;
+    let best1 = i.views >> 8u;
+    if best0 == MAX_VIEWS {
+        return vec4<f32>(lit, 1.0);
+    }
+    let uv0 = view_uv(i.tc0);
+    let uv1 = view_uv(i.tc1);
+    var c0 = vec4<f32>(0.0);
+    if uv0.z != 0.0 {
+        c0 = captured(best0, atlas_texel(best0, uv0.xy));
+    }
+    var c1 = vec4<f32>(0.0);
+    if best1 != MAX_VIEWS && uv1.z != 0.0 {
+        c1 = captured(best1, atlas_texel(best1, uv1.xy));
+    }
+    return blend(lit, c0, c1, i.weights);
 }

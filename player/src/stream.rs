@@ -49,7 +49,7 @@
 use crate::bake::{load_cell, Bake, PreparedCell};
 use crate::camera::{Aabb, Camera};
 use crate::gpu::{GpuProxy, Renderer};
-use format::pack::{BasePack, Index, TextureEncoding};
+use format::pack::{BasePack, Index};
 use glam::{Vec2, Vec3};
 use std::cmp::Ordering;
 use std::collections::{BTreeMap, BTreeSet, BinaryHeap, VecDeque};
@@ -625,10 +625,16 @@ impl Streamer {
                 let mut members = Vec::with_capacity(cell.proxies.len());
                 let mut pending = BTreeMap::new();
                 for (pi, p) in cell.proxies.into_iter().enumerate() {
-                    let views: Vec<([f32; 16], [f32; 3], bool)> = p
+                    let views: Vec<crate::gpu::ViewInfo> = p
                         .views
                         .iter()
-                        .map(|v| (v.matrix, v.eye, v.encoding == TextureEncoding::Bc1))
+                        .map(|v| crate::gpu::ViewInfo {
+                            matrix: v.matrix,
+                            eye: v.eye,
+                            width: v.width,
+                            height: v.height,
+                            encoding: v.encoding,
+                        })
                         .collect();
                     proxies.push(renderer.create_proxy(&p.vertices, &views));
                     bounds.push(p.bounds);

@@ -166,10 +166,15 @@ const _: () = assert!(ProxyVertex::ATTRIBUTES[6].offset == offset_of!(ProxyVerte
 pub struct ProxyUniform {
     pub tex_from_world: [[f32; 16]; MAX_VIEWS],
     pub view_eye: [[f32; 4]; MAX_VIEWS],
+    /// x: views; y: bit i = view i premultiplied by coverage; z, w: the atlas's
+    /// width and height in texels (0: no atlas, one texture per view).
     pub counts: [u32; 4],
+    /// With an atlas (issue 30 item 7): view i's rectangle in it, (x, y, w, h) as
+    /// fractions of the atlas's sides.
+    pub rects: [[f32; 4]; MAX_VIEWS],
 }
 
-const _: () = assert!(size_of::<ProxyUniform>() == 80 * MAX_VIEWS + 16);
+const _: () = assert!(size_of::<ProxyUniform>() == 96 * MAX_VIEWS + 16);
 
 /// The frame's uniform block (group 0, binding 0).
 #[repr(C)]

@@ -151,6 +151,10 @@ pub(super) struct Pipelines {
     /// entry of [`MESH_VIEW_SLOTS`], the texture slots its fragment shader reads
     /// (shader.wgsl `VIEW_SLOTS`).
     pub proxy_mesh: [wgpu::RenderPipeline; MESH_VIEW_SLOTS.len()],
+    /// Mesh proxies whose views share one atlas texture (issue 30 item 7):
+    /// `vs_proxy` / `fs_proxy_atlas`, which samples only the two views it blends and
+    /// never discards.
+    pub proxy_atlas: wgpu::RenderPipeline,
 }
 
 /// Step 3: the shader module and the pipelines. All draw counter-clockwise
@@ -249,6 +253,12 @@ pub(super) fn pipelines(
                 &[("VIEW_SLOTS", slots as f64)],
             )
         }),
+        proxy_atlas: pipeline(
+            "proxy atlas",
+            &proxy_layout,
+            ("vs_proxy", "fs_proxy_atlas"),
+            &[Some(ProxyVertex::layout())],
+        ),
     }
 }
 

@@ -6,7 +6,9 @@
 //! all its views are there.
 
 use super::setup::{self, albedo_bind_group};
-use super::{texture_2d, GpuClusters, GpuLod, GpuModel, GpuModels, GpuProxy, Renderer, MAX_VIEWS};
+use super::{
+    texture_2d, Atlas, GpuClusters, GpuLod, GpuModel, GpuModels, GpuProxy, Renderer, MAX_VIEWS,
+};
 use crate::vertex::{ModelVertex, ProxyUniform, ProxyVertex};
 use bytemuck::Zeroable;
 use format::pack::{BasePack, Texture, TextureEncoding};
@@ -180,22 +182,43 @@ impl Renderer {
         }
     }
 
-    /// Creates a proxy's vertex and uniform buffers; textures come later through
-    /// [`Renderer::upload_view_texture`]. `views`: each view's world → texture matrix,
-    /// eye, and whether its colours are premultiplied by coverage (BC1 textures:
-    /// punch-through alpha in format 4, fully opaque before, where it changes nothing).
-    pub fn create_proxy(
-        &self,
-        vertices: &[ProxyVertex],
-        views: &[([f32; 16], [f32; 3], bool)],
-    ) -> GpuProxy {
+    /// Creates a proxy's vertex and uniform buffers, and its [`Atlas`] where it gets
+    /// one; textures come later through [`Renderer::upload_view_texels`]. `views`:
+    /// each view's world → texture matrix, eye, size and encoding (BC1 colours are
+    /// premultiplied by coverage: punch-through alpha in format 4, fully opaque
+    /// before, where it changes nothing).
+    pub fn create_proxy(&self, vertices: &[ProxyVertex], views: &[ViewInfo]) -> GpuProxy {
         let mut u = ProxyUniform::zeroed();
-        for (i, (m, eye, premultiplied)) in views.iter().take(MAX_VIEWS).enumerate() {
-            u.tex_from_world[i] = *m;
-            u.view_eye[i] = [eye[0], eye[1], eye[2], 1.0];
-            u.counts[1] |= u32::from(*premultiplied) << i;
+        for (i, v) in views.iter().take(MAX_VIEWS).enumerate() {
+            u.tex_from_world[i] = v.matrix;
+            u.view_eye[i] = [v.eye[0], v.eye[1], v.eye[2], 1.0];
+            u.counts[1] |= u32::from(v.encoding == TextureEncoding::Bc1) << i;
         }
         u.counts[0] = views.len().min(MAX_VIEWS) as u32;
+        let layered = vertices
+            .iter()
+            .any(|v| v.kind == format::pack::ProxyKind::LayeredImpostor as u32);
+        let atlas = if layered {
+            None
+        } else {
+            self.create_atlas(views)
+        };
+        let mut texture_bytes = 0;
+        if let Some(a) = &atlas {
+            let size = a.texture.size();
+            u.counts[2] = size.width;
+            u.counts[3] = size.height;
+            for (r, rect) in u.rects.iter_mut().zip(&a.rects) {
+                let (w, h) = (size.width as f32, size.height as f32);
+                *r = [
+                    rect[0] as f32 / w,
+                    rect[1] as f32 / h,
+                    rect[2] as f32 / w,
+                    rect[3] as f32 / h,
+                ];
+            }
+            texture_bytes = atlas_bytes(a.format, size.width, size.height) as u64;
+        }
         // Issue 17: triangles grouped by normal cluster for the per-frame test.
         let (vertices, clusters) =
             crate::patches::cluster_proxy_vertices(vertices, self.options.tile_size());
@@ -219,16 +242,15 @@ impl Renderer {
             textures: vec![None; views.len().min(MAX_VIEWS)],
             bind_group: None,
             lit_bind_group,
-            texture_bytes: 0,
+            texture_bytes,
             vertex_bytes: std::mem::size_of_val(vertices) as u64,
             clusters,
             view_slots: setup::MESH_VIEW_SLOTS
                 .iter()
                 .position(|&n| n as usize >= views.len().min(MAX_VIEWS))
                 .unwrap_or(setup::MESH_VIEW_SLOTS.len() - 1),
-            layered: vertices
-                .iter()
-                .any(|v| v.kind == format::pack::ProxyKind::LayeredImpostor as u32),
+            layered,
+            atlas,
             bounds: vertices
                 .iter()
                 .fold(crate::camera::Aabb::EMPTY, |mut b, v| {
@@ -252,6 +274,9 @@ impl Renderer {
         encoding: TextureEncoding,
         data: &[u8],
     ) {
+        if proxy.atlas.is_some() {
+            return self.write_atlas(proxy, view, (width, height), encoding, data);
+        }
         let format = match encoding {
             TextureEncoding::Bc1 => wgpu::TextureFormat::Bc1RgbaUnormSrgb,
             TextureEncoding::Bc3 => wgpu::TextureFormat::Bc3RgbaUnormSrgb,
@@ -351,6 +376,142 @@ impl Renderer {
         self.try_bind(proxy);
     }
 
+    /// The [`Atlas`] of a mesh proxy with `views`, where it gets one: two to
+    /// [`MAX_VIEWS`] views of one encoding with sides of at least 1 (multiples of 4
+    /// for BC blocks), packed within the device's largest texture side. BC1/BC3 as
+    /// they are where the device samples them natively, else RGBA8 (decoded on the
+    /// CPU at upload, as the per-view path does). Every texel starts transparent
+    /// ("nothing captured"), so a view whose texels cannot be used samples as a
+    /// missing one does.
+    fn create_atlas(&self, views: &[ViewInfo]) -> Option<Atlas> {
+        let first = views.first()?.encoding;
+        if views.len() < 2
+            || views.len() > MAX_VIEWS
+            || views
+                .iter()
+                .any(|v| v.encoding != first || v.width == 0 || v.height == 0)
+        {
+            return None;
+        }
+        let native = self.options.bc_textures;
+        let format = match first {
+            TextureEncoding::Bc1 if native => wgpu::TextureFormat::Bc1RgbaUnormSrgb,
+            TextureEncoding::Bc3 if native => wgpu::TextureFormat::Bc3RgbaUnormSrgb,
+            TextureEncoding::Bc1 | TextureEncoding::Bc3 | TextureEncoding::Rgba8 => {
+                wgpu::TextureFormat::Rgba8UnormSrgb
+            }
+            _ => return None,
+        };
+        if first.is_block() && views.iter().any(|v| v.width % 4 != 0 || v.height % 4 != 0) {
+            return None;
+        }
+        let sizes: Vec<(u32, u32)> = views.iter().map(|v| (v.width, v.height)).collect();
+        let max = self.device.limits().max_texture_dimension_2d;
+        let ((width, height), rects) = pack_atlas(&sizes, max)?;
+        let clear: Vec<u8> = match format {
+            wgpu::TextureFormat::Bc1RgbaUnormSrgb => {
+                TRANSPARENT_BC1.repeat((width / 4 * (height / 4)) as usize)
+            }
+            _ => vec![0; atlas_bytes(format, width, height)],
+        };
+        let texture = self.device.create_texture_with_data(
+            &self.queue,
+            &texture_2d(
+                "capture atlas",
+                (width, height),
+                format,
+                wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+            ),
+            wgpu::util::TextureDataOrder::LayerMajor,
+            &clear,
+        );
+        let view = texture.create_view(&Default::default());
+        Some(Atlas {
+            texture,
+            view,
+            format,
+            rects,
+        })
+    }
+
+    /// Writes view `view`'s texels into the proxy's [`Atlas`] (decoding BC blocks to
+    /// RGBA8 where the atlas holds RGBA8) and binds the proxy once all its views are
+    /// there. Texels that do not match the view's rectangle or do not decode are
+    /// left transparent, with a warning: the view samples as missing.
+    fn write_atlas(
+        &self,
+        proxy: &mut GpuProxy,
+        view: usize,
+        (width, height): (u32, u32),
+        encoding: TextureEncoding,
+        data: &[u8],
+    ) {
+        let Some(atlas) = &proxy.atlas else {
+            return;
+        };
+        let Some(&[x, y, w, h]) = atlas.rects.get(view) else {
+            return;
+        };
+        let texture = Texture {
+            width,
+            height,
+            encoding,
+            data: data.to_vec(),
+        };
+        let texels: Result<Vec<u8>, String> = if (width, height) != (w, h) {
+            Err(format!("{width}x{height}, the atlas holds {w}x{h}"))
+        } else if atlas.format == wgpu::TextureFormat::Rgba8UnormSrgb {
+            if encoding == TextureEncoding::Rgba8 {
+                (data.len() == w as usize * h as usize * 4)
+                    .then(|| data.to_vec())
+                    .ok_or_else(|| format!("{} bytes for {w}x{h} RGBA8", data.len()))
+            } else {
+                texture
+                    .validate()
+                    .map_err(|e| e.to_string())
+                    .and_then(|()| texture.to_rgba8().map_err(|e| e.to_string()))
+            }
+        } else {
+            texture
+                .validate()
+                .map_err(|e| e.to_string())
+                .map(|()| texture.data)
+        };
+        match texels {
+            Ok(bytes) => {
+                let (bytes_per_row, rows) = match atlas.format {
+                    wgpu::TextureFormat::Bc1RgbaUnormSrgb => (w / 4 * 8, h / 4),
+                    wgpu::TextureFormat::Bc3RgbaUnormSrgb => (w / 4 * 16, h / 4),
+                    _ => (w * 4, h),
+                };
+                self.queue.write_texture(
+                    wgpu::TexelCopyTextureInfo {
+                        texture: &atlas.texture,
+                        mip_level: 0,
+                        origin: wgpu::Origin3d { x, y, z: 0 },
+                        aspect: wgpu::TextureAspect::All,
+                    },
+                    &bytes,
+                    wgpu::TexelCopyBufferLayout {
+                        offset: 0,
+                        bytes_per_row: Some(bytes_per_row),
+                        rows_per_image: Some(rows),
+                    },
+                    wgpu::Extent3d {
+                        width: w,
+                        height: h,
+                        depth_or_array_layers: 1,
+                    },
+                );
+            }
+            Err(what) => eprintln!(
+                "player: warning: capture texture not uploadable ({what}); that view is drawn as missing"
+            ),
+        }
+        proxy.textures[view] = Some(atlas.view.clone());
+        self.try_bind(proxy);
+    }
+
     fn try_bind(&self, p: &mut GpuProxy) {
         if p.bind_group.is_some() || p.textures.iter().any(|t| t.is_none()) {
             return;
@@ -390,5 +551,141 @@ impl Renderer {
             layout: &self.proxy_bgl,
             entries: &entries,
         })
+    }
+}
+
+/// What [`Renderer::create_proxy`] needs of a view before its texels arrive.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ViewInfo {
+    /// World → texture matrix.
+    pub matrix: [f32; 16],
+    /// The capture's eye.
+    pub eye: [f32; 3],
+    pub width: u32,
+    pub height: u32,
+    pub encoding: TextureEncoding,
+}
+
+/// A BC1 block that decodes to transparent black: both end colours 0 (so the block
+/// is in three-colour mode) and every index 3 (transparent). An all-zero BC1 block
+/// would be opaque black; all-zero BC3 and RGBA8 texels are transparent already.
+const TRANSPARENT_BC1: [u8; 8] = [0, 0, 0, 0, 0xff, 0xff, 0xff, 0xff];
+
+/// Bytes of a `width` × `height` texture of `format` (RGBA8, BC1 or BC3).
+fn atlas_bytes(format: wgpu::TextureFormat, width: u32, height: u32) -> usize {
+    let blocks = (width / 4 * (height / 4)) as usize;
+    match format {
+        wgpu::TextureFormat::Bc1RgbaUnormSrgb => blocks * 8,
+        wgpu::TextureFormat::Bc3RgbaUnormSrgb => blocks * 16,
+        _ => width as usize * height as usize * 4,
+    }
+}
+
+/// An atlas's size and each view's rectangle (x, y, width, height) in it.
+pub(crate) type PackedAtlas = ((u32, u32), Vec<[u32; 4]>);
+
+/// Places rectangles of `sizes` (width, height) in shelves, tallest first (ties by
+/// index), on rows about as wide as the square of their total area; every corner
+/// and every row height a multiple of 4 (BC blocks). Returns the atlas's size and
+/// each rectangle (x, y, width, height) in the order given; `None` when a side
+/// would exceed `max` or nothing is given.
+pub(crate) fn pack_atlas(sizes: &[(u32, u32)], max: u32) -> Option<PackedAtlas> {
+    let r4 = |v: u32| v.div_ceil(4) * 4;
+    let area: f64 = sizes
+        .iter()
+        .map(|&(w, h)| r4(w) as f64 * r4(h) as f64)
+        .sum();
+    let widest = sizes.iter().map(|&(w, _)| r4(w)).max()?;
+    let row_width = widest.max(r4(area.sqrt().ceil() as u32));
+    let mut order: Vec<usize> = (0..sizes.len()).collect();
+    order.sort_by_key(|&i| (std::cmp::Reverse(sizes[i].1), i));
+    let (mut x, mut y, mut row, mut width) = (0u32, 0u32, 0u32, 0u32);
+    let mut rects = vec![[0u32; 4]; sizes.len()];
+    for i in order {
+        let (w, h) = sizes[i];
+        if x > 0 && x + r4(w) > row_width {
+            y += row;
+            x = 0;
+            row = 0;
+        }
+        rects[i] = [x, y, w, h];
+        x += r4(w);
+        row = row.max(r4(h));
+        width = width.max(x);
+    }
+    let height = y + row;
+    (width > 0 && height > 0 && width <= max && height <= max).then_some(((width, height), rects))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{pack_atlas, TRANSPARENT_BC1};
+    use format::pack::{Texture, TextureEncoding};
+
+    /// The atlas's clear texels decode as "nothing captured" (alpha 0) in every
+    /// format it is made in.
+    #[test]
+    fn atlas_clear_blocks_decode_transparent() {
+        for (encoding, block) in [
+            (TextureEncoding::Bc1, TRANSPARENT_BC1.to_vec()),
+            (TextureEncoding::Bc3, vec![0u8; 16]),
+        ] {
+            let t = Texture {
+                width: 8,
+                height: 4,
+                encoding,
+                data: block.repeat(2),
+            };
+            let rgba = t.to_rgba8().unwrap();
+            assert_eq!(rgba.len(), 8 * 4 * 4);
+            assert!(rgba.chunks(4).all(|c| c[3] == 0), "{encoding:?}: {rgba:?}");
+        }
+        let opaque = Texture {
+            width: 4,
+            height: 4,
+            encoding: TextureEncoding::Bc1,
+            data: vec![0; 8],
+        };
+        assert!(opaque.to_rgba8().unwrap().chunks(4).all(|c| c[3] == 255));
+    }
+
+    /// Rectangles inside the atlas, on multiples of 4, never overlapping, each the
+    /// size asked; too large for the side limit: none.
+    #[test]
+    fn atlas_rectangles_are_disjoint_aligned_and_inside() {
+        let sizes = [
+            (64, 32),
+            (20, 100),
+            (4, 4),
+            (128, 8),
+            (36, 36),
+            (8, 60),
+            (100, 100),
+        ];
+        let ((w, h), rects) = pack_atlas(&sizes, 8192).unwrap();
+        assert_eq!(w % 4, 0);
+        assert_eq!(h % 4, 0);
+        for (k, (r, s)) in rects.iter().zip(&sizes).enumerate() {
+            assert_eq!((r[2], r[3]), *s, "rect {k}");
+            assert!(r[0] % 4 == 0 && r[1] % 4 == 0, "rect {k} at {r:?}");
+            assert!(
+                r[0] + r[2] <= w && r[1] + r[3] <= h,
+                "rect {k} {r:?} outside {w}x{h}"
+            );
+            for (j, o) in rects.iter().enumerate().skip(k + 1) {
+                let apart = r[0] + r[2] <= o[0]
+                    || o[0] + o[2] <= r[0]
+                    || r[1] + r[3] <= o[1]
+                    || o[1] + o[3] <= r[1];
+                assert!(apart, "rects {k} {r:?} and {j} {o:?} overlap");
+            }
+        }
+        let used: u32 = sizes.iter().map(|(a, b)| a * b).sum();
+        assert!(
+            (w * h) as f64 <= 2.5 * used as f64,
+            "{w}x{h} for {used} texels"
+        );
+        assert_eq!(pack_atlas(&[(5000, 5000), (5000, 5000)], 8192), None);
+        assert_eq!(pack_atlas(&[], 8192), None);
     }
 }
