@@ -195,17 +195,19 @@ mod tests {
         }
     }
 
+    const SETTINGS: CaptureSettings = CaptureSettings {
+        image_res: 64,
+        t_c0: 1.0,
+        t_c1: 0.5,
+        cell_size: 10.0,
+        footprint_px: 1.0,
+        neighbourhood_px: 1,
+    };
+
     fn key(i: u32) -> CaptureKey {
         let mesh = format::Mesh::default();
         let item = DrawItem::whole(&mesh, 0);
-        let s = CaptureSettings {
-            image_res: 64,
-            t_c0: 1.0,
-            t_c1: 0.5,
-            cell_size: 10.0,
-            footprint_px: 1.0,
-            neighbourhood_px: 1,
-        };
+        let s = SETTINGS;
         CaptureKey::new([0; 32], &item, Vec3::new(i as f32, 0.0, 0.0), &s).unwrap()
     }
 
@@ -254,14 +256,7 @@ mod tests {
     fn keys_differ_in_every_input() {
         let mesh = format::Mesh::default();
         let item = DrawItem::whole(&mesh, 0);
-        let s = CaptureSettings {
-            image_res: 64,
-            t_c0: 1.0,
-            t_c1: 0.5,
-            cell_size: 10.0,
-            footprint_px: 1.0,
-            neighbourhood_px: 1,
-        };
+        let s = SETTINGS;
         let k = |hash: u8, item: &DrawItem, eye: Vec3, s: CaptureSettings| {
             CaptureKey::new([hash; 32], item, eye, &s)
         };
