@@ -145,7 +145,9 @@ export class HexGrid {
 export const MODEL_VERTEX = 36;
 export const INSTANCE_RAW = 128;
 export const PROXY_VERTEX = 60;
-export const PROXY_UNIFORM = 80 * 8 + 16;
+// matrices, eyes, counts, then the atlas rectangles (zero here: the viewer draws
+// every proxy with a texture per view, counts.z = counts.w = 0).
+export const PROXY_UNIFORM = 96 * 8 + 16;
 export const GLOBALS = 224;
 
 /** Inverse-transpose of the 3×3 part (columns), or the part itself when singular. */
