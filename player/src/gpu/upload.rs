@@ -452,30 +452,34 @@ impl Renderer {
         let Some(&[x, y, w, h]) = atlas.rects.get(view) else {
             return;
         };
-        let texture = Texture {
+        // Only the BC paths need an owned `Texture` (to validate or decode it).
+        let blocks = || Texture {
             width,
             height,
             encoding,
             data: data.to_vec(),
         };
-        let texels: Result<Vec<u8>, String> = if (width, height) != (w, h) {
+        let texels: Result<std::borrow::Cow<[u8]>, String> = if (width, height) != (w, h) {
             Err(format!("{width}x{height}, the atlas holds {w}x{h}"))
         } else if atlas.format == wgpu::TextureFormat::Rgba8UnormSrgb {
             if encoding == TextureEncoding::Rgba8 {
                 (data.len() == w as usize * h as usize * 4)
-                    .then(|| data.to_vec())
+                    .then_some(std::borrow::Cow::Borrowed(data))
                     .ok_or_else(|| format!("{} bytes for {w}x{h} RGBA8", data.len()))
             } else {
+                let texture = blocks();
                 texture
                     .validate()
                     .map_err(|e| e.to_string())
                     .and_then(|()| texture.to_rgba8().map_err(|e| e.to_string()))
+                    .map(std::borrow::Cow::Owned)
             }
         } else {
-            texture
+            // BC blocks as they are: validated, then written from the pack's bytes.
+            blocks()
                 .validate()
                 .map_err(|e| e.to_string())
-                .map(|()| texture.data)
+                .map(|()| std::borrow::Cow::Borrowed(data))
         };
         match texels {
             Ok(bytes) => {
