@@ -240,7 +240,16 @@ pub fn tile_patches(mesh: &Mesh, target: usize) -> Vec<Vec<u32>> {
         .map(|(i, t)| Reverse((t.area.to_bits(), i as u32, 0)))
         .collect();
     let mut live = n;
-    let mut live_ids: Vec<u32> = (0..n as u32).collect();
+    // Per normal cluster, its patches (ascending; compacted as patches die): a
+    // separate piece searches only its own cluster's.
+    let mut live_in: Vec<Vec<u32>> = Vec::new();
+    for (t, &c) in cluster.iter().enumerate() {
+        if live_in.len() <= c as usize {
+            live_in.resize(c as usize + 1, Vec::new());
+        }
+        live_in[c as usize].push(t as u32);
+    }
+    let mut live_count: Vec<usize> = live_in.iter().map(Vec::len).collect();
     while live > target.max(1) {
         let Some(Reverse((_, p, version))) = heap.pop() else {
             break;
@@ -261,16 +270,14 @@ pub fn tile_patches(mesh: &Mesh, target: usize) -> Vec<Vec<u32>> {
         };
         let q = if pt.neighbours.is_empty() {
             // A separate piece: the live patch of its cluster of least merged
-            // extension (`live_ids` is compacted as patches die).
-            if live_ids.len() > 2 * live {
-                live_ids.retain(|&q| tiles[q as usize].alive);
-            }
-            let c = cluster[pt.members[0] as usize];
-            pick(&mut live_ids.iter().copied().filter(|&q| {
-                q != p
-                    && tiles[q as usize].alive
-                    && cluster[tiles[q as usize].members[0] as usize] == c
-            }))
+            // extension.
+            let ids = &live_in[cluster[pt.members[0] as usize] as usize];
+            pick(
+                &mut ids
+                    .iter()
+                    .copied()
+                    .filter(|&q| q != p && tiles[q as usize].alive),
+            )
         } else {
             pick(&mut pt.neighbours.iter().copied())
         };
@@ -296,6 +303,11 @@ pub fn tile_patches(mesh: &Mesh, target: usize) -> Vec<Vec<u32>> {
             if x != q {
                 nb.insert(q);
             }
+        }
+        let c = cluster[taken.members[0] as usize] as usize;
+        live_count[c] -= 1;
+        if live_in[c].len() > 2 * live_count[c] + 16 {
+            live_in[c].retain(|&x| tiles[x as usize].alive);
         }
         let qt = &mut tiles[q as usize];
         qt.neighbours
