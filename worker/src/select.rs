@@ -529,19 +529,59 @@ pub fn box_filter(c: &Capture, f: u32) -> (usize, usize, Vec<[u8; 4]>, Vec<bool>
     let mut cov = Vec::with_capacity(ow * oh);
     for oy in 0..oh {
         for ox in 0..ow {
-            let mut sum = Vec3::ZERO;
-            let (mut n, mut covered) = (0.0f32, false);
-            for y in oy * f..((oy + 1) * f).min(h) {
-                for x in ox * f..((ox + 1) * f).min(w) {
-                    let q = y * w + x;
-                    sum += format::srgb::srgb8_to_linear(c.color[q]);
-                    n += 1.0;
+            let (ys, xs) = (oy * f..((oy + 1) * f).min(h), ox * f..((ox + 1) * f).min(w));
+            let mut covered = false;
+            let first = c.color[ys.start * w + xs.start];
+            let mut uniform = true;
+            for y in ys.clone() {
+                for q in y * w + xs.start..y * w + xs.end {
                     covered |= c.object_id[q] != BACKGROUND_ID;
+                    uniform &= c.color[q][..3] == first[..3];
                 }
             }
-            px.push(format::srgb::linear_to_srgb8(sum / n));
+            if uniform {
+                // Samples of one colour (the sky, flat shading) average to it:
+                // sRGB8 → linear → sRGB8 gives every byte back (format::srgb).
+                px.push([first[0], first[1], first[2], 255]);
+            } else {
+                let mut sum = Vec3::ZERO;
+                let mut n = 0.0f32;
+                for y in ys {
+                    for q in y * w + xs.start..y * w + xs.end {
+                        sum += format::srgb::srgb8_to_linear(c.color[q]);
+                        n += 1.0;
+                    }
+                }
+                px.push(format::srgb::linear_to_srgb8(sum / n));
+            }
             cov.push(covered);
         }
     }
     (ow, oh, px, cov)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `box_filter` copies a block of one colour instead of averaging it: the same
+    /// bytes as the average for every byte and every block size it meets (1 to 4
+    /// samples at `SUPERSAMPLE` = 2, partial blocks included).
+    #[test]
+    fn a_uniform_block_averages_to_its_own_colour() {
+        for c in 0..=255u8 {
+            let l = format::srgb::srgb8_to_linear([c, c, c, 255]);
+            for n in 1..=(SUPERSAMPLE * SUPERSAMPLE) {
+                let mut sum = Vec3::ZERO;
+                for _ in 0..n {
+                    sum += l;
+                }
+                assert_eq!(
+                    format::srgb::linear_to_srgb8(sum / n as f32),
+                    [c, c, c, 255],
+                    "byte {c}, {n} samples"
+                );
+            }
+        }
+    }
 }
