@@ -5,7 +5,7 @@ mod cmd;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
-use worker::cli::{bad_input, exit_code, restore_default_sigpipe, Failure};
+use worker::cli::{bad_input, exit_code, limit_malloc_arenas, restore_default_sigpipe, Failure};
 
 #[derive(Parser)]
 #[command(
@@ -43,6 +43,7 @@ enum Command {
 
 fn main() -> ExitCode {
     restore_default_sigpipe();
+    limit_malloc_arenas();
     exit_code(run(Cli::parse()))
 }
 

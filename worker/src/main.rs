@@ -7,7 +7,7 @@ mod cmd;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
-use worker::cli::{exit_code, restore_default_sigpipe, Failure};
+use worker::cli::{exit_code, limit_malloc_arenas, restore_default_sigpipe, Failure};
 
 #[derive(Parser)]
 #[command(
@@ -38,6 +38,7 @@ enum Command {
 
 fn main() -> ExitCode {
     restore_default_sigpipe();
+    limit_malloc_arenas();
     exit_code(run(Cli::parse()))
 }
 
