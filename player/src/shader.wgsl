@@ -19,7 +19,8 @@
 // The choice of views depends on the triangle only, so vs_proxy makes it (once per
 // vertex, not per pixel) and passes the two views' projective coordinates.
 //
-// Layered impostors (kind 4, paper 001): see impostor_layer below.
+// Layered impostors (kind 4, paper 001): see impostor_layer below (alone, or a
+// batch of up to MAX_VIEWS impostors sharing one atlas, one draw call).
 
 // AMBIENT, LIGHT, SRGB_* and MAX_VIEWS are not declared here: the player prepends
 // format::shading::wgsl_constants() (player::gpu::shader_source), their one home.
@@ -154,7 +155,8 @@ struct ProxyOut {
     // is exact and saves two matrix products per pixel.
     @location(6) tc0: vec4<f32>,
     @location(7) tc1: vec4<f32>,
-    // Layered impostors: the layer's depth codes (lo | hi << 8).
+    // Layered impostors: the layer's depth codes (lo | hi << 8) and its impostor's
+    // slot in a batch (bits 16–23; 0 alone).
     @location(8) @interpolate(flat) mask: u32,
 };
 
@@ -179,8 +181,10 @@ fn vs_proxy(v: ProxyIn) -> ProxyOut {
     }
     let world = vec4<f32>(v.pos, 1.0);
     if v.kind == 4u {
-        o.views = 0u | (MAX_VIEWS << 8u);
-        o.tc0 = p.tex_from_world[0] * world;
+        // Its impostor's view: slot k of a batch (mask bits 16–23), 0 alone.
+        let k = min((v.mask >> 16u) & 0xffu, MAX_VIEWS - 1u);
+        o.views = k | (MAX_VIEWS << 8u);
+        o.tc0 = p.tex_from_world[k] * world;
         o.tc1 = vec4<f32>(0.0);
         return o;
     }
@@ -276,11 +280,16 @@ fn take_slot(
     }
 }
 
-// Layered impostor (paper 001 §4; kind 4): a layer quad shows view 0's texels whose
-// alpha (a depth code, linear in the sRGB texture) lies in the layer's codes
+// Layered impostor (paper 001 §4; kind 4): a layer quad shows its impostor's texels
+// whose alpha (a depth code, linear in the sRGB texture) lies in the layer's codes
 // (mask = lo | hi << 8); the others are discarded (the alpha test), so the quad writes
 // depth only where the layer has surface. The code is read from the nearest texel,
-// the colour bilinearly (worker impostor.rs does the same on the CPU).
+// the colour bilinearly (worker impostor.rs does the same on the CPU). Alone (no
+// atlas: counts.z = 0) the impostor's texture is t0; in a batch (the player's
+// upload, gpu/upload.rs) t0 is an atlas and the impostor is slot k = mask bits
+// 16–23: its texture is rectangle k, the code texel the nearest one mapped into
+// it and the colour's bilinear taps kept inside it (atlas_texel), so the texels are
+// those of its own texture.
 fn impostor_layer(i: ProxyOut) -> vec4<f32> {
     let tc = i.tc0;
     if tc.w <= 0.0 {
@@ -290,9 +299,19 @@ fn impostor_layer(i: ProxyOut) -> vec4<f32> {
     if any(uv < vec2<f32>(0.0)) || any(uv >= vec2<f32>(1.0)) {
         discard;
     }
+    let k = i.views & 0xffu;
     let dims = textureDimensions(t0);
-    let texel = min(vec2<u32>(uv * vec2<f32>(dims)), dims - vec2<u32>(1u));
-    let code = u32(round(textureLoad(t0, texel, 0).a * 255.0));
+    var origin = vec2<u32>(0u);
+    var size = dims;
+    if p.counts.z != 0u {
+        let atlas = vec2<f32>(f32(p.counts.z), f32(p.counts.w));
+        let r = p.rects[k];
+        origin = vec2<u32>(round(r.xy * atlas));
+        size = max(vec2<u32>(round(r.zw * atlas)), vec2<u32>(1u));
+    }
+    let texel = origin + min(vec2<u32>(uv * vec2<f32>(size)), size - vec2<u32>(1u));
+    // Kept inside t0 (a batch drawn lit binds the 1 × 1 "nothing captured" texel).
+    let code = u32(round(textureLoad(t0, min(texel, dims - vec2<u32>(1u)), 0).a * 255.0));
     let lo = i.mask & 0xffu;
     let hi = (i.mask >> 8u) & 0xffu;
     if code == 0u || code < lo || code > hi {
@@ -300,6 +319,9 @@ fn impostor_layer(i: ProxyOut) -> vec4<f32> {
     }
     if g.debug.x != 0u {
         return vec4<f32>(shade(i.albedo, -i.normal), 1.0);
+    }
+    if p.counts.z != 0u {
+        return vec4<f32>(atlas_texel(k, uv).rgb, 1.0);
     }
     return vec4<f32>(textureSampleLevel(t0, samp, uv, 0.0).rgb, 1.0);
 }
