@@ -667,8 +667,9 @@ impl Renderer {
         draws
     }
 
-    /// The plan's proxies in its order (nearest first, so that the depth test
-    /// rejects more hidden proxy fragments before they are shaded): mesh proxies
+    /// The plan's proxies in its order (mesh proxies nearest first, then impostors
+    /// nearest first, so that the depth test rejects more hidden proxy fragments
+    /// before they are shaded; `frame_model::near_to_far`): mesh proxies
     /// with a discard-free pipeline (the atlas one for proxies with an [`Atlas`],
     /// else the one for their number of views), impostor layers with the other, a
     /// pipeline switch only where that changes. Returns the draw calls.
