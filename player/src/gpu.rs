@@ -8,7 +8,9 @@
 //! (counter-clockwise front faces, as the worker's rasterizer). Each model is uploaded
 //! once ([`GpuModels`]); originals are drawn as instanced draws, one per model, with
 //! per-instance transforms. Proxies are de-indexed world-space triangle lists carrying
-//! each triangle's view mask and centroid (flat attributes), one draw per proxy.
+//! each triangle's view mask and centroid (flat attributes), one draw per proxy;
+//! a pack's layered impostors are uploaded in batches of up to [`MAX_VIEWS`], each
+//! batch one proxy (one draw) with its members' textures in one atlas.
 //! This file owns the GPU resources and the submission of a frame; what a frame
 //! draws — the draw list, its counts and the plan the renderer uploads and encodes —
 //! is decided in `gpu/frame_model.rs` (re-exported here: [`DrawList`]), the fixed GPU
@@ -162,8 +164,9 @@ pub struct GpuProxy {
     pub view_slots: usize,
     /// World bounds of its vertices (the draw order: nearest first).
     pub bounds: crate::camera::Aabb,
-    /// Its views in one texture, drawn with `fs_proxy_atlas` (issue 30 item 7); `None`:
-    /// one texture per view.
+    /// Its views in one texture (issue 30 item 7): a mesh proxy's, drawn with
+    /// `fs_proxy_atlas`, or a batch of layered impostors' (slot k = member k's one
+    /// view), drawn with `fs_proxy`; `None`: one texture per view.
     atlas: Option<Atlas>,
 }
 
@@ -171,7 +174,9 @@ pub struct GpuProxy {
 /// samples only the two views it blends (shader.wgsl `fs_proxy_atlas`), where with a
 /// texture per view a CPU rasterizer samples every slot the shader may read. Made
 /// for a mesh proxy of two or more views that share one encoding and fit the
-/// device's largest texture side; the other proxies keep a texture per view.
+/// device's largest texture side, and for a batch of layered impostors of one
+/// encoding (each member's one view; `Renderer::create_pack_proxies`); the other
+/// proxies keep a texture per view.
 struct Atlas {
     texture: wgpu::Texture,
     view: wgpu::TextureView,
@@ -244,6 +249,8 @@ pub struct Renderer {
     coverage_alpha: bool,
     /// Colour by representation ([`Renderer::set_representation_colours`]).
     representation_colours: bool,
+    /// Layered impostors of one pack drawn in batches ([`Renderer::set_impostor_batches`]).
+    impostor_batches: bool,
     /// What it draws with ([`Renderer::options`]): the tile size of proxies'
     /// clusters, and `bc_textures`: upload BC1/BC3 capture textures as they are (the
     /// device has `TEXTURE_COMPRESSION_BC` and the options did not turn it off);
@@ -364,6 +371,7 @@ impl Renderer {
             frame_indices: None,
             coverage_alpha: false,
             representation_colours: false,
+            impostor_batches: true,
             options,
         })
     }
@@ -399,6 +407,14 @@ impl Renderer {
         self.representation_colours
     }
 
+    /// With `on` (the default), the layered impostors of a pack uploaded from now on
+    /// are drawn in batches of up to [`MAX_VIEWS`], one draw call each
+    /// ([`Renderer::create_pack_proxies`]); off, one draw call per impostor, as
+    /// before (for comparisons: the frames are the same).
+    pub fn set_impostor_batches(&mut self, on: bool) {
+        self.impostor_batches = on;
+    }
+
     /// A second renderer on this one's device with a `width × height` target (e.g. a
     /// supersampled reference) and the same options: models uploaded by either can
     /// be drawn by both.
@@ -410,6 +426,10 @@ impl Renderer {
             (width, height),
             &self.options,
         )
+        .map(|mut r| {
+            r.impostor_batches = self.impostor_batches;
+            r
+        })
     }
 
     pub fn adapter(&self) -> &AdapterSummary {
@@ -647,8 +667,9 @@ impl Renderer {
         draws
     }
 
-    /// The plan's proxies in its order (nearest first, so that the depth test
-    /// rejects more hidden proxy fragments before they are shaded): mesh proxies
+    /// The plan's proxies in its order (mesh proxies nearest first, then impostors
+    /// nearest first, so that the depth test rejects more hidden proxy fragments
+    /// before they are shaded; `frame_model::near_to_far`): mesh proxies
     /// with a discard-free pipeline (the atlas one for proxies with an [`Atlas`],
     /// else the one for their number of views), impostor layers with the other, a
     /// pipeline switch only where that changes. Returns the draw calls.

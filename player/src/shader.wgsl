@@ -19,7 +19,8 @@
 // The choice of views depends on the triangle only, so vs_proxy makes it (once per
 // vertex, not per pixel) and passes the two views' projective coordinates.
 //
-// Layered impostors (kind 4, paper 001): see impostor_layer below.
+// Layered impostors (kind 4, paper 001): see impostor_layer below (alone, or a
+// batch of up to MAX_VIEWS impostors sharing one atlas, one draw call).
 
 // AMBIENT, LIGHT, SRGB_* and MAX_VIEWS are not declared here: the player prepends
 // format::shading::wgsl_constants() (player::gpu::shader_source), their one home.
@@ -154,8 +155,12 @@ struct ProxyOut {
     // is exact and saves two matrix products per pixel.
     @location(6) tc0: vec4<f32>,
     @location(7) tc1: vec4<f32>,
-    // Layered impostors: the layer's depth codes (lo | hi << 8).
+    // Layered impostors: the layer's depth codes (lo | hi << 8) and its impostor's
+    // slot in a batch (bits 16–23; 0 alone).
     @location(8) @interpolate(flat) mask: u32,
+    // Layered impostors in a batch: the impostor's rectangle of the atlas t0 in
+    // texels (x, y, width, height), looked up once per vertex; 0 alone (no atlas).
+    @location(9) @interpolate(flat) rect: vec4<u32>,
 };
 
 fn angle_between(a: vec3<f32>, b: vec3<f32>) -> f32 {
@@ -174,13 +179,24 @@ fn vs_proxy(v: ProxyIn) -> ProxyOut {
     o.mask = v.mask;
     o.kind = v.kind;
     o.weights = vec2<f32>(0.5, 0.5);
+    o.rect = vec4<u32>(0u);
     if g.debug.x != 0u {
         o.albedo = g.palette[min(v.kind, 7u)].rgb;
     }
     let world = vec4<f32>(v.pos, 1.0);
     if v.kind == 4u {
-        o.views = 0u | (MAX_VIEWS << 8u);
-        o.tc0 = p.tex_from_world[0] * world;
+        // Its impostor's view: slot k of a batch (mask bits 16–23), 0 alone.
+        let k = min((v.mask >> 16u) & 0xffu, MAX_VIEWS - 1u);
+        o.views = k | (MAX_VIEWS << 8u);
+        o.tc0 = p.tex_from_world[k] * world;
+        if p.counts.z != 0u {
+            let atlas = vec2<f32>(f32(p.counts.z), f32(p.counts.w));
+            let r = p.rects[k];
+            o.rect = vec4<u32>(
+                vec2<u32>(round(r.xy * atlas)),
+                max(vec2<u32>(round(r.zw * atlas)), vec2<u32>(1u)),
+            );
+        }
         o.tc1 = vec4<f32>(0.0);
         return o;
     }
@@ -276,11 +292,18 @@ fn take_slot(
     }
 }
 
-// Layered impostor (paper 001 §4; kind 4): a layer quad shows view 0's texels whose
-// alpha (a depth code, linear in the sRGB texture) lies in the layer's codes
+// Layered impostor (paper 001 §4; kind 4): a layer quad shows its impostor's texels
+// whose alpha (a depth code, linear in the sRGB texture) lies in the layer's codes
 // (mask = lo | hi << 8); the others are discarded (the alpha test), so the quad writes
 // depth only where the layer has surface. The code is read from the nearest texel,
-// the colour bilinearly (worker impostor.rs does the same on the CPU).
+// the colour bilinearly (worker impostor.rs does the same on the CPU). Alone (no
+// atlas: rect = 0) the impostor's texture is t0; in a batch (the player's upload,
+// gpu/upload.rs) t0 is an atlas and the impostor's texture is its rectangle (slot
+// k = mask bits 16–23; vs_proxy passes the rectangle in texels): the code texel is
+// the nearest one mapped into it and the colour's bilinear taps are kept half a
+// texel inside it, so the texels are those of its own clamped texture. Selects,
+// not branches, and one sample: most layer fragments are discarded, and a CPU
+// rasterizer runs both sides of a branch under lane masks.
 fn impostor_layer(i: ProxyOut) -> vec4<f32> {
     let tc = i.tc0;
     if tc.w <= 0.0 {
@@ -291,8 +314,12 @@ fn impostor_layer(i: ProxyOut) -> vec4<f32> {
         discard;
     }
     let dims = textureDimensions(t0);
-    let texel = min(vec2<u32>(uv * vec2<f32>(dims)), dims - vec2<u32>(1u));
-    let code = u32(round(textureLoad(t0, texel, 0).a * 255.0));
+    let in_atlas = i.rect.z != 0u;
+    let origin = select(vec2<u32>(0u), i.rect.xy, in_atlas);
+    let size = select(dims, i.rect.zw, in_atlas);
+    let texel = origin + min(vec2<u32>(uv * vec2<f32>(size)), size - vec2<u32>(1u));
+    // Kept inside t0 (a batch drawn lit binds the 1 × 1 "nothing captured" texel).
+    let code = u32(round(textureLoad(t0, min(texel, dims - vec2<u32>(1u)), 0).a * 255.0));
     let lo = i.mask & 0xffu;
     let hi = (i.mask >> 8u) & 0xffu;
     if code == 0u || code < lo || code > hi {
@@ -301,7 +328,10 @@ fn impostor_layer(i: ProxyOut) -> vec4<f32> {
     if g.debug.x != 0u {
         return vec4<f32>(shade(i.albedo, -i.normal), 1.0);
     }
-    return vec4<f32>(textureSampleLevel(t0, samp, uv, 0.0).rgb, 1.0);
+    let s = vec2<f32>(size);
+    let at = (vec2<f32>(origin) + clamp(uv * s, vec2<f32>(0.5), s - vec2<f32>(0.5)))
+        / vec2<f32>(dims);
+    return vec4<f32>(textureSampleLevel(t0, samp, select(uv, at, in_atlas), 0.0).rgb, 1.0);
 }
 
 // Two fragment entry points (issue 17): fs_proxy_mesh for SV/MV meshes and clusters

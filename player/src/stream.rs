@@ -219,11 +219,17 @@ type PendingTexture = (u32, u32, format::pack::TextureEncoding, Vec<u8>);
 pub struct ResidentCell {
     pub cell_id: u32,
     pub originals: Vec<u32>,
+    /// The pack's proxies as drawn: one per pack proxy, except that a batch of
+    /// layered impostors (`Renderer::create_pack_proxies`) is one, culled, ordered,
+    /// stood in for and replaced by originals as a whole.
     pub proxies: Vec<GpuProxy>,
+    /// Per proxy: its world bounds (a batch's: the union of its members').
     pub bounds: Vec<Aabb>,
-    /// Per proxy: its member instances (drawn as originals until it is ready).
+    /// Per proxy: its member instances (drawn as originals until it is ready; a
+    /// batch's: every member impostor's, without duplicates).
     pub members: Vec<Vec<u32>>,
-    /// Texels still waiting in the upload queue: (proxy, view) → texels.
+    /// Texels still waiting in the upload queue: (proxy, slot) → texels (a batch's
+    /// slot k: its member k's one view).
     pending: BTreeMap<(usize, usize), PendingTexture>,
     pub bytes: u64,
     last_used: u64,
@@ -620,26 +626,64 @@ impl Streamer {
         match result {
             Ok(cell) => {
                 let bytes = cell.bytes();
-                let mut proxies = Vec::with_capacity(cell.proxies.len());
-                let mut bounds = Vec::with_capacity(cell.proxies.len());
-                let mut members = Vec::with_capacity(cell.proxies.len());
+                let views: Vec<Vec<crate::gpu::ViewInfo>> = cell
+                    .proxies
+                    .iter()
+                    .map(|p| {
+                        p.views
+                            .iter()
+                            .map(|v| crate::gpu::ViewInfo {
+                                matrix: v.matrix,
+                                eye: v.eye,
+                                width: v.width,
+                                height: v.height,
+                                encoding: v.encoding,
+                            })
+                            .collect()
+                    })
+                    .collect();
+                let sources: Vec<(&[crate::vertex::ProxyVertex], &[crate::gpu::ViewInfo])> = cell
+                    .proxies
+                    .iter()
+                    .zip(&views)
+                    .map(|(p, v)| (p.vertices.as_slice(), v.as_slice()))
+                    .collect();
+                // The GPU proxies, each drawing one pack proxy or a batch of layered
+                // impostors (`Renderer::create_pack_proxies`): a batch is one proxy
+                // here too, with its members' union of bounds and member objects.
+                let drawn = renderer.create_pack_proxies(&sources);
+                let mut packed: Vec<Option<crate::bake::PreparedProxy>> =
+                    cell.proxies.into_iter().map(Some).collect();
+                let mut proxies = Vec::with_capacity(drawn.len());
+                let mut bounds = Vec::with_capacity(drawn.len());
+                let mut members = Vec::with_capacity(drawn.len());
                 let mut pending = BTreeMap::new();
-                for (pi, p) in cell.proxies.into_iter().enumerate() {
-                    let views: Vec<crate::gpu::ViewInfo> = p
-                        .views
-                        .iter()
-                        .map(|v| crate::gpu::ViewInfo {
-                            matrix: v.matrix,
-                            eye: v.eye,
-                            width: v.width,
-                            height: v.height,
-                            encoding: v.encoding,
-                        })
-                        .collect();
-                    proxies.push(renderer.create_proxy(&p.vertices, &views));
-                    bounds.push(p.bounds);
-                    members.push(p.members);
-                    for (vi, v) in p.views.into_iter().enumerate() {
+                for (pi, (gpu, from)) in drawn.into_iter().enumerate() {
+                    let mut b = Aabb::EMPTY;
+                    let mut m: Vec<u32> = Vec::new();
+                    // Slot `vi` of the drawn proxy: a lone proxy's view vi, a
+                    // batch's member vi's one view.
+                    let mut slots = Vec::new();
+                    for &i in &from {
+                        let Some(p) = packed.get_mut(i).and_then(Option::take) else {
+                            continue;
+                        };
+                        b = b.union(&p.bounds);
+                        m.extend(p.members);
+                        if from.len() == 1 {
+                            slots.extend(p.views);
+                        } else {
+                            slots.extend(p.views.into_iter().take(1));
+                        }
+                    }
+                    if from.len() > 1 {
+                        let mut seen = BTreeSet::new();
+                        m.retain(|x| seen.insert(*x));
+                    }
+                    proxies.push(gpu);
+                    bounds.push(b);
+                    members.push(m);
+                    for (vi, v) in slots.into_iter().enumerate() {
                         self.uploads.push_back((id, pi, vi));
                         pending.insert((pi, vi), (v.width, v.height, v.encoding, v.data));
                     }

@@ -463,37 +463,57 @@ pub fn write_impostor_bake(
     dir: &Path,
     capture: &Camera,
     texture: Texture,
-    mut layers: format::pack::ImpostorLayers,
+    layers: format::pack::ImpostorLayers,
 ) -> Result<GridParams, TestDataError> {
-    let centre = capture.eye + capture.dir.normalize() * layers.near;
-    let grid = write_quad_bake_views(dir, centre, ProxyKind::SvMesh, Vec::new(), Vec::new())?;
-    let t = (capture.fov_y_deg.to_radians() / 2.0).tan();
-    let r = t * capture.width as f32 / capture.height as f32;
-    let to_world = capture.view().inverse();
-    let ray = |s: f32, v: f32| {
-        to_world
-            .transform_vector3(Vec3::new((2.0 * s - 1.0) * r, (1.0 - 2.0 * v) * t, -1.0))
-            .to_array()
+    write_impostors_bake(dir, &[(*capture, texture, layers)])
+}
+
+/// [`write_impostor_bake`] with several LayeredImpostors in every cell's pack, in
+/// the order given, each `(capture, texture, layers)` as there; all of the one
+/// member instance (the quad, placed in front of the first capture).
+pub fn write_impostors_bake(
+    dir: &Path,
+    impostors: &[(Camera, Texture, format::pack::ImpostorLayers)],
+) -> Result<GridParams, TestDataError> {
+    let Some((first, _, first_layers)) = impostors.first() else {
+        return Err(TestDataError::Manifest("no impostor to write".into()));
     };
-    layers.corner_rays = [ray(0.0, 0.0), ray(1.0, 0.0), ray(1.0, 1.0), ray(0.0, 1.0)];
+    let centre = first.eye + first.dir.normalize() * first_layers.near;
+    let grid = write_quad_bake_views(dir, centre, ProxyKind::SvMesh, Vec::new(), Vec::new())?;
+    let proxies: Vec<Proxy> = impostors
+        .iter()
+        .map(|(capture, texture, layers)| {
+            let t = (capture.fov_y_deg.to_radians() / 2.0).tan();
+            let r = t * capture.width as f32 / capture.height as f32;
+            let to_world = capture.view().inverse();
+            let ray = |s: f32, v: f32| {
+                to_world
+                    .transform_vector3(Vec3::new((2.0 * s - 1.0) * r, (1.0 - 2.0 * v) * t, -1.0))
+                    .to_array()
+            };
+            let mut layers = layers.clone();
+            layers.corner_rays = [ray(0.0, 0.0), ray(1.0, 0.0), ray(1.0, 1.0), ray(0.0, 1.0)];
+            Proxy {
+                kind: ProxyKind::LayeredImpostor,
+                members: vec![ProxyMember {
+                    instance: 0,
+                    triangles: Vec::new(),
+                    view_masks: Vec::new(),
+                }],
+                views: vec![ProxyView {
+                    eye: capture.eye.to_array(),
+                    matrix: texture_matrix(capture),
+                    texture: texture.clone(),
+                }],
+                layers: Some(layers),
+            }
+        })
+        .collect();
     let fingerprint = [3u8; 32];
     for id in 0..grid.n_cols * grid.n_rows {
         let path = dir.join(format!("cells/{id}.pack"));
         let mut cell = CellPack::read(&path).map_err(TestDataError::Pack)?;
-        cell.proxies = vec![Proxy {
-            kind: ProxyKind::LayeredImpostor,
-            members: vec![ProxyMember {
-                instance: 0,
-                triangles: Vec::new(),
-                view_masks: Vec::new(),
-            }],
-            views: vec![ProxyView {
-                eye: capture.eye.to_array(),
-                matrix: texture_matrix(capture),
-                texture: texture.clone(),
-            }],
-            layers: Some(layers.clone()),
-        }];
+        cell.proxies = proxies.clone();
         cell.write(&path).map_err(TestDataError::Pack)?;
     }
     write_index(dir, &grid, fingerprint)?;

@@ -89,3 +89,117 @@ fn impostor_layers_are_drawn_where_their_codes_match() {
         assert_eq!(*orange, 0, "texels outside the layer's codes are discarded");
     }
 }
+
+/// A 64 × 64 capture of a disc of colour `rgb` at depth code 128 (background code 0).
+fn disc_of(rgb: [u8; 3]) -> Vec<u8> {
+    disc()
+        .chunks_exact(4)
+        .flat_map(|c| [rgb[0], rgb[1], rgb[2], c[3]])
+        .collect()
+}
+
+/// Ten layered impostors of one pack, side by side, each its own colour, drawn from
+/// a viewer that sees them all: with batches on (the default) and off. Returns per
+/// setting the frame's pixels, its draw calls (submitted, and as the list predicts)
+/// and triangles; `None` without an adapter.
+fn draw_ten(batches: bool) -> Option<(Vec<u8>, u64, u64, u64)> {
+    let dir = tempfile::tempdir().unwrap();
+    let impostors: Vec<_> = (0..10u8)
+        .map(|k| {
+            let capture = Camera {
+                eye: Vec3::new(10.0 + 9.0 * f32::from(k), 6.0, 80.0),
+                dir: Vec3::NEG_Z,
+                fov_y_deg: 30.0,
+                width: 64,
+                height: 64,
+                near: 0.5,
+                far: 200.0,
+            };
+            let rgb = [20 + 23 * k, 220 - 19 * k, 40 + 17 * k];
+            let tex = Texture::from_rgba8(64, 64, &disc_of(rgb), TextureEncoding::Rgba8).unwrap();
+            let layers = ImpostorLayers {
+                corner_rays: [[0.0; 3]; 4],
+                near: 15.0,
+                far: 25.0,
+                layers: vec![ImpostorLayer {
+                    depth: format::pack::depth_of_code(15.0, 25.0, 128),
+                    code_lo: 100,
+                    code_hi: 160,
+                }],
+            };
+            (capture, tex, layers)
+        })
+        .collect();
+    player::testdata::write_impostors_bake(dir.path(), &impostors).unwrap();
+    let mut p = common::open_player(dir.path(), (96, 96), &player::DrawOptions::default())?;
+    p.renderer.set_impostor_batches(batches);
+    let mut s = Streamer::new(&p.bake, StreamConfig::default());
+    let cam = Camera {
+        eye: Vec3::new(50.0, 6.0, 95.0),
+        dir: Vec3::NEG_Z,
+        fov_y_deg: 90.0,
+        width: 96,
+        height: 96,
+        near: 0.5,
+        far: 200.0,
+    };
+    let mut last = None;
+    for _ in 0..3 {
+        last = Some(p.draw_listed(&cam, Mode::Hybrid, Some(&mut s)).1);
+    }
+    let list = last.unwrap();
+    assert_eq!(
+        list.draw_calls, p.renderer.last_draw_calls,
+        "batches {batches}"
+    );
+    let px = p.renderer.read_pixels().unwrap();
+    Some((
+        px,
+        list.draw_calls,
+        p.renderer.last_draw_calls,
+        list.triangles,
+    ))
+}
+
+/// A pack's layered impostors drawn in batches (one atlas, one uniform, one draw
+/// call per up to 8 impostors) give the frame of drawing them one by one, in fewer
+/// draw calls (8 impostors in view: 2 batches instead of 8 draws).
+#[test]
+fn impostor_batches_draw_the_same_frame_in_fewer_calls() {
+    let Some((batched, calls, submitted, tris)) = draw_ten(true) else {
+        return;
+    };
+    let (alone, calls_alone, _, tris_alone) = draw_ten(false).unwrap();
+    assert_eq!(calls, submitted);
+    // The ground, then 8 of the 10 impostors in view (the two at the ends are
+    // outside the frustum): 8 draws alone, the 2 batches batched.
+    assert_eq!((calls_alone, calls), (1 + 8, 1 + 2));
+    assert_eq!(tris, tris_alone, "the tiles culled are the same");
+    assert_eq!(tris, 2 * 8, "eight one-layer impostors drawn");
+    // Above the horizon (the upper half) only the discs are drawn on the sky.
+    let sky = batched.chunks_exact(4).next().unwrap().to_vec();
+    let drawn = batched[..96 * 48 * 4]
+        .chunks_exact(4)
+        .filter(|c| *c != sky.as_slice())
+        .count();
+    assert!(
+        drawn > 300,
+        "the discs are drawn: {drawn} pixels above the horizon"
+    );
+    let worst = batched
+        .iter()
+        .zip(&alone)
+        .map(|(a, b)| a.abs_diff(*b))
+        .max()
+        .unwrap();
+    let differ = batched
+        .chunks_exact(4)
+        .zip(alone.chunks_exact(4))
+        .filter(|(a, b)| a != b)
+        .count();
+    eprintln!("batched vs alone: {differ} pixels differ, worst channel by {worst}");
+    assert!(
+        worst <= 1,
+        "worst channel difference {worst} ({differ} pixels differ)"
+    );
+}

@@ -182,19 +182,59 @@ impl Renderer {
         }
     }
 
+    /// The GPU proxies of one pack's `proxies` (each its vertices and views), in
+    /// pack order, each with the pack proxies it draws. A proxy is drawn alone
+    /// ([`Renderer::create_proxy`]; its views are its slots), except that layered
+    /// impostors (paper 001) are drawn in batches ([`impostor_batches`]) when
+    /// [`Renderer::set_impostor_batches`] is on (the default): up to [`MAX_VIEWS`]
+    /// impostors of one encoding in one vertex buffer, one [`Atlas`] and one uniform,
+    /// one draw call ([`Renderer::create_impostor_batch`]); slot k of a batch is its
+    /// member k's one view. A batch whose atlas cannot be made is drawn member by
+    /// member, as before.
+    pub fn create_pack_proxies(
+        &self,
+        proxies: &[(&[ProxyVertex], &[ViewInfo])],
+    ) -> Vec<(GpuProxy, Vec<usize>)> {
+        let batchable: Vec<Option<TextureEncoding>> = proxies
+            .iter()
+            .map(|(vertices, views)| {
+                let impostor = self.impostor_batches
+                    && !vertices.is_empty()
+                    && vertices
+                        .iter()
+                        .all(|v| v.kind == format::pack::ProxyKind::LayeredImpostor as u32)
+                    && views.len() == 1
+                    && views[0].width > 0
+                    && views[0].height > 0;
+                impostor.then(|| views[0].encoding)
+            })
+            .collect();
+        let mut out = Vec::with_capacity(proxies.len());
+        for batch in impostor_batches(&batchable, MAX_VIEWS) {
+            if batch.len() > 1 {
+                let members: Vec<(&[ProxyVertex], ViewInfo)> = batch
+                    .iter()
+                    .map(|&i| (proxies[i].0, proxies[i].1[0]))
+                    .collect();
+                if let Some(p) = self.create_impostor_batch(&members) {
+                    out.push((p, batch));
+                    continue;
+                }
+            }
+            for i in batch {
+                let (vertices, views) = proxies[i];
+                out.push((self.create_proxy(vertices, views), vec![i]));
+            }
+        }
+        out
+    }
+
     /// Creates a proxy's vertex and uniform buffers, and its [`Atlas`] where it gets
     /// one; textures come later through [`Renderer::upload_view_texels`]. `views`:
     /// each view's world → texture matrix, eye, size and encoding (BC1 colours are
     /// premultiplied by coverage: punch-through alpha in format 4, fully opaque
     /// before, where it changes nothing).
     pub fn create_proxy(&self, vertices: &[ProxyVertex], views: &[ViewInfo]) -> GpuProxy {
-        let mut u = ProxyUniform::zeroed();
-        for (i, v) in views.iter().take(MAX_VIEWS).enumerate() {
-            u.tex_from_world[i] = v.matrix;
-            u.view_eye[i] = [v.eye[0], v.eye[1], v.eye[2], 1.0];
-            u.counts[1] |= u32::from(v.encoding == TextureEncoding::Bc1) << i;
-        }
-        u.counts[0] = views.len().min(MAX_VIEWS) as u32;
         let layered = vertices
             .iter()
             .any(|v| v.kind == format::pack::ProxyKind::LayeredImpostor as u32);
@@ -203,6 +243,62 @@ impl Renderer {
         } else {
             self.create_atlas(views)
         };
+        // Issue 17: triangles grouped by normal cluster for the per-frame test.
+        let (vertices, clusters) =
+            crate::patches::cluster_proxy_vertices(vertices, self.options.tile_size());
+        self.finish_proxy(&vertices, clusters, views, atlas, layered)
+    }
+
+    /// A batch of layered impostors (paper 001 §4), each with its one view
+    /// (`members`: 2 to [`MAX_VIEWS`], one encoding), drawn as one proxy: member k's
+    /// layer quads, grouped by normal cluster as [`Renderer::create_proxy`] groups a
+    /// lone impostor's (member by member, so each tile holds one member's quads and
+    /// culls as before), carry k in bits 16–23 of their mask (bits 0–15: the layer's
+    /// depth codes); the uniform holds member k's `tex_from_world` in slot k and its
+    /// texture's rectangle of the batch's [`Atlas`] in `rects[k]`; `impostor_layer`
+    /// reads rectangle k. `None` where the atlas cannot be made (`create_atlas`).
+    fn create_impostor_batch(&self, members: &[(&[ProxyVertex], ViewInfo)]) -> Option<GpuProxy> {
+        if members.len() < 2 || members.len() > MAX_VIEWS {
+            return None;
+        }
+        let views: Vec<ViewInfo> = members.iter().map(|m| m.1).collect();
+        let atlas = self.create_atlas(&views)?;
+        let tile = self.options.tile_size();
+        let mut vertices = Vec::new();
+        let mut clusters = Vec::new();
+        for (k, (member, _)) in members.iter().enumerate() {
+            let (v, c) = crate::patches::cluster_proxy_vertices(member, tile);
+            let first = vertices.len() as u32;
+            vertices.extend(v.into_iter().map(|mut v| {
+                v.mask = (v.mask & 0xffff) | ((k as u32) << 16);
+                v
+            }));
+            clusters.extend(c.into_iter().map(|mut c| {
+                c.first += first;
+                c
+            }));
+        }
+        Some(self.finish_proxy(&vertices, clusters, &views, Some(atlas), true))
+    }
+
+    /// The proxy of `vertices` (already in cluster order, `clusters` over them) with
+    /// `views` in its slots and `atlas` holding them, if any: its vertex buffer and
+    /// view uniform; bound once its textures are there.
+    fn finish_proxy(
+        &self,
+        vertices: &[ProxyVertex],
+        clusters: Vec<crate::patches::ProxyCluster>,
+        views: &[ViewInfo],
+        atlas: Option<Atlas>,
+        layered: bool,
+    ) -> GpuProxy {
+        let mut u = ProxyUniform::zeroed();
+        for (i, v) in views.iter().take(MAX_VIEWS).enumerate() {
+            u.tex_from_world[i] = v.matrix;
+            u.view_eye[i] = [v.eye[0], v.eye[1], v.eye[2], 1.0];
+            u.counts[1] |= u32::from(v.encoding == TextureEncoding::Bc1) << i;
+        }
+        u.counts[0] = views.len().min(MAX_VIEWS) as u32;
         let mut texture_bytes = 0;
         if let Some(a) = &atlas {
             let size = a.texture.size();
@@ -219,10 +315,6 @@ impl Renderer {
             }
             texture_bytes = atlas_bytes(a.format, size.width, size.height) as u64;
         }
-        // Issue 17: triangles grouped by normal cluster for the per-frame test.
-        let (vertices, clusters) =
-            crate::patches::cluster_proxy_vertices(vertices, self.options.tile_size());
-        let vertices = vertices.as_slice();
         let contents: &[u8] = if vertices.is_empty() {
             bytemuck::bytes_of(&ProxyVertex::ZERO)
         } else {
@@ -585,6 +677,40 @@ fn atlas_bytes(format: wgpu::TextureFormat, width: u32, height: u32) -> usize {
     }
 }
 
+/// Which pack proxies are drawn together ([`Renderer::create_pack_proxies`]):
+/// `batchable[i]` is the encoding of proxy i's one view when it is a layered
+/// impostor that may join a batch, else `None`. Proxies in pack order; each
+/// batchable one joins the open batch of its encoding until that holds `max`, and a
+/// batch takes the place of its first member (a group pack's impostors come sector
+/// by sector, bands by distance: consecutive ones are neighbours, so a batch's
+/// bounds stay compact). Every other proxy is a batch of its own. Each proxy is in
+/// exactly one batch, members in pack order.
+pub(crate) fn impostor_batches(
+    batchable: &[Option<TextureEncoding>],
+    max: usize,
+) -> Vec<Vec<usize>> {
+    let mut out: Vec<Vec<usize>> = Vec::new();
+    // Per encoding: the batch being filled (an index of `out`).
+    let mut open: Vec<(TextureEncoding, usize)> = Vec::new();
+    for (i, b) in batchable.iter().enumerate() {
+        let Some(encoding) = *b else {
+            out.push(vec![i]);
+            continue;
+        };
+        match open.iter().position(|&(e, _)| e == encoding) {
+            Some(k) if out[open[k].1].len() < max.max(1) => out[open[k].1].push(i),
+            found => {
+                if let Some(k) = found {
+                    open.remove(k);
+                }
+                open.push((encoding, out.len()));
+                out.push(vec![i]);
+            }
+        }
+    }
+    out
+}
+
 /// An atlas's size and each view's rectangle (x, y, width, height) in it.
 pub(crate) type PackedAtlas = ((u32, u32), Vec<[u32; 4]>);
 
@@ -623,7 +749,7 @@ pub(crate) fn pack_atlas(sizes: &[(u32, u32)], max: u32) -> Option<PackedAtlas> 
 
 #[cfg(test)]
 mod tests {
-    use super::{pack_atlas, TRANSPARENT_BC1};
+    use super::{impostor_batches, pack_atlas, TRANSPARENT_BC1};
     use format::pack::{Texture, TextureEncoding};
 
     /// The atlas's clear texels decode as "nothing captured" (alpha 0) in every
@@ -691,5 +817,27 @@ mod tests {
         );
         assert_eq!(pack_atlas(&[(5000, 5000), (5000, 5000)], 8192), None);
         assert_eq!(pack_atlas(&[], 8192), None);
+    }
+
+    /// Layered impostors of one encoding share batches of at most `max`, in pack
+    /// order, each batch where its first member was; other proxies stay alone; every
+    /// proxy is drawn exactly once.
+    #[test]
+    fn impostor_batches_group_same_encoding_impostors() {
+        let (r, b) = (Some(TextureEncoding::Rgba8), Some(TextureEncoding::Bc3));
+        let plan = impostor_batches(&[None, r, r, b, r, None, b, r, r], 3);
+        assert_eq!(
+            plan,
+            vec![vec![0], vec![1, 2, 4], vec![3, 6], vec![5], vec![7, 8],]
+        );
+        let mut all: Vec<usize> = plan.into_iter().flatten().collect();
+        all.sort_unstable();
+        assert_eq!(all, (0..9).collect::<Vec<_>>());
+        assert_eq!(
+            impostor_batches(&[r; 17], 8),
+            vec![(0..8).collect(), (8..16).collect(), vec![16]]
+        );
+        assert_eq!(impostor_batches(&[None, None], 8), vec![vec![0], vec![1]]);
+        assert!(impostor_batches(&[], 8).is_empty());
     }
 }
