@@ -66,9 +66,13 @@ pub fn world_positions(mesh: &Mesh, transform: Mat4) -> Vec<Vec3> {
 
 /// The world-space plane of every triangle (`None` for a triangle with an index out of
 /// range).
-pub fn triangle_planes(mesh: &Mesh, transform: Mat4) -> Vec<Option<TrianglePlane>> {
+pub fn triangle_planes(
+    mesh: &Mesh,
+    triangles: &[[u32; 3]],
+    transform: Mat4,
+) -> Vec<Option<TrianglePlane>> {
     let world = world_positions(mesh, transform);
-    planes_of(&world, &mesh.triangles)
+    planes_of(&world, triangles)
 }
 
 pub(crate) fn planes_of(world: &[Vec3], triangles: &[[u32; 3]]) -> Vec<Option<TrianglePlane>> {
@@ -86,8 +90,18 @@ pub(crate) fn planes_of(world: &[Vec3], triangles: &[[u32; 3]]) -> Vec<Option<Tr
 /// Per triangle: strictly front-facing from `eye` (000 §3.1.3: "polygons front-facing
 /// to the cell's center"). Degenerate and out-of-range triangles are `false`.
 pub fn front_facing_from(mesh: &Mesh, transform: Mat4, eye: Vec3) -> Vec<bool> {
+    front_facing_of(mesh, &mesh.triangles, transform, eye)
+}
+
+/// [`front_facing_from`] for `triangles` over `mesh`'s vertices (a LOD chain level).
+pub fn front_facing_of(
+    mesh: &Mesh,
+    triangles: &[[u32; 3]],
+    transform: Mat4,
+    eye: Vec3,
+) -> Vec<bool> {
     let eye = eye.as_dvec3();
-    triangle_planes(mesh, transform)
+    triangle_planes(mesh, triangles, transform)
         .iter()
         .map(|plane| plane.is_some_and(|p| p.faces(eye)))
         .collect()
@@ -100,8 +114,19 @@ pub fn regional_backface_cull(
     transform: Mat4,
     prism_corners: &[Vec3; 12],
 ) -> Vec<bool> {
+    regional_backface_cull_of(mesh, &mesh.triangles, transform, prism_corners)
+}
+
+/// [`regional_backface_cull`] for `triangles` over `mesh`'s vertices (a LOD chain
+/// level).
+pub fn regional_backface_cull_of(
+    mesh: &Mesh,
+    triangles: &[[u32; 3]],
+    transform: Mat4,
+    prism_corners: &[Vec3; 12],
+) -> Vec<bool> {
     let corners: Vec<DVec3> = prism_corners.iter().map(|c| c.as_dvec3()).collect();
-    triangle_planes(mesh, transform)
+    triangle_planes(mesh, triangles, transform)
         .iter()
         .map(|plane| plane.is_some_and(|p| corners.iter().all(|&c| p.faces_away_from(c))))
         .collect()

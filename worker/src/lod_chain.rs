@@ -76,8 +76,10 @@ pub struct LodLevel {
     pub bound: f32,
     /// Largest distance of a removed original vertex from the level's surface.
     pub max_error: f32,
-    /// The model's vertices with the level's triangles.
-    pub mesh: Mesh,
+    /// The level's triangles, indexing the model's own vertices (a level keeps no
+    /// copy of them: with 12 levels per model, copies were most of a park bake's
+    /// chain memory).
+    pub triangles: Vec<[u32; 3]>,
     /// Per triangle of `mesh`, the removed original vertices it carries.
     pub carried: Vec<Vec<u32>>,
 }
@@ -172,10 +174,7 @@ impl LodChain {
             levels.push(LodLevel {
                 bound,
                 max_error,
-                mesh: Mesh {
-                    triangles: triangles.clone(),
-                    ..mesh.clone()
-                },
+                triangles: triangles.clone(),
                 carried: carried.clone(),
             });
         }
@@ -216,7 +215,7 @@ impl LodChain {
                 .map(|l| LodLevelData {
                     bound: l.bound,
                     max_error: l.max_error,
-                    triangles: l.mesh.triangles.clone(),
+                    triangles: l.triangles.clone(),
                     carried: l.carried.clone(),
                 })
                 .collect(),
@@ -272,10 +271,7 @@ impl LodChain {
                 .map(|l| LodLevel {
                     bound: l.bound,
                     max_error: l.max_error,
-                    mesh: Mesh {
-                        triangles: l.triangles,
-                        ..model.mesh.clone()
-                    },
+                    triangles: l.triangles,
                     carried: l.carried,
                 })
                 .collect(),

@@ -4,7 +4,7 @@
 //! Steps:
 //!
 //! 1. The polygons *not* regionally back-facing for the cell's prism (§3.1.5,
-//!    [`regional_backface_cull`]): "front-facing with respect to the cell", tidied
+//!    [`crate::backface::regional_backface_cull`]): "front-facing with respect to the cell", tidied
 //!    like the SVMesh's selection ([`crate::svmesh::tidy_selection_sized`], the
 //!    on-screen areas taken from the capture eyes).
 //! 2. Capture the object alone from the cell centre (view 0) and from the centres of
@@ -28,7 +28,7 @@
 //! 6. Keep only the views some triangle's mask names, renumbering the mask bits in
 //!    view order (the centre stays first when it is used).
 
-use crate::backface::regional_backface_cull;
+use crate::backface::regional_backface_cull_of;
 use crate::capture::{fit_texture, fitted_scale, items_aabb, CaptureError};
 use crate::grid::Prism;
 use crate::lod_chain::LodChains;
@@ -88,13 +88,20 @@ pub fn derive_mvmesh(
 
     // Step 1: polygons not back-facing for the whole cell.
     let t = Instant::now();
-    let mut kept: Vec<bool> = regional_backface_cull(mesh, item.transform, prism_corners)
-        .into_iter()
-        .map(|culled| !culled)
-        .collect();
+    let mut kept: Vec<bool> =
+        regional_backface_cull_of(mesh, start.triangles, item.transform, prism_corners)
+            .into_iter()
+            .map(|culled| !culled)
+            .collect();
     // On welded vertices: a UV-seamed model's faces are not specks (issue 18).
-    let welded = crate::simplify::welded_triangles(&mesh.positions, &mesh.triangles);
-    let areas = projected_areas_px(mesh, item.transform, eyes, settings.image_res);
+    let welded = crate::simplify::welded_triangles(&mesh.positions, start.triangles);
+    let areas = projected_areas_px(
+        mesh,
+        start.triangles,
+        item.transform,
+        eyes,
+        settings.image_res,
+    );
     tidy_selection_sized(&welded, &mut kept, settings.speck_triangles, Some(&areas));
     let (input_triangles, carried) = start.select(&kept);
     times.weights_ms += ms_since(t);

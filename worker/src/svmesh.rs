@@ -2,7 +2,7 @@
 //!
 //! Steps, for one object (or the members of a cluster, treated as one object):
 //!
-//! 1. The polygons front-facing to the cell's centre ([`front_facing_from`]), tidied
+//! 1. The polygons front-facing to the cell's centre ([`crate::backface::front_facing_from`]), tidied
 //!    ([`tidy_selection_sized`]): on a scanned mesh the front-facing set is ragged
 //!    near the rim, with specks of a few front-facing triangles beyond it (each would
 //!    survive the collapse as its own piece) and back-facing specks inside it (holes
@@ -26,7 +26,7 @@
 //! 6. The texture is the centre capture (its covered rectangle) with its world →
 //!    texture matrix.
 
-use crate::backface::front_facing_from;
+use crate::backface::front_facing_of;
 use crate::capture::{capture_objects, capture_objects_in, CaptureError};
 use crate::capture_memo::{CaptureKey, CaptureSettings, Captured};
 use crate::classify::{classify_objects, WindowDepth};
@@ -125,7 +125,10 @@ pub enum ProxyError {
 /// The mesh a member's collapse starts from: the coarsest level of its model's LOD
 /// chain that the region allows ([`crate::lod_chain::LodChain::start_for`]), or the model itself.
 pub(crate) struct StartMesh<'a> {
+    /// The model's vertices (its whole mesh).
     pub mesh: &'a format::Mesh,
+    /// The start's triangles over them: a chain level's, or the model's own.
+    pub triangles: &'a [[u32; 3]],
     /// Per triangle of `mesh`, the original vertices it carries (chain levels only).
     pub carried: Option<&'a [Vec<u32>]>,
     /// The model's locked vertices as [`SimplifyInput::locked`] (a chunk's cut
@@ -160,12 +163,14 @@ impl<'a> StartMesh<'a> {
             .and_then(|model| locked_mask(item.mesh.positions.len(), &model.locked_vertices));
         match level {
             Some(l) => StartMesh {
-                mesh: &l.mesh,
+                mesh: item.mesh,
+                triangles: &l.triangles,
                 carried: Some(&l.carried),
                 locked,
             },
             None => StartMesh {
                 mesh: item.mesh,
+                triangles: &item.mesh.triangles,
                 carried: None,
                 locked,
             },
@@ -243,7 +248,13 @@ impl<'a> StartMesh<'a> {
             None => std::sync::Arc::new(compute(times)?),
         };
         let t = Instant::now();
-        let states = with_front_facing(&captured.if_front, self.mesh, item.transform, eye);
+        let states = with_front_facing(
+            &captured.if_front,
+            self.mesh,
+            self.triangles,
+            item.transform,
+            eye,
+        );
         times.weights_ms += ms_since(t);
         Ok((captured, states))
     }
@@ -262,6 +273,7 @@ impl<'a> StartMesh<'a> {
     ) -> Vec<VertexState> {
         vertex_states_captured(
             self.mesh,
+            self.triangles,
             &item.mesh.triangles,
             item.transform,
             capture,
@@ -272,8 +284,8 @@ impl<'a> StartMesh<'a> {
     }
 
     pub(crate) fn select(&self, selected: &[bool]) -> (Vec<[u32; 3]>, Option<Vec<Vec<u32>>>) {
-        let picked = || (0..self.mesh.triangles.len()).filter(|&t| selected[t]);
-        let triangles = picked().map(|t| self.mesh.triangles[t]).collect();
+        let picked = || (0..self.triangles.len()).filter(|&t| selected[t]);
+        let triangles = picked().map(|t| self.triangles[t]).collect();
         let carried = self
             .carried
             .map(|c| picked().map(|t| c[t].clone()).collect());
@@ -326,6 +338,7 @@ pub struct SvMesh {
 /// times the pixels per steradian.
 pub fn projected_areas_px(
     mesh: &format::Mesh,
+    triangles: &[[u32; 3]],
     transform: Mat4,
     eyes: &[Vec3],
     image_res: u32,
@@ -336,7 +349,7 @@ pub fn projected_areas_px(
         .iter()
         .map(|&v| transform.transform_point3(Vec3::from_array(v)))
         .collect();
-    mesh.triangles
+    triangles
         .iter()
         .map(|t| {
             let [a, b, c] = t.map(|i| p[i as usize]);
@@ -479,10 +492,16 @@ pub fn derive_svmesh(
         };
         let weights: Vec<f32> = states.iter().map(|s| s.weight()).collect();
         // Step 1 (and 4 for clusters): the triangles to simplify.
-        let mut front = front_facing_from(mesh, item.transform, centre);
+        let mut front = front_facing_of(mesh, start.triangles, item.transform, centre);
         // On welded vertices: a UV-seamed model's faces are not specks (issue 18).
-        let welded = crate::simplify::welded_triangles(&mesh.positions, &mesh.triangles);
-        let areas = projected_areas_px(mesh, item.transform, &[centre], settings.image_res);
+        let welded = crate::simplify::welded_triangles(&mesh.positions, start.triangles);
+        let areas = projected_areas_px(
+            mesh,
+            start.triangles,
+            item.transform,
+            &[centre],
+            settings.image_res,
+        );
         tidy_selection_sized(&welded, &mut front, settings.speck_triangles, Some(&areas));
         let cluster_capture = match &shot {
             Shot::Cluster(shot) => Some(&shot.0),
@@ -501,12 +520,13 @@ pub fn derive_svmesh(
                     shown[v as usize] = true;
                 }
             }
-            mesh.triangles
+            start
+                .triangles
                 .iter()
                 .map(|tri| tri.iter().any(|&v| shown[v as usize]))
                 .collect()
         });
-        let selected: Vec<bool> = mesh
+        let selected: Vec<bool> = start
             .triangles
             .iter()
             .enumerate()

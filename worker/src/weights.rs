@@ -75,6 +75,7 @@ pub fn vertex_states(
     vertex_states_captured(
         mesh,
         &mesh.triangles,
+        &mesh.triangles,
         transform,
         capture,
         classes,
@@ -84,12 +85,14 @@ pub fn vertex_states(
 }
 
 /// [`vertex_states`] of a level of the model's LOD chain (`mesh`: the model's
-/// vertices with the level's triangles) in the capture of the full model, whose
+/// vertices; `triangles`: the level's) in the capture of the full model, whose
 /// triangles are `captured_triangles`: "front-facing" is judged on the level's
 /// triangles, the depth test's surface plane on the captured triangle under the
 /// vertex's pixel (the triangle-ID buffer indexes the captured mesh, not the level).
+#[allow(clippy::too_many_arguments)]
 pub fn vertex_states_captured(
     mesh: &Mesh,
+    triangles: &[[u32; 3]],
     captured_triangles: &[[u32; 3]],
     transform: Mat4,
     capture: &Capture,
@@ -99,7 +102,7 @@ pub fn vertex_states_captured(
 ) -> Vec<VertexState> {
     // Step 1: per vertex, "some incident triangle is front-facing" from the eye.
     let world = world_positions(mesh, transform);
-    let front_facing_vertex = front_facing_vertices_of(&world, &mesh.triangles, capture.view.eye);
+    let front_facing_vertex = front_facing_vertices_of(&world, triangles, capture.view.eye);
     // Steps 2–3: depth-buffer visibility of the front-facing vertices, combined.
     states_gated(
         &world,
@@ -139,17 +142,18 @@ pub fn vertex_states_if_front(
 }
 
 /// [`vertex_states_captured`] from [`vertex_states_if_front`]'s states: a vertex of
-/// `start` (the model's vertices with a level's triangles) none of whose triangles
+/// `start` (the model's vertices) none of whose `start_triangles` (a level's)
 /// faces `eye` is back-facing, any other keeps its state. Equal to
 /// [`vertex_states_captured`] of `start` in the same capture.
 pub fn with_front_facing(
     if_front: &[VertexState],
     start: &Mesh,
+    start_triangles: &[[u32; 3]],
     transform: Mat4,
     eye: Vec3,
 ) -> Vec<VertexState> {
     let world = world_positions(start, transform);
-    let front = front_facing_vertices_of(&world, &start.triangles, eye);
+    let front = front_facing_vertices_of(&world, start_triangles, eye);
     front
         .iter()
         .zip(if_front)

@@ -184,7 +184,8 @@ fn chain_level_vertices_are_as_visible_as_the_full_models() {
     let chain = chains.get(scene.instances[0].model).unwrap();
     let level = &chain.levels[chain.levels.len() / 2];
     let states = vertex_states_captured(
-        &level.mesh,
+        item.mesh,
+        &level.triangles,
         &item.mesh.triangles,
         item.transform,
         &capture.capture,
@@ -192,8 +193,7 @@ fn chain_level_vertices_are_as_visible_as_the_full_models() {
         inst,
         tol,
     );
-    let used: std::collections::BTreeSet<u32> =
-        level.mesh.triangles.iter().flatten().copied().collect();
+    let used: std::collections::BTreeSet<u32> = level.triangles.iter().flatten().copied().collect();
     let visible = |s: &[VertexState]| {
         used.iter()
             .filter(|&&v| matches!(s[v as usize], VertexState::Visible(_)))

@@ -1175,7 +1175,7 @@ proptest! {
         used.dedup();
         let mut finer = mesh.triangles.len();
         for (k, level) in chain.levels.iter().enumerate() {
-            let tris = &level.mesh.triangles;
+            let tris = &level.triangles;
             prop_assert!(tris.len() <= finer, "level {} grew", k);
             finer = tris.len();
             prop_assert!(level.max_error <= level.bound * 1.0001, "level {}: {} > ε {}", k, level.max_error, level.bound);
@@ -1222,27 +1222,27 @@ proptest! {
         let bound = DeviationBound { max_px, region: prism };
         let allowed = mesh.triangles.iter().flatten().all(|&v| {
             let p = mesh.positions[v as usize];
-            let d = distance_to_surface(&mesh.positions, &start.mesh.triangles, p);
+            let d = distance_to_surface(&mesh.positions, &start.triangles, p);
             d <= bound.world_tolerance(p, ppr)
         });
         prop_assume!(allowed);
         {
             let mut count = vec![0u32; mesh.positions.len()];
-            start.mesh.triangles.iter().flatten().for_each(|&v| count[v as usize] = 1);
+            start.triangles.iter().flatten().for_each(|&v| count[v as usize] = 1);
             start.carried.iter().flatten().for_each(|&v| count[v as usize] += 1);
             for &v in mesh.triangles.iter().flatten() {
                 prop_assert_eq!(count[v as usize], 1, "vertex {}", v);
             }
         }
         let w = vec![0.25f32; mesh.positions.len()];
-        let input = SimplifyInput { triangles: &start.mesh.triangles, ..input_of(&mesh, &w) };
+        let input = SimplifyInput { triangles: &start.triangles, ..input_of(&mesh, &w) };
         let params = SimplifyParams {
             edge_length_tolerance_px: 1e6,
             length: ProjectedLength::MaxOverPrism { prism, pixels_per_radian: ppr },
             deviation: Some(bound),
         };
         let out = simplify_seeded(&input, &params, Some(start.carried.clone())).unwrap();
-        validate(mesh.positions.len(), &start.mesh.triangles, &out).unwrap();
+        validate(mesh.positions.len(), &start.triangles, &out).unwrap();
         prop_assert_eq!(bound_violation(&mesh, &out.triangles, &bound, ppr), None);
     }
 
@@ -1266,7 +1266,7 @@ fn lod_chain_file_round_trips_and_refuses_damage() {
     let mesh = icosphere(2, Vec3::ZERO, 3.0, &[0.3, -0.2, 0.1]);
     let model = model_of(&mesh);
     let chain = worker::lod_chain::LodChain::build(&model).unwrap();
-    assert!(chain.levels.last().unwrap().mesh.triangles.len() < mesh.triangles.len());
+    assert!(chain.levels.last().unwrap().triangles.len() < mesh.triangles.len());
     let bytes = chain.to_file(mesh.positions.len() as u32).encode();
     let file = format::lod::LodChainFile::decode(&bytes).unwrap();
     let back = worker::lod_chain::LodChain::from_file(file.clone(), &model).unwrap();
