@@ -24,19 +24,24 @@ fn disc() -> Vec<u8> {
         .collect()
 }
 
-/// Frames of the impostor bake with one layer of codes `lo..=hi`, from the capture
-/// eye and from one displaced by 2 units; `None` without an adapter.
-fn draw(lo: u8, hi: u8) -> Option<Vec<(u64, usize)>> {
-    let dir = tempfile::tempdir().unwrap();
-    let capture = Camera {
-        eye: Vec3::new(50.0, 6.0, 80.0),
+/// The 64² capture camera of a test impostor at x = `x`, looking down −z.
+fn capture_camera(x: f32) -> Camera {
+    Camera {
+        eye: Vec3::new(x, 6.0, 80.0),
         dir: Vec3::NEG_Z,
         fov_y_deg: 30.0,
         width: 64,
         height: 64,
         near: 0.5,
         far: 200.0,
-    };
+    }
+}
+
+/// Frames of the impostor bake with one layer of codes `lo..=hi`, from the capture
+/// eye and from one displaced by 2 units; `None` without an adapter.
+fn draw(lo: u8, hi: u8) -> Option<Vec<(u64, usize)>> {
+    let dir = tempfile::tempdir().unwrap();
+    let capture = capture_camera(50.0);
     let tex = Texture::from_rgba8(64, 64, &disc(), TextureEncoding::Rgba8).unwrap();
     let layers = ImpostorLayers {
         corner_rays: [[0.0; 3]; 4],
@@ -106,15 +111,7 @@ fn draw_ten(batches: bool) -> Option<(Vec<u8>, u64, u64, u64)> {
     let dir = tempfile::tempdir().unwrap();
     let impostors: Vec<_> = (0..10u8)
         .map(|k| {
-            let capture = Camera {
-                eye: Vec3::new(10.0 + 9.0 * f32::from(k), 6.0, 80.0),
-                dir: Vec3::NEG_Z,
-                fov_y_deg: 30.0,
-                width: 64,
-                height: 64,
-                near: 0.5,
-                far: 200.0,
-            };
+            let capture = capture_camera(10.0 + 9.0 * f32::from(k));
             let rgb = [20 + 23 * k, 220 - 19 * k, 40 + 17 * k];
             let tex = Texture::from_rgba8(64, 64, &disc_of(rgb), TextureEncoding::Rgba8).unwrap();
             let layers = ImpostorLayers {
