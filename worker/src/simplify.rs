@@ -61,7 +61,11 @@
 //!     vertex, in the LOD chain levels as in every cell's collapse. A locked vertex
 //!     group (welding, below) is locked when one of its copies is.
 //! - **Retrying.** A rejected edge leaves the heap and is pushed again when a
-//!   collapse changes the neighbourhood of one of its vertices.
+//!   collapse changes the neighbourhood of one of its vertices. When it comes up
+//!   again with no triangle around its ends or opposite corners changed since (their
+//!   corners or carried points), it is rejected without the tests, which would
+//!   answer as before. The tests run cheapest-rejecting first (the deviation bound
+//!   before the link condition and the fan tests); the order changes no answer.
 //! - **Heap.** Since the survivor keeps its attributes, an edge's cost never
 //!   changes: the min-heap is invalidated lazily (an entry whose vertex was removed
 //!   is skipped when popped), edges new to the survivor are pushed after each
