@@ -23,6 +23,7 @@ pub const LIGHT_DIR: Vec3 = Vec3::new(0.4 / 1.118_034, 1.0 / 1.118_034, 0.3 / 1.
 
 /// Shaded linear colour of a surface point with linear `albedo_linear` and unit
 /// world-space `normal`.
+#[inline]
 pub fn shade(albedo_linear: Vec3, normal: Vec3) -> Vec3 {
     let lambert = normal.dot(LIGHT_DIR).max(0.0);
     albedo_linear * (AMBIENT + (1.0 - AMBIENT) * lambert)

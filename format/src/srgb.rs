@@ -43,6 +43,7 @@ pub fn srgb_to_linear_f64(c: u8) -> f64 {
 
 /// One 8-bit channel → linear in [0, 1] ([`srgb_to_linear_f64`] rounded to f32,
 /// from a table).
+#[inline]
 pub fn srgb_to_linear(c: u8) -> f32 {
     SRGB_TO_LINEAR[c as usize]
 }
@@ -53,6 +54,7 @@ static SRGB_TO_LINEAR: LazyLock<[f32; 256]> =
 /// sRGB transfer function, encoded: linear (clamped to [0, 1]) → 8-bit channel,
 /// rounded to nearest: the code c with decode((c − ½)/255) ≤ l < decode((c + ½)/255),
 /// found from a table of those 255 thresholds (computed in f64) rather than `powf`.
+#[inline]
 pub fn linear_to_srgb(l: f32) -> u8 {
     let t = &*ENCODE;
     if l.is_nan() || l <= 0.0 {
@@ -105,6 +107,7 @@ pub fn linear_to_srgb_powf(x: f32) -> u8 {
 }
 
 /// A linear colour → opaque sRGB8 ([`linear_to_srgb`] per channel).
+#[inline]
 pub fn linear_to_srgb8(rgb: Vec3) -> [u8; 4] {
     [
         linear_to_srgb(rgb.x),
@@ -115,6 +118,7 @@ pub fn linear_to_srgb8(rgb: Vec3) -> [u8; 4] {
 }
 
 /// An sRGB8 colour (alpha ignored) → linear RGB.
+#[inline]
 pub fn srgb8_to_linear(c: [u8; 4]) -> Vec3 {
     Vec3::new(
         srgb_to_linear(c[0]),
