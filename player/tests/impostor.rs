@@ -37,13 +37,10 @@ fn capture_camera(x: f32) -> Camera {
     }
 }
 
-/// Frames of the impostor bake with one layer of codes `lo..=hi`, from the capture
-/// eye and from one displaced by 2 units; `None` without an adapter.
-fn draw(lo: u8, hi: u8) -> Option<Vec<(u64, usize)>> {
-    let dir = tempfile::tempdir().unwrap();
-    let capture = capture_camera(50.0);
-    let tex = Texture::from_rgba8(64, 64, &disc(), TextureEncoding::Rgba8).unwrap();
-    let layers = ImpostorLayers {
+/// Impostor layers between depths 15 and 25: one layer at code 128 showing codes
+/// `lo..=hi`.
+fn one_layer(lo: u8, hi: u8) -> ImpostorLayers {
+    ImpostorLayers {
         corner_rays: [[0.0; 3]; 4],
         near: 15.0,
         far: 25.0,
@@ -52,7 +49,16 @@ fn draw(lo: u8, hi: u8) -> Option<Vec<(u64, usize)>> {
             code_lo: lo,
             code_hi: hi,
         }],
-    };
+    }
+}
+
+/// Frames of the impostor bake with one layer of codes `lo..=hi`, from the capture
+/// eye and from one displaced by 2 units; `None` without an adapter.
+fn draw(lo: u8, hi: u8) -> Option<Vec<(u64, usize)>> {
+    let dir = tempfile::tempdir().unwrap();
+    let capture = capture_camera(50.0);
+    let tex = Texture::from_rgba8(64, 64, &disc(), TextureEncoding::Rgba8).unwrap();
+    let layers = one_layer(lo, hi);
     write_impostor_bake(dir.path(), &capture, tex, layers).unwrap();
     let mut p = common::open_player(dir.path(), (96, 96), &player::DrawOptions::default())?;
     let mut s = Streamer::new(&p.bake, StreamConfig::default());
@@ -114,16 +120,7 @@ fn draw_ten(batches: bool) -> Option<(Vec<u8>, u64, u64, u64)> {
             let capture = capture_camera(10.0 + 9.0 * f32::from(k));
             let rgb = [20 + 23 * k, 220 - 19 * k, 40 + 17 * k];
             let tex = Texture::from_rgba8(64, 64, &disc_of(rgb), TextureEncoding::Rgba8).unwrap();
-            let layers = ImpostorLayers {
-                corner_rays: [[0.0; 3]; 4],
-                near: 15.0,
-                far: 25.0,
-                layers: vec![ImpostorLayer {
-                    depth: format::pack::depth_of_code(15.0, 25.0, 128),
-                    code_lo: 100,
-                    code_hi: 160,
-                }],
-            };
+            let layers = one_layer(100, 160);
             (capture, tex, layers)
         })
         .collect();
