@@ -56,6 +56,7 @@
 
 use crate::backface::all_culled;
 use crate::capture::pack_texture;
+use crate::capture_memo::CaptureMemo;
 pub use crate::derive::CellTimes;
 use crate::derive::{derive_region, selection_culled, Region};
 pub use crate::error::BakeError;
@@ -419,6 +420,16 @@ pub(crate) fn finish(
 impl CellBake {
     /// The cell pack (no times or other run-dependent data reach it).
     pub fn to_pack(&self, fingerprint: [u8; 32]) -> Result<CellPack, BakeError> {
+        self.to_pack_with(fingerprint, &CaptureMemo::default())
+    }
+
+    /// [`CellBake::to_pack`] with capture textures encoded through the run's
+    /// `memo` ([`CaptureMemo::encoded`]): once per distinct image, the same bytes.
+    pub fn to_pack_with(
+        &self,
+        fingerprint: [u8; 32],
+        memo: &CaptureMemo,
+    ) -> Result<CellPack, BakeError> {
         let proxies = self
             .proxies
             .iter()
@@ -460,7 +471,7 @@ impl CellBake {
                     .iter()
                     .map(|v| {
                         let (texture, matrix) =
-                            pack_texture(v).map_err(|what| BakeError::Texture {
+                            pack_texture(v, memo).map_err(|what| BakeError::Texture {
                                 cell: self.cell,
                                 instance: p.members.first().map_or(u32::MAX, |m| m.instance),
                                 what,

@@ -455,16 +455,19 @@ fn dilate(rgba: &mut [u8], filled: &mut [bool], w: usize, h: usize) {
 /// 1 × 1 texture of a sub-pixel object, opaque by design.)
 pub fn pack_texture(
     texture: &ProjectedTexture,
+    memo: &crate::capture_memo::CaptureMemo,
 ) -> Result<(format::pack::Texture, [f32; 16]), String> {
-    let t = format::pack::Texture::from_rgba8_bc1_coverage(
-        texture.width,
-        texture.height,
-        &texture.rgba,
-    )?;
+    let (w, h, rgba) = (texture.width, texture.height, &texture.rgba);
+    let t = memo.encoded(w, h, rgba, || {
+        format::pack::Texture::from_rgba8_bc1_coverage(w, h, rgba)
+    })?;
     let sx = texture.width as f32 / t.width as f32;
     let sy = texture.height as f32 / t.height as f32;
     let scale = Mat4::from_diagonal(Vec4::new(sx, sy, 1.0, 1.0));
-    Ok((t, matrix_array(&(scale * texture.matrix))))
+    Ok((
+        format::pack::Texture::clone(&t),
+        matrix_array(&(scale * texture.matrix)),
+    ))
 }
 
 /// The column-major matrix as stored in a pack.

@@ -394,7 +394,9 @@ pub fn bake_cell_pack(
         ),
     }
     .map_err(|e| e.explain(scene))?;
-    let pack = bake.to_pack(*fingerprint).map_err(|e| e.explain(scene))?;
+    let pack = bake
+        .to_pack_with(*fingerprint, chains.captures())
+        .map_err(|e| e.explain(scene))?;
     let s = &bake.stats;
     let t = &s.times;
     // What `pipeline report` reads (the paper's Tables 3–8 per cell), the quality
