@@ -265,6 +265,15 @@ impl ProjectiveTextures {
             Some(masks) => *masks.get(s.triangle as usize)? as u32,
             None => u32::MAX,
         };
+        let usable = mask & (u32::MAX >> (32 - surface.views.len().clamp(1, 32)));
+        if surface.views.is_empty() || usable == 0 {
+            return None;
+        }
+        if usable.is_power_of_two() {
+            // One usable view (every SvMesh and cluster pixel): no angles to rank.
+            let i = usable.trailing_zeros() as usize;
+            return Some(to_srgb8(surface.views[i].sample(p)?));
+        }
         let to_viewer = (self.viewer - p).normalize_or_zero();
         // The (up to) two usable views closest in angle to the viewer's direction.
         // Ranked by the cosine, with the arccosine taken only for the two kept (per
@@ -1085,8 +1094,55 @@ pub fn homogeneous_barycentrics(c: [Vec4; 3], ndc: Vec2) -> Vec3 {
 
 #[cfg(test)]
 mod tests {
-    use super::angle_closer;
+    use super::*;
     use proptest::prelude::*;
+
+    fn solid(colour: u8) -> ProjectedTexture {
+        ProjectedTexture {
+            eye: Vec3::new(0.0, 0.0, 10.0 + colour as f32),
+            matrix: Mat4::IDENTITY,
+            width: 1,
+            height: 1,
+            rgba: vec![colour, colour, colour, 255],
+        }
+    }
+
+    /// A pixel whose triangle one view alone may texture takes that view's colour;
+    /// none: lit (`None`); two: a blend of the two.
+    #[test]
+    fn a_pixel_with_one_usable_view_takes_it() {
+        let mesh = Mesh {
+            positions: vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+            triangles: vec![[0, 1, 2]],
+            ..Mesh::default()
+        };
+        let item = DrawItem::whole(&mesh, 0);
+        let normal_matrix = Mat3::IDENTITY;
+        let pixel = PixelSurface {
+            item: &item,
+            triangle: 0,
+            barycentric: Vec3::splat(1.0 / 3.0),
+            normal_matrix: &normal_matrix,
+        };
+        let shade = |views: Vec<ProjectedTexture>, mask: Option<u8>| {
+            ProjectiveTextures {
+                viewer: Vec3::new(0.0, 0.0, 5.0),
+                by_object: vec![Some(ProjectiveSurface {
+                    views,
+                    triangle_masks: mask.map(|m| vec![m]),
+                })],
+            }
+            .shade(&pixel)
+        };
+        let three = || vec![solid(10), solid(100), solid(200)];
+        assert_eq!(shade(vec![solid(77)], None), Some([77, 77, 77, 255]));
+        assert_eq!(shade(three(), Some(0b100)), Some([200, 200, 200, 255]));
+        assert_eq!(shade(three(), Some(0b010)), Some([100, 100, 100, 255]));
+        assert_eq!(shade(three(), Some(0)), None);
+        assert_eq!(shade(Vec::new(), None), None);
+        let blend = shade(three(), Some(0b011)).unwrap();
+        assert!(blend[0] > 10 && blend[0] < 100, "{blend:?}");
+    }
 
     proptest! {
         /// Ranking views by cosine picks what ranking them by angle picked, for
