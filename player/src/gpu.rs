@@ -9,8 +9,9 @@
 //! once ([`GpuModels`]); originals are drawn as instanced draws, one per model, with
 //! per-instance transforms. Proxies are de-indexed world-space triangle lists carrying
 //! each triangle's view mask and centroid (flat attributes), one draw per proxy;
-//! a pack's layered impostors are uploaded in batches of up to [`MAX_VIEWS`], each
-//! batch one proxy (one draw) with its members' textures in one atlas.
+//! a pack's layered impostors, and its single-view mesh proxies, are uploaded in
+//! batches of up to [`MAX_VIEWS`], each batch one proxy (one draw) with its
+//! members' textures in one atlas.
 //! This file owns the GPU resources and the submission of a frame; what a frame
 //! draws — the draw list, its counts and the plan the renderer uploads and encodes —
 //! is decided in `gpu/frame_model.rs` (re-exported here: [`DrawList`]), the fixed GPU
@@ -164,9 +165,10 @@ pub struct GpuProxy {
     pub view_slots: usize,
     /// World bounds of its vertices (the draw order: nearest first).
     pub bounds: crate::camera::Aabb,
-    /// Its views in one texture (issue 30 item 7): a mesh proxy's, drawn with
-    /// `fs_proxy_atlas`, or a batch of layered impostors' (slot k = member k's one
-    /// view), drawn with `fs_proxy`; `None`: one texture per view.
+    /// Its views in one texture (issue 30 item 7): a mesh proxy's, or a batch of
+    /// single-view mesh proxies' (slot k = member k's one view), drawn with
+    /// `fs_proxy_atlas`, or a batch of layered impostors' (slot k likewise), drawn
+    /// with `fs_proxy`; `None`: one texture per view.
     atlas: Option<Atlas>,
 }
 
@@ -174,9 +176,9 @@ pub struct GpuProxy {
 /// samples only the two views it blends (shader.wgsl `fs_proxy_atlas`), where with a
 /// texture per view a CPU rasterizer samples every slot the shader may read. Made
 /// for a mesh proxy of two or more views that share one encoding and fit the
-/// device's largest texture side, and for a batch of layered impostors of one
-/// encoding (each member's one view; `Renderer::create_pack_proxies`); the other
-/// proxies keep a texture per view.
+/// device's largest texture side, and for a batch of layered impostors or of
+/// single-view mesh proxies of one encoding (each member's one view;
+/// `Renderer::create_pack_proxies`); the other proxies keep a texture per view.
 struct Atlas {
     texture: wgpu::Texture,
     view: wgpu::TextureView,
@@ -251,6 +253,9 @@ pub struct Renderer {
     representation_colours: bool,
     /// Layered impostors of one pack drawn in batches ([`Renderer::set_impostor_batches`]).
     impostor_batches: bool,
+    /// Single-view mesh proxies of one pack drawn in batches
+    /// ([`Renderer::set_mesh_batches`]).
+    mesh_batches: bool,
     /// What it draws with ([`Renderer::options`]): the tile size of proxies'
     /// clusters, and `bc_textures`: upload BC1/BC3 capture textures as they are (the
     /// device has `TEXTURE_COMPRESSION_BC` and the options did not turn it off);
@@ -372,6 +377,7 @@ impl Renderer {
             coverage_alpha: false,
             representation_colours: false,
             impostor_batches: true,
+            mesh_batches: true,
             options,
         })
     }
@@ -415,6 +421,16 @@ impl Renderer {
         self.impostor_batches = on;
     }
 
+    /// With `on` (the default), the mesh proxies of a pack with exactly one view
+    /// (SV meshes, and clusters or MV meshes of one view) uploaded from now on are
+    /// drawn in batches of up to [`MAX_VIEWS`], one draw call each, with
+    /// `fs_proxy_atlas` ([`Renderer::create_pack_proxies`]); off, one draw call per
+    /// proxy, as before (for comparisons: the frames are the same to a level where
+    /// an atlas coordinate rounds differently; `tests/render.rs`).
+    pub fn set_mesh_batches(&mut self, on: bool) {
+        self.mesh_batches = on;
+    }
+
     /// A second renderer on this one's device with a `width × height` target (e.g. a
     /// supersampled reference) and the same options: models uploaded by either can
     /// be drawn by both.
@@ -428,6 +444,7 @@ impl Renderer {
         )
         .map(|mut r| {
             r.impostor_batches = self.impostor_batches;
+            r.mesh_batches = self.mesh_batches;
             r
         })
     }

@@ -20,7 +20,8 @@
 // vertex, not per pixel) and passes the two views' projective coordinates.
 //
 // Layered impostors (kind 4, paper 001): see impostor_layer below (alone, or a
-// batch of up to MAX_VIEWS impostors sharing one atlas, one draw call).
+// batch of up to MAX_VIEWS impostors sharing one atlas, one draw call). Mesh proxies
+// of one view may likewise be drawn in batches sharing one atlas (fs_proxy_atlas).
 
 // AMBIENT, LIGHT, SRGB_* and MAX_VIEWS are not declared here: the player prepends
 // format::shading::wgsl_constants() (player::gpu::shader_source), their one home.
@@ -431,6 +432,9 @@ fn atlas_texel(i: u32, uv: vec2<f32>) -> vec4<f32> {
 // A mesh proxy whose views share one atlas texture (t0): a fragment samples only the
 // two views it blends, where the per-view pipelines sample every slot (a CPU
 // rasterizer runs each branch under lane masks). Never discards, like fs_proxy_mesh.
+// Also a batch of single-view mesh proxies (the player's upload, gpu/upload.rs):
+// slot k is member k's one view, and member k's triangles have mask bit k where a
+// lone one's have bit 0, so vs_proxy chooses view k for them as it chose view 0.
 @fragment
 fn fs_proxy_atlas(i: ProxyOut) -> @location(0) vec4<f32> {
     let lit = shade(i.albedo, i.normal);

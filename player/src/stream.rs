@@ -220,13 +220,14 @@ pub struct ResidentCell {
     pub cell_id: u32,
     pub originals: Vec<u32>,
     /// The pack's proxies as drawn: one per pack proxy, except that a batch of
-    /// layered impostors (`Renderer::create_pack_proxies`) is one, culled, ordered,
-    /// stood in for and replaced by originals as a whole.
+    /// layered impostors or of single-view mesh proxies
+    /// (`Renderer::create_pack_proxies`) is one, culled, ordered, stood in for and
+    /// replaced by originals as a whole.
     pub proxies: Vec<GpuProxy>,
     /// Per proxy: its world bounds (a batch's: the union of its members').
     pub bounds: Vec<Aabb>,
     /// Per proxy: its member instances (drawn as originals until it is ready; a
-    /// batch's: every member impostor's, without duplicates).
+    /// batch's: every member proxy's, without duplicates).
     pub members: Vec<Vec<u32>>,
     /// Texels still waiting in the upload queue: (proxy, slot) → texels (a batch's
     /// slot k: its member k's one view).
@@ -649,8 +650,9 @@ impl Streamer {
                     .map(|(p, v)| (p.vertices.as_slice(), v.as_slice()))
                     .collect();
                 // The GPU proxies, each drawing one pack proxy or a batch of layered
-                // impostors (`Renderer::create_pack_proxies`): a batch is one proxy
-                // here too, with its members' union of bounds and member objects.
+                // impostors or single-view mesh proxies
+                // (`Renderer::create_pack_proxies`): a batch is one proxy here too,
+                // with its members' union of bounds and member objects.
                 let drawn = renderer.create_pack_proxies(&sources);
                 let mut packed: Vec<Option<crate::bake::PreparedProxy>> =
                     cell.proxies.into_iter().map(Some).collect();

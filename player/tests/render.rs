@@ -701,6 +701,105 @@ fn texture_uploads_stay_under_the_budget_at_every_frame() {
     );
 }
 
+/// The synthetic bake's hybrid frame looking across the park from a corner (many
+/// SV mesh proxies in view), with the single-view mesh proxies of each pack drawn in
+/// batches (`Renderer::set_mesh_batches`, the default) or one by one, every texture
+/// resident (`PendingDraw::Lit`: the frame before is drawn with the lit ones too).
+/// Returns the pixels, the draw calls (as the list predicts them and as submitted),
+/// the triangles and the proxies waiting; `None` without an adapter.
+fn mesh_batch_frame(batches: bool, budget: u64) -> Option<(Vec<u8>, u64, u64, u64, usize)> {
+    let dir = tempfile::tempdir().unwrap();
+    write_synthetic_bake(dir.path()).unwrap();
+    let mut p = open(dir.path(), (128, 128), &DrawOptions::default())?;
+    p.renderer.set_mesh_batches(batches);
+    let cam = Camera {
+        eye: Vec3::new(30.0, 6.0, 40.0),
+        dir: Vec3::new(120.0, -2.0, 80.0),
+        fov_y_deg: 60.0,
+        width: 128,
+        height: 128,
+        near: 0.25,
+        far: p.bake.extent,
+    };
+    let mut s = Streamer::new(
+        &p.bake,
+        StreamConfig {
+            prefetch: false,
+            upload_budget_bytes: budget,
+            pending: PendingDraw::Lit,
+            ..Default::default()
+        },
+    );
+    let (_, list, stats) = p.draw_listed(&cam, Mode::Hybrid, Some(&mut s));
+    let px = p.renderer.read_pixels().unwrap();
+    let out = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("mesh-batches-{batches}-budget-{budget}.png"));
+    player::run::write_png(&out, 128, 128, &px).unwrap();
+    eprintln!(
+        "batches {batches}, budget {budget}: {} draw calls, {} triangles, {} proxies waiting; {}",
+        list.draw_calls,
+        list.triangles,
+        stats.pending_proxies,
+        out.display()
+    );
+    Some((
+        px,
+        list.draw_calls,
+        p.renderer.last_draw_calls,
+        list.triangles,
+        stats.pending_proxies,
+    ))
+}
+
+/// Issue 27: a pack's single-view mesh proxies (SV meshes, the synthetic bake's one
+/// cluster) drawn in batches of up to 8 — one vertex buffer, one atlas, one uniform,
+/// one draw call (`Renderer::create_pack_proxies`) — give the frame of drawing them
+/// one by one in fewer draw calls, with the same tiles culled; so does a frame whose
+/// proxies wait for their textures and are drawn lit.
+#[test]
+fn mesh_batches_draw_the_same_frame_in_fewer_calls() {
+    let Some((batched, calls, submitted, tris, _)) = mesh_batch_frame(true, 1 << 30) else {
+        return;
+    };
+    let (alone, calls_alone, submitted_alone, tris_alone, _) =
+        mesh_batch_frame(false, 1 << 30).unwrap();
+    assert_eq!((calls, calls_alone), (submitted, submitted_alone));
+    assert_eq!(tris, tris_alone, "the tiles culled are the same");
+    assert!(
+        calls + 5 <= calls_alone,
+        "{calls} draw calls batched, {calls_alone} alone"
+    );
+    assert!(
+        non_sky(&batched) > 2000,
+        "{} object pixels",
+        non_sky(&batched)
+    );
+    let differ = |a: &[u8], b: &[u8]| {
+        let worst = a.iter().zip(b).map(|(x, y)| x.abs_diff(*y)).max().unwrap();
+        let n = a
+            .chunks_exact(4)
+            .zip(b.chunks_exact(4))
+            .filter(|(x, y)| x != y)
+            .count();
+        (n, worst)
+    };
+    let (n, worst) = differ(&batched, &alone);
+    eprintln!("batched vs alone: {n} pixels differ, worst channel by {worst}");
+    assert_eq!((n, worst), (0, 0), "the same frame");
+    // Nothing uploaded yet: every proxy drawn lit, batches as their members.
+    let Some((lit, calls_lit, _, tris_lit, waiting)) = mesh_batch_frame(true, 1) else {
+        return;
+    };
+    let (lit_alone, calls_lit_alone, _, _, waiting_alone) = mesh_batch_frame(false, 1).unwrap();
+    assert!(
+        waiting > 0 && waiting < waiting_alone,
+        "{waiting} vs {waiting_alone}"
+    );
+    assert_eq!(tris_lit, tris);
+    assert_eq!((calls_lit, calls_lit_alone), (calls, calls_alone));
+    assert_eq!(differ(&lit, &lit_alone), (0, 0), "the same lit frame");
+}
+
 /// Proxies whose textures are still queued are drawn as their members' original
 /// geometry: a frame with a tiny budget has no more holes than one with every
 /// texture resident (a skipped proxy would leave sky where its objects are).

@@ -184,39 +184,53 @@ impl Renderer {
 
     /// The GPU proxies of one pack's `proxies` (each its vertices and views), in
     /// pack order, each with the pack proxies it draws. A proxy is drawn alone
-    /// ([`Renderer::create_proxy`]; its views are its slots), except that layered
-    /// impostors (paper 001) are drawn in batches ([`impostor_batches`]) when
-    /// [`Renderer::set_impostor_batches`] is on (the default): up to [`MAX_VIEWS`]
-    /// impostors of one encoding in one vertex buffer, one [`Atlas`] and one uniform,
-    /// one draw call ([`Renderer::create_impostor_batch`]); slot k of a batch is its
-    /// member k's one view. A batch whose atlas cannot be made is drawn member by
+    /// ([`Renderer::create_proxy`]; its views are its slots), except that two
+    /// classes are drawn in batches ([`proxy_batches`]) of up to [`MAX_VIEWS`]
+    /// members of one class and one encoding, each batch one vertex buffer, one
+    /// [`Atlas`] and one uniform, one draw call, slot k being member k's one view:
+    /// layered impostors (paper 001) when [`Renderer::set_impostor_batches`] is on
+    /// ([`Renderer::create_impostor_batch`]), and mesh proxies of exactly one view
+    /// (SV meshes; clusters and MV meshes of one view alike; paper 000 §3.2) when
+    /// [`Renderer::set_mesh_batches`] is on ([`Renderer::create_mesh_batch`]); both
+    /// are on by default. A batch whose atlas cannot be made is drawn member by
     /// member, as before.
     pub fn create_pack_proxies(
         &self,
         proxies: &[(&[ProxyVertex], &[ViewInfo])],
     ) -> Vec<(GpuProxy, Vec<usize>)> {
-        let batchable: Vec<Option<TextureEncoding>> = proxies
+        let layered = format::pack::ProxyKind::LayeredImpostor as u32;
+        let batchable: Vec<Option<(BatchClass, TextureEncoding)>> = proxies
             .iter()
             .map(|(vertices, views)| {
-                let impostor = self.impostor_batches
-                    && !vertices.is_empty()
-                    && vertices
-                        .iter()
-                        .all(|v| v.kind == format::pack::ProxyKind::LayeredImpostor as u32)
+                let one_view = !vertices.is_empty()
                     && views.len() == 1
                     && views[0].width > 0
                     && views[0].height > 0;
-                impostor.then(|| views[0].encoding)
+                let class = if !one_view {
+                    None
+                } else if vertices.iter().all(|v| v.kind == layered) {
+                    self.impostor_batches.then_some(BatchClass::Impostors)
+                } else if vertices.iter().all(|v| v.kind != layered) {
+                    self.mesh_batches.then_some(BatchClass::Meshes)
+                } else {
+                    None
+                };
+                class.map(|c| (c, views[0].encoding))
             })
             .collect();
         let mut out = Vec::with_capacity(proxies.len());
-        for batch in impostor_batches(&batchable, MAX_VIEWS) {
+        for batch in proxy_batches(&batchable, MAX_VIEWS) {
             if batch.len() > 1 {
                 let members: Vec<(&[ProxyVertex], ViewInfo)> = batch
                     .iter()
                     .map(|&i| (proxies[i].0, proxies[i].1[0]))
                     .collect();
-                if let Some(p) = self.create_impostor_batch(&members) {
+                let made = match batchable[batch[0]] {
+                    Some((BatchClass::Impostors, _)) => self.create_impostor_batch(&members),
+                    Some((BatchClass::Meshes, _)) => self.create_mesh_batch(&members),
+                    None => None,
+                };
+                if let Some(p) = made {
                     out.push((p, batch));
                     continue;
                 }
@@ -279,6 +293,40 @@ impl Renderer {
             }));
         }
         Some(self.finish_proxy(&vertices, clusters, &views, Some(atlas), true))
+    }
+
+    /// A batch of mesh proxies with one view each (`members`: 2 to [`MAX_VIEWS`], one
+    /// encoding; SV meshes, paper 000 §3.2), drawn as one proxy with
+    /// `fs_proxy_atlas`: member k's triangles, grouped by normal cluster as
+    /// [`Renderer::create_proxy`] groups a lone proxy's (member by member, so each
+    /// tile holds one member's triangles and culls as before), see view k where
+    /// they saw view 0 (mask bit 0 becomes bit k; the other bits, which a proxy of
+    /// one view never reads, are cleared), so `vs_proxy` chooses slot k exactly as
+    /// it chose slot 0 alone; the uniform holds member k's `tex_from_world` and eye
+    /// in slot k and its texture's rectangle of the batch's [`Atlas`] in
+    /// `rects[k]`. `None` where the atlas cannot be made (`create_atlas`).
+    fn create_mesh_batch(&self, members: &[(&[ProxyVertex], ViewInfo)]) -> Option<GpuProxy> {
+        if members.len() < 2 || members.len() > MAX_VIEWS {
+            return None;
+        }
+        let views: Vec<ViewInfo> = members.iter().map(|m| m.1).collect();
+        let atlas = self.create_atlas(&views)?;
+        let tile = self.options.tile_size();
+        let mut vertices = Vec::new();
+        let mut clusters = Vec::new();
+        for (k, (member, _)) in members.iter().enumerate() {
+            let (v, c) = crate::patches::cluster_proxy_vertices(member, tile);
+            let first = vertices.len() as u32;
+            vertices.extend(v.into_iter().map(|mut v| {
+                v.mask = (v.mask & 1) << k;
+                v
+            }));
+            clusters.extend(c.into_iter().map(|mut c| {
+                c.first += first;
+                c
+            }));
+        }
+        Some(self.finish_proxy(&vertices, clusters, &views, Some(atlas), false))
     }
 
     /// The proxy of `vertices` (already in cluster order, `clusters` over them) with
@@ -677,33 +725,43 @@ fn atlas_bytes(format: wgpu::TextureFormat, width: u32, height: u32) -> usize {
     }
 }
 
+/// What a pack proxy may be batched as ([`Renderer::create_pack_proxies`]): the
+/// two classes never share a batch (they are drawn with different pipelines).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum BatchClass {
+    /// A layered impostor with one view ([`Renderer::create_impostor_batch`]).
+    Impostors,
+    /// A mesh proxy with one view ([`Renderer::create_mesh_batch`]).
+    Meshes,
+}
+
 /// Which pack proxies are drawn together ([`Renderer::create_pack_proxies`]):
-/// `batchable[i]` is the encoding of proxy i's one view when it is a layered
-/// impostor that may join a batch, else `None`. Proxies in pack order; each
-/// batchable one joins the open batch of its encoding until that holds `max`, and a
+/// `batchable[i]` is proxy i's batch key (its class and the encoding of its one
+/// view) when it may join a batch, else `None`. Proxies in pack order; each
+/// batchable one joins the open batch of its key until that holds `max`, and a
 /// batch takes the place of its first member (a group pack's impostors come sector
 /// by sector, bands by distance: consecutive ones are neighbours, so a batch's
 /// bounds stay compact). Every other proxy is a batch of its own. Each proxy is in
 /// exactly one batch, members in pack order.
-pub(crate) fn impostor_batches(
-    batchable: &[Option<TextureEncoding>],
+pub(crate) fn proxy_batches<K: Copy + PartialEq>(
+    batchable: &[Option<K>],
     max: usize,
 ) -> Vec<Vec<usize>> {
     let mut out: Vec<Vec<usize>> = Vec::new();
-    // Per encoding: the batch being filled (an index of `out`).
-    let mut open: Vec<(TextureEncoding, usize)> = Vec::new();
+    // Per key: the batch being filled (an index of `out`).
+    let mut open: Vec<(K, usize)> = Vec::new();
     for (i, b) in batchable.iter().enumerate() {
-        let Some(encoding) = *b else {
+        let Some(key) = *b else {
             out.push(vec![i]);
             continue;
         };
-        match open.iter().position(|&(e, _)| e == encoding) {
+        match open.iter().position(|&(e, _)| e == key) {
             Some(k) if out[open[k].1].len() < max.max(1) => out[open[k].1].push(i),
             found => {
                 if let Some(k) = found {
                     open.remove(k);
                 }
-                open.push((encoding, out.len()));
+                open.push((key, out.len()));
                 out.push(vec![i]);
             }
         }
@@ -749,7 +807,7 @@ pub(crate) fn pack_atlas(sizes: &[(u32, u32)], max: u32) -> Option<PackedAtlas> 
 
 #[cfg(test)]
 mod tests {
-    use super::{impostor_batches, pack_atlas, TRANSPARENT_BC1};
+    use super::{pack_atlas, proxy_batches, BatchClass, TRANSPARENT_BC1};
     use format::pack::{Texture, TextureEncoding};
 
     /// The atlas's clear texels decode as "nothing captured" (alpha 0) in every
@@ -819,13 +877,13 @@ mod tests {
         assert_eq!(pack_atlas(&[], 8192), None);
     }
 
-    /// Layered impostors of one encoding share batches of at most `max`, in pack
-    /// order, each batch where its first member was; other proxies stay alone; every
-    /// proxy is drawn exactly once.
+    /// Proxies of one key (class and encoding) share batches of at most `max`, in
+    /// pack order, each batch where its first member was; other proxies stay alone;
+    /// every proxy is drawn exactly once.
     #[test]
-    fn impostor_batches_group_same_encoding_impostors() {
+    fn proxy_batches_group_same_encoding_proxies() {
         let (r, b) = (Some(TextureEncoding::Rgba8), Some(TextureEncoding::Bc3));
-        let plan = impostor_batches(&[None, r, r, b, r, None, b, r, r], 3);
+        let plan = proxy_batches(&[None, r, r, b, r, None, b, r, r], 3);
         assert_eq!(
             plan,
             vec![vec![0], vec![1, 2, 4], vec![3, 6], vec![5], vec![7, 8],]
@@ -834,10 +892,26 @@ mod tests {
         all.sort_unstable();
         assert_eq!(all, (0..9).collect::<Vec<_>>());
         assert_eq!(
-            impostor_batches(&[r; 17], 8),
+            proxy_batches(&[r; 17], 8),
             vec![(0..8).collect(), (8..16).collect(), vec![16]]
         );
-        assert_eq!(impostor_batches(&[None, None], 8), vec![vec![0], vec![1]]);
-        assert!(impostor_batches(&[], 8).is_empty());
+        assert_eq!(
+            proxy_batches::<()>(&[None, None], 8),
+            vec![vec![0], vec![1]]
+        );
+        assert!(proxy_batches::<()>(&[], 8).is_empty());
+    }
+
+    /// Layered impostors and single-view mesh proxies of one encoding are batched
+    /// apart (they are drawn with different pipelines).
+    #[test]
+    fn proxy_batches_keep_impostors_and_meshes_apart() {
+        let e = TextureEncoding::Bc1;
+        let (i, m) = (
+            Some((BatchClass::Impostors, e)),
+            Some((BatchClass::Meshes, e)),
+        );
+        let plan = proxy_batches(&[m, i, m, None, i, m], 8);
+        assert_eq!(plan, vec![vec![0, 2, 5], vec![1, 4], vec![3]]);
     }
 }
