@@ -265,47 +265,36 @@ impl Renderer {
 
     /// A batch of layered impostors (paper 001 §4), each with its one view
     /// (`members`: 2 to [`MAX_VIEWS`], one encoding), drawn as one proxy: member k's
-    /// layer quads, grouped by normal cluster as [`Renderer::create_proxy`] groups a
-    /// lone impostor's (member by member, so each tile holds one member's quads and
-    /// culls as before), carry k in bits 16–23 of their mask (bits 0–15: the layer's
-    /// depth codes); the uniform holds member k's `tex_from_world` in slot k and its
-    /// texture's rectangle of the batch's [`Atlas`] in `rects[k]`; `impostor_layer`
-    /// reads rectangle k. `None` where the atlas cannot be made (`create_atlas`).
+    /// layer quads carry k in bits 16–23 of their mask (bits 0–15: the layer's depth
+    /// codes); `impostor_layer` reads rectangle k of the batch's [`Atlas`]
+    /// ([`Renderer::create_batch`]).
     fn create_impostor_batch(&self, members: &[(&[ProxyVertex], ViewInfo)]) -> Option<GpuProxy> {
-        if members.len() < 2 || members.len() > MAX_VIEWS {
-            return None;
-        }
-        let views: Vec<ViewInfo> = members.iter().map(|m| m.1).collect();
-        let atlas = self.create_atlas(&views)?;
-        let tile = self.options.tile_size();
-        let mut vertices = Vec::new();
-        let mut clusters = Vec::new();
-        for (k, (member, _)) in members.iter().enumerate() {
-            let (v, c) = crate::patches::cluster_proxy_vertices(member, tile);
-            let first = vertices.len() as u32;
-            vertices.extend(v.into_iter().map(|mut v| {
-                v.mask = (v.mask & 0xffff) | ((k as u32) << 16);
-                v
-            }));
-            clusters.extend(c.into_iter().map(|mut c| {
-                c.first += first;
-                c
-            }));
-        }
-        Some(self.finish_proxy(&vertices, clusters, &views, Some(atlas), true))
+        self.create_batch(members, true, |mask, k| (mask & 0xffff) | (k << 16))
     }
 
     /// A batch of mesh proxies with one view each (`members`: 2 to [`MAX_VIEWS`], one
     /// encoding; SV meshes, paper 000 §3.2), drawn as one proxy with
-    /// `fs_proxy_atlas`: member k's triangles, grouped by normal cluster as
-    /// [`Renderer::create_proxy`] groups a lone proxy's (member by member, so each
-    /// tile holds one member's triangles and culls as before), see view k where
-    /// they saw view 0 (mask bit 0 becomes bit k; the other bits, which a proxy of
-    /// one view never reads, are cleared), so `vs_proxy` chooses slot k exactly as
-    /// it chose slot 0 alone; the uniform holds member k's `tex_from_world` and eye
-    /// in slot k and its texture's rectangle of the batch's [`Atlas`] in
-    /// `rects[k]`. `None` where the atlas cannot be made (`create_atlas`).
+    /// `fs_proxy_atlas`: member k's triangles see view k where they saw view 0 (mask
+    /// bit 0 becomes bit k; the other bits, which a proxy of one view never reads,
+    /// are cleared), so `vs_proxy` chooses slot k exactly as it chose slot 0 alone
+    /// ([`Renderer::create_batch`]).
     fn create_mesh_batch(&self, members: &[(&[ProxyVertex], ViewInfo)]) -> Option<GpuProxy> {
+        self.create_batch(members, false, |mask, k| (mask & 1) << k)
+    }
+
+    /// One proxy drawing `members` (2 to [`MAX_VIEWS`], each with its one view):
+    /// member k's vertices, grouped by normal cluster as [`Renderer::create_proxy`]
+    /// groups a lone proxy's (member by member, so each tile holds one member's
+    /// triangles and culls as before), with their masks rewritten by
+    /// `mask_of(mask, k)`; the uniform holds member k's `tex_from_world` and eye in
+    /// slot k and its texture's rectangle of the batch's [`Atlas`] in `rects[k]`.
+    /// `None` where the atlas cannot be made (`create_atlas`).
+    fn create_batch(
+        &self,
+        members: &[(&[ProxyVertex], ViewInfo)],
+        layered: bool,
+        mask_of: impl Fn(u32, u32) -> u32,
+    ) -> Option<GpuProxy> {
         if members.len() < 2 || members.len() > MAX_VIEWS {
             return None;
         }
@@ -318,7 +307,7 @@ impl Renderer {
             let (v, c) = crate::patches::cluster_proxy_vertices(member, tile);
             let first = vertices.len() as u32;
             vertices.extend(v.into_iter().map(|mut v| {
-                v.mask = (v.mask & 1) << k;
+                v.mask = mask_of(v.mask, k as u32);
                 v
             }));
             clusters.extend(c.into_iter().map(|mut c| {
@@ -326,7 +315,7 @@ impl Renderer {
                 c
             }));
         }
-        Some(self.finish_proxy(&vertices, clusters, &views, Some(atlas), false))
+        Some(self.finish_proxy(&vertices, clusters, &views, Some(atlas), layered))
     }
 
     /// The proxy of `vertices` (already in cluster order, `clusters` over them) with
