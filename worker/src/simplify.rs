@@ -64,8 +64,14 @@
 //!   collapse changes the neighbourhood of one of its vertices. When it comes up
 //!   again with no triangle around its ends or opposite corners changed since (their
 //!   corners or carried points), it is rejected without the tests, which would
-//!   answer as before. The tests run cheapest-rejecting first (the deviation bound
-//!   before the link condition and the fan tests); the order changes no answer.
+//!   answer as before. Every test but one reads only the fans of the edge's two
+//!   ends (their triangles, corners and static per-vertex data); the one is the
+//!   deviation bound at the points carried around u, which also reads the carried
+//!   points and the opposite corners' fans. An edge whose every direction failed
+//!   another test is rejected again while its two ends' fans are unchanged as
+//!   lists of triangles, whatever happened around them (`fans_unchanged_since`).
+//!   The tests run cheapest-rejecting first (the deviation bound before the link
+//!   condition and the fan tests); the order changes no answer.
 //! - **Heap.** Since the survivor keeps its attributes, an edge's cost never
 //!   changes: the min-heap is invalidated lazily (an entry whose vertex was removed
 //!   is skipped when popped), edges new to the survivor are pushed after each
@@ -898,6 +904,9 @@ struct HeapEdge {
     /// The collapse count when the edge was last rejected ([`NEVER_REJECTED`]:
     /// never); not part of the order.
     rejected_at: u32,
+    /// That rejection came from tests that read only the fans of `a` and `b`
+    /// ([`Collapser::point_test_failed`]); not part of the order.
+    fan_only: bool,
 }
 
 /// [`HeapEdge::rejected_at`] of an edge that was never rejected.
@@ -939,8 +948,9 @@ struct Collapser<'a> {
     fans: Vec<Vec<u32>>,
     removed: Vec<bool>,
     /// Per vertex: the other ends of its rejected edges (waiting for a change),
-    /// each with the collapse count when it was rejected.
-    rejected: Vec<Vec<(u32, u32)>>,
+    /// each with the collapse count when it was rejected and whether only tests
+    /// reading the two ends' fans rejected it ([`HeapEdge::fan_only`]).
+    rejected: Vec<Vec<(u32, u32, bool)>>,
     /// Collapses done so far.
     clock: u32,
     /// Per vertex: the collapse count when a triangle of its fan last changed (its
@@ -948,6 +958,14 @@ struct Collapser<'a> {
     /// ends and opposite corners are unchanged since its rejection is rejected
     /// again without the tests: they read nothing else that changes.
     changed_at: Vec<u32>,
+    /// Per vertex: the collapse count when its fan last changed as a list of
+    /// triangles (a corner renamed, a triangle removed or added); unlike
+    /// `changed_at`, not when a triangle of it gains or loses carried points.
+    fan_changed_at: Vec<u32>,
+    /// Set by [`Collapser::can_collapse`] when a candidate fails the deviation
+    /// bound at the points carried around u, the one test that reads more than the
+    /// fans of u and v (module docs, "Retrying").
+    point_test_failed: bool,
     /// Per vertex: [`Collapser::is_boundary`]'s answer and the collapse count + 1
     /// when it was worked out (0: never); valid while its fan is unchanged.
     boundary_memo: Vec<(u32, bool)>,
@@ -1035,6 +1053,8 @@ impl<'a> Collapser<'a> {
             rejected: vec![Vec::new(); n],
             clock: 0,
             changed_at: vec![0; n],
+            fan_changed_at: vec![0; n],
+            point_test_failed: false,
             boundary_memo: vec![(0, false); n],
             dropped,
             scratch_u: Vec::new(),
@@ -1066,20 +1086,22 @@ impl<'a> Collapser<'a> {
                     su & sv != 0 || (su == 0 && sv == 0)
                 })
         };
-        let push = |heap: &mut BinaryHeap<HeapEdge>, a: u32, b: u32, rejected_at: u32| {
-            let (a, b) = (a.min(b), a.max(b));
-            if may_collapse(a, b) || may_collapse(b, a) {
-                let cost = cost_of(a, b);
-                if cost < tolerance {
-                    heap.push(HeapEdge {
-                        cost,
-                        a,
-                        b,
-                        rejected_at,
-                    });
+        let push =
+            |heap: &mut BinaryHeap<HeapEdge>, a: u32, b: u32, rejected_at: u32, fan_only: bool| {
+                let (a, b) = (a.min(b), a.max(b));
+                if may_collapse(a, b) || may_collapse(b, a) {
+                    let cost = cost_of(a, b);
+                    if cost < tolerance {
+                        heap.push(HeapEdge {
+                            cost,
+                            a,
+                            b,
+                            rejected_at,
+                            fan_only,
+                        });
+                    }
                 }
-            }
-        };
+            };
         let mut heap = BinaryHeap::new();
         let mut neighbours = Vec::new();
         let mut neighbours_before = Vec::new();
@@ -1091,7 +1113,7 @@ impl<'a> Collapser<'a> {
         for a in 0..self.fans.len() as u32 {
             self.neighbours(a, &mut neighbours);
             for &b in neighbours.iter().filter(|&&b| b > a) {
-                push(&mut heap, a, b, NEVER_REJECTED);
+                push(&mut heap, a, b, NEVER_REJECTED, false);
             }
         }
         // Step 2: collapse the cheapest edge until the cheapest costs T_l or more.
@@ -1104,10 +1126,17 @@ impl<'a> Collapser<'a> {
             if edge.cost >= tolerance {
                 break; // (only finite costs below T_l are pushed; kept as a guard)
             }
-            if edge.rejected_at != NEVER_REJECTED && self.unchanged_since(a, b, edge.rejected_at) {
-                // Rejected before and nothing the tests read has changed.
-                self.rejected[a as usize].push((b, edge.rejected_at));
-                self.rejected[b as usize].push((a, edge.rejected_at));
+            let at = edge.rejected_at;
+            let unchanged = at != NEVER_REJECTED
+                && if edge.fan_only {
+                    self.fans_unchanged_since(a, b, at)
+                } else {
+                    self.unchanged_since(a, b, at)
+                };
+            if unchanged {
+                // Rejected before and nothing the failing tests read has changed.
+                self.rejected[a as usize].push((b, at, edge.fan_only));
+                self.rejected[b as usize].push((a, at, edge.fan_only));
                 continue;
             }
             // The lower weight collapses into the higher (§3.1.3.3); on a tie an
@@ -1120,11 +1149,13 @@ impl<'a> Collapser<'a> {
                 Ordering::Equal if self.is_boundary(a) && !self.is_boundary(b) => &[(b, a), (a, b)],
                 Ordering::Equal => &[(a, b), (b, a)],
             };
+            self.point_test_failed = false;
             let Some(&(u, v)) = directions.iter().find(|&&(u, v)| self.can_collapse(u, v)) else {
                 // Rejected: tried again when a collapse changes either vertex's
                 // neighbourhood.
-                self.rejected[a as usize].push((b, self.clock));
-                self.rejected[b as usize].push((a, self.clock));
+                let fan_only = !self.point_test_failed;
+                self.rejected[a as usize].push((b, self.clock, fan_only));
+                self.rejected[b as usize].push((a, self.clock, fan_only));
                 continue;
             };
             self.neighbours(v, &mut neighbours_before);
@@ -1138,25 +1169,25 @@ impl<'a> Collapser<'a> {
             self.neighbours(v, &mut neighbours);
             for &x in &neighbours {
                 if neighbours_before.binary_search(&x).is_err() {
-                    push(&mut heap, v, x, NEVER_REJECTED);
+                    push(&mut heap, v, x, NEVER_REJECTED, false);
                 }
             }
             // Step 4: v and its neighbours changed neighbourhoods: the edges at them
             // that were rejected get another chance.
             revived.clear();
             for &x in neighbours.iter().chain([&v, &u]) {
-                for (y, at) in std::mem::take(&mut self.rejected[x as usize]) {
-                    revived.push((x.min(y), x.max(y), at));
+                for (y, at, fan_only) in std::mem::take(&mut self.rejected[x as usize]) {
+                    revived.push((x.min(y), x.max(y), at, fan_only));
                 }
             }
             revived.sort_unstable();
             revived.dedup();
-            for &(x, y, at) in &revived {
+            for &(x, y, at, fan_only) in &revived {
                 for (p, q) in [(x, y), (y, x)] {
-                    self.rejected[p as usize].retain(|&(r, _)| r != q);
+                    self.rejected[p as usize].retain(|&(r, ..)| r != q);
                 }
                 if !self.removed[x as usize] && !self.removed[y as usize] {
-                    push(&mut heap, x, y, at);
+                    push(&mut heap, x, y, at, fan_only);
                 }
             }
         }
@@ -1196,6 +1227,15 @@ impl<'a> Collapser<'a> {
             let tri = &self.triangles[t as usize];
             !tri.contains(&b) || tri.iter().all(|&w| !changed(w))
         })
+    }
+
+    /// Whether neither `a`'s nor `b`'s fan has changed as a list of triangles since
+    /// collapse count `at`: every test of [`Collapser::can_collapse`] but the
+    /// deviation bound's carried points reads only those two fans (their
+    /// triangles, corners and static per-vertex data), so an edge that failed such
+    /// a test in every direction tried fails it again.
+    fn fans_unchanged_since(&self, a: u32, b: u32, at: u32) -> bool {
+        self.fan_changed_at[a as usize] <= at && self.fan_changed_at[b as usize] <= at
     }
 
     /// Sorted, distinct neighbours of `v` (vertices sharing an alive triangle).
@@ -1533,6 +1573,9 @@ impl<'a> Collapser<'a> {
         });
         dev.scratch_fan = fan;
         dev.scratch_points = points;
+        if !ok {
+            self.point_test_failed = true;
+        }
         ok
     }
 
@@ -1559,6 +1602,7 @@ impl<'a> Collapser<'a> {
             let tri = self.triangles[ti];
             for x in tri {
                 self.changed_at[x as usize] = clock;
+                self.fan_changed_at[x as usize] = clock;
             }
             if tri.contains(&v) {
                 // The triangle on the edge disappears from all its vertices' fans.
