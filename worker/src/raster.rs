@@ -280,10 +280,11 @@ impl ProjectiveTextures {
         // view and pixel it was 4 % of park-2m's bake CPU); `angle_closer` answers
         // as comparing the angles did, ties included.
         let mut best: [Option<(f32, usize)>; 2] = [None, None];
-        for (i, view) in surface.views.iter().enumerate() {
-            if i >= 32 || mask & (1 << i) == 0 {
-                continue;
-            }
+        let mut rest = usable;
+        while rest != 0 {
+            let i = rest.trailing_zeros() as usize;
+            rest &= rest - 1;
+            let view = &surface.views[i];
             let cos = to_viewer
                 .dot((view.eye - p).normalize_or_zero())
                 .clamp(-1.0, 1.0);
