@@ -20,8 +20,10 @@
 // vertex, not per pixel) and passes the two views' projective coordinates.
 //
 // Layered impostors (kind 4, paper 001): see impostor_layer below (alone, or a
-// batch of up to MAX_VIEWS impostors sharing one atlas, one draw call). Mesh proxies
-// of one view may likewise be drawn in batches sharing one atlas (fs_proxy_atlas).
+// batch of up to PROXY_SLOTS impostors sharing one atlas, one draw call). Mesh
+// proxies (SV/MV meshes, clusters) whose views share one encoding may likewise be
+// drawn in batches sharing one atlas and one uniform (fs_proxy_atlas; up to
+// PROXY_SLOTS views in all).
 
 // AMBIENT, LIGHT, SRGB_* and MAX_VIEWS are not declared here: the player prepends
 // format::shading::wgsl_constants() (player::gpu::shader_source), their one home.
@@ -112,14 +114,22 @@ fn fs_ground(i: LitOut) -> @location(0) vec4<f32> {
 
 // ---- proxies ----
 
+// View slots of a proxy's uniform (player vertex.rs PROXY_SLOTS): a lone proxy
+// uses its first MAX_VIEWS, a batch of proxies sharing one atlas up to all of them
+// (member views at consecutive slots from the member's base, vertex mask bits 16–23).
+const PROXY_SLOTS: u32 = 32u;
+// "No view" in ProxyOut.views.
+const NO_VIEW: u32 = 255u;
+
 struct Proxy {
-    tex_from_world: array<mat4x4<f32>, MAX_VIEWS>,
-    view_eye: array<vec4<f32>, MAX_VIEWS>,
-    // x: number of views; y: bit i = view i's colours are premultiplied by coverage;
+    tex_from_world: array<mat4x4<f32>, PROXY_SLOTS>,
+    view_eye: array<vec4<f32>, PROXY_SLOTS>,
+    // x: number of views; y: bit i = view i's colours are premultiplied by coverage
+    // (a batch has one encoding: bit 31 stands for the slots from 31 on);
     // z, w: the atlas's width and height in texels (0: one texture per view).
     counts: vec4<u32>,
     // With an atlas (t0 holds every view): view i's rectangle in it, as fractions.
-    rects: array<vec4<f32>, MAX_VIEWS>,
+    rects: array<vec4<f32>, PROXY_SLOTS>,
 };
 @group(1) @binding(0) var<uniform> p: Proxy;
 @group(1) @binding(1) var samp: sampler;
@@ -146,7 +156,7 @@ struct ProxyOut {
     @builtin(position) clip: vec4<f32>,
     @location(1) normal: vec3<f32>,
     @location(2) albedo: vec3<f32>,
-    // The two views drawn for this triangle (MAX_VIEWS = none): best0 | best1 << 8.
+    // The two view slots drawn for this triangle (NO_VIEW = none): best0 | best1 << 8.
     @location(3) @interpolate(flat) views: u32,
     // Their blend weights when both have data (inversely proportional to the angles).
     @location(4) @interpolate(flat) weights: vec2<f32>,
@@ -164,13 +174,11 @@ struct ProxyOut {
     @location(9) @interpolate(flat) rect: vec4<u32>,
 };
 
-fn angle_between(a: vec3<f32>, b: vec3<f32>) -> f32 {
-    return acos(clamp(dot(normalize(a), normalize(b)), -1.0, 1.0));
-}
-
 // The view choice depends only on the triangle (its mask and centroid, flat) and the
 // eye, so it is made once per vertex here instead of once per pixel: of the views in
-// the mask, the two whose direction to the centroid is closest to the viewer's.
+// the mask, the two whose direction to the centroid is closest to the viewer's. Mask
+// bit k is view slot base + k, base being bits 16–23 (0 alone; a batch member's
+// first slot).
 @vertex
 fn vs_proxy(v: ProxyIn) -> ProxyOut {
     var o: ProxyOut;
@@ -187,8 +195,8 @@ fn vs_proxy(v: ProxyIn) -> ProxyOut {
     let world = vec4<f32>(v.pos, 1.0);
     if v.kind == 4u {
         // Its impostor's view: slot k of a batch (mask bits 16–23), 0 alone.
-        let k = min((v.mask >> 16u) & 0xffu, MAX_VIEWS - 1u);
-        o.views = k | (MAX_VIEWS << 8u);
+        let k = min((v.mask >> 16u) & 0xffu, PROXY_SLOTS - 1u);
+        o.views = k | (NO_VIEW << 8u);
         o.tc0 = p.tex_from_world[k] * world;
         if p.counts.z != 0u {
             let atlas = vec2<f32>(f32(p.counts.z), f32(p.counts.w));
@@ -201,38 +209,44 @@ fn vs_proxy(v: ProxyIn) -> ProxyOut {
         o.tc1 = vec4<f32>(0.0);
         return o;
     }
-    let n = min(p.counts.x, MAX_VIEWS);
-    let to_poly = v.centroid - g.eye.xyz;
-    var best0 = MAX_VIEWS;
-    var best1 = MAX_VIEWS;
-    var a0 = 1e9;
-    var a1 = 1e9;
-    for (var k = 0u; k < n; k = k + 1u) {
+    let base = (v.mask >> 16u) & 0xffu;
+    let n = min(p.counts.x, PROXY_SLOTS) - min(base, min(p.counts.x, PROXY_SLOTS));
+    // Ranked by the cosine of the angle (the closest view has the largest), so the
+    // arccosine is taken for the two chosen views only, for their weights.
+    let to_poly = normalize(v.centroid - g.eye.xyz);
+    var best0 = NO_VIEW;
+    var best1 = NO_VIEW;
+    var c0 = -2.0;
+    var c1 = -2.0;
+    for (var k = 0u; k < min(n, MAX_VIEWS); k = k + 1u) {
         if ((v.mask >> k) & 1u) == 0u {
             continue;
         }
-        let a = angle_between(v.centroid - p.view_eye[k].xyz, to_poly);
-        if a < a0 {
+        let slot = base + k;
+        let c = dot(normalize(v.centroid - p.view_eye[slot].xyz), to_poly);
+        if c > c0 {
             best1 = best0;
-            a1 = a0;
-            best0 = k;
-            a0 = a;
-        } else if a < a1 {
-            best1 = k;
-            a1 = a;
+            c1 = c0;
+            best0 = slot;
+            c0 = c;
+        } else if c > c1 {
+            best1 = slot;
+            c1 = c;
         }
     }
+    let a0 = acos(clamp(c0, -1.0, 1.0));
+    let a1 = acos(clamp(c1, -1.0, 1.0));
     o.views = best0 | (best1 << 8u);
     let s = a0 + a1;
-    if best1 != MAX_VIEWS && s > 1e-6 {
+    if best1 != NO_VIEW && s > 1e-6 {
         o.weights = vec2<f32>(a1 / s, a0 / s);
     }
     o.tc0 = vec4<f32>(0.0);
     o.tc1 = vec4<f32>(0.0);
-    if best0 != MAX_VIEWS {
+    if best0 != NO_VIEW {
         o.tc0 = p.tex_from_world[best0] * world;
     }
-    if best1 != MAX_VIEWS {
+    if best1 != NO_VIEW {
         o.tc1 = p.tex_from_world[best1] * world;
     }
     return o;
@@ -256,7 +270,7 @@ fn captured(i: u32, c: vec4<f32>) -> vec4<f32> {
     if c.a < 0.5 {
         return vec4<f32>(0.0);
     }
-    if ((p.counts.y >> i) & 1u) != 0u {
+    if ((p.counts.y >> min(i, 31u)) & 1u) != 0u {
         // Colours premultiplied by coverage (BC1 with punch-through alpha, format 4):
         // the uncovered taps are transparent black, so colour / alpha is the mean
         // of the covered taps.
@@ -362,7 +376,7 @@ fn mesh_colour(i: ProxyOut) -> vec4<f32> {
     }
     let best0 = i.views & 0xffu;
     let best1 = i.views >> 8u;
-    if best0 == MAX_VIEWS {
+    if best0 == NO_VIEW {
         return vec4<f32>(lit, 1.0);
     }
     // The two views' texels: one sample per slot (not one per slot and view).
@@ -397,7 +411,7 @@ fn mesh_colour(i: ProxyOut) -> vec4<f32> {
         c0 = captured(best0, s0);
     }
     var c1 = vec4<f32>(0.0);
-    if best1 != MAX_VIEWS && uv1.z != 0.0 {
+    if best1 != NO_VIEW && uv1.z != 0.0 {
         c1 = captured(best1, s1);
     }
     return blend(lit, c0, c1, i.weights);
@@ -443,7 +457,7 @@ fn fs_proxy_atlas(i: ProxyOut) -> @location(0) vec4<f32> {
     }
     let best0 = i.views & 0xffu;
     let best1 = i.views >> 8u;
-    if best0 == MAX_VIEWS {
+    if best0 == NO_VIEW {
         return vec4<f32>(lit, 1.0);
     }
     let uv0 = view_uv(i.tc0);
@@ -453,7 +467,7 @@ fn fs_proxy_atlas(i: ProxyOut) -> @location(0) vec4<f32> {
         c0 = captured(best0, atlas_texel(best0, uv0.xy));
     }
     var c1 = vec4<f32>(0.0);
-    if best1 != MAX_VIEWS && uv1.z != 0.0 {
+    if best1 != NO_VIEW && uv1.z != 0.0 {
         c1 = captured(best1, atlas_texel(best1, uv1.xy));
     }
     return blend(lit, c0, c1, i.weights);

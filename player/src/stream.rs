@@ -418,7 +418,7 @@ impl Streamer {
         self.clock += 1;
         // 1. Cells the prefetch thread has prepared.
         while let Ok((id, result)) = self.rx.try_recv() {
-            self.accept(renderer, id, result);
+            self.accept(renderer, &bake.grid, id, result);
         }
         // 2. The current cell; timestamp and prefetch requests.
         let (cell, group) = cell_and_group(bake, camera);
@@ -552,7 +552,7 @@ impl Streamer {
     fn load_now(&mut self, renderer: &Renderer, bake: &Bake, key: u32) {
         if !self.cells.contains_key(&key) && !self.failed.contains(&key) {
             let result = bake.load_cell(key).map_err(|e| e.to_string());
-            self.accept(renderer, key, result);
+            self.accept(renderer, &bake.grid, key, result);
         }
     }
 
@@ -620,7 +620,13 @@ impl Streamer {
         self.shared.wake.notify_one();
     }
 
-    fn accept(&mut self, renderer: &Renderer, id: u32, result: Result<PreparedCell, String>) {
+    fn accept(
+        &mut self,
+        renderer: &Renderer,
+        grid: &crate::grid::CellGrid,
+        id: u32,
+        result: Result<PreparedCell, String>,
+    ) {
         if self.cells.contains_key(&id) || self.failed.contains(&id) {
             return;
         }
@@ -649,11 +655,23 @@ impl Streamer {
                     .zip(&views)
                     .map(|(p, v)| (p.vertices.as_slice(), v.as_slice()))
                     .collect();
+                // Batches hold the proxies of one cell's objects (the cell of the
+                // proxy's bounds centre): crossing into a cell turns its objects
+                // into originals, and a batch of the previous cell can still stand
+                // in for the others only if none of its members is among them.
+                let regions: Vec<u32> = cell
+                    .proxies
+                    .iter()
+                    .map(|p| {
+                        let c = p.bounds.centre();
+                        grid.nearest_cell(Vec2::new(c.x, c.z)).unwrap_or(u32::MAX)
+                    })
+                    .collect();
                 // The GPU proxies, each drawing one pack proxy or a batch of layered
-                // impostors or single-view mesh proxies
+                // impostors or of mesh proxies
                 // (`Renderer::create_pack_proxies`): a batch is one proxy here too,
                 // with its members' union of bounds and member objects.
-                let drawn = renderer.create_pack_proxies(&sources);
+                let drawn = renderer.create_pack_proxies(&sources, &regions);
                 let mut packed: Vec<Option<crate::bake::PreparedProxy>> =
                     cell.proxies.into_iter().map(Some).collect();
                 let mut proxies = Vec::with_capacity(drawn.len());
@@ -663,8 +681,9 @@ impl Streamer {
                 for (pi, (gpu, from)) in drawn.into_iter().enumerate() {
                     let mut b = Aabb::EMPTY;
                     let mut m: Vec<u32> = Vec::new();
-                    // Slot `vi` of the drawn proxy: a lone proxy's view vi, a
-                    // batch's member vi's one view.
+                    // Slot `vi` of the drawn proxy: a lone proxy's view vi; in a
+                    // batch, the members' views in member order (each member's
+                    // from its base slot on).
                     let mut slots = Vec::new();
                     for &i in &from {
                         let Some(p) = packed.get_mut(i).and_then(Option::take) else {
@@ -672,11 +691,7 @@ impl Streamer {
                         };
                         b = b.union(&p.bounds);
                         m.extend(p.members);
-                        if from.len() == 1 {
-                            slots.extend(p.views);
-                        } else {
-                            slots.extend(p.views.into_iter().take(1));
-                        }
+                        slots.extend(p.views);
                     }
                     if from.len() > 1 {
                         let mut seen = BTreeSet::new();

@@ -160,21 +160,31 @@ const _: () =
     assert!(ProxyVertex::ATTRIBUTES[5].offset == offset_of!(ProxyVertex, centroid) as u64);
 const _: () = assert!(ProxyVertex::ATTRIBUTES[6].offset == offset_of!(ProxyVertex, kind) as u64);
 
+/// View slots of a proxy's uniform (shader.wgsl `PROXY_SLOTS`): a lone proxy uses
+/// its first [`MAX_VIEWS`]; a batch of proxies sharing one atlas up to all of them,
+/// member by member at consecutive slots (`gpu::upload`, `create_batch`), so that one
+/// bind group and one draw serve several multi-view proxies. On lavapipe each
+/// switch to another bind group costs about 0.7 ms of frame time whatever it holds
+/// (measured on the city walk: BENCHMARKS.md), far more than the draws themselves.
+pub const PROXY_SLOTS: usize = 32;
+
 /// A proxy's per-view uniform block (group 1, binding 0).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 pub struct ProxyUniform {
-    pub tex_from_world: [[f32; 16]; MAX_VIEWS],
-    pub view_eye: [[f32; 4]; MAX_VIEWS],
-    /// x: views; y: bit i = view i premultiplied by coverage; z, w: the atlas's
-    /// width and height in texels (0: no atlas, one texture per view).
+    pub tex_from_world: [[f32; 16]; PROXY_SLOTS],
+    pub view_eye: [[f32; 4]; PROXY_SLOTS],
+    /// x: views; y: bit i = view i premultiplied by coverage (a batch has one
+    /// encoding; bit 31 stands for slots 31 and up); z, w: the atlas's width and
+    /// height in texels (0: no atlas, one texture per view).
     pub counts: [u32; 4],
     /// With an atlas (issue 30 item 7): view i's rectangle in it, (x, y, w, h) as
     /// fractions of the atlas's sides.
-    pub rects: [[f32; 4]; MAX_VIEWS],
+    pub rects: [[f32; 4]; PROXY_SLOTS],
 }
 
-const _: () = assert!(size_of::<ProxyUniform>() == 96 * MAX_VIEWS + 16);
+const _: () = assert!(size_of::<ProxyUniform>() == 96 * PROXY_SLOTS + 16);
+const _: () = assert!(PROXY_SLOTS >= MAX_VIEWS && PROXY_SLOTS <= 255);
 
 /// The frame's uniform block (group 0, binding 0).
 #[repr(C)]
@@ -190,3 +200,18 @@ pub struct Globals {
 }
 
 const _: () = assert!(size_of::<Globals>() == 224);
+
+#[cfg(test)]
+mod slot_tests {
+    use super::PROXY_SLOTS;
+
+    /// The shader's and the browser viewer's proxy uniform have the slots the
+    /// player writes (a mismatch would shift every eye and rectangle).
+    #[test]
+    fn the_shader_and_the_web_viewer_agree_on_proxy_slots() {
+        let wgsl = include_str!("shader.wgsl");
+        assert!(wgsl.contains(&format!("const PROXY_SLOTS: u32 = {PROXY_SLOTS}u;")));
+        let ts = include_str!("../web/src/scene.ts");
+        assert!(ts.contains(&format!("export const PROXY_SLOTS = {PROXY_SLOTS};")));
+    }
+}

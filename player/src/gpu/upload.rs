@@ -9,7 +9,7 @@ use super::setup::{self, albedo_bind_group};
 use super::{
     texture_2d, Atlas, GpuClusters, GpuLod, GpuModel, GpuModels, GpuProxy, Renderer, MAX_VIEWS,
 };
-use crate::vertex::{ModelVertex, ProxyUniform, ProxyVertex};
+use crate::vertex::{ModelVertex, ProxyUniform, ProxyVertex, PROXY_SLOTS};
 use bytemuck::Zeroable;
 use format::pack::{BasePack, Texture, TextureEncoding};
 use glam::Vec3;
@@ -185,49 +185,76 @@ impl Renderer {
     /// The GPU proxies of one pack's `proxies` (each its vertices and views), in
     /// pack order, each with the pack proxies it draws. A proxy is drawn alone
     /// ([`Renderer::create_proxy`]; its views are its slots), except that two
-    /// classes are drawn in batches ([`proxy_batches`]) of up to [`MAX_VIEWS`]
-    /// members of one class and one encoding, each batch one vertex buffer, one
-    /// [`Atlas`] and one uniform, one draw call, slot k being member k's one view:
-    /// layered impostors (paper 001) when [`Renderer::set_impostor_batches`] is on
-    /// ([`Renderer::create_impostor_batch`]), and mesh proxies of exactly one view
-    /// (SV meshes; clusters and MV meshes of one view alike; paper 000 §3.2) when
+    /// classes are drawn in batches ([`proxy_batches`]) of members of one class and
+    /// one encoding, up to [`PROXY_SLOTS`] views and [`BATCH_TEXELS`] texels in all,
+    /// each batch one vertex buffer, one [`Atlas`] and one uniform, one bind group
+    /// and one draw call, member k's views at consecutive slots from its base:
+    /// layered impostors of one view (paper 001) when
+    /// [`Renderer::set_impostor_batches`] is on ([`Renderer::create_impostor_batch`]),
+    /// and mesh proxies (SV and MV meshes, clusters; paper 000 §3.2) when
     /// [`Renderer::set_mesh_batches`] is on ([`Renderer::create_mesh_batch`]); both
     /// are on by default. A batch whose atlas cannot be made is drawn member by
     /// member, as before.
+    /// `regions[i]`: a key of proxy i's place (the player's: the cell of its
+    /// objects); mesh proxies of several views (MV meshes: objects of the cells
+    /// next door, paper 000 §3.3) share a batch only within one region, so that
+    /// crossing into a cell, whose objects become originals, leaves the previous
+    /// cell's other batches whole to stand in (`frame::stand_ins_for`); the
+    /// single-view ones (objects further away) and impostors ignore it.
     pub fn create_pack_proxies(
         &self,
         proxies: &[(&[ProxyVertex], &[ViewInfo])],
+        regions: &[u32],
     ) -> Vec<(GpuProxy, Vec<usize>)> {
         let layered = format::pack::ProxyKind::LayeredImpostor as u32;
-        let batchable: Vec<Option<(BatchClass, TextureEncoding)>> = proxies
+        let batchable: Vec<Option<(BatchKey, BatchCost)>> = proxies
             .iter()
-            .map(|(vertices, views)| {
-                let one_view = !vertices.is_empty()
-                    && views.len() == 1
-                    && views[0].width > 0
-                    && views[0].height > 0;
-                let class = if !one_view {
+            .enumerate()
+            .map(|(i, (vertices, views))| {
+                let first = views.first()?.encoding;
+                let usable = !vertices.is_empty()
+                    && views.len() <= MAX_VIEWS
+                    && views.iter().all(|v| {
+                        v.encoding == first
+                            && v.width > 0
+                            && v.height > 0
+                            && (!first.is_block() || (v.width % 4 == 0 && v.height % 4 == 0))
+                    });
+                let class = if !usable {
                     None
                 } else if vertices.iter().all(|v| v.kind == layered) {
-                    self.impostor_batches.then_some(BatchClass::Impostors)
+                    (self.impostor_batches && views.len() == 1).then_some(BatchClass::Impostors)
                 } else if vertices.iter().all(|v| v.kind != layered) {
                     self.mesh_batches.then_some(BatchClass::Meshes)
                 } else {
                     None
+                }?;
+                let cost = BatchCost {
+                    slots: views.len(),
+                    texels: views
+                        .iter()
+                        .map(|v| u64::from(v.width) * u64::from(v.height))
+                        .sum(),
                 };
-                class.map(|c| (c, views[0].encoding))
+                let region = match class {
+                    BatchClass::Meshes if views.len() > 1 => regions.get(i).copied().unwrap_or(0),
+                    _ => u32::MAX,
+                };
+                Some(((class, first, region), cost))
             })
             .collect();
         let mut out = Vec::with_capacity(proxies.len());
-        for batch in proxy_batches(&batchable, MAX_VIEWS) {
+        let limit = BatchCost {
+            slots: PROXY_SLOTS,
+            texels: BATCH_TEXELS,
+        };
+        for batch in proxy_batches(&batchable, limit) {
             if batch.len() > 1 {
-                let members: Vec<(&[ProxyVertex], ViewInfo)> = batch
-                    .iter()
-                    .map(|&i| (proxies[i].0, proxies[i].1[0]))
-                    .collect();
+                let members: Vec<(&[ProxyVertex], &[ViewInfo])> =
+                    batch.iter().map(|&i| proxies[i]).collect();
                 let made = match batchable[batch[0]] {
-                    Some((BatchClass::Impostors, _)) => self.create_impostor_batch(&members),
-                    Some((BatchClass::Meshes, _)) => self.create_mesh_batch(&members),
+                    Some(((BatchClass::Impostors, ..), _)) => self.create_impostor_batch(&members),
+                    Some(((BatchClass::Meshes, ..), _)) => self.create_mesh_batch(&members),
                     None => None,
                 };
                 if let Some(p) = made {
@@ -264,52 +291,55 @@ impl Renderer {
     }
 
     /// A batch of layered impostors (paper 001 §4), each with its one view
-    /// (`members`: 2 to [`MAX_VIEWS`], one encoding), drawn as one proxy: member k's
-    /// layer quads carry k in bits 16–23 of their mask (bits 0–15: the layer's depth
-    /// codes); `impostor_layer` reads rectangle k of the batch's [`Atlas`]
+    /// (`members`: one encoding), drawn as one proxy: member k's layer quads carry
+    /// its slot (k) in bits 16–23 of their mask (bits 0–15: the layer's depth
+    /// codes); `impostor_layer` reads that rectangle of the batch's [`Atlas`]
     /// ([`Renderer::create_batch`]).
-    fn create_impostor_batch(&self, members: &[(&[ProxyVertex], ViewInfo)]) -> Option<GpuProxy> {
-        self.create_batch(members, true, |mask, k| (mask & 0xffff) | (k << 16))
+    fn create_impostor_batch(&self, members: &[(&[ProxyVertex], &[ViewInfo])]) -> Option<GpuProxy> {
+        self.create_batch(members, true, |mask, base| (mask & 0xffff) | (base << 16))
     }
 
-    /// A batch of mesh proxies with one view each (`members`: 2 to [`MAX_VIEWS`], one
-    /// encoding; SV meshes, paper 000 §3.2), drawn as one proxy with
-    /// `fs_proxy_atlas`: member k's triangles see view k where they saw view 0 (mask
-    /// bit 0 becomes bit k; the other bits, which a proxy of one view never reads,
-    /// are cleared), so `vs_proxy` chooses slot k exactly as it chose slot 0 alone
-    /// ([`Renderer::create_batch`]).
-    fn create_mesh_batch(&self, members: &[(&[ProxyVertex], ViewInfo)]) -> Option<GpuProxy> {
-        self.create_batch(members, false, |mask, k| (mask & 1) << k)
+    /// A batch of mesh proxies (`members`: SV/MV meshes and clusters, paper 000
+    /// §3.2, views of one encoding), drawn as one proxy with `fs_proxy_atlas`:
+    /// member k's views take the slots from its base on, in their order, and its
+    /// triangles carry the base in mask bits 16–23 beside their own view bits
+    /// (0–7), so `vs_proxy` reads mask bit j as slot base + j and chooses the same
+    /// views as for the member alone ([`Renderer::create_batch`]).
+    fn create_mesh_batch(&self, members: &[(&[ProxyVertex], &[ViewInfo])]) -> Option<GpuProxy> {
+        self.create_batch(members, false, |mask, base| (mask & 0xff) | (base << 16))
     }
 
-    /// One proxy drawing `members` (2 to [`MAX_VIEWS`], each with its one view):
+    /// One proxy drawing `members` (2 or more, [`PROXY_SLOTS`] views in all):
     /// member k's vertices, grouped by normal cluster as [`Renderer::create_proxy`]
     /// groups a lone proxy's (member by member, so each tile holds one member's
     /// triangles and culls as before), with their masks rewritten by
-    /// `mask_of(mask, k)`; the uniform holds member k's `tex_from_world` and eye in
-    /// slot k and its texture's rectangle of the batch's [`Atlas`] in `rects[k]`.
-    /// `None` where the atlas cannot be made (`create_atlas`).
+    /// `mask_of(mask, base)`, base being the slot of the member's first view; the
+    /// uniform holds each view's `tex_from_world` and eye in its slot and its
+    /// texture's rectangle of the batch's [`Atlas`]. `None` where the atlas cannot
+    /// be made (`create_atlas`).
     fn create_batch(
         &self,
-        members: &[(&[ProxyVertex], ViewInfo)],
+        members: &[(&[ProxyVertex], &[ViewInfo])],
         layered: bool,
         mask_of: impl Fn(u32, u32) -> u32,
     ) -> Option<GpuProxy> {
-        if members.len() < 2 || members.len() > MAX_VIEWS {
+        let views: Vec<ViewInfo> = members.iter().flat_map(|m| m.1.iter().copied()).collect();
+        if members.len() < 2 || views.len() > PROXY_SLOTS {
             return None;
         }
-        let views: Vec<ViewInfo> = members.iter().map(|m| m.1).collect();
         let atlas = self.create_atlas(&views)?;
         let tile = self.options.tile_size();
         let mut vertices = Vec::new();
         let mut clusters = Vec::new();
-        for (k, (member, _)) in members.iter().enumerate() {
+        let mut base = 0u32;
+        for (member, member_views) in members {
             let (v, c) = crate::patches::cluster_proxy_vertices(member, tile);
             let first = vertices.len() as u32;
             vertices.extend(v.into_iter().map(|mut v| {
-                v.mask = mask_of(v.mask, k as u32);
+                v.mask = mask_of(v.mask, base);
                 v
             }));
+            base += member_views.len() as u32;
             clusters.extend(c.into_iter().map(|mut c| {
                 c.first += first;
                 c
@@ -330,12 +360,12 @@ impl Renderer {
         layered: bool,
     ) -> GpuProxy {
         let mut u = ProxyUniform::zeroed();
-        for (i, v) in views.iter().take(MAX_VIEWS).enumerate() {
+        for (i, v) in views.iter().take(PROXY_SLOTS).enumerate() {
             u.tex_from_world[i] = v.matrix;
             u.view_eye[i] = [v.eye[0], v.eye[1], v.eye[2], 1.0];
-            u.counts[1] |= u32::from(v.encoding == TextureEncoding::Bc1) << i;
+            u.counts[1] |= u32::from(v.encoding == TextureEncoding::Bc1) << i.min(31);
         }
-        u.counts[0] = views.len().min(MAX_VIEWS) as u32;
+        u.counts[0] = views.len().min(PROXY_SLOTS) as u32;
         let mut texture_bytes = 0;
         if let Some(a) = &atlas {
             let size = a.texture.size();
@@ -368,7 +398,7 @@ impl Renderer {
             vertices: vbuf,
             vertex_count: vertices.len() as u32,
             uniform,
-            textures: vec![None; views.len().min(MAX_VIEWS)],
+            textures: vec![None; views.len().min(PROXY_SLOTS)],
             bind_group: None,
             lit_bind_group,
             texture_bytes,
@@ -506,7 +536,7 @@ impl Renderer {
     }
 
     /// The [`Atlas`] of a mesh proxy with `views`, where it gets one: two to
-    /// [`MAX_VIEWS`] views of one encoding with sides of at least 1 (multiples of 4
+    /// [`PROXY_SLOTS`] views of one encoding with sides of at least 1 (multiples of 4
     /// for BC blocks), packed within the device's largest texture side. BC1/BC3 as
     /// they are where the device samples them natively, else RGBA8 (decoded on the
     /// CPU at upload, as the per-view path does). Every texel starts transparent
@@ -515,7 +545,7 @@ impl Renderer {
     fn create_atlas(&self, views: &[ViewInfo]) -> Option<Atlas> {
         let first = views.first()?.encoding;
         if views.len() < 2
-            || views.len() > MAX_VIEWS
+            || views.len() > PROXY_SLOTS
             || views
                 .iter()
                 .any(|v| v.encoding != first || v.width == 0 || v.height == 0)
@@ -720,40 +750,60 @@ fn atlas_bytes(format: wgpu::TextureFormat, width: u32, height: u32) -> usize {
 pub(crate) enum BatchClass {
     /// A layered impostor with one view ([`Renderer::create_impostor_batch`]).
     Impostors,
-    /// A mesh proxy with one view ([`Renderer::create_mesh_batch`]).
+    /// A mesh proxy ([`Renderer::create_mesh_batch`]).
     Meshes,
 }
 
+/// What a pack proxy may be batched with: its class, the encoding of its views and
+/// its region (`Renderer::create_pack_proxies`).
+pub(crate) type BatchKey = (BatchClass, TextureEncoding, u32);
+
+/// Most capture texels in one batch's atlas (4096², 8 MiB in BC1): a batch stays
+/// well inside the 8192-texel side every adapter offers (`pack_atlas`'s shelves
+/// waste some), and a cell's load does not clear one huge atlas at once.
+pub(crate) const BATCH_TEXELS: u64 = 4096 * 4096;
+
+/// What a proxy adds to a batch: view slots and capture texels.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct BatchCost {
+    pub slots: usize,
+    pub texels: u64,
+}
+
 /// Which pack proxies are drawn together ([`Renderer::create_pack_proxies`]):
-/// `batchable[i]` is proxy i's batch key (its class and the encoding of its one
-/// view) when it may join a batch, else `None`. Proxies in pack order; each
-/// batchable one joins the open batch of its key until that holds `max`, and a
-/// batch takes the place of its first member (a group pack's impostors come sector
-/// by sector, bands by distance: consecutive ones are neighbours, so a batch's
-/// bounds stay compact). Every other proxy is a batch of its own. Each proxy is in
-/// exactly one batch, members in pack order.
+/// `batchable[i]` is proxy i's batch key (its class and the encoding of its views)
+/// and cost when it may join a batch, else `None`. Proxies in pack order; each
+/// batchable one joins the open batch of its key while that stays within `limit`
+/// (slots and texels), else opens the key's next batch; a batch takes the place of
+/// its first member (a group pack's impostors come sector by sector, bands by
+/// distance: consecutive ones are neighbours, so a batch's bounds stay compact).
+/// Every other proxy is a batch of its own. Each proxy is in exactly one batch,
+/// members in pack order.
 pub(crate) fn proxy_batches<K: Copy + PartialEq>(
-    batchable: &[Option<K>],
-    max: usize,
+    batchable: &[Option<(K, BatchCost)>],
+    limit: BatchCost,
 ) -> Vec<Vec<usize>> {
     let mut out: Vec<Vec<usize>> = Vec::new();
-    // Per key: the batch being filled (an index of `out`).
-    let mut open: Vec<(K, usize)> = Vec::new();
+    // Per key: the batch being filled (an index of `out`) and what it holds.
+    let mut open: Vec<(K, usize, BatchCost)> = Vec::new();
     for (i, b) in batchable.iter().enumerate() {
-        let Some(key) = *b else {
+        let Some((key, cost)) = *b else {
             out.push(vec![i]);
             continue;
         };
-        match open.iter().position(|&(e, _)| e == key) {
-            Some(k) if out[open[k].1].len() < max.max(1) => out[open[k].1].push(i),
-            found => {
-                if let Some(k) = found {
-                    open.remove(k);
-                }
-                open.push((key, out.len()));
-                out.push(vec![i]);
+        let found = open.iter().position(|&(e, _, _)| e == key);
+        if let Some(k) = found {
+            let (_, at, held) = &mut open[k];
+            if held.slots + cost.slots <= limit.slots && held.texels + cost.texels <= limit.texels {
+                out[*at].push(i);
+                held.slots += cost.slots;
+                held.texels += cost.texels;
+                continue;
             }
+            open.remove(k);
         }
+        open.push((key, out.len(), cost));
+        out.push(vec![i]);
     }
     out
 }
@@ -796,7 +846,7 @@ pub(crate) fn pack_atlas(sizes: &[(u32, u32)], max: u32) -> Option<PackedAtlas> 
 
 #[cfg(test)]
 mod tests {
-    use super::{pack_atlas, proxy_batches, BatchClass, TRANSPARENT_BC1};
+    use super::{pack_atlas, proxy_batches, BatchClass, BatchCost, TRANSPARENT_BC1};
     use format::pack::{Texture, TextureEncoding};
 
     /// The atlas's clear texels decode as "nothing captured" (alpha 0) in every
@@ -871,8 +921,19 @@ mod tests {
     /// every proxy is drawn exactly once.
     #[test]
     fn proxy_batches_group_same_encoding_proxies() {
-        let (r, b) = (Some(TextureEncoding::Rgba8), Some(TextureEncoding::Bc3));
-        let plan = proxy_batches(&[None, r, r, b, r, None, b, r, r], 3);
+        let one = BatchCost {
+            slots: 1,
+            texels: 16,
+        };
+        let (r, b) = (
+            Some((TextureEncoding::Rgba8, one)),
+            Some((TextureEncoding::Bc3, one)),
+        );
+        let at_most = |n: usize| BatchCost {
+            slots: n,
+            texels: u64::MAX,
+        };
+        let plan = proxy_batches(&[None, r, r, b, r, None, b, r, r], at_most(3));
         assert_eq!(
             plan,
             vec![vec![0], vec![1, 2, 4], vec![3, 6], vec![5], vec![7, 8],]
@@ -881,26 +942,58 @@ mod tests {
         all.sort_unstable();
         assert_eq!(all, (0..9).collect::<Vec<_>>());
         assert_eq!(
-            proxy_batches(&[r; 17], 8),
+            proxy_batches(&[r; 17], at_most(8)),
             vec![(0..8).collect(), (8..16).collect(), vec![16]]
         );
         assert_eq!(
-            proxy_batches::<()>(&[None, None], 8),
+            proxy_batches::<()>(&[None, None], at_most(8)),
             vec![vec![0], vec![1]]
         );
-        assert!(proxy_batches::<()>(&[], 8).is_empty());
+        assert!(proxy_batches::<()>(&[], at_most(8)).is_empty());
     }
 
-    /// Layered impostors and single-view mesh proxies of one encoding are batched
+    /// Members fill a batch by their views and texels: one that would pass either
+    /// limit opens the key's next batch, and one over a limit on its own stands
+    /// alone (a batch of one).
+    #[test]
+    fn proxy_batches_respect_slots_and_texels() {
+        let cost = |slots: usize, texels: u64| Some(((), BatchCost { slots, texels }));
+        let limit = BatchCost {
+            slots: 8,
+            texels: 100,
+        };
+        let plan = proxy_batches(
+            &[
+                cost(7, 10),
+                cost(1, 10),
+                cost(7, 10),
+                cost(2, 10),
+                cost(1, 90),
+                cost(1, 200),
+            ],
+            limit,
+        );
+        assert_eq!(plan, vec![vec![0, 1], vec![2], vec![3, 4], vec![5]]);
+    }
+
+    /// Layered impostors and mesh proxies of one encoding are batched
     /// apart (they are drawn with different pipelines).
     #[test]
     fn proxy_batches_keep_impostors_and_meshes_apart() {
         let e = TextureEncoding::Bc1;
+        let one = BatchCost {
+            slots: 1,
+            texels: 1,
+        };
         let (i, m) = (
-            Some((BatchClass::Impostors, e)),
-            Some((BatchClass::Meshes, e)),
+            Some(((BatchClass::Impostors, e), one)),
+            Some(((BatchClass::Meshes, e), one)),
         );
-        let plan = proxy_batches(&[m, i, m, None, i, m], 8);
+        let limit = BatchCost {
+            slots: 8,
+            texels: 8,
+        };
+        let plan = proxy_batches(&[m, i, m, None, i, m], limit);
         assert_eq!(plan, vec![vec![0, 2, 5], vec![1, 4], vec![3]]);
     }
 }

@@ -40,6 +40,7 @@ import {
   INSTANCE_RAW,
   MODEL_VERTEX,
   modelVertices,
+  PROXY_SLOTS,
   PROXY_UNIFORM,
   PROXY_VERTEX,
   proxyVertices,
@@ -609,12 +610,12 @@ function makeProxy(res: Resident, p: CellPack["proxies"][number]): GpuProxy {
   let premult = 0;
   p.views.slice(0, n).forEach((view, i) => {
     for (let k = 0; k < 16; k++) dv.setFloat32(64 * i + 4 * k, view.matrix[k], true);
-    for (let k = 0; k < 3; k++) dv.setFloat32(64 * MAX_VIEWS + 16 * i + 4 * k, view.eye[k], true);
-    dv.setFloat32(64 * MAX_VIEWS + 16 * i + 12, 1, true);
+    for (let k = 0; k < 3; k++) dv.setFloat32(64 * PROXY_SLOTS + 16 * i + 4 * k, view.eye[k], true);
+    dv.setFloat32(64 * PROXY_SLOTS + 16 * i + 12, 1, true);
     if (view.encoding === 2) premult |= 1 << i;
   });
-  dv.setUint32(80 * MAX_VIEWS, n, true);
-  dv.setUint32(80 * MAX_VIEWS + 4, premult, true);
+  dv.setUint32(80 * PROXY_SLOTS, n, true);
+  dv.setUint32(80 * PROXY_SLOTS + 4, premult, true);
   const gp: GpuProxy = {
     vbuf: buffer(v.data, GPUBufferUsage.VERTEX),
     count: v.count,

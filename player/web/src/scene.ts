@@ -147,7 +147,11 @@ export const INSTANCE_RAW = 128;
 export const PROXY_VERTEX = 60;
 // matrices, eyes, counts, then the atlas rectangles (zero here: the viewer draws
 // every proxy with a texture per view, counts.z = counts.w = 0).
-export const PROXY_UNIFORM = 96 * 8 + 16;
+// View slots of the proxy uniform (player vertex.rs PROXY_SLOTS, shader.wgsl): the
+// player batches proxies up to this many views; this viewer fills the first
+// MAX_VIEWS of a lone proxy.
+export const PROXY_SLOTS = 32;
+export const PROXY_UNIFORM = 96 * PROXY_SLOTS + 16;
 export const GLOBALS = 224;
 
 /** Inverse-transpose of the 3×3 part (columns), or the part itself when singular. */
