@@ -180,15 +180,13 @@ fn cell_list<'a>(
             .filter(|(_, b)| f.intersects(b))
             .map(|(p, _)| p)
     };
-    let proxies = in_view()
-        .filter(|p| p.is_ready())
-        .chain(
-            standing_in
-                .into_iter()
-                .filter(|(_, b)| f.intersects(b))
-                .map(|(p, _)| p),
-        )
-        .collect();
+    let ready: Vec<&GpuProxy> = in_view().filter(|p| p.is_ready()).collect();
+    let mut proxy_only: Vec<Option<Vec<(u32, u32)>>> = vec![None; ready.len()];
+    let mut proxies = ready;
+    for (p, _, only) in standing_in.into_iter().filter(|(_, b, _)| f.intersects(b)) {
+        proxies.push(p);
+        proxy_only.push(only);
+    }
     let lit_proxies = match pending {
         PendingDraw::StandIns | PendingDraw::Originals => Vec::new(),
         PendingDraw::Lit => in_view().filter(|p| !p.is_ready()).collect(),
@@ -197,6 +195,7 @@ fn cell_list<'a>(
         originals,
         levels: Vec::new(),
         proxies,
+        proxy_only,
         lit_proxies,
         patched: Vec::new(),
         cull: Some(crate::patches::CullView::new(camera.eye, f, &bake.options)),
@@ -210,26 +209,43 @@ fn cell_list<'a>(
 }
 
 /// The ready proxies of `stand_ins` (the packs drawn before the last crossing)
-/// whose members all wait in `waiting` (objects of proxies still waiting for their
-/// textures), first come first served, with their bounds; their members leave
-/// `waiting`. A proxy with a member that is drawn otherwise now (inside the cell,
-/// or by a ready proxy) is never a stand-in, so no object is drawn twice.
+/// that show objects waiting in `waiting` (objects of proxies still waiting for
+/// their textures), first come first served, with their bounds: a lone proxy whose
+/// members all wait, and of a batch each member proxy whose objects all wait (the
+/// vertex ranges of those members, `GpuProxy::member_spans`; `None` when every
+/// member is). Their objects leave `waiting`. A member with an object that is
+/// drawn otherwise now (inside the cell, or by a ready proxy) never stands in, so
+/// no object is drawn twice.
+#[allow(clippy::type_complexity)]
 fn stand_ins_for<'a>(
     stand_ins: &[&'a ResidentCell],
     waiting: &mut std::collections::BTreeSet<u32>,
-) -> Vec<(&'a GpuProxy, &'a Aabb)> {
+) -> Vec<(&'a GpuProxy, &'a Aabb, Option<Vec<(u32, u32)>>)> {
     let mut chosen = Vec::new();
     for pack in stand_ins {
-        for ((proxy, bounds), members) in pack.proxies.iter().zip(&pack.bounds).zip(&pack.members) {
-            if proxy.is_ready()
-                && !members.is_empty()
-                && members.iter().all(|m| waiting.contains(m))
-            {
-                for m in members {
-                    waiting.remove(m);
-                }
-                chosen.push((proxy, bounds));
+        for ((proxy, bounds), objects) in pack
+            .proxies
+            .iter()
+            .zip(&pack.bounds)
+            .zip(&pack.member_objects)
+        {
+            if !proxy.is_ready() {
+                continue;
             }
+            let mut spans = Vec::new();
+            for (member, span) in objects.iter().zip(&proxy.member_spans) {
+                if !member.is_empty() && member.iter().all(|m| waiting.contains(m)) {
+                    for m in member {
+                        waiting.remove(m);
+                    }
+                    spans.push(*span);
+                }
+            }
+            if spans.is_empty() {
+                continue;
+            }
+            let whole = spans.len() == proxy.member_spans.len();
+            chosen.push((proxy, bounds, (!whole).then_some(spans)));
         }
     }
     chosen

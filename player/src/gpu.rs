@@ -145,6 +145,10 @@ pub struct GpuLod {
 pub struct GpuProxy {
     vertices: wgpu::Buffer,
     pub vertex_count: u32,
+    /// Per pack proxy it draws (a batch's members in order; one for a lone proxy):
+    /// that member's vertex range [start, end) in `vertices` (members' triangles
+    /// are contiguous, their tiles too), so a stand-in may draw some members only.
+    pub member_spans: Vec<(u32, u32)>,
     uniform: wgpu::Buffer,
     textures: Vec<Option<wgpu::TextureView>>,
     bind_group: Option<wgpu::BindGroup>,

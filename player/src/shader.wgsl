@@ -117,7 +117,7 @@ fn fs_ground(i: LitOut) -> @location(0) vec4<f32> {
 // View slots of a proxy's uniform (player vertex.rs PROXY_SLOTS): a lone proxy
 // uses its first MAX_VIEWS, a batch of proxies sharing one atlas up to all of them
 // (member views at consecutive slots from the member's base, vertex mask bits 16–23).
-const PROXY_SLOTS: u32 = 32u;
+const PROXY_SLOTS: u32 = 64u;
 // "No view" in ProxyOut.views.
 const NO_VIEW: u32 = 255u;
 
@@ -451,14 +451,10 @@ fn atlas_texel(i: u32, uv: vec2<f32>) -> vec4<f32> {
 // lone one's have bit 0, so vs_proxy chooses view k for them as it chose view 0.
 @fragment
 fn fs_proxy_atlas(i: ProxyOut) -> @location(0) vec4<f32> {
-    let lit = shade(i.albedo, i.normal);
-    if g.debug.x != 0u {
-        return vec4<f32>(lit, 1.0);
-    }
     let best0 = i.views & 0xffu;
     let best1 = i.views >> 8u;
-    if best0 == NO_VIEW {
-        return vec4<f32>(lit, 1.0);
+    if g.debug.x != 0u || best0 == NO_VIEW {
+        return vec4<f32>(shade(i.albedo, i.normal), 1.0);
     }
     let uv0 = view_uv(i.tc0);
     let uv1 = view_uv(i.tc1);
@@ -470,5 +466,10 @@ fn fs_proxy_atlas(i: ProxyOut) -> @location(0) vec4<f32> {
     if best1 != NO_VIEW && uv1.z != 0.0 {
         c1 = captured(best1, atlas_texel(best1, uv1.xy));
     }
-    return blend(lit, c0, c1, i.weights);
+    // Lit only where neither view has data (blend's fallback), so textured
+    // fragments skip the shading.
+    if c0.a + c1.a <= 0.0 {
+        return vec4<f32>(shade(i.albedo, i.normal), 1.0);
+    }
+    return blend(vec3<f32>(0.0), c0, c1, i.weights);
 }

@@ -220,15 +220,18 @@ pub struct ResidentCell {
     pub cell_id: u32,
     pub originals: Vec<u32>,
     /// The pack's proxies as drawn: one per pack proxy, except that a batch of
-    /// layered impostors or of single-view mesh proxies
-    /// (`Renderer::create_pack_proxies`) is one, culled, ordered, stood in for and
-    /// replaced by originals as a whole.
+    /// layered impostors or of mesh proxies (`Renderer::create_pack_proxies`) is
+    /// one, culled, ordered and replaced by originals as a whole, and stood in for
+    /// member by member (`frame::stand_ins_for`).
     pub proxies: Vec<GpuProxy>,
     /// Per proxy: its world bounds (a batch's: the union of its members').
     pub bounds: Vec<Aabb>,
     /// Per proxy: its member instances (drawn as originals until it is ready; a
     /// batch's: every member proxy's, without duplicates).
     pub members: Vec<Vec<u32>>,
+    /// Per proxy, per batch member (`GpuProxy::member_spans` order; one for a lone
+    /// proxy): that member's instances.
+    pub member_objects: Vec<Vec<Vec<u32>>>,
     /// Texels still waiting in the upload queue: (proxy, slot) → texels (a batch's
     /// slot k: its member k's one view).
     pending: BTreeMap<(usize, usize), PendingTexture>,
@@ -418,7 +421,7 @@ impl Streamer {
         self.clock += 1;
         // 1. Cells the prefetch thread has prepared.
         while let Ok((id, result)) = self.rx.try_recv() {
-            self.accept(renderer, &bake.grid, id, result);
+            self.accept(renderer, id, result);
         }
         // 2. The current cell; timestamp and prefetch requests.
         let (cell, group) = cell_and_group(bake, camera);
@@ -552,7 +555,7 @@ impl Streamer {
     fn load_now(&mut self, renderer: &Renderer, bake: &Bake, key: u32) {
         if !self.cells.contains_key(&key) && !self.failed.contains(&key) {
             let result = bake.load_cell(key).map_err(|e| e.to_string());
-            self.accept(renderer, &bake.grid, key, result);
+            self.accept(renderer, key, result);
         }
     }
 
@@ -620,13 +623,7 @@ impl Streamer {
         self.shared.wake.notify_one();
     }
 
-    fn accept(
-        &mut self,
-        renderer: &Renderer,
-        grid: &crate::grid::CellGrid,
-        id: u32,
-        result: Result<PreparedCell, String>,
-    ) {
+    fn accept(&mut self, renderer: &Renderer, id: u32, result: Result<PreparedCell, String>) {
         if self.cells.contains_key(&id) || self.failed.contains(&id) {
             return;
         }
@@ -655,32 +652,22 @@ impl Streamer {
                     .zip(&views)
                     .map(|(p, v)| (p.vertices.as_slice(), v.as_slice()))
                     .collect();
-                // Batches hold the proxies of one cell's objects (the cell of the
-                // proxy's bounds centre): crossing into a cell turns its objects
-                // into originals, and a batch of the previous cell can still stand
-                // in for the others only if none of its members is among them.
-                let regions: Vec<u32> = cell
-                    .proxies
-                    .iter()
-                    .map(|p| {
-                        let c = p.bounds.centre();
-                        grid.nearest_cell(Vec2::new(c.x, c.z)).unwrap_or(u32::MAX)
-                    })
-                    .collect();
                 // The GPU proxies, each drawing one pack proxy or a batch of layered
                 // impostors or of mesh proxies
                 // (`Renderer::create_pack_proxies`): a batch is one proxy here too,
                 // with its members' union of bounds and member objects.
-                let drawn = renderer.create_pack_proxies(&sources, &regions);
+                let drawn = renderer.create_pack_proxies(&sources);
                 let mut packed: Vec<Option<crate::bake::PreparedProxy>> =
                     cell.proxies.into_iter().map(Some).collect();
                 let mut proxies = Vec::with_capacity(drawn.len());
                 let mut bounds = Vec::with_capacity(drawn.len());
                 let mut members = Vec::with_capacity(drawn.len());
+                let mut member_objects = Vec::with_capacity(drawn.len());
                 let mut pending = BTreeMap::new();
                 for (pi, (gpu, from)) in drawn.into_iter().enumerate() {
                     let mut b = Aabb::EMPTY;
                     let mut m: Vec<u32> = Vec::new();
+                    let mut per_member = Vec::with_capacity(from.len());
                     // Slot `vi` of the drawn proxy: a lone proxy's view vi; in a
                     // batch, the members' views in member order (each member's
                     // from its base slot on).
@@ -690,6 +677,7 @@ impl Streamer {
                             continue;
                         };
                         b = b.union(&p.bounds);
+                        per_member.push(p.members.clone());
                         m.extend(p.members);
                         slots.extend(p.views);
                     }
@@ -700,6 +688,7 @@ impl Streamer {
                     proxies.push(gpu);
                     bounds.push(b);
                     members.push(m);
+                    member_objects.push(per_member);
                     for (vi, v) in slots.into_iter().enumerate() {
                         self.uploads.push_back((id, pi, vi));
                         pending.insert((pi, vi), (v.width, v.height, v.encoding, v.data));
@@ -713,6 +702,7 @@ impl Streamer {
                         proxies,
                         bounds,
                         members,
+                        member_objects,
                         pending,
                         bytes,
                         last_used: self.clock,

@@ -166,7 +166,7 @@ const _: () = assert!(ProxyVertex::ATTRIBUTES[6].offset == offset_of!(ProxyVerte
 /// bind group and one draw serve several multi-view proxies. On lavapipe each
 /// switch to another bind group costs about 0.7 ms of frame time whatever it holds
 /// (measured on the city walk: BENCHMARKS.md), far more than the draws themselves.
-pub const PROXY_SLOTS: usize = 32;
+pub const PROXY_SLOTS: usize = 64;
 
 /// A proxy's per-view uniform block (group 1, binding 0).
 #[repr(C)]

@@ -24,6 +24,10 @@ pub struct DrawList<'a> {
     /// Originals at a simplified level (LOD baseline): ((model, level ≥ 1), instances).
     pub levels: Vec<((u32, u32), Vec<InstanceRaw>)>,
     pub proxies: Vec<&'a GpuProxy>,
+    /// Per proxy of `proxies` (missing: `None`): the vertex ranges it is limited
+    /// to, sorted and disjoint (a batch standing in for some of its members,
+    /// `frame::stand_ins_for`); `None` draws all of it.
+    pub proxy_only: Vec<Option<Vec<(u32, u32)>>>,
     /// Proxies drawn lit (vertex colours, no texture) because their textures are not
     /// resident yet (`--pending lit`).
     pub lit_proxies: Vec<&'a GpuProxy>,
@@ -40,6 +44,28 @@ pub struct DrawList<'a> {
     pub(crate) ranges: std::cell::OnceCell<Vec<Vec<(u32, u32)>>>,
 }
 
+/// The parts of sorted, disjoint ranges `a` that lie in sorted, disjoint ranges
+/// `b` ([start, end) each), sorted, adjacent ones merged.
+pub(crate) fn intersect_ranges(a: &[(u32, u32)], b: &[(u32, u32)]) -> Vec<(u32, u32)> {
+    let mut out: Vec<(u32, u32)> = Vec::new();
+    let (mut i, mut j) = (0, 0);
+    while i < a.len() && j < b.len() {
+        let (s, e) = (a[i].0.max(b[j].0), a[i].1.min(b[j].1));
+        if s < e {
+            match out.last_mut() {
+                Some(last) if last.1 == s => last.1 = e,
+                _ => out.push((s, e)),
+            }
+        }
+        if a[i].1 < b[j].1 {
+            i += 1;
+        } else {
+            j += 1;
+        }
+    }
+    out
+}
+
 impl DrawList<'_> {
     /// Per proxy of `proxies`, then of `lit_proxies`, the vertex ranges it draws
     /// from [`DrawList::cull`] ([`GpuProxy::ranges`]); the tests run once per list.
@@ -48,7 +74,14 @@ impl DrawList<'_> {
             self.proxies
                 .iter()
                 .chain(&self.lit_proxies)
-                .map(|p| p.ranges(self.cull.as_ref()))
+                .enumerate()
+                .map(|(k, p)| {
+                    let ranges = p.ranges(self.cull.as_ref());
+                    match self.proxy_only.get(k).and_then(Option::as_ref) {
+                        Some(only) if k < self.proxies.len() => intersect_ranges(&ranges, only),
+                        _ => ranges,
+                    }
+                })
                 .collect()
         })
     }
@@ -354,4 +387,34 @@ fn near_to_far(proxies: &[&GpuProxy], eye: Vec3) -> Vec<usize> {
         .collect();
     keyed.sort_by(|a, b| a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)));
     keyed.into_iter().map(|(_, _, k)| k).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::intersect_ranges;
+
+    /// The intersection keeps exactly the vertices in both (checked vertex by
+    /// vertex), sorted, with touching pieces merged.
+    #[test]
+    fn intersected_ranges_keep_the_vertices_in_both() {
+        type Ranges = &'static [(u32, u32)];
+        let cases: [(Ranges, Ranges); 6] = [
+            (&[(0, 10)], &[(2, 4), (6, 12)]),
+            (&[(0, 3), (5, 9), (12, 20)], &[(2, 13)]),
+            (&[(0, 4), (4, 8)], &[(0, 8)]),
+            (&[(1, 2)], &[(2, 3)]),
+            (&[], &[(0, 5)]),
+            (&[(3, 30)], &[(0, 3), (10, 11), (29, 40)]),
+        ];
+        let has = |r: &[(u32, u32)], v: u32| r.iter().any(|&(s, e)| s <= v && v < e);
+        for (a, b) in cases {
+            let got = intersect_ranges(a, b);
+            for v in 0..50 {
+                assert_eq!(has(&got, v), has(a, v) && has(b, v), "{a:?} ∩ {b:?} at {v}");
+            }
+            assert!(got.windows(2).all(|w| w[0].1 < w[1].0), "{got:?}");
+            assert!(got.iter().all(|&(s, e)| s < e));
+        }
+        assert_eq!(intersect_ranges(&[(0, 4), (4, 8)], &[(0, 8)]), vec![(0, 8)]);
+    }
 }

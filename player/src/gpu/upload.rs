@@ -195,22 +195,14 @@ impl Renderer {
     /// [`Renderer::set_mesh_batches`] is on ([`Renderer::create_mesh_batch`]); both
     /// are on by default. A batch whose atlas cannot be made is drawn member by
     /// member, as before.
-    /// `regions[i]`: a key of proxy i's place (the player's: the cell of its
-    /// objects); mesh proxies of several views (MV meshes: objects of the cells
-    /// next door, paper 000 §3.3) share a batch only within one region, so that
-    /// crossing into a cell, whose objects become originals, leaves the previous
-    /// cell's other batches whole to stand in (`frame::stand_ins_for`); the
-    /// single-view ones (objects further away) and impostors ignore it.
     pub fn create_pack_proxies(
         &self,
         proxies: &[(&[ProxyVertex], &[ViewInfo])],
-        regions: &[u32],
     ) -> Vec<(GpuProxy, Vec<usize>)> {
         let layered = format::pack::ProxyKind::LayeredImpostor as u32;
         let batchable: Vec<Option<(BatchKey, BatchCost)>> = proxies
             .iter()
-            .enumerate()
-            .map(|(i, (vertices, views))| {
+            .map(|(vertices, views)| {
                 let first = views.first()?.encoding;
                 let usable = !vertices.is_empty()
                     && views.len() <= MAX_VIEWS
@@ -236,11 +228,7 @@ impl Renderer {
                         .map(|v| u64::from(v.width) * u64::from(v.height))
                         .sum(),
                 };
-                let region = match class {
-                    BatchClass::Meshes if views.len() > 1 => regions.get(i).copied().unwrap_or(0),
-                    _ => u32::MAX,
-                };
-                Some(((class, first, region), cost))
+                Some(((class, first), cost))
             })
             .collect();
         let mut out = Vec::with_capacity(proxies.len());
@@ -332,6 +320,7 @@ impl Renderer {
         let mut vertices = Vec::new();
         let mut clusters = Vec::new();
         let mut base = 0u32;
+        let mut spans = Vec::with_capacity(members.len());
         for (member, member_views) in members {
             let (v, c) = crate::patches::cluster_proxy_vertices(member, tile);
             let first = vertices.len() as u32;
@@ -340,12 +329,15 @@ impl Renderer {
                 v
             }));
             base += member_views.len() as u32;
+            spans.push((first, vertices.len() as u32));
             clusters.extend(c.into_iter().map(|mut c| {
                 c.first += first;
                 c
             }));
         }
-        Some(self.finish_proxy(&vertices, clusters, &views, Some(atlas), layered))
+        let mut p = self.finish_proxy(&vertices, clusters, &views, Some(atlas), layered);
+        p.member_spans = spans;
+        Some(p)
     }
 
     /// The proxy of `vertices` (already in cluster order, `clusters` over them) with
@@ -397,6 +389,7 @@ impl Renderer {
         let mut p = GpuProxy {
             vertices: vbuf,
             vertex_count: vertices.len() as u32,
+            member_spans: vec![(0, vertices.len() as u32)],
             uniform,
             textures: vec![None; views.len().min(PROXY_SLOTS)],
             bind_group: None,
@@ -754,9 +747,8 @@ pub(crate) enum BatchClass {
     Meshes,
 }
 
-/// What a pack proxy may be batched with: its class, the encoding of its views and
-/// its region (`Renderer::create_pack_proxies`).
-pub(crate) type BatchKey = (BatchClass, TextureEncoding, u32);
+/// What a pack proxy may be batched with: its class and the encoding of its views.
+pub(crate) type BatchKey = (BatchClass, TextureEncoding);
 
 /// Most capture texels in one batch's atlas (4096², 8 MiB in BC1): a batch stays
 /// well inside the 8192-texel side every adapter offers (`pack_atlas`'s shelves

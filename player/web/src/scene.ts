@@ -150,7 +150,7 @@ export const PROXY_VERTEX = 60;
 // View slots of the proxy uniform (player vertex.rs PROXY_SLOTS, shader.wgsl): the
 // player batches proxies up to this many views; this viewer fills the first
 // MAX_VIEWS of a lone proxy.
-export const PROXY_SLOTS = 32;
+export const PROXY_SLOTS = 64;
 export const PROXY_UNIFORM = 96 * PROXY_SLOTS + 16;
 export const GLOBALS = 224;
 
