@@ -23,7 +23,8 @@
 //!   their order, and go up under the same budget. Until all of a proxy's textures
 //!   are resident, the frame draws a **stand-in** for it: the ready proxy of the
 //!   packs drawn before the crossing (the previous cell and its group) that shows
-//!   the same objects, if there is one — a proxy made for the region next door,
+//!   the same objects, if there is one (of a batch, the members that do: its
+//!   vertex ranges, `frame::stand_ins_for`) — a proxy made for the region next door,
 //!   seen from just across its border, as a texture streamer shows a coarser mip
 //!   until the finer one arrives — else the member objects as original geometry
 //!   ([`ResidentCell::fallback_instances`]); with [`PendingDraw::Lit`], the proxy
