@@ -167,8 +167,13 @@ fn cell_list<'a>(
         ids.extend(waiting);
     }
     if let Far::Unavailable = far {
-        let proxied: std::collections::BTreeSet<u32> =
-            cell.members.iter().flatten().copied().collect();
+        let proxied: std::collections::BTreeSet<u32> = cell
+            .member_objects
+            .iter()
+            .flatten()
+            .flatten()
+            .copied()
+            .collect();
         ids.extend((0..bake.base.instances.len() as u32).filter(|i| !proxied.contains(i)));
     }
     let shown: Vec<u32> = visible(bake, &f, ids.into_iter()).collect();
@@ -208,6 +213,10 @@ fn cell_list<'a>(
     list
 }
 
+/// A proxy standing in, its bounds and the vertex ranges of the members drawn
+/// (`None`: all of it).
+type StandIn<'a> = (&'a GpuProxy, &'a Aabb, Option<Vec<(u32, u32)>>);
+
 /// The ready proxies of `stand_ins` (the packs drawn before the last crossing)
 /// that show objects waiting in `waiting` (objects of proxies still waiting for
 /// their textures), first come first served, with their bounds: a lone proxy whose
@@ -216,11 +225,10 @@ fn cell_list<'a>(
 /// member is). Their objects leave `waiting`. A member with an object that is
 /// drawn otherwise now (inside the cell, or by a ready proxy) never stands in, so
 /// no object is drawn twice.
-#[allow(clippy::type_complexity)]
 fn stand_ins_for<'a>(
     stand_ins: &[&'a ResidentCell],
     waiting: &mut std::collections::BTreeSet<u32>,
-) -> Vec<(&'a GpuProxy, &'a Aabb, Option<Vec<(u32, u32)>>)> {
+) -> Vec<StandIn<'a>> {
     let mut chosen = Vec::new();
     for pack in stand_ins {
         for ((proxy, bounds), objects) in pack

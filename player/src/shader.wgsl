@@ -210,7 +210,9 @@ fn vs_proxy(v: ProxyIn) -> ProxyOut {
         return o;
     }
     let base = (v.mask >> 16u) & 0xffu;
-    let n = min(p.counts.x, PROXY_SLOTS) - min(base, min(p.counts.x, PROXY_SLOTS));
+    // The member's views: slots base … base + MAX_VIEWS − 1 that the proxy has.
+    let slots = min(p.counts.x, PROXY_SLOTS);
+    let n = min(slots - min(base, slots), MAX_VIEWS);
     // Ranked by the cosine of the angle (the closest view has the largest), so the
     // arccosine is taken for the two chosen views only, for their weights.
     let to_poly = normalize(v.centroid - g.eye.xyz);
@@ -218,7 +220,7 @@ fn vs_proxy(v: ProxyIn) -> ProxyOut {
     var best1 = NO_VIEW;
     var c0 = -2.0;
     var c1 = -2.0;
-    for (var k = 0u; k < min(n, MAX_VIEWS); k = k + 1u) {
+    for (var k = 0u; k < n; k = k + 1u) {
         if ((v.mask >> k) & 1u) == 0u {
             continue;
         }

@@ -227,11 +227,9 @@ pub struct ResidentCell {
     pub proxies: Vec<GpuProxy>,
     /// Per proxy: its world bounds (a batch's: the union of its members').
     pub bounds: Vec<Aabb>,
-    /// Per proxy: its member instances (drawn as originals until it is ready; a
-    /// batch's: every member proxy's, without duplicates).
-    pub members: Vec<Vec<u32>>,
     /// Per proxy, per batch member (`GpuProxy::member_spans` order; one for a lone
-    /// proxy): that member's instances.
+    /// proxy): that member's instances (drawn as originals until the proxy is
+    /// ready).
     pub member_objects: Vec<Vec<Vec<u32>>>,
     /// Texels still waiting in the upload queue: (proxy, slot) → texels (a batch's
     /// slot k: its member k's one view).
@@ -257,9 +255,9 @@ impl ResidentCell {
         let set: BTreeSet<u32> = self
             .proxies
             .iter()
-            .zip(&self.members)
+            .zip(&self.member_objects)
             .filter(|(p, _)| !p.is_ready())
-            .flat_map(|(_, m)| m.iter().copied())
+            .flat_map(|(_, m)| m.iter().flatten().copied())
             .collect();
         set.into_iter().collect()
     }
@@ -656,18 +654,16 @@ impl Streamer {
                 // The GPU proxies, each drawing one pack proxy or a batch of layered
                 // impostors or of mesh proxies
                 // (`Renderer::create_pack_proxies`): a batch is one proxy here too,
-                // with its members' union of bounds and member objects.
+                // with its members' union of bounds and each member's objects.
                 let drawn = renderer.create_pack_proxies(&sources);
                 let mut packed: Vec<Option<crate::bake::PreparedProxy>> =
                     cell.proxies.into_iter().map(Some).collect();
                 let mut proxies = Vec::with_capacity(drawn.len());
                 let mut bounds = Vec::with_capacity(drawn.len());
-                let mut members = Vec::with_capacity(drawn.len());
                 let mut member_objects = Vec::with_capacity(drawn.len());
                 let mut pending = BTreeMap::new();
                 for (pi, (gpu, from)) in drawn.into_iter().enumerate() {
                     let mut b = Aabb::EMPTY;
-                    let mut m: Vec<u32> = Vec::new();
                     let mut per_member = Vec::with_capacity(from.len());
                     // Slot `vi` of the drawn proxy: a lone proxy's view vi; in a
                     // batch, the members' views in member order (each member's
@@ -678,17 +674,11 @@ impl Streamer {
                             continue;
                         };
                         b = b.union(&p.bounds);
-                        per_member.push(p.members.clone());
-                        m.extend(p.members);
+                        per_member.push(p.members);
                         slots.extend(p.views);
-                    }
-                    if from.len() > 1 {
-                        let mut seen = BTreeSet::new();
-                        m.retain(|x| seen.insert(*x));
                     }
                     proxies.push(gpu);
                     bounds.push(b);
-                    members.push(m);
                     member_objects.push(per_member);
                     for (vi, v) in slots.into_iter().enumerate() {
                         self.uploads.push_back((id, pi, vi));
@@ -702,7 +692,6 @@ impl Streamer {
                         originals: cell.originals,
                         proxies,
                         bounds,
-                        members,
                         member_objects,
                         pending,
                         bytes,

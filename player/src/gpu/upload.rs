@@ -203,16 +203,8 @@ impl Renderer {
         let batchable: Vec<Option<(BatchKey, BatchCost)>> = proxies
             .iter()
             .map(|(vertices, views)| {
-                let first = views.first()?.encoding;
-                let usable = !vertices.is_empty()
-                    && views.len() <= MAX_VIEWS
-                    && views.iter().all(|v| {
-                        v.encoding == first
-                            && v.width > 0
-                            && v.height > 0
-                            && (!first.is_block() || (v.width % 4 == 0 && v.height % 4 == 0))
-                    });
-                let class = if !usable {
+                let first = atlas_encoding(views)?;
+                let class = if vertices.is_empty() || views.len() > MAX_VIEWS {
                     None
                 } else if vertices.iter().all(|v| v.kind == layered) {
                     (self.impostor_batches && views.len() == 1).then_some(BatchClass::Impostors)
@@ -536,13 +528,8 @@ impl Renderer {
     /// ("nothing captured"), so a view whose texels cannot be used samples as a
     /// missing one does.
     fn create_atlas(&self, views: &[ViewInfo]) -> Option<Atlas> {
-        let first = views.first()?.encoding;
-        if views.len() < 2
-            || views.len() > PROXY_SLOTS
-            || views
-                .iter()
-                .any(|v| v.encoding != first || v.width == 0 || v.height == 0)
-        {
+        let first = atlas_encoding(views)?;
+        if views.len() < 2 || views.len() > PROXY_SLOTS {
             return None;
         }
         let native = self.options.bc_textures;
@@ -554,9 +541,6 @@ impl Renderer {
             }
             _ => return None,
         };
-        if first.is_block() && views.iter().any(|v| v.width % 4 != 0 || v.height % 4 != 0) {
-            return None;
-        }
         let sizes: Vec<(u32, u32)> = views.iter().map(|v| (v.width, v.height)).collect();
         let max = self.device.limits().max_texture_dimension_2d;
         let ((width, height), rects) = pack_atlas(&sizes, max)?;
@@ -745,6 +729,21 @@ pub(crate) enum BatchClass {
     Impostors,
     /// A mesh proxy ([`Renderer::create_mesh_batch`]).
     Meshes,
+}
+
+/// The one encoding of `views` when they can share an atlas: at least one view,
+/// all of one encoding, sides of at least 1 (multiples of 4 for BC blocks).
+fn atlas_encoding(views: &[ViewInfo]) -> Option<TextureEncoding> {
+    let first = views.first()?.encoding;
+    views
+        .iter()
+        .all(|v| {
+            v.encoding == first
+                && v.width > 0
+                && v.height > 0
+                && (!first.is_block() || (v.width % 4 == 0 && v.height % 4 == 0))
+        })
+        .then_some(first)
 }
 
 /// What a pack proxy may be batched with: its class and the encoding of its views.
