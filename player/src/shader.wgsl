@@ -174,13 +174,9 @@ struct ProxyOut {
     @location(9) @interpolate(flat) rect: vec4<u32>,
 };
 
-// The view choice depends only on the triangle (its mask and centroid, flat) and the
-// eye, so it is made once per vertex here instead of once per pixel: of the views in
-// the mask, the two whose direction to the centroid is closest to the viewer's. Mask
-// bit k is view slot base + k, base being bits 16–23 (0 alone; a batch member's
-// first slot).
-@vertex
-fn vs_proxy(v: ProxyIn) -> ProxyOut {
+// What every proxy vertex passes on whatever its kind: position, lit-fallback
+// inputs, mask and kind; no views yet.
+fn proxy_common(v: ProxyIn) -> ProxyOut {
     var o: ProxyOut;
     o.clip = g.clip_from_world * vec4<f32>(v.pos, 1.0);
     o.normal = v.normal;
@@ -189,30 +185,66 @@ fn vs_proxy(v: ProxyIn) -> ProxyOut {
     o.kind = v.kind;
     o.weights = vec2<f32>(0.5, 0.5);
     o.rect = vec4<u32>(0u);
+    o.views = NO_VIEW | (NO_VIEW << 8u);
+    o.tc0 = vec4<f32>(0.0);
+    o.tc1 = vec4<f32>(0.0);
     if g.debug.x != 0u {
         o.albedo = g.palette[min(v.kind, 7u)].rgb;
     }
-    let world = vec4<f32>(v.pos, 1.0);
+    return o;
+}
+
+// Every proxy kind: layered-impostor quads (kind 4) or mesh triangles.
+@vertex
+fn vs_proxy(v: ProxyIn) -> ProxyOut {
+    var o = proxy_common(v);
     if v.kind == 4u {
-        // Its impostor's view: slot k of a batch (mask bits 16–23), 0 alone.
-        let k = min((v.mask >> 16u) & 0xffu, PROXY_SLOTS - 1u);
-        o.views = k | (NO_VIEW << 8u);
-        o.tc0 = p.tex_from_world[k] * world;
-        if p.counts.z != 0u {
-            let atlas = vec2<f32>(f32(p.counts.z), f32(p.counts.w));
-            let r = p.rects[k];
-            o.rect = vec4<u32>(
-                vec2<u32>(round(r.xy * atlas)),
-                max(vec2<u32>(round(r.zw * atlas)), vec2<u32>(1u)),
-            );
-        }
-        o.tc1 = vec4<f32>(0.0);
-        return o;
+        impostor_view(v, &o);
+    } else {
+        mesh_views(v, &o);
     }
+    return o;
+}
+
+// Mesh proxies only (SV/MV meshes, clusters: never kind 4), for the pipelines that
+// draw no impostor: a CPU rasterizer runs both sides of vs_proxy's branch under
+// lane masks, and the impostor side cost ≈ 5 ms of a 512² city frame on llvmpipe.
+@vertex
+fn vs_proxy_mesh(v: ProxyIn) -> ProxyOut {
+    var o = proxy_common(v);
+    mesh_views(v, &o);
+    return o;
+}
+
+// A layered-impostor vertex: its impostor's view, slot k of a batch (mask bits
+// 16–23), 0 alone, and with an atlas its rectangle in texels.
+fn impostor_view(v: ProxyIn, o: ptr<function, ProxyOut>) {
+    let k = min((v.mask >> 16u) & 0xffu, PROXY_SLOTS - 1u);
+    (*o).views = k | (NO_VIEW << 8u);
+    (*o).tc0 = p.tex_from_world[k] * vec4<f32>(v.pos, 1.0);
+    if p.counts.z != 0u {
+        let atlas = vec2<f32>(f32(p.counts.z), f32(p.counts.w));
+        let r = p.rects[k];
+        (*o).rect = vec4<u32>(
+            vec2<u32>(round(r.xy * atlas)),
+            max(vec2<u32>(round(r.zw * atlas)), vec2<u32>(1u)),
+        );
+    }
+}
+
+// A mesh triangle's two views. The view choice depends only on the triangle (its
+// mask and centroid, flat) and the eye, so it is made once per vertex here instead
+// of once per pixel: of the views in the mask, the two whose direction to the
+// centroid is closest to the viewer's. Mask bit k is view slot base + k, base being
+// bits 16–23 (0 alone; a batch member's first slot).
+fn mesh_views(v: ProxyIn, o: ptr<function, ProxyOut>) {
     let base = (v.mask >> 16u) & 0xffu;
-    // The member's views: slots base … base + MAX_VIEWS − 1 that the proxy has.
+    // The member's views: slots base … base + MAX_VIEWS − 1 that the proxy has, up
+    // to the mask's highest bit (the loop runs as long as its longest lane, so a
+    // triangle seen by views 0 and 1 only stops after two turns, not MAX_VIEWS).
     let slots = min(p.counts.x, PROXY_SLOTS);
-    let n = min(slots - min(base, slots), MAX_VIEWS);
+    let highest = 32u - countLeadingZeros(v.mask & 0xffu);
+    let n = min(min(slots - min(base, slots), MAX_VIEWS), highest);
     // Ranked by the cosine of the angle (the closest view has the largest), so the
     // arccosine is taken for the two chosen views only, for their weights.
     let to_poly = normalize(v.centroid - g.eye.xyz);
@@ -238,20 +270,18 @@ fn vs_proxy(v: ProxyIn) -> ProxyOut {
     }
     let a0 = acos(clamp(c0, -1.0, 1.0));
     let a1 = acos(clamp(c1, -1.0, 1.0));
-    o.views = best0 | (best1 << 8u);
+    (*o).views = best0 | (best1 << 8u);
     let s = a0 + a1;
     if best1 != NO_VIEW && s > 1e-6 {
-        o.weights = vec2<f32>(a1 / s, a0 / s);
+        (*o).weights = vec2<f32>(a1 / s, a0 / s);
     }
-    o.tc0 = vec4<f32>(0.0);
-    o.tc1 = vec4<f32>(0.0);
+    let world = vec4<f32>(v.pos, 1.0);
     if best0 != NO_VIEW {
-        o.tc0 = p.tex_from_world[best0] * world;
+        (*o).tc0 = p.tex_from_world[best0] * world;
     }
     if best1 != NO_VIEW {
-        o.tc1 = p.tex_from_world[best1] * world;
+        (*o).tc1 = p.tex_from_world[best1] * world;
     }
-    return o;
 }
 
 // The texture coordinates of projective coordinates tc (.xy) and whether they lie

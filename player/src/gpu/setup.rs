@@ -146,13 +146,13 @@ pub(super) struct Pipelines {
     /// Proxies with impostor layers: `vs_proxy` / `fs_proxy` over [`ProxyVertex`]
     /// (the layers' alpha test discards).
     pub proxy: wgpu::RenderPipeline,
-    /// Mesh proxies (SV/MV meshes, clusters): `vs_proxy` / `fs_proxy_mesh`, which
+    /// Mesh proxies (SV/MV meshes, clusters): `vs_proxy_mesh` / `fs_proxy_mesh`, which
     /// never discards, so hidden fragments can be rejected before shading; one per
     /// entry of [`MESH_VIEW_SLOTS`], the texture slots its fragment shader reads
     /// (shader.wgsl `VIEW_SLOTS`).
     pub proxy_mesh: [wgpu::RenderPipeline; MESH_VIEW_SLOTS.len()],
     /// Mesh proxies whose views share one atlas texture (issue 30 item 7):
-    /// `vs_proxy` / `fs_proxy_atlas`, which samples only the two views it blends and
+    /// `vs_proxy_mesh` / `fs_proxy_atlas`, which samples only the two views it blends and
     /// never discards.
     pub proxy_atlas: wgpu::RenderPipeline,
 }
@@ -248,7 +248,7 @@ pub(super) fn pipelines(
             pipeline_with(
                 "proxy mesh",
                 &proxy_layout,
-                ("vs_proxy", "fs_proxy_mesh"),
+                ("vs_proxy_mesh", "fs_proxy_mesh"),
                 &[Some(ProxyVertex::layout())],
                 &[("VIEW_SLOTS", slots as f64)],
             )
@@ -256,7 +256,7 @@ pub(super) fn pipelines(
         proxy_atlas: pipeline(
             "proxy atlas",
             &proxy_layout,
-            ("vs_proxy", "fs_proxy_atlas"),
+            ("vs_proxy_mesh", "fs_proxy_atlas"),
             &[Some(ProxyVertex::layout())],
         ),
     }

@@ -283,7 +283,7 @@ impl Renderer {
     /// §3.2, views of one encoding), drawn as one proxy with `fs_proxy_atlas`:
     /// member k's views take the slots from its base on, in their order, and its
     /// triangles carry the base in mask bits 16–23 beside their own view bits
-    /// (0–7), so `vs_proxy` reads mask bit j as slot base + j and chooses the same
+    /// (0–7), so `vs_proxy_mesh` reads mask bit j as slot base + j and chooses the same
     /// views as for the member alone ([`Renderer::create_batch`]).
     fn create_mesh_batch(&self, members: &[(&[ProxyVertex], &[ViewInfo])]) -> Option<GpuProxy> {
         self.create_batch(members, false, |mask, base| (mask & 0xff) | (base << 16))

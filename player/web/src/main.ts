@@ -386,7 +386,7 @@ async function makePipelines(module: GPUShaderModule) {
     pipe(litLayout, "vs_lit", "fs_lit", litBuffers),
     pipe(litLayout, "vs_lit", "fs_ground", litBuffers),
     pipe(proxyLayout, "vs_proxy", "fs_proxy", proxyBuffers),
-    ...Array.from({ length: MAX_VIEWS }, (_, i) => pipe(proxyLayout, "vs_proxy", "fs_proxy_mesh", proxyBuffers, { VIEW_SLOTS: i + 1 })),
+    ...Array.from({ length: MAX_VIEWS }, (_, i) => pipe(proxyLayout, "vs_proxy_mesh", "fs_proxy_mesh", proxyBuffers, { VIEW_SLOTS: i + 1 })),
   ]);
   pipes = {
     lit,
