@@ -16,8 +16,8 @@
 // eye_i → centroid and viewer → centroid), blended with weights inversely
 // proportional to those angles. A texel outside [0,1]², behind the capture or with
 // alpha < 0.5 (nothing captured there) falls back to the other view, then to lit.
-// The choice of views depends on the triangle only, so vs_proxy makes it (once per
-// vertex, not per pixel) and passes the two views' projective coordinates.
+// The choice of views depends on the triangle only, so the vertex stage makes it
+// (once per vertex, not per pixel) and passes the two views' projective coordinates.
 //
 // Layered impostors (kind 4, paper 001): see impostor_layer below (alone, or a
 // batch of up to PROXY_SLOTS impostors sharing one atlas, one draw call). Mesh
@@ -480,7 +480,8 @@ fn atlas_texel(i: u32, uv: vec2<f32>) -> vec4<f32> {
 // rasterizer runs each branch under lane masks). Never discards, like fs_proxy_mesh.
 // Also a batch of single-view mesh proxies (the player's upload, gpu/upload.rs):
 // slot k is member k's one view, and member k's triangles have mask bit k where a
-// lone one's have bit 0, so vs_proxy chooses view k for them as it chose view 0.
+// lone one's have bit 0, so vs_proxy_mesh chooses view k for them as it chose
+// view 0.
 @fragment
 fn fs_proxy_atlas(i: ProxyOut) -> @location(0) vec4<f32> {
     let best0 = i.views & 0xffu;
