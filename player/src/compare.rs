@@ -272,6 +272,8 @@ struct RunAcc {
     fallback_cells: std::collections::BTreeSet<u32>,
     clusters_drawn: Vec<f64>,
     cut_ms: Vec<f64>,
+    /// CPU milliseconds of each frame's draw list ([`Player::last_list_ms`]).
+    list_ms: Vec<f64>,
     peak_resident: u64,
 }
 
@@ -345,18 +347,21 @@ pub fn compare_runs(
             fallback_cells: Default::default(),
             clusters_drawn: Vec::new(),
             cut_ms: Vec::new(),
+            list_ms: Vec::new(),
             peak_resident: 0,
         })
         .collect();
     let keep_worst = opts.worst_dir.is_some() && opts.worst_count > 0;
     // 2. The walk: per frame the reference (A), B for timing and the anti-aliased
     //    reference once, then each run's frame, its metrics and worst frames.
+    let mut frustum_list_ms: Vec<f64> = Vec::with_capacity(frames.len());
     for (i, f) in frames.iter().enumerate() {
         // 2a. The reference (A) and B for timing.
         let cam = camera_for(f, path, size, far);
         let (ref_ms, ref_tris, _, _) = player.draw(&cam, Mode::Full, None);
         let reference = player.renderer.read_pixels()?;
         let (fr_ms, _, _, _) = player.draw(&cam, Mode::Frustum, None);
+        frustum_list_ms.push(player.last_list_ms);
         // 2b. Each run's frame.
         let mut drawn = Vec::with_capacity(accs.len());
         for acc in accs.iter_mut() {
@@ -366,6 +371,7 @@ pub fn compare_runs(
             drawn.push((ms, list, stats, player.renderer.read_pixels()?));
             acc.clusters_drawn.push(list.clusters as f64);
             acc.cut_ms.push(player.last_cluster_cut_ms);
+            acc.list_ms.push(player.last_list_ms);
             if acc.run.mode == Mode::Hybrid {
                 acc.peak_resident = acc.peak_resident.max(streamer.resident_bytes());
             }
@@ -549,6 +555,8 @@ pub fn compare_runs(
             pops,
             fallback_cells: acc.fallback_cells.into_iter().collect(),
             near_border: near_border(&per_frame, &acc.quality),
+            mean_list_ms: mean(acc.list_ms.iter().copied()),
+            mean_frustum_list_ms: mean(frustum_list_ms.iter().copied()),
             per_frame,
         };
         reports.push((report, bytes));

@@ -210,6 +210,10 @@ fn cell_list<'a>(
     if let Some(runtime) = &bake.patches {
         patch_originals(&mut list, runtime, bake, &shown, camera, &f);
     }
+    // 000 §3.2 step (3): proxy tiles hidden behind what the originals draw.
+    if bake.options.occlusion {
+        list.occlusion = Some(crate::occlusion::of_originals(bake, camera, &list));
+    }
     list
 }
 

@@ -22,6 +22,7 @@ mod frame_model;
 mod setup;
 mod upload;
 
+pub(crate) use frame_model::intersect_ranges;
 pub use frame_model::DrawList;
 use frame_model::{FramePlan, Span};
 pub use upload::ViewInfo;
@@ -169,6 +170,10 @@ pub struct GpuProxy {
     pub view_slots: usize,
     /// World bounds of its vertices (the draw order: nearest first).
     pub bounds: crate::camera::Aabb,
+    /// Its vertex positions on the CPU (world; three per triangle) for occlusion
+    /// culling when it may hide others ([`crate::occlusion`]): empty for a proxy
+    /// with layered impostors, whose fragment stage discards.
+    pub positions: Vec<[f32; 3]>,
     /// Its views in one texture (issue 30 item 7): a mesh proxy's, or a batch of
     /// single-view mesh proxies' (slot k = member k's one view), drawn with
     /// `fs_proxy_atlas`, or a batch of layered impostors' (slot k likewise), drawn

@@ -60,6 +60,7 @@ pub mod grid;
 pub mod lod;
 pub mod metrics;
 pub mod mode;
+pub mod occlusion;
 pub mod overlay;
 pub mod patches;
 pub mod representation;

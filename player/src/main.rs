@@ -252,6 +252,7 @@ mod tests {
             "--tile-triangles",
             "1000000",
             "--no-bc",
+            "--no-occlusion",
         ])
         .unwrap();
         assert_eq!(
@@ -262,6 +263,7 @@ mod tests {
                 frustum: false,
                 tile_triangles: 1_000_000,
                 bc_textures: false,
+                occlusion: false,
             }
         );
         assert!(draw(&["--tile-triangles", "0"]).is_err());

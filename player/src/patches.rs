@@ -436,6 +436,16 @@ pub struct CullView {
 }
 
 impl CullView {
+    /// Whether proxy cluster `c` passes the tests that are on: not wholly
+    /// back-facing to the eye, its box not outside the frustum.
+    pub fn keeps(&self, c: &ProxyCluster) -> bool {
+        let eps = 1e-5 * (1.0 + Vec3::from(c.bounds.centre).length());
+        let back = self.backface_test
+            && format::patch_visibility::patch_backfacing(&c.bounds, self.eye, eps);
+        let outside = self.frustum_test && !self.frustum.intersects(&c.aabb);
+        !(back || outside)
+    }
+
     /// The view from `eye` within `frustum` with the tests `options` leave on.
     pub fn new(eye: Vec3, frustum: Frustum, options: &DrawOptions) -> CullView {
         CullView {
@@ -458,26 +468,22 @@ pub fn proxy_ranges(
     let Some(view) = view else {
         return vec![(0, vertex_count)];
     };
-    let (backface, frustum) = (view.backface_test, view.frustum_test);
-    if !(backface || frustum) || clusters.is_empty() {
+    if !(view.backface_test || view.frustum_test) || clusters.is_empty() {
         return vec![(0, vertex_count)];
     }
     let mut ranges: Vec<(u32, u32)> = Vec::new();
-    for c in clusters {
-        let eps = 1e-5 * (1.0 + Vec3::from(c.bounds.centre).length());
-        if backface && format::patch_visibility::patch_backfacing(&c.bounds, view.eye, eps) {
-            continue;
-        }
-        if frustum && !view.frustum.intersects(&c.aabb) {
-            continue;
-        }
-        let (a, b) = (c.first, c.first + c.count);
-        match ranges.last_mut() {
-            Some(last) if last.1 == a => last.1 = b,
-            _ => ranges.push((a, b)),
-        }
+    for c in clusters.iter().filter(|c| view.keeps(c)) {
+        push_range(&mut ranges, (c.first, c.first + c.count));
     }
     ranges
+}
+
+/// Appends [a, b) to sorted `ranges`, merged with the last one when adjacent.
+pub fn push_range(ranges: &mut Vec<(u32, u32)>, (a, b): (u32, u32)) {
+    match ranges.last_mut() {
+        Some(last) if last.1 == a => last.1 = b,
+        _ => ranges.push((a, b)),
+    }
 }
 
 #[cfg(test)]

@@ -112,6 +112,11 @@ pub struct Player {
     /// CPU time of the last cluster-LOD frame's cut and culling (building its draw
     /// list), milliseconds.
     pub last_cluster_cut_ms: f64,
+    /// CPU time of the last frame's draw list in any configuration: its culling
+    /// (instances, tiles, occlusion) and the statistics that settle its ranges,
+    /// milliseconds; not in the frame time, which is the GPU's (the streamer's
+    /// work before the list is not in it either).
+    pub last_list_ms: f64,
     /// `compare --repeat`: times each configuration's frame is drawn; its frame time
     /// is the fastest (1: the one draw, with the uploads the frame submits).
     pub timing_repeats: u32,
@@ -140,6 +145,7 @@ impl Player {
             clusters: None,
             cluster_tau: crate::clusterlod::DEFAULT_TAU_PX,
             last_cluster_cut_ms: 0.0,
+            last_list_ms: 0.0,
             timing_repeats: 1,
         }
     }
@@ -227,8 +233,10 @@ impl Player {
             (Mode::Hybrid, Some(s)) => {
                 let pending = s.config().pending;
                 let (current, stats) = s.begin_frame(&self.renderer, &self.bake, camera);
+                let t0 = std::time::Instant::now();
                 let list = hybrid_list(&self.bake, camera, &current, pending);
                 let stats_of_list = list_stats(&list, &self.models);
+                self.last_list_ms = t0.elapsed().as_secs_f64() * 1e3;
                 let ms =
                     self.renderer
                         .render_fastest(self.timing_repeats, camera, &self.models, &list);
@@ -238,8 +246,10 @@ impl Player {
             (Mode::Lod, _) => {
                 self.prepare_lod();
                 let set = self.lod.as_ref().expect("prepared");
+                let t0 = std::time::Instant::now();
                 let list = lod_list(&self.bake, set, camera, self.lod_pixel_error);
                 let stats_of_list = list_stats(&list, &self.models);
+                self.last_list_ms = t0.elapsed().as_secs_f64() * 1e3;
                 let ms =
                     self.renderer
                         .render_fastest(self.timing_repeats, camera, &self.models, &list);
@@ -252,14 +262,17 @@ impl Player {
                 let list = cluster_list(&self.bake, set, camera, self.cluster_tau);
                 self.last_cluster_cut_ms = t0.elapsed().as_secs_f64() * 1e3;
                 let stats_of_list = list_stats(&list, &self.models);
+                self.last_list_ms = t0.elapsed().as_secs_f64() * 1e3;
                 let ms =
                     self.renderer
                         .render_fastest(self.timing_repeats, camera, &self.models, &list);
                 (ms, stats_of_list, self.cell_stats(camera))
             }
             (m, _) => {
+                let t0 = std::time::Instant::now();
                 let list = originals_list(&self.bake, camera, m != Mode::Full);
                 let stats_of_list = list_stats(&list, &self.models);
+                self.last_list_ms = t0.elapsed().as_secs_f64() * 1e3;
                 let ms =
                     self.renderer
                         .render_fastest(self.timing_repeats, camera, &self.models, &list);

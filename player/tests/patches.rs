@@ -175,6 +175,7 @@ fn proxy_tile_culling_changes_no_pixel_and_draws_fewer_triangles() {
     let (t_off, off) = draw_with(DrawOptions {
         backface: false,
         frustum: false,
+        occlusion: false,
         ..Default::default()
     });
     assert_eq!(t_off, t_whole);
@@ -186,4 +187,53 @@ fn proxy_tile_culling_changes_no_pixel_and_draws_fewer_triangles() {
     eprintln!("proxies: {t_fine} triangles with tiles of one triangle");
     assert!(t_fine <= t_culled, "{t_fine} > {t_culled}");
     assert!(fine == b, "tiles of one triangle changed pixels");
+}
+
+/// Run-time occlusion culling (000 §3.2 run-time step (3), `player::occlusion`):
+/// along the demo walk at eye height, the hybrid with it draws the very frames it
+/// draws without (pixel for pixel), never more proxy triangles, and fewer in all.
+#[test]
+fn occlusion_culling_changes_no_pixel_and_draws_fewer_triangles() {
+    let dir = tempfile::tempdir().unwrap();
+    write_synthetic_bake_with(dir.path(), false).unwrap();
+    let size = (160, 120);
+    let Some(mut p) = open_player(dir.path(), size, &DrawOptions::default()) else {
+        return;
+    };
+    let off = DrawOptions {
+        occlusion: false,
+        ..Default::default()
+    };
+    let mut q = open_player(dir.path(), size, &off).expect("an adapter (the first open found one)");
+    let config = StreamConfig {
+        prefetch: false,
+        upload_budget_bytes: 1 << 30,
+        ..Default::default()
+    };
+    let (mut sp, mut sq) = (
+        Streamer::new(&p.bake, config.clone()),
+        Streamer::new(&q.bake, config),
+    );
+    let path = common::demo_walk();
+    let (mut culled, mut all, mut frames) = (0u64, 0u64, 0);
+    for f in path.frames().iter().step_by(3) {
+        let cam = player::run::camera_for(f, &path, size, p.bake.extent);
+        let (_, a, _) = p.draw_listed(&cam, Mode::Hybrid, Some(&mut sp));
+        let with = p.renderer.read_pixels().unwrap();
+        let (_, b, _) = q.draw_listed(&cam, Mode::Hybrid, Some(&mut sq));
+        let without = q.renderer.read_pixels().unwrap();
+        assert!(
+            with == without,
+            "t={:.2}s: occlusion culling changed pixels (PSNR {})",
+            f.time_s,
+            psnr_y(&with, &without)
+        );
+        assert!(a.triangles <= b.triangles, "t={:.2}s", f.time_s);
+        (culled, all, frames) = (culled + a.triangles, all + b.triangles, frames + 1);
+    }
+    eprintln!("{frames} frames identical; {culled} of {all} triangles with occlusion culling");
+    assert!(
+        culled < all,
+        "occlusion culling removed nothing along the walk"
+    );
 }

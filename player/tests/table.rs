@@ -56,6 +56,8 @@ fn interpolation_over_a_hand_made_sweep() {
         resident_bytes: None,
         frame_ms: 1.0,
         frustum_frame_ms: 1.0,
+        list_ms: 0.5,
+        frustum_list_ms: 0.5,
     };
     let rows = [
         row("hybrid", 50.0, 36.0),

@@ -270,6 +270,14 @@ pub struct CompareReport {
     /// (issue 31); `None` when no frame is that near or in older reports.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub near_border: Option<BorderQuality>,
+    /// Mean CPU time of building the compared mode's draw list per frame
+    /// (culling included: instances, tiles, the hybrid's occlusion map),
+    /// milliseconds, and the same for the frustum-culled frames; not in any frame
+    /// time. 0: a report of a player before it (not written).
+    #[serde(deserialize_with = "nan_if_null", skip_serializing_if = "is_zero_f64")]
+    pub mean_list_ms: f64,
+    #[serde(deserialize_with = "nan_if_null", skip_serializing_if = "is_zero_f64")]
+    pub mean_frustum_list_ms: f64,
     pub per_frame: Vec<CompareFrame>,
 }
 
@@ -457,7 +465,7 @@ mod tests {
         };
         let json = serde_json::to_string(&r).unwrap();
         assert!(
-            json.contains(r#""draw_options":{"patch_bitfields":true,"backface":true,"frustum":false,"tile_triangles":64,"bc_textures":true}"#),
+            json.contains(r#""draw_options":{"patch_bitfields":true,"backface":true,"frustum":false,"tile_triangles":64,"bc_textures":true,"occlusion":true}"#),
             "{json}"
         );
         let back: CompareReport = serde_json::from_str(&json).unwrap();

@@ -25,9 +25,10 @@ pub const DEFAULT_TILE_TRIANGLES: u32 = 16;
 /// The switches of the player's frame model, passed explicitly to the player's
 /// renderer and bake (no environment variable is read; `player` flags
 /// `--no-patch-bitfields`, `--no-backface`, `--no-frustum`, `--tile-triangles N`,
-/// `--no-bc`). The default is what the player draws without flags; the cone and
-/// frustum tests and the tile size change which triangles are submitted, never a
-/// pixel (they are conservative), the bitfields may (paper 002 §4).
+/// `--no-bc`, `--no-occlusion`). The default is what the player draws without flags; the cone and
+/// frustum tests, the tile size and occlusion culling change which triangles are
+/// submitted, never a pixel (they are conservative), the bitfields may (paper 002
+/// §4).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct DrawOptions {
@@ -47,6 +48,11 @@ pub struct DrawOptions {
     /// `TEXTURE_COMPRESSION_BC`, they are decoded to RGBA8 on the CPU. What reports
     /// record is what was in effect.
     pub bc_textures: bool,
+    /// Proxies: tiles hidden behind the frame's originals (a CPU masked depth
+    /// buffer of them, 000 §3.2 run-time step (3)) are not drawn. Reports and
+    /// files of players before it read as off.
+    #[serde(default)]
+    pub occlusion: bool,
 }
 
 impl Default for DrawOptions {
@@ -57,6 +63,7 @@ impl Default for DrawOptions {
             frustum: true,
             tile_triangles: DEFAULT_TILE_TRIANGLES,
             bc_textures: true,
+            occlusion: true,
         }
     }
 }
@@ -103,7 +110,7 @@ pub struct FrameRow {
 }
 
 /// The header line of `frames.csv` (the columns [`FrameRow::csv`] writes).
-pub const FRAMES_CSV_HEADER: &str = "frame,time_s,cell,crossing,frame_ms,triangles,texture_bytes,cache_hits,cache_misses,stream_ms,uploaded_bytes,pending_proxies,draw_calls,patch_bitfields,backface,frustum,tile_triangles,bc_textures";
+pub const FRAMES_CSV_HEADER: &str = "frame,time_s,cell,crossing,frame_ms,triangles,texture_bytes,cache_hits,cache_misses,stream_ms,uploaded_bytes,pending_proxies,draw_calls,patch_bitfields,backface,frustum,tile_triangles,bc_textures,occlusion";
 
 impl FrameRow {
     /// The row as a `frames.csv` line (no newline), columns as
@@ -112,15 +119,16 @@ impl FrameRow {
     pub fn csv(&self) -> String {
         let b = |v: bool| u8::from(v).to_string();
         let options = self.draw_options.map_or_else(
-            || ",,,,".to_string(),
+            || ",,,,,".to_string(),
             |o| {
                 format!(
-                    "{},{},{},{},{}",
+                    "{},{},{},{},{},{}",
                     b(o.patch_bitfields),
                     b(o.backface),
                     b(o.frustum),
                     o.tile_triangles,
-                    b(o.bc_textures)
+                    b(o.bc_textures),
+                    b(o.occlusion)
                 )
             },
         );
@@ -168,8 +176,8 @@ pub enum FramesCsvError {
 }
 
 /// Parses `frames.csv` by its header (columns in any order; unknown ones ignored,
-/// missing ones at their default; the draw options only when all five columns are
-/// there and filled).
+/// missing ones at their default; the draw options only when the first five of their
+/// columns are there and filled, `occlusion` off when missing).
 pub fn parse_frames_csv(text: &str) -> Result<Vec<FrameRow>, FramesCsvError> {
     let mut lines = text
         .lines()
@@ -200,6 +208,11 @@ pub fn parse_frames_csv(text: &str) -> Result<Vec<FrameRow>, FramesCsvError> {
                 frustum: row.flag("frustum", frustum)?,
                 tile_triangles: row.parse("tile_triangles", tile)?,
                 bc_textures: row.flag("bc_textures", bc)?,
+                // A column of later players: off in older files.
+                occlusion: match row.get("occlusion") {
+                    Some(v) => row.flag("occlusion", v)?,
+                    None => false,
+                },
             }),
             _ => None,
         };
@@ -312,6 +325,7 @@ mod tests {
             frustum: false,
             tile_triangles: 1_000_000,
             bc_textures: false,
+            occlusion: false,
         };
         let rows = vec![
             row(0, Some(5), Some(DrawOptions::default())),
@@ -387,19 +401,21 @@ mod tests {
     #[test]
     fn default_options_are_the_players_defaults() {
         let d = DrawOptions::default();
-        assert!(d.patch_bitfields && d.backface && d.frustum && d.bc_textures);
+        assert!(d.patch_bitfields && d.backface && d.frustum && d.bc_textures && d.occlusion);
         assert_eq!(d.tile_size(), 16);
         let none = DrawOptions {
             tile_triangles: 0,
             ..d
         };
         assert_eq!(none.tile_size(), 1);
-        // A report key written before a switch existed reads as its default.
+        // A report key written before a switch existed reads as its default,
+        // but occlusion culling as off: players before it had none.
         let o: DrawOptions = serde_json::from_str(r#"{"backface":false}"#).unwrap();
         assert_eq!(
             o,
             DrawOptions {
                 backface: false,
+                occlusion: false,
                 ..d
             }
         );

@@ -72,6 +72,10 @@ pub struct DrawArgs {
     /// them natively.
     #[arg(long)]
     pub no_bc: bool,
+    /// Proxies: no run-time occlusion culling (tiles hidden behind the frame's
+    /// originals are then drawn too).
+    #[arg(long)]
+    pub no_occlusion: bool,
 }
 
 impl DrawArgs {
@@ -82,6 +86,7 @@ impl DrawArgs {
             frustum: !self.no_frustum,
             tile_triangles: self.tile_triangles,
             bc_textures: !self.no_bc,
+            occlusion: !self.no_occlusion,
         }
     }
 }

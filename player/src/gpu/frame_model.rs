@@ -39,6 +39,9 @@ pub struct DrawList<'a> {
     /// The view the proxies' clusters are tested against (issue 17); `None` draws
     /// every proxy triangle.
     pub cull: Option<crate::patches::CullView>,
+    /// The frame's originals rasterised on the CPU: proxy tiles they hide are not
+    /// drawn ([`crate::occlusion`]); `None` tests nothing.
+    pub occlusion: Option<crate::occlusion::OcclusionMap>,
     /// Per proxy of `proxies`, then of `lit_proxies`, the vertex ranges drawn
     /// ([`DrawList::proxy_ranges`], computed once).
     pub(crate) ranges: std::cell::OnceCell<Vec<Vec<(u32, u32)>>>,
@@ -68,18 +71,37 @@ pub(crate) fn intersect_ranges(a: &[(u32, u32)], b: &[(u32, u32)]) -> Vec<(u32, 
 
 impl DrawList<'_> {
     /// Per proxy of `proxies`, then of `lit_proxies`, the vertex ranges it draws
-    /// from [`DrawList::cull`] ([`GpuProxy::ranges`]); the tests run once per list.
+    /// from [`DrawList::cull`] ([`GpuProxy::ranges`]) and, with
+    /// [`DrawList::occlusion`], that nothing drawn nearer hides
+    /// ([`crate::occlusion::proxy_ranges`]); the tests run once per list.
     pub fn proxy_ranges(&self) -> &[Vec<(u32, u32)>] {
         self.ranges.get_or_init(|| {
-            self.proxies
+            let all: Vec<&GpuProxy> = self
+                .proxies
                 .iter()
                 .chain(&self.lit_proxies)
+                .copied()
+                .collect();
+            let n = self.proxies.len();
+            // A stand-in batch draws only some members' ranges.
+            let only = |k: usize| {
+                self.proxy_only
+                    .get(k)
+                    .and_then(Option::as_ref)
+                    .filter(|_| k < n)
+            };
+            if let (Some(map), Some(view)) = (&self.occlusion, &self.cull) {
+                // Drawn (ready, or lit) with a fragment stage that never discards.
+                let hides = |k: usize| !all[k].layered && (k >= n || all[k].bind_group.is_some());
+                return crate::occlusion::proxy_ranges(map.clone(), view, &all, only, hides);
+            }
+            all.iter()
                 .enumerate()
                 .map(|(k, p)| {
                     let ranges = p.ranges(self.cull.as_ref());
-                    match self.proxy_only.get(k).and_then(Option::as_ref) {
-                        Some(only) if k < self.proxies.len() => intersect_ranges(&ranges, only),
-                        _ => ranges,
+                    match only(k) {
+                        Some(only) => intersect_ranges(&ranges, only),
+                        None => ranges,
                     }
                 })
                 .collect()

@@ -395,6 +395,11 @@ impl Renderer {
                 .unwrap_or(setup::MESH_VIEW_SLOTS.len() - 1),
             layered,
             atlas,
+            positions: if layered {
+                Vec::new()
+            } else {
+                vertices.iter().map(|v| v.pos).collect()
+            },
             bounds: vertices
                 .iter()
                 .fold(crate::camera::Aabb::EMPTY, |mut b, v| {
