@@ -14,6 +14,7 @@ use crate::gpu::{DrawList, GpuModels, GpuProxy};
 /// The configurations (their home is `mode.rs`, plain data; re-exported here, where
 /// each one's draw list is built).
 pub use crate::mode::Mode;
+use crate::occlusion::OcclusionMap;
 use crate::stream::{CurrentCell, Far, PendingDraw, ResidentCell};
 use crate::vertex::InstanceRaw;
 use std::collections::BTreeMap;
@@ -212,9 +213,54 @@ fn cell_list<'a>(
     }
     // 000 §3.2 step (3): proxy tiles hidden behind what the originals draw.
     if bake.options.occlusion {
-        list.occlusion = Some(crate::occlusion::of_originals(bake, camera, &list));
+        list.occlusion = Some(occluders(bake, camera, &list));
     }
     list
+}
+
+/// The occlusion map of a draw list's originals (instanced groups and patched
+/// draws, only the tiles the list keeps) from `camera`, nearest instances first so
+/// that tiles keep the nearest bounds.
+fn occluders(bake: &Bake, camera: &Camera, list: &DrawList<'_>) -> OcclusionMap {
+    let mut map = OcclusionMap::new(camera);
+    // (distance², model, object → world, kept index ranges of the tile order).
+    type Occluder<'a> = (f32, u32, glam::Mat4, Option<&'a [(u32, u32)]>);
+    let mut occluders: Vec<Occluder<'_>> = Vec::new();
+    let place = |raw: &crate::vertex::InstanceRaw| {
+        let m = glam::Mat4::from_cols_array_2d(&raw.model);
+        (m.w_axis.truncate().distance_squared(camera.eye), m)
+    };
+    for (model, instances) in &list.originals {
+        for raw in instances {
+            let (d, m) = place(raw);
+            occluders.push((d, *model, m, None));
+        }
+    }
+    for p in &list.patched {
+        let (d, m) = place(&p.instance);
+        occluders.push((d, p.model, m, Some(&p.ranges)));
+    }
+    occluders.sort_by(|a, b| a.0.total_cmp(&b.0));
+    for (_, model, m, ranges) in occluders {
+        let Some(mesh) = bake.base.models.get(model as usize).map(|x| &x.mesh) else {
+            continue;
+        };
+        match ranges {
+            None => map.add_mesh(&m, &mesh.positions, mesh.triangles.iter()),
+            Some(ranges) => {
+                // Index ranges of the model's tile-ordered index buffer.
+                let order = bake.draw_order.as_ref().and_then(|o| o.get(model as usize));
+                let Some(order) = order else { continue };
+                let tris = ranges
+                    .iter()
+                    .flat_map(|&(s, e)| order.get(s as usize / 3..e as usize / 3))
+                    .flatten()
+                    .filter_map(|&t| mesh.triangles.get(t as usize));
+                map.add_mesh(&m, &mesh.positions, tris);
+            }
+        }
+    }
+    map
 }
 
 /// A proxy standing in, its bounds and the vertex ranges of the members drawn

@@ -22,7 +22,6 @@ mod frame_model;
 mod setup;
 mod upload;
 
-pub(crate) use frame_model::intersect_ranges;
 pub use frame_model::DrawList;
 use frame_model::{FramePlan, Span};
 pub use upload::ViewInfo;

@@ -9,7 +9,8 @@
 //!    links the worker), [`metrics`] (PSNR/SSIM), [`mode`] (configurations A/B/C and
 //!    `lod`, `cluster-lod`), [`representation`] (the debug colours), [`DrawOptions`] (the culling
 //!    switches, from `format`).
-//! 2. CPU algorithms: [`patches`] (per-tile patch and cluster culling, issue 17).
+//! 2. CPU algorithms: [`patches`] (per-tile patch and cluster culling, issue 17),
+//!    [`occlusion`] (the run-time occlusion map, 000 §3.2 step 3).
 //! 3. The bake in memory: [`bake`] (a bake directory → [`bake::PreparedCell`]),
 //!    [`lod`] (the distance-LOD baseline's chains, issue 8), [`clusterlod`]
 //!    (cluster LOD's DAGs, their cache beside the bake and per-frame cut, issue 30).
@@ -42,7 +43,7 @@
 //! `--display-hz`, a path's display rate, is `render`'s and `compare`'s only),
 //! `player synth <out>` (a synthetic bake of `manifests/demo.ron`). `view`, `render`
 //! and `compare` also take the draw options ([`DrawOptions`]: `--no-patch-bitfields`,
-//! `--no-backface`, `--no-frustum`, `--tile-triangles N`, `--no-bc`).
+//! `--no-backface`, `--no-frustum`, `--tile-triangles N`, `--no-bc`, `--no-occlusion`).
 
 /// The switches of the frame model (culling tests, tile size, BC textures; issue
 /// 28), passed explicitly to [`bake::Bake::open`] and [`gpu::Renderer::new`] (or

@@ -150,6 +150,14 @@ impl OcclusionMap {
         {
             return;
         }
+        let (minx, maxx) = (a.x.min(b.x).min(c.x), a.x.max(b.x).max(c.x));
+        let (miny, maxy) = (a.y.min(b.y).min(c.y), a.y.max(b.y).max(c.y));
+        let Some((px0, px1)) = pixel_span(minx, maxx, self.width) else {
+            return; // between pixel columns or off the frame
+        };
+        let Some((py0, py1)) = pixel_span(miny, maxy, self.height) else {
+            return;
+        };
         self.triangles += 1;
         // Edge functions e(x, y) = ex·x + ey·y + e0, ≥ 0 inside (clockwise, y down).
         let edge = |p: Screen, q: Screen| {
@@ -164,14 +172,6 @@ impl OcclusionMap {
         let zy = ((c.z - a.z) * (b.x - a.x) - (b.z - a.z) * (c.x - a.x)) * inv;
         let z0 = a.z - zx * a.x - zy * a.y;
         let z_top = a.z.max(b.z).max(c.z);
-        let (minx, maxx) = (a.x.min(b.x).min(c.x), a.x.max(b.x).max(c.x));
-        let (miny, maxy) = (a.y.min(b.y).min(c.y), a.y.max(b.y).max(c.y));
-        let Some((px0, px1)) = pixel_span(minx, maxx, self.width) else {
-            return;
-        };
-        let Some((py0, py1)) = pixel_span(miny, maxy, self.height) else {
-            return;
-        };
         for ty in py0 / TILE..=py1 / TILE {
             let y0 = ty * TILE;
             let (cy0, cy1) = (y0 as f32 + 0.5, (y0 + TILE - 1) as f32 + 0.5);
@@ -261,8 +261,15 @@ impl OcclusionMap {
     /// Whether every pixel `bounds` (world) may cover is covered by occluders
     /// nearer than all of it. `false` when any corner is behind the near plane.
     pub fn hides(&self, bounds: &Aabb) -> bool {
+        self.visible_area(bounds).is_none()
+    }
+
+    /// `None` when `bounds` is hidden ([`OcclusionMap::hides`]); else the area of
+    /// its projection's bounding rectangle within the frame, in pixels (infinite
+    /// when a corner is behind the near plane).
+    pub fn visible_area(&self, bounds: &Aabb) -> Option<f32> {
         if bounds.is_empty() {
-            return false;
+            return Some(0.0);
         }
         let (mut minx, mut maxx) = (f32::INFINITY, f32::NEG_INFINITY);
         let (mut miny, mut maxy) = (f32::INFINITY, f32::NEG_INFINITY);
@@ -287,7 +294,7 @@ impl OcclusionMap {
             );
             let v = self.clip * p.extend(1.0);
             if !(v.w > 0.0 && v.z >= 0.0) {
-                return false;
+                return Some(f32::INFINITY);
             }
             let s = self.to_screen(v);
             minx = minx.min(s.x);
@@ -298,11 +305,12 @@ impl OcclusionMap {
         }
         // Widened by one pixel each way (sub-pixel differences from the GPU).
         let Some((px0, px1)) = pixel_span(minx - 1.0, maxx + 1.0, self.width) else {
-            return false;
+            return Some(0.0);
         };
         let Some((py0, py1)) = pixel_span(miny - 1.0, maxy + 1.0, self.height) else {
-            return false;
+            return Some(0.0);
         };
+        let area = ((px1 - px0 + 1) * (py1 - py0 + 1)) as f32;
         let limit = zmin - DEPTH_MARGIN;
         for ty in py0 / TILE..=py1 / TILE {
             let rows = span_bits(py0, py1, ty * TILE);
@@ -311,11 +319,16 @@ impl OcclusionMap {
                 let need = rect_bits(cols, rows);
                 let t = ty * self.tiles_x + tx;
                 if self.mask[t] & need != need || self.zmax[t] >= limit {
-                    return false;
+                    return Some(area);
                 }
             }
         }
-        true
+        None
+    }
+
+    /// Pixels in the frame.
+    pub fn pixels(&self) -> f32 {
+        (self.width * self.height) as f32
     }
 
     /// Fraction of the frame's pixels covered by occluders (0–1; tests, reports).
@@ -410,109 +423,6 @@ fn clip_polygon(poly: &[Vec4], d: impl Fn(Vec4) -> f32) -> Vec<Vec4> {
         }
     }
     out
-}
-
-/// The occlusion map of a draw list's originals (instanced groups and patched
-/// draws, only the tiles the list keeps) from `camera`, nearest instances first so
-/// that tiles keep the nearest bounds.
-pub fn of_originals(
-    bake: &crate::bake::Bake,
-    camera: &Camera,
-    list: &crate::gpu::DrawList<'_>,
-) -> OcclusionMap {
-    let mut map = OcclusionMap::new(camera);
-    // (distance², model, object → world, kept index ranges of the tile order).
-    type Occluder<'a> = (f32, u32, Mat4, Option<&'a [(u32, u32)]>);
-    let mut occluders: Vec<Occluder<'_>> = Vec::new();
-    let place = |raw: &crate::vertex::InstanceRaw| {
-        let m = Mat4::from_cols_array_2d(&raw.model);
-        (m.w_axis.truncate().distance_squared(camera.eye), m)
-    };
-    for (model, instances) in &list.originals {
-        for raw in instances {
-            let (d, m) = place(raw);
-            occluders.push((d, *model, m, None));
-        }
-    }
-    for p in &list.patched {
-        let (d, m) = place(&p.instance);
-        occluders.push((d, p.model, m, Some(&p.ranges)));
-    }
-    occluders.sort_by(|a, b| a.0.total_cmp(&b.0));
-    for (_, model, m, ranges) in occluders {
-        let Some(mesh) = bake.base.models.get(model as usize).map(|x| &x.mesh) else {
-            continue;
-        };
-        match ranges {
-            None => map.add_mesh(&m, &mesh.positions, mesh.triangles.iter()),
-            Some(ranges) => {
-                // Index ranges of the model's tile-ordered index buffer.
-                let order = bake.draw_order.as_ref().and_then(|o| o.get(model as usize));
-                let Some(order) = order else { continue };
-                let tris = ranges
-                    .iter()
-                    .flat_map(|&(s, e)| order.get(s as usize / 3..e as usize / 3))
-                    .flatten()
-                    .filter_map(|&t| mesh.triangles.get(t as usize));
-                map.add_mesh(&m, &mesh.positions, tris);
-            }
-        }
-    }
-    map
-}
-
-/// Per proxy of `proxies`, the vertex ranges to draw: its tiles (normal clusters,
-/// `GpuProxy::clusters`; the whole proxy without them) that pass `view`'s tests,
-/// lie in `only(k)` when that limits it, and are not hidden in `map`. Tiles are
-/// tested nearest first across all proxies, and each kept tile of a proxy for
-/// which `hides(k)` joins the map after its test, so a façade hides what stands
-/// behind it within the same batch too.
-pub fn proxy_ranges<'o>(
-    mut map: OcclusionMap,
-    view: &crate::patches::CullView,
-    proxies: &[&crate::gpu::GpuProxy],
-    only: impl Fn(usize) -> Option<&'o Vec<(u32, u32)>>,
-    hides: impl Fn(usize) -> bool,
-) -> Vec<Vec<(u32, u32)>> {
-    // (distance, proxy, vertex range, box) of every tile that passes the view.
-    let mut tiles: Vec<(f32, usize, (u32, u32), Aabb)> = Vec::new();
-    for (k, p) in proxies.iter().enumerate() {
-        let mut add = |range: (u32, u32), b: Aabb| {
-            let kept = match only(k) {
-                Some(o) => crate::gpu::intersect_ranges(&[range], o),
-                None => vec![range],
-            };
-            let d = crate::camera::distance_to_box(view.eye, &b);
-            tiles.extend(kept.into_iter().map(|r| (d, k, r, b)));
-        };
-        if p.clusters.is_empty() || !(view.backface_test || view.frustum_test) {
-            add((0, p.vertex_count), p.bounds);
-        } else {
-            for c in p.clusters.iter().filter(|c| view.keeps(c)) {
-                add((c.first, c.first + c.count), c.aabb);
-            }
-        }
-    }
-    tiles.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let mut kept: Vec<Vec<(u32, u32)>> = vec![Vec::new(); proxies.len()];
-    for (_, k, range, b) in tiles {
-        if map.hides(&b) {
-            continue;
-        }
-        if hides(k) {
-            map.add_world(&proxies[k].positions, &[range]);
-        }
-        kept[k].push(range);
-    }
-    for ranges in &mut kept {
-        ranges.sort_unstable();
-        let mut merged = Vec::with_capacity(ranges.len());
-        for &r in ranges.iter() {
-            crate::patches::push_range(&mut merged, r);
-        }
-        *ranges = merged;
-    }
-    kept
 }
 
 #[cfg(test)]
