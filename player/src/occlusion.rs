@@ -43,8 +43,8 @@ pub struct OcclusionMap {
     mask: Vec<u64>,
     /// Per tile: the farthest NDC depth of the occluders over its covered pixels.
     zmax: Vec<f32>,
-    /// Occluder triangles rasterised (front-facing, after clipping) and boxes
-    /// tested and found hidden, for reports and tests.
+    /// Occluder triangles rasterised (front-facing, covering a pixel centre's
+    /// row or column span; a clipped triangle counts per piece).
     pub triangles: u64,
 }
 
