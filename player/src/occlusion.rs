@@ -38,14 +38,10 @@ pub struct OcclusionMap {
     width: usize,
     height: usize,
     tiles_x: usize,
-    tiles_y: usize,
     /// Per tile: pixel centres covered (bit `row * 8 + column`).
     mask: Vec<u64>,
     /// Per tile: the farthest NDC depth of the occluders over its covered pixels.
     zmax: Vec<f32>,
-    /// Occluder triangles rasterised (front-facing, covering a pixel centre's
-    /// row or column span; a clipped triangle counts per piece).
-    pub triangles: u64,
 }
 
 /// A clipped vertex in pixel coordinates (y down) with its NDC depth.
@@ -66,10 +62,8 @@ impl OcclusionMap {
             width,
             height,
             tiles_x,
-            tiles_y,
             mask: vec![0; tiles_x * tiles_y],
             zmax: vec![0.0; tiles_x * tiles_y],
-            triangles: 0,
         }
     }
 
@@ -158,7 +152,6 @@ impl OcclusionMap {
         let Some((py0, py1)) = pixel_span(miny, maxy, self.height) else {
             return;
         };
-        self.triangles += 1;
         // Edge functions e(x, y) = ex·x + ey·y + e0, ≥ 0 inside (clockwise, y down).
         let edge = |p: Screen, q: Screen| {
             let (ex, ey) = (q.y - p.y, p.x - q.x);
@@ -331,10 +324,11 @@ impl OcclusionMap {
         (self.width * self.height) as f32
     }
 
-    /// Fraction of the frame's pixels covered by occluders (0–1; tests, reports).
-    pub fn coverage(&self) -> f64 {
+    /// Fraction of the frame's pixels covered by occluders (0–1).
+    #[cfg(test)]
+    fn coverage(&self) -> f64 {
         let mut n = 0u64;
-        for ty in 0..self.tiles_y {
+        for ty in 0..self.mask.len() / self.tiles_x {
             for tx in 0..self.tiles_x {
                 let covered = self.mask[ty * self.tiles_x + tx] & self.inside(tx, ty);
                 n += u64::from(covered.count_ones());

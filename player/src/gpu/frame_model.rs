@@ -414,13 +414,17 @@ pub(crate) fn occluded_ranges<'o>(
     // (distance, proxy, vertex range, box) of every tile that passes the view.
     let mut tiles: Vec<(f32, usize, (u32, u32), crate::camera::Aabb)> = Vec::new();
     for (k, p) in proxies.iter().enumerate() {
+        let limit = only(k);
         let mut add = |range: (u32, u32), b: crate::camera::Aabb| {
-            let kept = match only(k) {
-                Some(o) => intersect_ranges(&[range], o),
-                None => vec![range],
-            };
             let d = crate::camera::distance_to_box(view.eye, &b);
-            tiles.extend(kept.into_iter().map(|r| (d, k, r, b)));
+            match limit {
+                Some(o) => tiles.extend(
+                    intersect_ranges(&[range], o)
+                        .into_iter()
+                        .map(|r| (d, k, r, b)),
+                ),
+                None => tiles.push((d, k, range, b)),
+            }
         };
         if p.clusters.is_empty() || !(view.backface_test || view.frustum_test) {
             add((0, p.vertex_count), p.bounds);
