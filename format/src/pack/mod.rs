@@ -24,6 +24,7 @@ pub mod reader;
 pub mod sample;
 pub mod texture;
 pub mod texture_store;
+pub mod web;
 pub mod writer;
 
 pub use base::{BasePack, GridParams, PackedInstance, PackedModel};

@@ -11,7 +11,7 @@
 // whole pack is then decoded at once, as before.
 
 import { decodeBase, PackError, PackFile, PackHead } from "./pack";
-import type { Base, SectionSource } from "./pack";
+import type { Base, SectionSource, VertexSubset } from "./pack";
 
 /** Fetches `url`, bytes `start..end` (end exclusive) or all of it: the bytes and
  * whether the server answered with the range (206) or the whole file (200). */
@@ -46,7 +46,8 @@ export class BaseStream {
     src: SectionSource,
     whole: boolean,
   ) {
-    this.base = decodeBase(src);
+    // A ranged stream's triangles are zeros until they arrive (`settle` checks them).
+    this.base = decodeBase(src, whole);
     let v = 0;
     let t = 0;
     for (const m of this.base.models) {
@@ -132,6 +133,30 @@ export class BaseStream {
     const jobs: Promise<void>[] = [];
     for (const [k, models] of want) jobs.push(this.ensureSection(k, [...models].sort((a, b) => a - b)));
     return Promise.all(jobs).then(() => {});
+  }
+
+  /** Writes a pack's vertex subset (`<pack>.vertices`) into the vertex sections:
+   * enough for its proxies, though no model is marked in by it (originals need the
+   * whole model). Nothing to do when the whole pack was read at once. */
+  scatter(s: VertexSubset, name: string) {
+    const total = this.vertexStart.length ? this.vertexStart[this.vertexStart.length - 1] + this.base.models[this.base.models.length - 1].vertexCount : 0;
+    if (s.ids.length && s.ids[s.ids.length - 1] >= total) throw new PackError(`${name}: vertex id ${s.ids[s.ids.length - 1]}, base.pack has ${total}`);
+    const [pos, nrm, col] = [POSITIONS, NORMALS, COLOURS].map((k) => this.buffers.get(k));
+    if (!pos || !nrm || !col) return;
+    // As 32-bit words (the buffers and the subset's arrays start 4-byte aligned).
+    const words = (b: Uint8Array) => new Uint32Array(b.buffer, b.byteOffset, b.length >> 2);
+    const [P, N, C] = [words(pos), words(nrm), words(col)];
+    const [sp, sn, sc] = [words(s.positions), words(s.normals), words(s.colours)];
+    for (let i = 0; i < s.ids.length; i++) {
+      const id = s.ids[i];
+      P[3 * id] = sp[3 * i];
+      P[3 * id + 1] = sp[3 * i + 1];
+      P[3 * id + 2] = sp[3 * i + 2];
+      N[3 * id] = sn[3 * i];
+      N[3 * id + 1] = sn[3 * i + 1];
+      N[3 * id + 2] = sn[3 * i + 2];
+      C[id] = sc[i];
+    }
   }
 
   /** Everything not fetched yet (after the first frame, in the background). */

@@ -17,7 +17,10 @@ import { BaseStream } from "./base";
 import {
   decodeCell,
   decodeIndex,
+  decodeTextureBundle,
+  decodeVertices,
   packModels,
+  proxyKinds,
   decodeTextureFile,
   NONE,
   PackError,
@@ -30,6 +33,8 @@ import {
 /** Store textures kept decoded between cells (a crossing re-uses the neighbours'
  * shared captures); cleared whole past this many. */
 const MAX_CACHED_TEXTURES = 4096;
+/** Fewest missing textures for which a pack's bundle is fetched instead. */
+const BUNDLE_MIN = 8;
 const textureCache = new Map<string, Promise<Uint8Array>>();
 import type { Base, CellPack, Index, IndexEntry } from "./pack";
 import {
@@ -124,6 +129,38 @@ async function fetchBytes(url: string): Promise<Uint8Array> {
   return (await fetchRange(url)).bytes;
 }
 
+/** Whether the server derives `<pack>.vertices` and `<pack>.textures` (`pipeline
+ * serve`, or a static folder `pipeline web-export` wrote them into): until one
+ * answers 404, after which the viewer reads base.pack ranges and single store files. */
+let derivedFiles = true;
+
+/** A derived file of a pack, or `null` when the server has none (404). */
+async function fetchDerived(url: string): Promise<Uint8Array | null> {
+  if (!derivedFiles) return null;
+  let r: Response;
+  try {
+    r = await fetch(url);
+  } catch (e) {
+    throw new PackError(`${url}: ${e}`);
+  }
+  stats.requests++;
+  if (r.status === 404) {
+    derivedFiles = false;
+    return null;
+  }
+  if (!r.ok) throw new PackError(`${url}: HTTP ${r.status} ${r.statusText}`);
+  const b = new Uint8Array(await r.arrayBuffer());
+  stats.fetched += wireBytes(r, b);
+  return b;
+}
+
+/** The body bytes that crossed the network: `Content-Length` when the server sent
+ * the body encoded (`Content-Encoding: zstd`, decoded by the browser), else `b`'s. */
+function wireBytes(r: Response, b: Uint8Array): number {
+  const sent = Number(r.headers.get("content-length"));
+  return r.headers.get("content-encoding") && Number.isFinite(sent) && sent > 0 ? sent : b.length;
+}
+
 /** `url`, or its bytes `start..end` (end exclusive) by a `Range` request: `partial`
  * when the server answered 206 with them, not 200 with the whole file. */
 async function fetchRange(url: string, start?: number, end?: number): Promise<{ bytes: Uint8Array; partial: boolean }> {
@@ -136,7 +173,7 @@ async function fetchRange(url: string, start?: number, end?: number): Promise<{ 
   }
   if (!r.ok) throw new PackError(`${url}${ranged ? ` bytes ${start}-${end - 1}` : ""}: HTTP ${r.status} ${r.statusText}`);
   const b = new Uint8Array(await r.arrayBuffer());
-  stats.fetched += b.length;
+  stats.fetched += wireBytes(r, b);
   stats.requests++;
   return { bytes: b, partial: r.status === 206 };
 }
@@ -182,8 +219,9 @@ let bakeUrl = "/bake/";
 let pipes: {
   lit: GPURenderPipeline;
   ground: GPURenderPipeline;
-  proxy: GPURenderPipeline;
-  mesh: GPURenderPipeline[];
+  /** Proxy pipelines by `proxySlot`, compiled on first use (`proxyPipe`). */
+  proxies: (GPURenderPipeline | Promise<void> | undefined)[];
+  compileProxy: (slot: number) => Promise<GPURenderPipeline>;
   g0: GPUBindGroupLayout;
   g1: GPUBindGroupLayout;
   g2: GPUBindGroupLayout;
@@ -325,6 +363,7 @@ async function init() {
   instBuf = device.createBuffer({ size: INSTANCE_RAW * (base.instances.length + 1), usage: GPUBufferUsage.VERTEX | GPUBufferUsage.COPY_DST });
   depthTex = device.createTexture({ size: [cam.width, cam.height], format: "depth32float", usage: GPUTextureUsage.RENDER_ATTACHMENT });
   mark("models uploaded");
+
   stats.ready = true;
   installControls(canvas);
   requestAnimationFrame(frame);
@@ -380,23 +419,24 @@ async function makePipelines(module: GPUShaderModule) {
       depthStencil: { format: "depth32float", depthWriteEnabled: true, depthCompare: "less" },
       fragment: { module, entryPoint: fs, targets: [{ format: "rgba8unorm-srgb" }], constants },
     });
-  // Compiled concurrently (createRenderPipelineAsync): on SwiftShader the ten
-  // pipelines are most of the time between base.pack and the first frame.
-  const [lit, ground, proxy, ...mesh] = await Promise.all([
-    pipe(litLayout, "vs_lit", "fs_lit", litBuffers),
-    pipe(litLayout, "vs_lit", "fs_ground", litBuffers),
-    pipe(proxyLayout, "vs_proxy", "fs_proxy", proxyBuffers),
-    ...Array.from({ length: MAX_VIEWS }, (_, i) => pipe(proxyLayout, "vs_proxy_mesh", "fs_proxy_mesh", proxyBuffers, { VIEW_SLOTS: i + 1 })),
-  ]);
+  // The two pipelines every frame uses now; the proxy pipelines (one for layered
+  // impostors, one per view count of mesh proxies) when a pack's proxy first needs
+  // one (`proxyPipe`), the rest after the first frame. On SwiftShader compiling all
+  // ten at once took 0.7–1.7 s of a cold start; a first cell uses two to four.
+  const [lit, ground] = await Promise.all([pipe(litLayout, "vs_lit", "fs_lit", litBuffers), pipe(litLayout, "vs_lit", "fs_ground", litBuffers)]);
   pipes = {
     lit,
     ground,
-    proxy,
-    mesh,
+    proxies: new Array(MAX_VIEWS + 1).fill(undefined),
+    compileProxy: (slot) =>
+      slot === 0
+        ? pipe(proxyLayout, "vs_proxy", "fs_proxy", proxyBuffers)
+        : pipe(proxyLayout, "vs_proxy_mesh", "fs_proxy_mesh", proxyBuffers, { VIEW_SLOTS: slot }),
     g0,
     g1,
     g2,
   };
+  for (const slot of earlySlots) proxyPipe(slot);
   globalsBuf = device.createBuffer({ size: GLOBALS, usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST });
   globalsBg = device.createBindGroup({ layout: g0, entries: [{ binding: 0, resource: { buffer: globalsBuf } }] });
   sampler = device.createSampler({ addressModeU: "clamp-to-edge", addressModeV: "clamp-to-edge", magFilter: "linear", minFilter: "linear" });
@@ -414,6 +454,33 @@ async function makePipelines(module: GPUShaderModule) {
       { binding: 1, resource: albedoSampler },
     ],
   });
+}
+
+const earlySlots = new Set<number>();
+
+/** A proxy's pipeline slot: 0 for a layered impostor, else its view count. */
+function proxySlot(p: GpuProxy): number {
+  return p.layered ? 0 : p.slots + 1;
+}
+
+/** The pipeline of proxy slot `slot`, or `undefined` while it compiles (asked for
+ * here the first time; a proxy waiting for it draws as its pack's stand-in would). */
+function proxyPipe(slot: number): GPURenderPipeline | undefined {
+  if (!pipes) {
+    earlySlots.add(slot); // asked for before the layouts exist: compiled with them
+    return undefined;
+  }
+  const have = pipes.proxies[slot];
+  if (have instanceof GPURenderPipeline) return have;
+  if (!have)
+    pipes.proxies[slot] = pipes
+      .compileProxy(slot)
+      .then((pl) => {
+        pipes.proxies[slot] = pl;
+        mark(`proxy pipeline ${slot}`);
+      })
+      .catch((e) => fail(`compiling proxy pipeline ${slot}: ${e?.message ?? e}`));
+  return undefined;
 }
 
 /** A textured model's group 2: its albedo texture (sRGB, no mipmaps) and a bilinear
@@ -528,9 +595,19 @@ function chain(cell: number): { key: string; entry: IndexEntry }[] {
 /** A version-6 pack's textures from the bake's store (format/README.md
  * "textures/"), concatenated in view order; `undefined` for inline packs. A texture
  * shared by neighbouring cells is fetched once while it is cached here. */
-async function storeTextures(file: PackFile): Promise<Uint8Array | undefined> {
+async function storeTextures(file: PackFile, url: string): Promise<Uint8Array | undefined> {
   const refs = textureRefs(file);
   if (refs === null) return undefined;
+  // Most of them missing (a cold start, a jump): the pack's bundle in one request
+  // (each request costs ≈ 5 ms in headless Chromium here; a bundle re-sends the
+  // textures already cached, so only when they are at most half).
+  const missing = new Set(refs.filter((r) => !textureCache.has(r)));
+  if (missing.size >= BUNDLE_MIN && 2 * missing.size >= new Set(refs).size) {
+    const bundle = await fetchDerived(url + ".textures");
+    if (bundle)
+      for (const { ref, data } of decodeTextureBundle(url + ".textures", bundle))
+        if (!textureCache.has(ref)) textureCache.set(ref, Promise.resolve(data));
+  }
   const parts = await Promise.all(
     refs.map((r) => {
       let t = textureCache.get(r);
@@ -565,14 +642,28 @@ async function load(key: string, entry: IndexEntry): Promise<Loaded> {
   const bytes = await fetchBytes(bakeUrl + entry.file);
   mark(`${key} fetched`);
   const file = new PackFile(entry.file, bytes);
+  // Its proxies' pipelines compile while its textures and vertices download.
+  for (const { kind, views } of proxyKinds(file)) proxyPipe(kind === 4 ? 0 : Math.max(1, Math.min(views, MAX_VIEWS)));
   const { vertices, full } = packModels(file, base);
   const [tex] = await Promise.all([
-    storeTextures(file).then((t) => (mark(`${key} textures fetched`), t)),
-    baseStream.ensure(vertices, full).then(() => mark(`${key} models fetched`)),
+    storeTextures(file, bakeUrl + entry.file).then((t) => (mark(`${key} textures fetched`), t)),
+    fetchProxyVertices(bakeUrl + entry.file, vertices)
+      .then(() => baseStream.ensure([], full))
+      .then(() => mark(`${key} models fetched`)),
   ]);
-    const pack = decodeCell(file, base, tex);
+  const pack = decodeCell(file, base, tex);
+  mark(`${key} decoded`);
   if (pack.id !== entry.id) throw new PackError(`${entry.file}: holds cell ${pack.id}, index.pack lists ${entry.id}`);
   return { pack, bytes: bytes.length };
+}
+
+/** The vertices of models `vertices` that a pack's proxies use: its `.vertices`
+ * file when the server has one, else those models' whole base.pack ranges. */
+async function fetchProxyVertices(url: string, vertices: Set<number>) {
+  if ([...vertices].every((m) => baseStream.ready(m))) return;
+  const b = await fetchDerived(url + ".vertices");
+  if (b) baseStream.scatter(decodeVertices(url + ".vertices", b), url + ".vertices");
+  else await baseStream.ensure(vertices);
 }
 
 function request(key: string, entry: IndexEntry, priority: boolean) {
@@ -594,6 +685,7 @@ function request(key: string, entry: IndexEntry, priority: boolean) {
       res.proxies = pack.proxies.map((p) => makeProxy(res, p));
       res.state = "ready";
       mark(`first pack decoded`);
+      mark(`${key} proxies built`);
     })
     .catch((e) => {
       res.state = "error";
@@ -632,6 +724,7 @@ function makeProxy(res: Resident, p: CellPack["proxies"][number]): GpuProxy {
   p.views.slice(0, n).forEach((view, i) =>
     uploads.push({ res, proxy: gp, view: i, w: view.width, h: view.height, enc: view.encoding, data: view.encoding <= 1 ? rgba8(view) : view.data }),
   );
+  proxyPipe(proxySlot(gp));
   tryBind(gp);
   return gp;
 }
@@ -806,7 +899,7 @@ function draw(): boolean {
     const drawn = farReady ? (packs as Resident[]) : [cellPack];
     for (const r of drawn)
       for (const p of r.proxies) {
-        if (p.bind) proxies.push(p);
+        if (p.bind && proxyPipe(proxySlot(p))) proxies.push(p);
         else for (const m of p.members) originals.add(m);
       }
     if (!farReady) {
@@ -822,11 +915,17 @@ function draw(): boolean {
   if (walk && walkStart !== null && stats.walkLog.length < 100000) stats.walkLog.push([cell ?? -1, drawnCell, farReady ? 1 : 0, waiting]);
   if (cellPack) mark("first frame with a cell pack");
   stats.settled = current && !!cellPack && farReady && proxies.length === packs.reduce((s, r) => s + (r?.proxies.length ?? 0), 0);
+  // A cold start draws no frame between the first (ground and sky) and the settled
+  // one: on SwiftShader a frame costs ≈ 100 ms that the packs' last pipelines and
+  // uploads would wait behind.
+  if (stats.firstFrameMs === null && !stats.settled) return false;
   if (stats.firstFrameMs === null && stats.settled) {
     stats.firstFrameMs = performance.now();
     stats.firstFrameBytes = stats.fetched;
     // The rest of base.pack in the background (the next cells' models).
     baseStream.ensureAll().catch((e) => fail(`${e.message ?? e}`));
+    // And the proxy pipelines no pack has asked for yet (the next cells' ones).
+    for (let slot = 0; slot <= MAX_VIEWS; slot++) proxyPipe(slot);
     (stats as any).firstFrameNo = stats.frames;
   }
 
@@ -899,7 +998,7 @@ function draw(): boolean {
   let bound: GPURenderPipeline | null = null;
   for (const p of proxies) {
     if (p.count === 0 || !inside(fr, p)) continue;
-    const pl = p.layered ? pipes.proxy : pipes.mesh[p.slots];
+    const pl = proxyPipe(proxySlot(p))!; // only proxies with their pipeline are listed
     if (pl !== bound) pass.setPipeline((bound = pl));
     pass.setBindGroup(1, p.bind!);
     pass.setVertexBuffer(0, p.vbuf);

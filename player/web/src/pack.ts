@@ -331,7 +331,7 @@ export interface Base {
   textures: AlbedoTexture[];
 }
 
-export function decodeBase(file: SectionSource): Base {
+export function decodeBase(file: SectionSource, checkTriangles = true): Base {
   if (file.fileKind !== KIND.base) throw new PackError(`${file.name}: file kind ${file.fileKind}, not a base pack`);
   const meta = new Reader(file.section(0x0101), `${file.name}: base-meta`);
   const grid: GridParams = {
@@ -360,7 +360,7 @@ export function decodeBase(file: SectionSource): Base {
     if (4 * (v0 + vc) > col.length) throw new PackError(`${file.name}: vertex-colours shorter than the models' vertices`);
     const triangles = tri.u32array(12 * t0, 3 * tc);
     let top = 0;
-    for (let i = 0; i < triangles.length; i++) top = Math.max(top, triangles[i]);
+    if (checkTriangles) for (let i = 0; i < triangles.length; i++) top = Math.max(top, triangles[i]);
     if (triangles.length && top >= vc) throw new PackError(`${file.name}: triangles: index ${top} ≥ model ${m}'s ${vc} vertices`);
     models.push({
       vertexCount: vc,
@@ -533,9 +533,17 @@ export function textureRefs(file: PackFile): string[] | null {
   const refs = file.section(0x020b, true);
   if (refs.length % 32 !== 0) throw new PackError(`${file.name}: texture-refs: ${refs.length} bytes, not 32-byte references`);
   const out: string[] = [];
-  for (let o = 0; o < refs.length; o += 32)
-    out.push(Array.from(refs.subarray(o, o + 32), (b) => b.toString(16).padStart(2, "0")).join(""));
+  for (let o = 0; o < refs.length; o += 32) out.push(hex(refs.subarray(o, o + 32)));
   return out;
+}
+
+const HEX = Array.from({ length: 256 }, (_, b) => b.toString(16).padStart(2, "0"));
+
+/** Lower-case hex of `b`. */
+function hex(b: Uint8Array): string {
+  let s = "";
+  for (let i = 0; i < b.length; i++) s += HEX[b[i]];
+  return s;
 }
 
 /** The store path of a texture reference, relative to the bake folder. */
@@ -678,5 +686,89 @@ export function rgba8(v: View): Uint8Array {
   const row = v.width * 4;
   for (let y = 0; y < v.height; y++)
     for (let j = 4; j < row; j++) out[y * row + j] = (out[y * row + j] + out[y * row + j - 4]) & 0xff;
+  return out;
+}
+
+// ---- files derived from a pack for the browser (format/README.md "Derived files
+// for the browser"; format/src/pack/web.rs) ----
+
+/** `<pack>.vertices`: the vertices a pack's proxies use, by global id (base.pack
+ * vertex order), with their positions, normals and colours as raw bytes. */
+export interface VertexSubset {
+  ids: Uint32Array;
+  positions: Uint8Array; // 12 B per vertex
+  normals: Uint8Array; // 12 B per vertex
+  colours: Uint8Array; // 4 B per vertex
+}
+
+const u32At = (b: Uint8Array, o: number) => (b[o] | (b[o + 1] << 8) | (b[o + 2] << 16) | (b[o + 3] << 24)) >>> 0;
+
+function checkHead(name: string, b: Uint8Array, magic: string) {
+  if (b.length < 12 || String.fromCharCode(b[0], b[1], b[2], b[3]) !== magic) throw new PackError(`${name}: byte 0: not a hexbake ${magic} file`);
+  const version = u32At(b, 4);
+  if (version !== 1) throw new PackError(`${name}: byte 4: version ${version}, this viewer knows 1`);
+}
+
+export function decodeVertices(name: string, b: Uint8Array): VertexSubset {
+  checkHead(name, b, "HXVS");
+  if (b.length < 16) throw new PackError(`${name}: byte ${b.length}: file ends inside the 16-byte head`);
+  const n = u32At(b, 8);
+  const streamEnd = 16 + u32At(b, 12);
+  const data = Math.ceil(streamEnd / 4) * 4;
+  if (b.length !== data + 28 * n) throw new PackError(`${name}: byte ${b.length}: ${n} vertices need ${data + 28 * n} bytes`);
+  const ids = new Uint32Array(n);
+  let o = 16;
+  let prev = -1;
+  for (let i = 0; i < n; i++) {
+    let gap = 0;
+    let scale = 1;
+    for (;;) {
+      if (o >= streamEnd || scale > 2 ** 28) throw new PackError(`${name}: byte ${o}: id gap cut short or longer than 32 bits`);
+      const byte = b[o++];
+      gap += (byte & 0x7f) * scale;
+      scale *= 128;
+      if (!(byte & 0x80)) break;
+    }
+    const id = prev + 1 + gap;
+    if (id > 0xffffffff) throw new PackError(`${name}: byte ${o}: vertex id ${id} past u32`);
+    ids[i] = prev = id;
+  }
+  if (o !== streamEnd) throw new PackError(`${name}: byte ${o}: bytes left over after the ids`);
+  return {
+    ids,
+    positions: b.subarray(data, data + 12 * n),
+    normals: b.subarray(data + 12 * n, data + 24 * n),
+    colours: b.subarray(data + 24 * n, data + 28 * n),
+  };
+}
+
+/** `<pack>.textures`: the encoded textures a pack names (distinct, first use
+ * first), each with its reference as lower-case hex. */
+export function decodeTextureBundle(name: string, b: Uint8Array): { ref: string; data: Uint8Array }[] {
+  checkHead(name, b, "HXTB");
+  const n = u32At(b, 8);
+  const tableEnd = 12 + 36 * n;
+  if (tableEnd > b.length) throw new PackError(`${name}: byte ${b.length}: ${n} records need ${tableEnd} bytes`);
+  const out: { ref: string; data: Uint8Array }[] = [];
+  let at = tableEnd;
+  for (let k = 0; k < n; k++) {
+    const o = 12 + 36 * k;
+    const len = u32At(b, o + 32);
+    if (at + len > b.length) throw new PackError(`${name}: byte ${at}: texture ${k} needs ${len} bytes, fewer are left`);
+    const ref = hex(b.subarray(o, o + 32));
+    out.push({ ref, data: b.subarray(at, at + len) });
+    at += len;
+  }
+  if (at !== b.length) throw new PackError(`${name}: byte ${at}: bytes left over after the textures`);
+  return out;
+}
+
+/** Each proxy's kind and view count, read from a cell or group pack's `proxies`
+ * records before anything else is decoded (to compile the pipelines it needs while
+ * its textures and vertices download). */
+export function proxyKinds(file: PackFile): { kind: number; views: number }[] {
+  const r = new Reader(file.section(0x0203, true), `${file.name}: proxies`);
+  const out: { kind: number; views: number }[] = [];
+  for (let o = 0; o + 16 <= r.bytes.length; o += 16) out.push({ kind: r.u32(o), views: r.u32(o + 8) });
   return out;
 }
