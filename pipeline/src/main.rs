@@ -39,6 +39,9 @@ enum Command {
     Serve(pipeline::serve::ServeArgs),
     /// Print a pack's header and sections and check every checksum.
     Inspect(cmd::inspect::Args),
+    /// Write each pack's `.vertices` and `.textures` beside it, for serving a bake to
+    /// the browser viewer from a static host (`pipeline serve` derives them itself).
+    WebExport(pipeline::serve::WebExportArgs),
 }
 
 fn main() -> ExitCode {
@@ -57,5 +60,15 @@ fn run(cli: Cli) -> Result<(), Failure> {
         Command::Export(args) => cmd::export::run(args),
         Command::Serve(args) => pipeline::serve::serve(&args).map_err(bad_input),
         Command::Inspect(args) => cmd::inspect::run(args),
+        Command::WebExport(args) => match pipeline::serve::web_export(&args) {
+            Ok((files, bytes)) => {
+                println!(
+                    "web-export {}: {files} files, {bytes} bytes",
+                    args.out.display()
+                );
+                Ok(())
+            }
+            Err(e) => Err(bad_input(e)),
+        },
     }
 }

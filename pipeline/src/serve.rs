@@ -538,6 +538,50 @@ fn respond(out: &mut TcpStream, req: &Request, roots: &Roots) -> std::io::Result
     out.flush()
 }
 
+/// `pipeline web-export` arguments.
+#[derive(clap::Args, Debug, Clone)]
+pub struct WebExportArgs {
+    /// The bake folder: writes `<pack>.vertices` and `<pack>.textures` beside every
+    /// cell and group pack its `index.pack` lists.
+    pub out: PathBuf,
+}
+
+/// Writes every derived file of a bake for a static host (format/README.md
+/// "Derived files for the browser"), each as one zstd frame of its bytes (level
+/// [`DERIVED_ZSTD_LEVEL`]; the viewer decodes a frame it finds), atomically. Returns
+/// the files written and their bytes. `pipeline serve` serves these as they are.
+pub fn web_export(args: &WebExportArgs) -> anyhow::Result<(usize, u64)> {
+    use format::pack::web;
+    use rayon::prelude::*;
+    let bake = &args.out;
+    let index = format::pack::Index::read(&bake.join("index.pack"))?;
+    let base = index.read_base(bake)?;
+    let files: Vec<&str> = index
+        .cells
+        .iter()
+        .chain(&index.groups)
+        .map(|e| e.file.as_str())
+        .collect();
+    let written = files
+        .par_iter()
+        .map(|file| -> anyhow::Result<u64> {
+            let path = bake.join(file);
+            let pack = format::pack::PackFile::open(&path)?;
+            let mut bytes = 0;
+            for (suffix, data) in [
+                (web::VERTICES_SUFFIX, web::vertices_file(&base, &pack)?),
+                (web::TEXTURES_SUFFIX, web::textures_file(&pack, bake)?),
+            ] {
+                let frame = zstd::bulk::compress(&data, DERIVED_ZSTD_LEVEL)?;
+                format::pack::write_atomic(&bake.join(format!("{file}{suffix}")), &frame)?;
+                bytes += frame.len() as u64;
+            }
+            Ok(bytes)
+        })
+        .collect::<anyhow::Result<Vec<u64>>>()?;
+    Ok((2 * written.len(), written.iter().sum()))
+}
+
 /// zstd level of derived files sent compressed: on park-2m cell 253's 1.79 MB of
 /// textures, level 3 gives 704 KB in 20 ms, 6 gives 690 KB in 30 ms, 9 689 KB in 70 ms.
 const DERIVED_ZSTD_LEVEL: i32 = 6;

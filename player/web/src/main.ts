@@ -28,6 +28,7 @@ import {
   rgba8,
   texturePath,
   textureRefs,
+  unframe,
 } from "./pack";
 
 /** Store textures kept decoded between cells (a crossing re-uses the neighbours'
@@ -151,7 +152,7 @@ async function fetchDerived(url: string): Promise<Uint8Array | null> {
   if (!r.ok) throw new PackError(`${url}: HTTP ${r.status} ${r.statusText}`);
   const b = new Uint8Array(await r.arrayBuffer());
   stats.fetched += wireBytes(r, b);
-  return b;
+  return unframe(url, b);
 }
 
 /** The body bytes that crossed the network: `Content-Length` when the server sent
@@ -602,7 +603,7 @@ async function storeTextures(file: PackFile, url: string): Promise<Uint8Array | 
   // (each request costs ≈ 5 ms in headless Chromium here; a bundle re-sends the
   // textures already cached, so only when they are at most half).
   const missing = new Set(refs.filter((r) => !textureCache.has(r)));
-  if (missing.size >= BUNDLE_MIN && 2 * missing.size >= new Set(refs).size) {
+  if (missing.size >= BUNDLE_MIN && 10 * missing.size >= 9 * new Set(refs).size) {
     const bundle = await fetchDerived(url + ".textures");
     if (bundle)
       for (const { ref, data } of decodeTextureBundle(url + ".textures", bundle))
@@ -661,9 +662,27 @@ async function load(key: string, entry: IndexEntry): Promise<Loaded> {
  * file when the server has one, else those models' whole base.pack ranges. */
 async function fetchProxyVertices(url: string, vertices: Set<number>) {
   if ([...vertices].every((m) => baseStream.ready(m))) return;
+  const before = stats.fetched;
   const b = await fetchDerived(url + ".vertices");
-  if (b) baseStream.scatter(decodeVertices(url + ".vertices", b), url + ".vertices");
-  else await baseStream.ensure(vertices);
+  if (!b) return baseStream.ensure(vertices);
+  baseStream.scatter(decodeVertices(url + ".vertices", b), url + ".vertices");
+  // Rent or buy: once the subsets fetched cost as much as the models' vertices
+  // would, fetch those whole in the background (at most twice the bytes of the
+  // better choice made in hindsight, on a short visit or a long walk; a world
+  // whose models are large keeps renting).
+  rentBytes += stats.fetched - before;
+  if (!boughtVertices && rentBytes >= baseVertexBytes()) {
+    boughtVertices = true;
+    baseStream.ensure(base.models.map((_, m) => m)).catch((e) => fail(`${e.message ?? e}`));
+  }
+}
+
+let rentBytes = 0;
+let boughtVertices = false;
+
+/** Bytes of all models' positions, normals and colours in base.pack. */
+function baseVertexBytes(): number {
+  return 28 * base.models.reduce((n, m) => n + m.vertexCount, 0);
 }
 
 function request(key: string, entry: IndexEntry, priority: boolean) {
@@ -794,8 +813,10 @@ async function frame(now: number) {
   stats.fps = stats.frames > 1 ? 0.9 * stats.fps + 0.1 * (1000 / Math.max(1e-3, now - last)) : 0;
   last = now;
   if (walk) {
-    // The walk starts once its start cell is drawn (a cold start is timed apart).
-    if (stats.firstFrameMs !== null) walkStart ??= now;
+    // The walk starts once its start cell is drawn and its neighbours' packs are in
+    // (as the native player's walk starts with its prefetch ring loaded; a cold start
+    // is timed apart), or 10 s after the first frame if they never come.
+    if (stats.firstFrameMs !== null && walkStart === null && (ringResident() || now - stats.firstFrameMs > 10000)) walkStart = now;
     const p = walkPose(walk, walkStart === null ? 0 : (now - walkStart) / 1000);
     cam.eye = p.eye;
     cam.yaw = p.yaw;
@@ -820,6 +841,13 @@ async function frame(now: number) {
   }
   if (drawn) stats.frames++;
   requestAnimationFrame(frame);
+}
+
+/** Whether the packs of the current cell's neighbours (and their groups) are in. */
+function ringResident(): boolean {
+  const cell = grid.cellAt(cam.eye[0], cam.eye[2]);
+  if (cell === null) return true;
+  return (index.cells.get(cell)?.neighbours ?? []).every((n) => chain(n).every((w) => resident.get(w.key)?.state === "ready"));
 }
 
 function move(dt: number) {
@@ -922,8 +950,9 @@ function draw(): boolean {
   if (stats.firstFrameMs === null && stats.settled) {
     stats.firstFrameMs = performance.now();
     stats.firstFrameBytes = stats.fetched;
-    // The rest of base.pack in the background (the next cells' models).
-    baseStream.ensureAll().catch((e) => fail(`${e.message ?? e}`));
+    // Without derived files, the rest of base.pack in the background (the next
+    // cells' proxies need their models' vertices; with them, each pack brings its own).
+    if (!derivedFiles) baseStream.ensureAll().catch((e) => fail(`${e.message ?? e}`));
     // And the proxy pipelines no pack has asked for yet (the next cells' ones).
     for (let slot = 0; slot <= MAX_VIEWS; slot++) proxyPipe(slot);
     (stats as any).firstFrameNo = stats.frames;

@@ -772,3 +772,14 @@ export function proxyKinds(file: PackFile): { kind: number; views: number }[] {
   for (let o = 0; o + 16 <= r.bytes.length; o += 16) out.push({ kind: r.u32(o), views: r.u32(o + 8) });
   return out;
 }
+
+/** A derived file's bytes: as sent, or decoded when stored as one zstd frame
+ * (`pipeline web-export` writes them so for static hosts). */
+export function unframe(name: string, b: Uint8Array): Uint8Array {
+  if (b.length < 4 || b[0] !== 0x28 || b[1] !== 0xb5 || b[2] !== 0x2f || b[3] !== 0xfd) return b;
+  try {
+    return decompress(b);
+  } catch (e) {
+    throw new PackError(`${name}: not a zstd frame: ${e}`);
+  }
+}
