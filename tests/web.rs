@@ -52,9 +52,15 @@ impl Drop for Server {
 }
 
 fn serve(out: &Path) -> Server {
+    serve_with(out, &[])
+}
+
+/// [`serve`] with more `pipeline serve` arguments (`--static`).
+fn serve_with(out: &Path, more: &[&str]) -> Server {
     let mut child = Command::new(bin_dir().join("pipeline"))
         .args(["serve", out.to_str().unwrap(), "--port", "0", "--web"])
         .arg(repo().join("player/web"))
+        .args(more)
         .stdout(Stdio::piped())
         .stderr(Stdio::inherit())
         .spawn()
@@ -165,6 +171,28 @@ fn web_viewer_draws_the_demo_like_the_player() {
         art.display()
     );
     assert!(psnr >= 35.0, "web vs native PSNR(Y) {psnr:.2} dB < 35");
+
+    // The same pose from a static host (`--static`: no derived `.vertices` and
+    // `.textures`; base.pack ranges and single store files instead): the same
+    // pixels, in more requests.
+    let fast_requests = v["stats"]["requests"].as_u64().unwrap();
+    let fallback = serve_with(&out, &["--static"]);
+    let static_png = art.join("demo-web-static.png");
+    let url = format!("{}&pose={x},,{z},{yaw},0&size=512x384", fallback.url);
+    let (vs, ok) = drive(&["shot", &url, static_png.to_str().unwrap(), "240"]);
+    assert!(ok, "static host: the viewer did not settle: {vs}");
+    assert_eq!(
+        read_png(&static_png),
+        read_png(&art.join("demo-web.png")),
+        "the frame from a static host differs from the one with derived files"
+    );
+    let static_requests = vs["stats"]["requests"].as_u64().unwrap();
+    eprintln!("requests by the first settled frame: {fast_requests} with derived files, {static_requests} from a static host");
+    assert!(
+        fast_requests < static_requests,
+        "derived files did not save requests: {fast_requests} vs {static_requests}"
+    );
+    drop(fallback);
 
     // A walk that streams ≥ 10 cells (issue 33): every frame from the walk's start
     // draws the camera's cell from its own packs, far field included (no stand-in,

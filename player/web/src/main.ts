@@ -49,6 +49,7 @@ import {
   PROXY_SLOTS,
   PROXY_UNIFORM,
   PROXY_VERTEX,
+  proxyVertexCount,
   proxyVertices,
   writeInstance,
   dir,
@@ -352,7 +353,7 @@ async function init() {
   const start = grid.cellAt(cam.eye[0], cam.eye[2]);
   if (start !== null)
     for (const w of chain(start)) {
-      const p = load(w.key, w.entry);
+      const p = load(w.key, w.entry, true);
       p.catch(() => {}); // reported when request() takes it
       early.set(w.key, p);
     }
@@ -596,15 +597,16 @@ function chain(cell: number): { key: string; entry: IndexEntry }[] {
 /** A version-6 pack's textures from the bake's store (format/README.md
  * "textures/"), concatenated in view order; `undefined` for inline packs. A texture
  * shared by neighbouring cells is fetched once while it is cached here. */
-async function storeTextures(file: PackFile, url: string): Promise<Uint8Array | undefined> {
+async function storeTextures(file: PackFile, url: string, asked?: Promise<Uint8Array | null>): Promise<Uint8Array | undefined> {
   const refs = textureRefs(file);
   if (refs === null) return undefined;
   // Most of them missing (a cold start, a jump): the pack's bundle in one request
   // (each request costs ≈ 5 ms in headless Chromium here; a bundle re-sends the
-  // textures already cached, so only when they are at most half).
+  // textures already cached, so only when at least 9 in 10 are missing). `asked`:
+  // the bundle, already requested.
   const missing = new Set(refs.filter((r) => !textureCache.has(r)));
-  if (missing.size >= BUNDLE_MIN && 10 * missing.size >= 9 * new Set(refs).size) {
-    const bundle = await fetchDerived(url + ".textures");
+  if (asked || (missing.size >= BUNDLE_MIN && 10 * missing.size >= 9 * new Set(refs).size)) {
+    const bundle = await (asked ?? fetchDerived(url + ".textures"));
     if (bundle)
       for (const { ref, data } of decodeTextureBundle(url + ".textures", bundle))
         if (!textureCache.has(ref)) textureCache.set(ref, Promise.resolve(data));
@@ -639,16 +641,23 @@ interface Loaded {
 /** Fetches and decodes a cell or group pack with what it draws with: its store
  * textures and the base.pack ranges of its models (its proxies' members' vertices,
  * its originals' whole models), those two at once. */
-async function load(key: string, entry: IndexEntry): Promise<Loaded> {
-  const bytes = await fetchBytes(bakeUrl + entry.file);
+async function load(key: string, entry: IndexEntry, cold = false): Promise<Loaded> {
+  const url = bakeUrl + entry.file;
+  // A cold start lacks every texture and vertex: the pack's derived files are
+  // asked for with it, not after it (one round trip instead of two).
+  const early = cold ? { vertices: fetchDerived(url + ".vertices"), textures: fetchDerived(url + ".textures") } : undefined;
+  early?.vertices.catch(() => {}); // awaited below
+  early?.textures.catch(() => {});
+  const bytes = await fetchBytes(url);
   mark(`${key} fetched`);
   const file = new PackFile(entry.file, bytes);
   // Its proxies' pipelines compile while its textures and vertices download.
   for (const { kind, views } of proxyKinds(file)) proxyPipe(kind === 4 ? 0 : Math.max(1, Math.min(views, MAX_VIEWS)));
   const { vertices, full } = packModels(file, base);
   const [tex] = await Promise.all([
-    storeTextures(file, bakeUrl + entry.file).then((t) => (mark(`${key} textures fetched`), t)),
-    fetchProxyVertices(bakeUrl + entry.file, vertices)
+    storeTextures(file, url, early?.textures).then((t) => (mark(`${key} textures fetched`), t)),
+    // Models the pack draws whole (its originals) bring their vertices anyway.
+    fetchProxyVertices(url, new Set([...vertices].filter((m) => !full.has(m))), early?.vertices)
       .then(() => baseStream.ensure([], full))
       .then(() => mark(`${key} models fetched`)),
   ]);
@@ -660,17 +669,16 @@ async function load(key: string, entry: IndexEntry): Promise<Loaded> {
 
 /** The vertices of models `vertices` that a pack's proxies use: its `.vertices`
  * file when the server has one, else those models' whole base.pack ranges. */
-async function fetchProxyVertices(url: string, vertices: Set<number>) {
+async function fetchProxyVertices(url: string, vertices: Set<number>, asked?: Promise<Uint8Array | null>) {
   if ([...vertices].every((m) => baseStream.ready(m))) return;
-  const before = stats.fetched;
-  const b = await fetchDerived(url + ".vertices");
+  const b = await (asked ?? fetchDerived(url + ".vertices"));
   if (!b) return baseStream.ensure(vertices);
   baseStream.scatter(decodeVertices(url + ".vertices", b), url + ".vertices");
   // Rent or buy: once the subsets fetched cost as much as the models' vertices
   // would, fetch those whole in the background (at most twice the bytes of the
   // better choice made in hindsight, on a short visit or a long walk; a world
   // whose models are large keeps renting).
-  rentBytes += stats.fetched - before;
+  rentBytes += b.length; // decoded bytes: a little above what crossed the network
   if (!boughtVertices && rentBytes >= baseVertexBytes()) {
     boughtVertices = true;
     baseStream.ensure(base.models.map((_, m) => m)).catch((e) => fail(`${e.message ?? e}`));
@@ -714,7 +722,10 @@ function request(key: string, entry: IndexEntry, priority: boolean) {
 }
 
 function makeProxy(res: Resident, p: CellPack["proxies"][number]): GpuProxy {
-  const v = proxyVertices(base, p);
+  // Written straight into the vertex buffer, mapped at creation.
+  const vbuf = device.createBuffer({ size: Math.max(1, proxyVertexCount(p)) * PROXY_VERTEX, usage: GPUBufferUsage.VERTEX, mappedAtCreation: true });
+  const v = proxyVertices(base, p, vbuf.getMappedRange());
+  vbuf.unmap();
   const u = new ArrayBuffer(PROXY_UNIFORM);
   const dv = new DataView(u);
   const n = Math.min(p.views.length, MAX_VIEWS);
@@ -728,7 +739,7 @@ function makeProxy(res: Resident, p: CellPack["proxies"][number]): GpuProxy {
   dv.setUint32(80 * PROXY_SLOTS, n, true);
   dv.setUint32(80 * PROXY_SLOTS + 4, premult, true);
   const gp: GpuProxy = {
-    vbuf: buffer(v.data, GPUBufferUsage.VERTEX),
+    vbuf,
     count: v.count,
     bind: null,
     uniform: buffer(u, GPUBufferUsage.UNIFORM),

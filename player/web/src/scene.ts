@@ -226,12 +226,20 @@ export function groundVertices(g: GridParams): ArrayBuffer {
   return buf;
 }
 
-/** A proxy's world-space triangle list (player/src/bake.rs `prepare_cell`). */
-export function proxyVertices(base: Base, p: Proxy): { data: ArrayBuffer; count: number; min: number[]; max: number[] } {
+/** How many vertices `proxyVertices` writes for `p`. */
+export function proxyVertexCount(p: Proxy): number {
   let count = 0;
   if (p.kind === 4 && p.layers && p.views.length > 0) count += 6 * p.layers.layers.length;
   for (const m of p.members) count += m.triangles.length;
-  const data = new ArrayBuffer(Math.max(count, 1) * PROXY_VERTEX);
+  return count;
+}
+
+/** A proxy's world-space triangle list (player/src/bake.rs `prepare_cell`), written
+ * into `data` when given (at least `proxyVertexCount(p)` × PROXY_VERTEX bytes, e.g. a
+ * GPU buffer mapped at creation: no copy), else into a new buffer. */
+export function proxyVertices(base: Base, p: Proxy, into?: ArrayBuffer): { data: ArrayBuffer; count: number; min: number[]; max: number[] } {
+  const count = proxyVertexCount(p);
+  const data = into ?? new ArrayBuffer(Math.max(count, 1) * PROXY_VERTEX);
   const dv = new DataView(data);
   const min = [Infinity, Infinity, Infinity];
   const max = [-Infinity, -Infinity, -Infinity];
