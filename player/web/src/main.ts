@@ -165,11 +165,13 @@ function wireBytes(r: Response, b: Uint8Array): number {
 
 /** `url`, or its bytes `start..end` (end exclusive) by a `Range` request: `partial`
  * when the server answered 206 with them, not 200 with the whole file. */
-async function fetchRange(url: string, start?: number, end?: number): Promise<{ bytes: Uint8Array; partial: boolean }> {
+async function fetchRange(url: string, start?: number, end?: number, asked?: Promise<Response | Error>): Promise<{ bytes: Uint8Array; partial: boolean }> {
   let r: Response;
   const ranged = start !== undefined && end !== undefined;
   try {
-    r = await fetch(url, ranged ? { headers: { Range: `bytes=${start}-${end - 1}` } } : undefined);
+    const got = await (asked ?? fetch(url, ranged ? { headers: { Range: `bytes=${start}-${end - 1}` } } : undefined));
+    if (got instanceof Error) throw got;
+    r = got;
   } catch (e) {
     throw new PackError(`${url}: ${e}`);
   }
@@ -305,8 +307,12 @@ async function init() {
 
   // The pipelines compile (in the GPU process) while the packs download and decode:
   // on SwiftShader their compilation is the largest part of a cold start.
-  const pipelinesReady = fetch("/shader.wgsl")
+  // The index and shader requests index.html started, for this ?bake=.
+  const asked: { index: Promise<Response | Error>; shader: Promise<Response | Error> } | undefined =
+    (window as any).hexbakeEarly?.bake === bakeUrl ? (window as any).hexbakeEarly : undefined;
+  const pipelinesReady = (asked?.shader ?? fetch("/shader.wgsl"))
     .then((r) => {
+      if (r instanceof Error) throw r;
       if (!r.ok) throw new Error(`/shader.wgsl: HTTP ${r.status}`);
       return r.text();
     })
@@ -323,7 +329,7 @@ async function init() {
   // The index first, then the base pack it names (format 7, issue 32: a rebake on the
   // server never mixes two generations in one session), by range: its table and
   // small sections now, the models' vertices as the packs drawn need them (src/base.ts).
-  index = decodeIndex(new PackFile("index.pack", await fetchBytes(bakeUrl + "index.pack")));
+  index = decodeIndex(new PackFile("index.pack", (await fetchRange(bakeUrl + "index.pack", undefined, undefined, asked?.index)).bytes));
   baseStream = await BaseStream.open(bakeUrl + index.baseFile, fetchRange);
   base = baseStream.base;
   grid = new HexGrid(base.grid);
