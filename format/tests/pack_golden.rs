@@ -422,3 +422,26 @@ fn encoding_reusing_an_earlier_pack_gives_the_same_bytes() {
         .encode_reusing(true, None, None)
         .is_err());
 }
+
+/// The browser's derived files (format/README.md "Derived files for the browser",
+/// layout version 1) of the golden version-7 store bake: `web-v1/` holds the
+/// `.vertices` and `.textures` of its cell and group, and the writer reproduces them
+/// byte for byte from the committed packs.
+#[test]
+fn golden_derived_web_files_are_reproduced() {
+    use format::pack::web;
+    let base = sample::small_base();
+    let bake = golden("store-v7");
+    for pack in ["cells/5.pack", "groups/1.pack"] {
+        let file = PackFile::open(&bake.join(pack)).unwrap();
+        let stem = pack.replace('/', "-");
+        let vertices = web::vertices_file(&base, &file).unwrap();
+        let textures = web::textures_file(&file, &bake).unwrap();
+        let s = web::decode_vertices(&vertices, std::path::Path::new(&stem)).unwrap();
+        assert_eq!(s.ids.len(), s.positions.len());
+        let t = web::decode_textures(&textures, std::path::Path::new(&stem)).unwrap();
+        assert!(!t.is_empty(), "{pack}: the sample names textures");
+        check_or_bless(&format!("web-v1/{stem}.vertices"), vertices);
+        check_or_bless(&format!("web-v1/{stem}.textures"), textures);
+    }
+}
