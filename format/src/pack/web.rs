@@ -153,20 +153,12 @@ pub fn encode_vertices(s: &VertexSubset) -> Vec<u8> {
     let mut stream = Vec::with_capacity(2 * s.ids.len());
     let mut prev: Option<u32> = None;
     for &id in &s.ids {
-        let mut gap = match prev {
+        let gap = match prev {
             None => id,
             Some(p) => id - p - 1,
         };
         prev = Some(id);
-        loop {
-            let byte = (gap & 0x7f) as u8;
-            gap >>= 7;
-            if gap == 0 {
-                stream.push(byte);
-                break;
-            }
-            stream.push(byte | 0x80);
-        }
+        super::codec::push_leb128(&mut stream, gap);
     }
     let mut out = Vec::with_capacity(16 + stream.len() + 3 + 28 * s.ids.len());
     out.extend_from_slice(&VERTICES_MAGIC);
