@@ -24,7 +24,7 @@ mod upload;
 
 pub use frame_model::DrawList;
 use frame_model::{FramePlan, Span};
-pub use upload::ViewInfo;
+pub use upload::{ProxySource, ViewInfo};
 
 use crate::camera::Camera;
 use crate::metrics::srgb_to_linear;
@@ -459,6 +459,12 @@ impl Renderer {
 
     pub fn adapter(&self) -> &AdapterSummary {
         &self.adapter
+    }
+
+    /// Triangles per spatial tile of a proxy's normal clusters
+    /// ([`crate::DrawOptions::tile_triangles`], at least 1).
+    pub fn tile_size(&self) -> usize {
+        self.options.tile_size()
     }
 
     pub fn size(&self) -> (u32, u32) {

@@ -344,6 +344,8 @@ pub struct RenderOptions {
     pub cluster_tau: f32,
     /// The frame model's switches (`--no-backface`, `--tile-triangles`, ...).
     pub draw: crate::DrawOptions,
+    /// `--pace`: the walk's wall-clock speed as a multiple of the path's (0: none).
+    pub pace: f64,
 }
 
 /// Renders every frame of `path`; writes `frames.csv` (and PNGs) into the frames dir.
@@ -375,7 +377,14 @@ pub fn render(
     player.prime(&mut streamer, &camera_for(&frames[0], path, size, far));
     let mut records = Vec::with_capacity(frames.len());
     let mut prev: Option<Option<u32>> = None;
+    let walk_start = std::time::Instant::now();
     for (i, f) in frames.iter().enumerate() {
+        if opts.pace > 0.0 {
+            let due = std::time::Duration::from_secs_f64(f64::from(f.time_s) / opts.pace);
+            if let Some(wait) = due.checked_sub(walk_start.elapsed()) {
+                std::thread::sleep(wait);
+            }
+        }
         let cam = camera_for(f, path, size, far);
         let (ms, list, stats) = player.draw_listed(&cam, opts.mode, Some(&mut streamer));
         if opts.png {

@@ -211,6 +211,9 @@ struct Shared {
     timestamp: AtomicU64,
     stop: AtomicBool,
     resident: Mutex<BTreeSet<u32>>,
+    /// The renderer's tile size, for [`crate::bake::cluster_cell`] on the prefetch
+    /// thread (0 until the first frame says it).
+    tile: std::sync::atomic::AtomicUsize,
 }
 
 /// A view texture waiting for upload: width, height, encoding, texel bytes.
@@ -358,6 +361,7 @@ impl Streamer {
             timestamp: AtomicU64::new(0),
             stop: AtomicBool::new(false),
             resident: Mutex::new(BTreeSet::new()),
+            tile: std::sync::atomic::AtomicUsize::new(0),
         });
         let (tx, rx) = channel();
         let thread = if config.prefetch {
@@ -418,6 +422,9 @@ impl Streamer {
     ) -> (CurrentCell<'_>, StreamStats) {
         let t0 = Instant::now();
         self.clock += 1;
+        self.shared
+            .tile
+            .store(renderer.tile_size(), AtomicOrdering::Relaxed);
         // 1. Cells the prefetch thread has prepared.
         while let Ok((id, result)) = self.rx.try_recv() {
             self.accept(renderer, id, result);
@@ -645,11 +652,21 @@ impl Streamer {
                             .collect()
                     })
                     .collect();
-                let sources: Vec<(&[crate::vertex::ProxyVertex], &[crate::gpu::ViewInfo])> = cell
+                let tile = renderer.tile_size();
+                let sources: Vec<crate::gpu::ProxySource> = cell
                     .proxies
                     .iter()
                     .zip(&views)
-                    .map(|(p, v)| (p.vertices.as_slice(), v.as_slice()))
+                    .map(|(p, v)| crate::gpu::ProxySource {
+                        vertices: &p.vertices,
+                        views: v,
+                        // Grouped on the prefetch thread for this tile size.
+                        clusters: p
+                            .clusters
+                            .as_ref()
+                            .filter(|(t, _)| *t == tile)
+                            .map(|(_, c)| c.as_slice()),
+                    })
                     .collect();
                 // The GPU proxies, each drawing one pack proxy or a batch of layered
                 // impostors or of mesh proxies
@@ -814,6 +831,30 @@ impl Drop for Streamer {
     }
 }
 
+/// Background loading yields to drawing (issue 31, "no hitch"): the prefetch thread
+/// runs at nice +10 (`HEXBAKE_PREFETCH_NICE` overrides it, for measuring), so on a
+/// machine with fewer free cores than busy threads the render thread and the
+/// graphics driver's threads get the CPU first. On the city walk with two cores the
+/// prefetch thread was busy for the whole walk (perf), beside the render thread and
+/// lavapipe's. Best effort: an error leaves the priority as it was.
+fn lower_priority() {
+    let nice = std::env::var("HEXBAKE_PREFETCH_NICE")
+        .ok()
+        .and_then(|v| v.parse::<libc::c_int>().ok())
+        .unwrap_or(PREFETCH_NICE);
+    #[cfg(target_os = "linux")]
+    // SAFETY: plain syscalls on this thread's own id; no memory is shared.
+    unsafe {
+        let tid = libc::syscall(libc::SYS_gettid) as libc::id_t;
+        libc::setpriority(libc::PRIO_PROCESS, tid, nice);
+    }
+    #[cfg(not(target_os = "linux"))]
+    let _ = nice;
+}
+
+/// The prefetch thread's nice value ([`lower_priority`]).
+const PREFETCH_NICE: libc::c_int = 10;
+
 fn prefetch_loop(
     shared: Arc<Shared>,
     dir: PathBuf,
@@ -821,6 +862,7 @@ fn prefetch_loop(
     index: Option<Arc<Index>>,
     tx: Sender<(u32, Result<PreparedCell, String>)>,
 ) {
+    lower_priority();
     loop {
         let entry = {
             let mut q = shared.queue.lock().unwrap_or_else(|e| e.into_inner());
@@ -843,8 +885,15 @@ fn prefetch_loop(
         if resident {
             continue;
         }
-        let result =
-            load_cell(&dir, index.as_deref(), &base, entry.cell).map_err(|e| e.to_string());
+        let tile = shared.tile.load(AtomicOrdering::Relaxed);
+        let result = load_cell(&dir, index.as_deref(), &base, entry.cell)
+            .map(|mut cell| {
+                if tile > 0 {
+                    crate::bake::cluster_cell(&mut cell, tile);
+                }
+                cell
+            })
+            .map_err(|e| e.to_string());
         if tx.send((entry.cell, result)).is_err() {
             return;
         }

@@ -238,6 +238,7 @@ fn render_hybrid(
         lod_pixel_error: 1.0,
         cluster_tau: player::clusterlod::DEFAULT_TAU_PX,
         draw: DrawOptions::default(),
+        pace: 0.0,
     };
     render(dir, path, &opts).unwrap().0
 }

@@ -22,6 +22,13 @@ pub struct RenderArgs {
     /// Also write one PNG per frame.
     #[arg(long)]
     pub png: bool,
+    /// Walk the path in wall-clock time at this multiple of its own speed (1 =
+    /// walking speed, 3 = three times as fast): each path frame is drawn no earlier
+    /// than its time in the path ÷ pace after the walk began, so the prefetch thread
+    /// has the time a viewer moving at that speed would give it. 0: as fast as the
+    /// frames render (the walk then outruns a viewer and its prefetch).
+    #[arg(long, default_value_t = 0.0)]
+    pub pace: f64,
     #[command(flatten)]
     pub walk: PathArgs,
     #[command(flatten)]
@@ -36,6 +43,7 @@ pub fn render(args: RenderArgs) -> Result<(), RunError> {
         frames,
         mode,
         png,
+        pace,
         walk,
         draw,
     } = args;
@@ -49,6 +57,7 @@ pub fn render(args: RenderArgs) -> Result<(), RunError> {
         lod_pixel_error: walk.stream.lod_pixel_error,
         cluster_tau: walk.stream.cluster_tau,
         draw: draw.options(),
+        pace,
     };
     let (records, _) = crate::run::render(&out, &path, &opts)?;
     let n = records.len().max(1) as f64;

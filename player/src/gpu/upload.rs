@@ -195,33 +195,34 @@ impl Renderer {
     /// [`Renderer::set_mesh_batches`] is on ([`Renderer::create_mesh_batch`]); both
     /// are on by default. A batch whose atlas cannot be made is drawn member by
     /// member, as before.
-    pub fn create_pack_proxies(
-        &self,
-        proxies: &[(&[ProxyVertex], &[ViewInfo])],
-    ) -> Vec<(GpuProxy, Vec<usize>)> {
+    pub fn create_pack_proxies(&self, proxies: &[ProxySource]) -> Vec<(GpuProxy, Vec<usize>)> {
         let layered = format::pack::ProxyKind::LayeredImpostor as u32;
         let batchable: Vec<Option<(BatchKey, BatchCost)>> = proxies
             .iter()
-            .map(|(vertices, views)| {
-                let first = atlas_encoding(views)?;
-                let class = if vertices.is_empty() || views.len() > MAX_VIEWS {
-                    None
-                } else if vertices.iter().all(|v| v.kind == layered) {
-                    (self.impostor_batches && views.len() == 1).then_some(BatchClass::Impostors)
-                } else if vertices.iter().all(|v| v.kind != layered) {
-                    self.mesh_batches.then_some(BatchClass::Meshes)
-                } else {
-                    None
-                }?;
-                let cost = BatchCost {
-                    slots: views.len(),
-                    texels: views
-                        .iter()
-                        .map(|v| u64::from(v.width) * u64::from(v.height))
-                        .sum(),
-                };
-                Some(((class, first), cost))
-            })
+            .map(
+                |&ProxySource {
+                     vertices, views, ..
+                 }| {
+                    let first = atlas_encoding(views)?;
+                    let class = if vertices.is_empty() || views.len() > MAX_VIEWS {
+                        None
+                    } else if vertices.iter().all(|v| v.kind == layered) {
+                        (self.impostor_batches && views.len() == 1).then_some(BatchClass::Impostors)
+                    } else if vertices.iter().all(|v| v.kind != layered) {
+                        self.mesh_batches.then_some(BatchClass::Meshes)
+                    } else {
+                        None
+                    }?;
+                    let cost = BatchCost {
+                        slots: views.len(),
+                        texels: views
+                            .iter()
+                            .map(|v| u64::from(v.width) * u64::from(v.height))
+                            .sum(),
+                    };
+                    Some(((class, first), cost))
+                },
+            )
             .collect();
         let mut out = Vec::with_capacity(proxies.len());
         let limit = BatchCost {
@@ -230,8 +231,7 @@ impl Renderer {
         };
         for batch in proxy_batches(&batchable, limit) {
             if batch.len() > 1 {
-                let members: Vec<(&[ProxyVertex], &[ViewInfo])> =
-                    batch.iter().map(|&i| proxies[i]).collect();
+                let members: Vec<ProxySource> = batch.iter().map(|&i| proxies[i]).collect();
                 let made = match batchable[batch[0]] {
                     Some(((BatchClass::Impostors, ..), _)) => self.create_impostor_batch(&members),
                     Some(((BatchClass::Meshes, ..), _)) => self.create_mesh_batch(&members),
@@ -243,8 +243,7 @@ impl Renderer {
                 }
             }
             for i in batch {
-                let (vertices, views) = proxies[i];
-                out.push((self.create_proxy(vertices, views), vec![i]));
+                out.push((self.create_proxy_from(&proxies[i]), vec![i]));
             }
         }
         out
@@ -256,18 +255,27 @@ impl Renderer {
     /// premultiplied by coverage: punch-through alpha in format 4, fully opaque
     /// before, where it changes nothing).
     pub fn create_proxy(&self, vertices: &[ProxyVertex], views: &[ViewInfo]) -> GpuProxy {
-        let layered = vertices
+        self.create_proxy_from(&ProxySource {
+            vertices,
+            views,
+            clusters: None,
+        })
+    }
+
+    /// [`Renderer::create_proxy`] of a [`ProxySource`] (its clusters used when given).
+    fn create_proxy_from(&self, src: &ProxySource) -> GpuProxy {
+        let layered = src
+            .vertices
             .iter()
             .any(|v| v.kind == format::pack::ProxyKind::LayeredImpostor as u32);
         let atlas = if layered {
             None
         } else {
-            self.create_atlas(views)
+            self.create_atlas(src.views)
         };
         // Issue 17: triangles grouped by normal cluster for the per-frame test.
-        let (vertices, clusters) =
-            crate::patches::cluster_proxy_vertices(vertices, self.options.tile_size());
-        self.finish_proxy(&vertices, clusters, views, atlas, layered)
+        let (vertices, clusters) = src.clustered(self.options.tile_size());
+        self.finish_proxy(&vertices, clusters, src.views, atlas, layered)
     }
 
     /// A batch of layered impostors (paper 001 §4), each with its one view
@@ -275,7 +283,7 @@ impl Renderer {
     /// its slot (k) in bits 16–23 of their mask (bits 0–15: the layer's depth
     /// codes); `impostor_layer` reads that rectangle of the batch's [`Atlas`]
     /// ([`Renderer::create_batch`]).
-    fn create_impostor_batch(&self, members: &[(&[ProxyVertex], &[ViewInfo])]) -> Option<GpuProxy> {
+    fn create_impostor_batch(&self, members: &[ProxySource]) -> Option<GpuProxy> {
         self.create_batch(members, true, |mask, base| (mask & 0xffff) | (base << 16))
     }
 
@@ -285,7 +293,7 @@ impl Renderer {
     /// triangles carry the base in mask bits 16–23 beside their own view bits
     /// (0–7), so `vs_proxy_mesh` reads mask bit j as slot base + j and chooses the same
     /// views as for the member alone ([`Renderer::create_batch`]).
-    fn create_mesh_batch(&self, members: &[(&[ProxyVertex], &[ViewInfo])]) -> Option<GpuProxy> {
+    fn create_mesh_batch(&self, members: &[ProxySource]) -> Option<GpuProxy> {
         self.create_batch(members, false, |mask, base| (mask & 0xff) | (base << 16))
     }
 
@@ -299,11 +307,14 @@ impl Renderer {
     /// be made (`create_atlas`).
     fn create_batch(
         &self,
-        members: &[(&[ProxyVertex], &[ViewInfo])],
+        members: &[ProxySource],
         layered: bool,
         mask_of: impl Fn(u32, u32) -> u32,
     ) -> Option<GpuProxy> {
-        let views: Vec<ViewInfo> = members.iter().flat_map(|m| m.1.iter().copied()).collect();
+        let views: Vec<ViewInfo> = members
+            .iter()
+            .flat_map(|m| m.views.iter().copied())
+            .collect();
         if members.len() < 2 || views.len() > PROXY_SLOTS {
             return None;
         }
@@ -313,14 +324,15 @@ impl Renderer {
         let mut clusters = Vec::new();
         let mut base = 0u32;
         let mut spans = Vec::with_capacity(members.len());
-        for (member, member_views) in members {
-            let (v, c) = crate::patches::cluster_proxy_vertices(member, tile);
+        for member in members {
+            let (v, c) = member.clustered(tile);
             let first = vertices.len() as u32;
-            vertices.extend(v.into_iter().map(|mut v| {
+            vertices.extend(v.iter().map(|&v| {
+                let mut v = v;
                 v.mask = mask_of(v.mask, base);
                 v
             }));
-            base += member_views.len() as u32;
+            base += member.views.len() as u32;
             spans.push((first, vertices.len() as u32));
             clusters.extend(c.into_iter().map(|mut c| {
                 c.first += first;
@@ -696,6 +708,36 @@ impl Renderer {
             layout: &self.proxy_bgl,
             entries: &entries,
         })
+    }
+}
+
+/// One pack proxy for [`Renderer::create_pack_proxies`]: its vertices, its views and,
+/// when the prefetch thread grouped them for the renderer's tile size
+/// ([`crate::bake::cluster_cell`]), the clusters over `vertices` (then already in
+/// cluster order).
+#[derive(Clone, Copy, Debug)]
+pub struct ProxySource<'a> {
+    pub vertices: &'a [ProxyVertex],
+    pub views: &'a [ViewInfo],
+    pub clusters: Option<&'a [crate::patches::ProxyCluster]>,
+}
+
+impl ProxySource<'_> {
+    /// The vertices in cluster order and the clusters: as given, or grouped now.
+    fn clustered(
+        &self,
+        tile: usize,
+    ) -> (
+        std::borrow::Cow<'_, [ProxyVertex]>,
+        Vec<crate::patches::ProxyCluster>,
+    ) {
+        match self.clusters {
+            Some(c) => (std::borrow::Cow::Borrowed(self.vertices), c.to_vec()),
+            None => {
+                let (v, c) = crate::patches::cluster_proxy_vertices(self.vertices, tile);
+                (std::borrow::Cow::Owned(v), c)
+            }
+        }
     }
 }
 
