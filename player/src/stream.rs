@@ -831,31 +831,6 @@ impl Drop for Streamer {
     }
 }
 
-/// The prefetch thread's scheduling priority (issue 31, "no hitch"): its nice value
-/// is `HEXBAKE_PREFETCH_NICE` when set (for measuring), else unchanged. Measured at
-/// nice +10 on the city walk at walking speed (player README "Crossings off the
-/// render thread"): the frame after a crossing 2.13× the in-cell median against 2.64×
-/// at 0, one run each; but with the cores shared by other work (the test suite), the
-/// next cell was then not resident at 1 of 6 crossings
-/// (`the_next_cell_is_resident_before_the_viewer_crosses_into_it`). Residency wins:
-/// the default leaves the priority alone.
-fn lower_priority() {
-    let Some(nice) = std::env::var("HEXBAKE_PREFETCH_NICE")
-        .ok()
-        .and_then(|v| v.parse::<libc::c_int>().ok())
-    else {
-        return;
-    };
-    #[cfg(target_os = "linux")]
-    // SAFETY: plain syscalls on this thread's own id; no memory is shared.
-    unsafe {
-        let tid = libc::syscall(libc::SYS_gettid) as libc::id_t;
-        libc::setpriority(libc::PRIO_PROCESS, tid, nice);
-    }
-    #[cfg(not(target_os = "linux"))]
-    let _ = nice;
-}
-
 fn prefetch_loop(
     shared: Arc<Shared>,
     dir: PathBuf,
@@ -863,7 +838,6 @@ fn prefetch_loop(
     index: Option<Arc<Index>>,
     tx: Sender<(u32, Result<PreparedCell, String>)>,
 ) {
-    lower_priority();
     loop {
         let entry = {
             let mut q = shared.queue.lock().unwrap_or_else(|e| e.into_inner());

@@ -139,47 +139,46 @@ let derivedFiles = true;
 /** A derived file of a pack, or `null` when the server has none (404). */
 async function fetchDerived(url: string): Promise<Uint8Array | null> {
   if (!derivedFiles) return null;
-  let r: Response;
-  try {
-    r = await fetch(url);
-  } catch (e) {
-    throw new PackError(`${url}: ${e}`);
-  }
-  stats.requests++;
+  const r = await respond(url);
   if (r.status === 404) {
+    stats.requests++;
     derivedFiles = false;
     return null;
   }
   if (!r.ok) throw new PackError(`${url}: HTTP ${r.status} ${r.statusText}`);
-  const b = new Uint8Array(await r.arrayBuffer());
-  stats.fetched += wireBytes(r, b);
-  return unframe(url, b);
+  return unframe(url, await body(r));
 }
 
-/** The body bytes that crossed the network: `Content-Length` when the server sent
- * the body encoded (`Content-Encoding: zstd`, decoded by the browser), else `b`'s. */
-function wireBytes(r: Response, b: Uint8Array): number {
+/** The response to `url` (a request already `asked`, e.g. by index.html, or a new
+ * one with `init`); a network failure is a PackError naming the URL. */
+async function respond(url: string, init?: RequestInit, asked?: Promise<Response | Error>): Promise<Response> {
+  try {
+    const got = await (asked ?? fetch(url, init));
+    if (got instanceof Error) throw got;
+    return got;
+  } catch (e) {
+    throw new PackError(`${url}: ${e}`);
+  }
+}
+
+/** A response's body, counted in `stats`: the bytes that crossed the network
+ * (`Content-Length` when the server sent the body encoded, `Content-Encoding: zstd`,
+ * which the browser decodes) and one request. */
+async function body(r: Response): Promise<Uint8Array> {
+  const b = new Uint8Array(await r.arrayBuffer());
   const sent = Number(r.headers.get("content-length"));
-  return r.headers.get("content-encoding") && Number.isFinite(sent) && sent > 0 ? sent : b.length;
+  stats.fetched += r.headers.get("content-encoding") && Number.isFinite(sent) && sent > 0 ? sent : b.length;
+  stats.requests++;
+  return b;
 }
 
 /** `url`, or its bytes `start..end` (end exclusive) by a `Range` request: `partial`
  * when the server answered 206 with them, not 200 with the whole file. */
 async function fetchRange(url: string, start?: number, end?: number, asked?: Promise<Response | Error>): Promise<{ bytes: Uint8Array; partial: boolean }> {
-  let r: Response;
   const ranged = start !== undefined && end !== undefined;
-  try {
-    const got = await (asked ?? fetch(url, ranged ? { headers: { Range: `bytes=${start}-${end - 1}` } } : undefined));
-    if (got instanceof Error) throw got;
-    r = got;
-  } catch (e) {
-    throw new PackError(`${url}: ${e}`);
-  }
+  const r = await respond(url, ranged ? { headers: { Range: `bytes=${start}-${end - 1}` } } : undefined, asked);
   if (!r.ok) throw new PackError(`${url}${ranged ? ` bytes ${start}-${end - 1}` : ""}: HTTP ${r.status} ${r.statusText}`);
-  const b = new Uint8Array(await r.arrayBuffer());
-  stats.fetched += wireBytes(r, b);
-  stats.requests++;
-  return { bytes: b, partial: r.status === 206 };
+  return { bytes: await body(r), partial: r.status === 206 };
 }
 
 // ---- GPU state ----
@@ -466,9 +465,15 @@ async function makePipelines(module: GPUShaderModule) {
 
 const earlySlots = new Set<number>();
 
-/** A proxy's pipeline slot: 0 for a layered impostor, else its view count. */
+/** The pipeline slot of a proxy: 0 for a layered impostor, else its view count
+ * (1 to MAX_VIEWS; a proxy without views uses the one-view pipeline). */
+function slotOf(layered: boolean, views: number): number {
+  return layered ? 0 : Math.max(1, Math.min(views, MAX_VIEWS));
+}
+
+/** A GPU proxy's pipeline slot (`slotOf`; `slots` is its view count − 1). */
 function proxySlot(p: GpuProxy): number {
-  return p.layered ? 0 : p.slots + 1;
+  return slotOf(p.layered, p.slots + 1);
 }
 
 /** The pipeline of proxy slot `slot`, or `undefined` while it compiles (asked for
@@ -658,7 +663,7 @@ async function load(key: string, entry: IndexEntry, cold = false): Promise<Loade
   mark(`${key} fetched`);
   const file = new PackFile(entry.file, bytes);
   // Its proxies' pipelines compile while its textures and vertices download.
-  for (const { kind, views } of proxyKinds(file)) proxyPipe(kind === 4 ? 0 : Math.max(1, Math.min(views, MAX_VIEWS)));
+  for (const { kind, views } of proxyKinds(file)) proxyPipe(slotOf(kind === 4, views));
   const { vertices, full } = packModels(file, base);
   const [tex] = await Promise.all([
     storeTextures(file, url, early?.textures).then((t) => (mark(`${key} textures fetched`), t)),
@@ -899,9 +904,9 @@ function installControls(canvas: HTMLCanvasElement) {
   });
 }
 
-/** Draws a frame; `false` when it did not: during a cold start, after one frame of
- * ground and sky, until the start cell's packs are in (the CPU goes to fetching
- * and decoding them, not to redrawing the same frame on SwiftShader). */
+/** Draws a frame; `false` when it did not: during a cold start, until the start
+ * cell's packs are in and settled (the CPU goes to fetching and decoding them, not
+ * to drawing unfinished frames on SwiftShader). */
 function draw(): boolean {
   const cell = grid.cellAt(cam.eye[0], cam.eye[2]);
   stats.cell = cell;
@@ -927,18 +932,18 @@ function draw(): boolean {
   const current = packs[0]?.state === "ready" && packs.slice(1).every((p) => p?.state === "ready");
   if (current) shownChain = want.map((w) => w.key);
   else if (shownChain.every((k) => resident.get(k)?.state === "ready")) {
-    // Until the new cell's packs are in, the last cell drawn stands in (a cold start
-    // draws the ground and sky only: drawing every original instead, as the native
+    // Until the new cell's packs are in, the last cell drawn stands in (with none,
+    // the ground and sky only: drawing every original instead, as the native
     // player's fallback does, takes seconds per frame on SwiftShader).
     packs = shownChain.map((k) => resident.get(k));
   }
-  if (stats.firstFrameMs === null && !current && stats.frames > 0) return false;
+  if (stats.firstFrameMs === null && !current) return false;
   const cellPack = packs[0]?.state === "ready" ? packs[0] : undefined;
   const farReady = packs.slice(1).every((p) => p?.state === "ready");
   const originals = new Set<number>();
   const proxies: GpuProxy[] = [];
   if (!cellPack) {
-    // Nothing drawn yet: ground and sky only.
+    // No pack of the cell nor a stand-in: ground and sky only.
   } else {
     for (const i of cellPack.pack!.originals) originals.add(i);
     const drawn = farReady ? (packs as Resident[]) : [cellPack];
@@ -960,9 +965,8 @@ function draw(): boolean {
   if (walk && walkStart !== null && stats.walkLog.length < 100000) stats.walkLog.push([cell ?? -1, drawnCell, farReady ? 1 : 0, waiting]);
   if (cellPack) mark("first frame with a cell pack");
   stats.settled = current && !!cellPack && farReady && proxies.length === packs.reduce((s, r) => s + (r?.proxies.length ?? 0), 0);
-  // A cold start draws no frame between the first (ground and sky) and the settled
-  // one: on SwiftShader a frame costs ≈ 100 ms that the packs' last pipelines and
-  // uploads would wait behind.
+  // A cold start draws nothing until it is settled: on SwiftShader a frame costs
+  // ≈ 100 ms that the packs' last pipelines and uploads would wait behind.
   if (stats.firstFrameMs === null && !stats.settled) return false;
   if (stats.firstFrameMs === null && stats.settled) {
     stats.firstFrameMs = performance.now();
