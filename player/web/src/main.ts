@@ -15,7 +15,8 @@
 
 import { BaseStream } from "./base";
 import {
-  decodeCell,
+  attachTextures,
+  decodeCellRecords,
   decodeIndex,
   decodeTextureBundle,
   decodeVertices,
@@ -265,66 +266,9 @@ function buffer(data: ArrayBuffer | ArrayBufferView, usage: number): GPUBuffer {
   return b;
 }
 
-async function init() {
-  const q = new URLSearchParams(location.search);
-  bakeUrl = q.get("bake") ?? "/bake/";
-  if (!bakeUrl.endsWith("/")) bakeUrl += "/";
-  const size = (q.get("size") ?? "1024x768").split("x").map(Number);
-  if (size.length === 2 && size.every((v) => v >= 1 && v <= 8192)) [cam.width, cam.height] = size;
-  uploadBudget = Number(q.get("budget") ?? 8) * (1 << 20);
-  prefetch = q.get("prefetch") !== "0";
-
-  if (!navigator.gpu) throw new Error("this browser has no WebGPU (navigator.gpu missing)");
-  const adapter = await navigator.gpu.requestAdapter();
-  if (!adapter) throw new Error("no WebGPU adapter");
-  const hasBc = adapter.features.has("texture-compression-bc");
-  if (!hasBc) throw new Error("the WebGPU adapter lacks texture-compression-bc (the packs' BC1/BC3 captures)");
-  device = await adapter.requestDevice({ requiredFeatures: ["texture-compression-bc"] });
-  device.lost.then((i) => fail(`WebGPU device lost (${i.reason}): ${i.message}`));
-  device.onuncapturederror = (e) => fail(`WebGPU: ${e.error.message}`);
-
-  const canvas = document.getElementById("view") as HTMLCanvasElement;
-  canvas.width = cam.width;
-  canvas.height = cam.height;
-  // Headless Chromium on SwiftShader destroys the device as soon as a WebGPU canvas
-  // is configured (measured with Chromium 148 here), so under automation (or with
-  // ?readback=1) frames are drawn into a texture and copied to a 2D canvas.
-  readback = q.get("readback") === "1" || (navigator.webdriver && q.get("readback") !== "0");
-  if (readback) {
-    ctx2d = canvas.getContext("2d") as CanvasRenderingContext2D;
-    colourTex = device.createTexture({
-      size: [cam.width, cam.height],
-      format: "rgba8unorm-srgb",
-      usage: GPUTextureUsage.RENDER_ATTACHMENT | GPUTextureUsage.COPY_SRC,
-    });
-    rowBytes = Math.ceil((cam.width * 4) / 256) * 256;
-    readBuf = device.createBuffer({ size: rowBytes * cam.height, usage: GPUBufferUsage.MAP_READ | GPUBufferUsage.COPY_DST });
-  } else {
-    ctx = canvas.getContext("webgpu") as GPUCanvasContext;
-    ctx.configure({ device, format: "rgba8unorm", viewFormats: ["rgba8unorm-srgb"], alphaMode: "opaque" });
-  }
-
-  // The pipelines compile (in the GPU process) while the packs download and decode:
-  // on SwiftShader their compilation is the largest part of a cold start.
-  // The index and shader requests index.html started, for this ?bake=.
-  const asked: { index: Promise<Response | Error>; shader: Promise<Response | Error> } | undefined =
-    (window as any).hexbakeEarly?.bake === bakeUrl ? (window as any).hexbakeEarly : undefined;
-  const pipelinesReady = (asked?.shader ?? fetch("/shader.wgsl"))
-    .then((r) => {
-      if (r instanceof Error) throw r;
-      if (!r.ok) throw new Error(`/shader.wgsl: HTTP ${r.status}`);
-      return r.text();
-    })
-    .then(async (shaderText) => {
-      const module = device.createShaderModule({ code: shaderText });
-      const info = await module.getCompilationInfo();
-      const errs = info.messages.filter((m) => m.type === "error");
-      if (errs.length) throw new Error(`shader.wgsl: ${errs.map((m) => `${m.lineNum}:${m.linePos} ${m.message}`).join("; ")}`);
-      mark("shader compiled");
-      await makePipelines(module);
-      mark("pipelines");
-    });
-  pipelinesReady.catch(() => {}); // awaited below; no unhandled rejection meanwhile
+/** Reads the index and base table, sets the pose (`?pose=`, `?path=`), and starts
+ * the start cell's packs with their derived files (`load`, cold). */
+async function openScene(q: URLSearchParams, asked?: { index: Promise<Response | Error> }) {
   // The index first, then the base pack it names (format 7, issue 32: a rebake on the
   // server never mixes two generations in one session), by range: its table and
   // small sections now, the models' vertices as the packs drawn need them (src/base.ts).
@@ -362,10 +306,78 @@ async function init() {
       p.catch(() => {}); // reported when request() takes it
       early.set(w.key, p);
     }
+}
+
+async function init() {
+  const q = new URLSearchParams(location.search);
+  bakeUrl = q.get("bake") ?? "/bake/";
+  if (!bakeUrl.endsWith("/")) bakeUrl += "/";
+  const size = (q.get("size") ?? "1024x768").split("x").map(Number);
+  if (size.length === 2 && size.every((v) => v >= 1 && v <= 8192)) [cam.width, cam.height] = size;
+  uploadBudget = Number(q.get("budget") ?? 8) * (1 << 20);
+  prefetch = q.get("prefetch") !== "0";
+
+  // The index and shader requests index.html started, for this ?bake=.
+  const asked: { index: Promise<Response | Error>; shader: Promise<Response | Error> } | undefined =
+    (window as any).hexbakeEarly?.bake === bakeUrl ? (window as any).hexbakeEarly : undefined;
+  // The scene (index, base table, pose, the start cell's packs) is fetched while
+  // the browser starts its GPU process and device: none of it needs the device.
+  const sceneReady = openScene(q, asked);
+  sceneReady.catch(() => {}); // awaited below
+
+  if (!navigator.gpu) throw new Error("this browser has no WebGPU (navigator.gpu missing)");
+  const adapter = await navigator.gpu.requestAdapter();
+  if (!adapter) throw new Error("no WebGPU adapter");
+  const hasBc = adapter.features.has("texture-compression-bc");
+  if (!hasBc) throw new Error("the WebGPU adapter lacks texture-compression-bc (the packs' BC1/BC3 captures)");
+  device = await adapter.requestDevice({ requiredFeatures: ["texture-compression-bc"] });
+  device.lost.then((i) => fail(`WebGPU device lost (${i.reason}): ${i.message}`));
+  device.onuncapturederror = (e) => fail(`WebGPU: ${e.error.message}`);
+
+  const canvas = document.getElementById("view") as HTMLCanvasElement;
+  canvas.width = cam.width;
+  canvas.height = cam.height;
+  // Headless Chromium on SwiftShader destroys the device as soon as a WebGPU canvas
+  // is configured (measured with Chromium 148 here), so under automation (or with
+  // ?readback=1) frames are drawn into a texture and copied to a 2D canvas.
+  readback = q.get("readback") === "1" || (navigator.webdriver && q.get("readback") !== "0");
+  if (readback) {
+    ctx2d = canvas.getContext("2d") as CanvasRenderingContext2D;
+    colourTex = device.createTexture({
+      size: [cam.width, cam.height],
+      format: "rgba8unorm-srgb",
+      usage: GPUTextureUsage.RENDER_ATTACHMENT | GPUTextureUsage.COPY_SRC,
+    });
+    rowBytes = Math.ceil((cam.width * 4) / 256) * 256;
+    readBuf = device.createBuffer({ size: rowBytes * cam.height, usage: GPUBufferUsage.MAP_READ | GPUBufferUsage.COPY_DST });
+  } else {
+    ctx = canvas.getContext("webgpu") as GPUCanvasContext;
+    ctx.configure({ device, format: "rgba8unorm", viewFormats: ["rgba8unorm-srgb"], alphaMode: "opaque" });
+  }
+
+  // The pipelines compile (in the GPU process) while the packs download and decode:
+  // on SwiftShader their compilation is the largest part of a cold start.
+  const pipelinesReady = (asked?.shader ?? fetch("/shader.wgsl"))
+    .then((r) => {
+      if (r instanceof Error) throw r;
+      if (!r.ok) throw new Error(`/shader.wgsl: HTTP ${r.status}`);
+      return r.text();
+    })
+    .then(async (shaderText) => {
+      const module = device.createShaderModule({ code: shaderText });
+      const info = await module.getCompilationInfo();
+      const errs = info.messages.filter((m) => m.type === "error");
+      if (errs.length) throw new Error(`shader.wgsl: ${errs.map((m) => `${m.lineNum}:${m.linePos} ${m.message}`).join("; ")}`);
+      mark("shader compiled");
+      await makePipelines(module);
+      mark("pipelines");
+    });
+  pipelinesReady.catch(() => {}); // awaited below; no unhandled rejection meanwhile
+  await sceneReady;
   await pipelinesReady;
 
   models = base.models.map(() => undefined);
-  groundBuf = buffer(groundVertices(g), GPUBufferUsage.VERTEX);
+  groundBuf = buffer(groundVertices(base.grid), GPUBufferUsage.VERTEX);
   instanceBounds = base.instances.map(() => undefined);
   instBuf = device.createBuffer({ size: INSTANCE_RAW * (base.instances.length + 1), usage: GPUBufferUsage.VERTEX | GPUBufferUsage.COPY_DST });
   depthTex = device.createTexture({ size: [cam.width, cam.height], format: "depth32float", usage: GPUTextureUsage.RENDER_ATTACHMENT });
@@ -645,13 +657,17 @@ async function storeTextures(file: PackFile, url: string, asked?: Promise<Uint8A
 }
 
 interface Loaded {
+  /** Decoded but for its views' texture bytes, which `textures` attaches. */
   pack: CellPack;
   bytes: number;
+  textures: Promise<void>;
 }
 
 /** Fetches and decodes a cell or group pack with what it draws with: its store
  * textures and the base.pack ranges of its models (its proxies' members' vertices,
- * its originals' whole models), those two at once. */
+ * its originals' whole models), those two at once. Resolves once the pack's records
+ * are decoded and its models are in, so that its proxies' vertices are built while
+ * its textures still download. */
 async function load(key: string, entry: IndexEntry, cold = false): Promise<Loaded> {
   const url = bakeUrl + entry.file;
   // A cold start lacks every texture and vertex: the pack's derived files are
@@ -665,17 +681,18 @@ async function load(key: string, entry: IndexEntry, cold = false): Promise<Loade
   // Its proxies' pipelines compile while its textures and vertices download.
   for (const { kind, views } of proxyKinds(file)) proxyPipe(slotOf(kind === 4, views));
   const { vertices, full } = packModels(file, base);
-  const [tex] = await Promise.all([
-    storeTextures(file, url, early?.textures).then((t) => (mark(`${key} textures fetched`), t)),
-    // Models the pack draws whole (its originals) bring their vertices anyway.
-    fetchProxyVertices(url, new Set([...vertices].filter((m) => !full.has(m))), early?.vertices)
-      .then(() => baseStream.ensure([], full))
-      .then(() => mark(`${key} models fetched`)),
-  ]);
-  const pack = decodeCell(file, base, tex);
-  mark(`${key} decoded`);
+  const tex = storeTextures(file, url, early?.textures).then((t) => (mark(`${key} textures fetched`), t));
+  tex.catch(() => {}); // awaited below
+  // Models the pack draws whole (its originals) bring their vertices anyway.
+  const models = fetchProxyVertices(url, new Set([...vertices].filter((m) => !full.has(m))), early?.vertices)
+    .then(() => baseStream.ensure([], full))
+    .then(() => mark(`${key} models fetched`));
+  models.catch(() => {});
+  const pack = decodeCellRecords(file, base);
   if (pack.id !== entry.id) throw new PackError(`${entry.file}: holds cell ${pack.id}, index.pack lists ${entry.id}`);
-  return { pack, bytes: bytes.length };
+  mark(`${key} decoded`);
+  await models;
+  return { pack, bytes: bytes.length, textures: tex.then((t) => attachTextures(file, pack, t)) };
 }
 
 /** The vertices of models `vertices` that a pack's proxies use: its `.vertices`
@@ -717,10 +734,17 @@ function request(key: string, entry: IndexEntry, priority: boolean) {
   const loading = early.get(key) ?? load(key, entry);
   early.delete(key);
   loading
-    .then(({ pack, bytes }) => {
+    .then(async ({ pack, bytes, textures }) => {
+      // Vertex buffers first, while the textures are still on their way.
+      const proxies = pack.proxies.map((p) => makeProxy(p));
+      await textures.catch((e) => {
+        for (const p of proxies) [p.vbuf, p.uniform].forEach((b) => b.destroy());
+        throw e;
+      });
       res.pack = pack;
       res.bytes = bytes;
-      res.proxies = pack.proxies.map((p) => makeProxy(res, p));
+      res.proxies = proxies;
+      proxies.forEach((gp, i) => queueUploads(res, gp, pack.proxies[i]));
       res.state = "ready";
       mark(`first pack decoded`);
       mark(`${key} proxies built`);
@@ -732,7 +756,8 @@ function request(key: string, entry: IndexEntry, priority: boolean) {
     .finally(() => inflight--);
 }
 
-function makeProxy(res: Resident, p: CellPack["proxies"][number]): GpuProxy {
+/** A proxy's vertex buffer and view uniforms; its textures follow (`queueUploads`). */
+function makeProxy(p: CellPack["proxies"][number]): GpuProxy {
   // Written straight into the vertex buffer, mapped at creation.
   const vbuf = device.createBuffer({ size: Math.max(1, proxyVertexCount(p)) * PROXY_VERTEX, usage: GPUBufferUsage.VERTEX, mappedAtCreation: true });
   const v = proxyVertices(base, p, vbuf.getMappedRange());
@@ -762,12 +787,16 @@ function makeProxy(res: Resident, p: CellPack["proxies"][number]): GpuProxy {
     min: v.min,
     max: v.max,
   };
-  p.views.slice(0, n).forEach((view, i) =>
+  proxyPipe(proxySlot(gp));
+  return gp;
+}
+
+/** Queues a proxy's view textures for upload (`runUploads`), once they are in. */
+function queueUploads(res: Resident, gp: GpuProxy, p: CellPack["proxies"][number]) {
+  p.views.slice(0, gp.textures.length).forEach((view, i) =>
     uploads.push({ res, proxy: gp, view: i, w: view.width, h: view.height, enc: view.encoding, data: view.encoding <= 1 ? rgba8(view) : view.data }),
   );
-  proxyPipe(proxySlot(gp));
   tryBind(gp);
-  return gp;
 }
 
 function tryBind(p: GpuProxy) {

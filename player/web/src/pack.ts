@@ -130,6 +130,10 @@ export class PackFile implements SectionSource {
     return this.head.has(kind);
   }
 
+  /** Sections decoded so far: a pack's records are read before its textures
+   * arrive (`packModels`, `proxyKinds`) and again by `decodeCell`. */
+  private readonly decoded = new Map<number, Uint8Array>();
+
   /** The decoded bytes of section `kind` (empty when absent and `optional`). */
   section(kind: number, optional = false): Uint8Array {
     const s = this.head.sections.get(kind);
@@ -137,7 +141,12 @@ export class PackFile implements SectionSource {
       if (optional) return new Uint8Array(0);
       throw new PackError(`${this.head.label(kind)} missing`);
     }
-    return decodeStored(this.head.label(kind), s, this.bytes.subarray(s.offset, s.offset + s.stored));
+    let d = this.decoded.get(kind);
+    if (!d) {
+      d = decodeStored(this.head.label(kind), s, this.bytes.subarray(s.offset, s.offset + s.stored));
+      this.decoded.set(kind, d);
+    }
+    return d;
   }
 }
 
@@ -497,7 +506,8 @@ export interface View {
   width: number;
   height: number;
   encoding: number; // 0 rgba8, 1 rgba8-left, 2 bc1, 3 bc3
-  data: Uint8Array;
+  len: number; // bytes of its texture (the views record's)
+  data: Uint8Array; // empty until `attachTextures`
 }
 
 export interface Member {
@@ -586,6 +596,30 @@ export function packModels(file: PackFile, base: Base): { vertices: Set<number>;
 /** `textures`: the textures of a version-6 pack fetched from the store, concatenated
  * in view order (what its `textures` section would hold); omitted for inline packs. */
 export function decodeCell(file: PackFile, base: Base, textures?: Uint8Array): CellPack {
+  const pack = decodeCellRecords(file, base);
+  attachTextures(file, pack, textures);
+  return pack;
+}
+
+/** A pack's views' texture bytes from `textures` (as `decodeCell`'s), checked
+ * against each view's size and encoding. */
+export function attachTextures(file: PackFile, pack: CellPack, textures?: Uint8Array) {
+  const tex = textures ?? file.section(0x0208);
+  let to = 0;
+  let vi = 0;
+  for (const p of pack.proxies)
+    for (const view of p.views) {
+      if (to + view.len > tex.length) throw new PackError(`${file.name}: textures: view ${vi}'s ${view.len} bytes past the section's end`);
+      view.data = tex.subarray(to, to + view.len);
+      checkTexture(view, `${file.name}: textures: view ${vi}`);
+      to += view.len;
+      vi++;
+    }
+}
+
+/** Everything of a cell or group pack but its textures (views' `data` stay empty
+ * until `attachTextures`): decoded while the textures download. */
+export function decodeCellRecords(file: PackFile, base: Base): CellPack {
   if (file.fileKind !== KIND.cell && file.fileKind !== KIND.group)
     throw new PackError(`${file.name}: file kind ${file.fileKind}, not a cell or group pack`);
   const n = file.name;
@@ -604,13 +638,11 @@ export function decodeCell(file: PackFile, base: Base, textures?: Uint8Array): C
   const tris = new Reader(file.section(0x0205), `${n}: member-triangles`);
   const masks = file.section(0x0206);
   const views = new Reader(file.section(0x0207), `${n}: views`);
-  const tex = textures ?? file.section(0x0208);
   const lay = new Reader(file.section(0x0209, true), `${n}: layered-impostors`);
   let mi = 0,
     ti = 0,
     ki = 0,
     vi = 0,
-    to = 0,
     lo = 0;
   const proxies: Proxy[] = [];
   for (let p = 0; p < proxyCount; p++) {
@@ -641,19 +673,15 @@ export function decodeCell(file: PackFile, base: Base, textures?: Uint8Array): C
     const vs: View[] = [];
     for (let v = 0; v < nv; v++, vi++) {
       const o = 96 * vi;
-      const len = views.u64(o + 88);
-      if (to + len > tex.length) throw new PackError(`${n}: textures: view ${vi}'s ${len} bytes past the section's end`);
-      const view: View = {
+      vs.push({
         matrix: views.f32array(o, 16),
         eye: [views.f32(o + 64), views.f32(o + 68), views.f32(o + 72)],
         width: views.u32(o + 76),
         height: views.u32(o + 80),
         encoding: views.u32(o + 84),
-        data: tex.subarray(to, to + len),
-      };
-      checkTexture(view, `${n}: textures: view ${vi}`);
-      to += len;
-      vs.push(view);
+        len: views.u64(o + 88),
+        data: new Uint8Array(0),
+      });
     }
     let layers: Layers | null = null;
     if (kind === 4 && lay.bytes.length > 0) {
