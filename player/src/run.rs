@@ -421,38 +421,84 @@ fn median(v: &mut [f64]) -> f64 {
     }
 }
 
+/// Frames after a crossing that count as its window (the crossing frame and 9 after).
+const CROSSING_WINDOW: usize = 10;
+
 /// Frame-time behaviour at cell crossings (paper Fig. 14); see
 /// [`CrossingStats`].
 pub fn crossing_stats(records: &[FrameRow]) -> CrossingStats {
     let total = |r: &FrameRow| r.frame_ms + r.stream_ms;
+    let ms: Vec<f64> = records.iter().map(total).collect();
     let mut near = vec![false; records.len()];
-    let mut crossings = 0;
-    for (i, r) in records.iter().enumerate() {
-        if r.crossing {
-            crossings += 1;
-            for n in near.iter_mut().skip(i).take(10) {
-                *n = true;
-            }
+    let starts: Vec<usize> = (0..records.len())
+        .filter(|&i| records[i].crossing)
+        .collect();
+    for &i in &starts {
+        for n in near.iter_mut().skip(i).take(CROSSING_WINDOW) {
+            *n = true;
         }
     }
-    let mut inside: Vec<f64> = records
-        .iter()
-        .zip(&near)
-        .filter(|(_, &n)| !n)
-        .map(|(r, _)| total(r))
-        .collect();
-    let med = median(&mut inside);
-    let max_after = records
-        .iter()
-        .zip(&near)
-        .filter(|(_, &n)| n)
-        .map(|(r, _)| total(r))
+    // The in-cell frames (outside every crossing window) of `lo..hi`.
+    let inside = |lo: usize, hi: usize| -> Vec<f64> {
+        (lo..hi.min(ms.len()))
+            .filter(|&j| !near[j])
+            .map(|j| ms[j])
+            .collect()
+    };
+    let med = median(&mut inside(0, ms.len()));
+    let max_after = (0..ms.len())
+        .filter(|&j| near[j])
+        .map(|j| ms[j])
         .fold(0.0, f64::max);
+    // Each crossing against the in-cell frames of the cell it enters (of the two
+    // cells it joins when that visit is too short, of the walk when both are).
+    let mut local = Vec::with_capacity(starts.len());
+    for (k, &i) in starts.iter().enumerate() {
+        let lo = if k > 0 { starts[k - 1] } else { 0 };
+        let hi = starts.get(k + 1).copied().unwrap_or(ms.len());
+        let (mut entered, mut joined) = (inside(i, hi), inside(lo, hi));
+        let m = if entered.len() >= 3 {
+            median(&mut entered)
+        } else if joined.len() >= 3 {
+            median(&mut joined)
+        } else {
+            med
+        };
+        let peak = ms[i..(i + CROSSING_WINDOW).min(ms.len())]
+            .iter()
+            .copied()
+            .fold(0.0, f64::max);
+        if m > 0.0 {
+            local.push(peak / m);
+        }
+    }
+    // The same statistic where no crossing is: the noise floor.
+    let quiet = (0..ms.len())
+        .step_by(CROSSING_WINDOW)
+        .filter(|&s| {
+            s + CROSSING_WINDOW <= ms.len() && !near[s..s + CROSSING_WINDOW].contains(&true)
+        })
+        .filter_map(|s| {
+            let m = median(&mut inside(s.saturating_sub(40), s + CROSSING_WINDOW + 40));
+            let peak = ms[s..s + CROSSING_WINDOW]
+                .iter()
+                .copied()
+                .fold(0.0, f64::max);
+            (m > 0.0).then(|| peak / m)
+        })
+        .fold(f64::NAN, f64::max);
     CrossingStats {
-        crossings,
+        crossings: starts.len(),
         in_cell_median_ms: med,
         max_after_crossing_ms: max_after,
         ratio: if med > 0.0 { max_after / med } else { f64::NAN },
+        local_ratio_max: local.iter().copied().fold(f64::NAN, f64::max),
+        local_ratio_mean: if local.is_empty() {
+            f64::NAN
+        } else {
+            local.iter().sum::<f64>() / local.len() as f64
+        },
+        quiet_ratio_max: quiet,
     }
 }
 
@@ -463,3 +509,47 @@ pub use crate::metrics::PSNR_CAP;
 pub const DEFAULT_REFERENCE_SS: u32 = 4;
 /// The largest `--reference-ss`.
 pub const MAX_REFERENCE_SS: u32 = 8;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A walk of `a` frames at `ms_a` then `b` at `ms_b`, crossing between them.
+    fn walk(a: usize, ms_a: f64, b: usize, ms_b: f64) -> Vec<FrameRow> {
+        (0..a + b)
+            .map(|i| FrameRow {
+                frame: i,
+                cell: Some(u32::from(i >= a)),
+                crossing: i == a,
+                frame_ms: if i < a { ms_a } else { ms_b },
+                ..Default::default()
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_crossing_is_measured_against_the_cell_it_enters() {
+        // Entering a dearer view is not a hitch: the whole-walk ratio says 5×.
+        let c = crossing_stats(&walk(60, 10.0, 50, 50.0));
+        assert_eq!(c.crossings, 1);
+        assert!((c.ratio - 5.0).abs() < 1e-9, "{c:?}");
+        assert!((c.local_ratio_max - 1.0).abs() < 1e-9, "{c:?}");
+        assert!((c.quiet_ratio_max - 1.0).abs() < 1e-9, "{c:?}");
+        // A spike in the crossing's window is one.
+        let mut r = walk(60, 10.0, 50, 50.0);
+        r[61].stream_ms = 30.0;
+        let c = crossing_stats(&r);
+        assert!((c.local_ratio_max - 1.6).abs() < 1e-9, "{c:?}");
+        assert_eq!(c.local_ratio_max, c.local_ratio_mean);
+    }
+
+    #[test]
+    fn a_walk_without_crossings_has_no_local_ratio() {
+        let mut r = walk(40, 10.0, 0, 0.0);
+        r[25].frame_ms = 20.0;
+        let c = crossing_stats(&r);
+        assert_eq!(c.crossings, 0);
+        assert!(c.local_ratio_max.is_nan() && c.local_ratio_mean.is_nan());
+        assert!((c.quiet_ratio_max - 2.0).abs() < 1e-9, "{c:?}");
+    }
+}

@@ -1065,6 +1065,47 @@ fn a_cells_far_field_group_is_drawn_with_it() {
     assert_eq!(psnr_y(&hybrid, &frustum), f64::INFINITY);
 }
 
+/// Issue 31 item 3: prepared neighbours that arrive together (here: all of them,
+/// while the viewer stands still) are accepted one a frame, not in one frame; the
+/// cell drawn now never waits behind them.
+#[test]
+fn prefetched_packs_are_accepted_one_a_frame() {
+    let dir = tempfile::tempdir().unwrap();
+    write_synthetic_bake(dir.path()).unwrap();
+    let path = demo_walk();
+    let Some(mut p) = open(dir.path(), (96, 96), &DrawOptions::default()) else {
+        return;
+    };
+    let cam = player::run::camera_for(&path.frames()[0], &path, (96, 96), p.bake.extent);
+    let mut s = Streamer::new(&p.bake, StreamConfig::default());
+    let (_, _, _, first) = p.draw(&cam, Mode::Hybrid, Some(&mut s));
+    assert!(first.cell.is_some() && !first.fallback, "{first:?}");
+    // The prefetch thread prepares the whole ring meanwhile.
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(60);
+    let mut accepted = 0;
+    let mut most_waiting = 0;
+    loop {
+        std::thread::sleep(std::time::Duration::from_millis(if accepted == 0 {
+            2000
+        } else {
+            0
+        }));
+        let (_, _, _, st) = p.draw(&cam, Mode::Hybrid, Some(&mut s));
+        assert!(st.accepted_ahead <= 1, "{st:?}");
+        assert!(!st.fallback && st.cell == first.cell, "{st:?}");
+        accepted += st.accepted_ahead;
+        most_waiting = most_waiting.max(st.held_back);
+        if (accepted > 0 && st.held_back == 0) || std::time::Instant::now() > deadline {
+            break;
+        }
+    }
+    assert!(accepted >= 2, "{accepted} neighbours accepted");
+    assert!(
+        most_waiting >= 1,
+        "the ring arrived together, yet at most {most_waiting} waited"
+    );
+}
+
 /// Issue 31 item 3: walking at the path's own speed (frames paced at `1 / frame_rate`
 /// in real time, the prefetch thread running beside), the cell the viewer crosses
 /// into is already resident: the first frame in it finds its pack in the cache (no
@@ -1087,6 +1128,7 @@ fn the_next_cell_is_resident_before_the_viewer_crosses_into_it() {
             prefetch,
             ..StreamConfig::default()
         };
+        let ahead_budget = config.upload_budget_bytes / player::stream::AHEAD_UPLOAD_SHARE;
         let mut s = Streamer::new(&p.bake, config);
         let (mut crossings, mut missed) = (0, 0);
         let (mut cell, mut misses) = (None, 0);
@@ -1094,6 +1136,11 @@ fn the_next_cell_is_resident_before_the_viewer_crosses_into_it() {
             let start = std::time::Instant::now();
             let cam = player::run::camera_for(f, &path, (96, 96), p.bake.extent);
             let (_, _, _, stats) = p.draw(&cam, Mode::Hybrid, Some(&mut s));
+            // What is not drawn yet is spread over frames: one pack accepted a
+            // frame, its textures under a share of the budget (the demo's
+            // textures are each smaller than that share).
+            assert!(stats.accepted_ahead <= 1, "{stats:?}");
+            assert!(stats.uploaded_ahead_bytes <= ahead_budget, "{stats:?}");
             if cell.is_some() && stats.cell != cell {
                 crossings += 1;
                 if stats.misses > misses || stats.fallback {

@@ -30,7 +30,17 @@ pub const REQUIRED_KEYS: [&str; 8] = [
 /// Frame-time behaviour at cell crossings (paper Fig. 14): per crossing, the maximum
 /// total frame time (GPU + streaming) in the crossing frame and the 9 after it,
 /// relative to the median of the other (in-cell) frames.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+///
+/// `ratio` divides by the median of the whole walk's in-cell frames; where a walk's
+/// cost varies with what is in view (park-2m's walk: 45–50 ms a frame facing the
+/// statues, 10 ms later), it measures where the crossings lie more than a hitch.
+/// `local_ratio_*` divide each crossing's maximum by the median of the in-cell
+/// frames of the two cells it joins (the frames since the previous crossing and
+/// until the next, outside crossing windows); `quiet_ratio_max` is the same
+/// statistic on 10-frame windows with no crossing (their maximum over the median of
+/// the in-cell frames within 40 frames): what frame-time noise alone gives. The
+/// three are left out of the JSON when NaN, as files of older players lack them.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct CrossingStats {
     pub crossings: usize,
@@ -41,6 +51,32 @@ pub struct CrossingStats {
     /// max_after_crossing_ms / in_cell_median_ms.
     #[serde(deserialize_with = "nan_if_null")]
     pub ratio: f64,
+    /// The largest per-crossing ratio against its two cells' median (NaN: no
+    /// crossing, or a file of an older player).
+    #[serde(deserialize_with = "nan_if_null", skip_serializing_if = "is_nan")]
+    pub local_ratio_max: f64,
+    /// The mean of the per-crossing ratios against their two cells' medians.
+    #[serde(deserialize_with = "nan_if_null", skip_serializing_if = "is_nan")]
+    pub local_ratio_mean: f64,
+    /// The largest ratio of the same statistic on windows without a crossing
+    /// (NaN: none).
+    #[serde(deserialize_with = "nan_if_null", skip_serializing_if = "is_nan")]
+    pub quiet_ratio_max: f64,
+}
+
+/// Absent ratios (files of older players) read as NaN, not 0.
+impl Default for CrossingStats {
+    fn default() -> Self {
+        Self {
+            crossings: 0,
+            in_cell_median_ms: f64::NAN,
+            max_after_crossing_ms: f64::NAN,
+            ratio: f64::NAN,
+            local_ratio_max: f64::NAN,
+            local_ratio_mean: f64::NAN,
+            quiet_ratio_max: f64::NAN,
+        }
+    }
 }
 
 /// Image quality of one frame against one reference (both rendered with coverage
@@ -382,6 +418,10 @@ fn is_zero_f64(v: &f64) -> bool {
     *v == 0.0
 }
 
+fn is_nan(x: &f64) -> bool {
+    x.is_nan()
+}
+
 fn nan_if_null<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
     Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
 }
@@ -397,6 +437,7 @@ mod tests {
             in_cell_median_ms: 1.0,
             max_after_crossing_ms: 0.0,
             ratio: f64::NAN,
+            ..Default::default()
         };
         let json = serde_json::to_string(&c).unwrap();
         assert!(json.contains("\"ratio\":null"), "{json}");

@@ -323,8 +323,9 @@ fn print_report(r: &CompareReport) {
     ] {
         if let Some(c) = c {
             println!(
-                    "crossings ({name}): {} — max frame time in the 10 frames after a crossing {:.2} ms = {:.2} × in-cell median {:.2} ms",
-                    c.crossings, c.max_after_crossing_ms, c.ratio, c.in_cell_median_ms
+                    "crossings ({name}): {} — max frame time in the 10 frames after a crossing {:.2} ms = {:.2} × in-cell median {:.2} ms; against the two cells' medians worst {:.2}×, mean {:.2}× (windows without a crossing: up to {:.2}×)",
+                    c.crossings, c.max_after_crossing_ms, c.ratio, c.in_cell_median_ms,
+                    c.local_ratio_max, c.local_ratio_mean, c.quiet_ratio_max
                 );
         }
     }

@@ -65,12 +65,15 @@ pub fn render(args: RenderArgs) -> Result<(), RunError> {
     let tris: f64 = records.iter().map(|r| r.triangles as f64).sum::<f64>() / n;
     let c = crossing_stats(&records);
     println!(
-        "{} frames ({}): mean {ms:.2} ms, {tris:.0} triangles; {} crossings, max after crossing {:.2} ms vs in-cell median {:.2} ms; {}",
+        "{} frames ({}): mean {ms:.2} ms, {tris:.0} triangles; {} crossings, max after crossing {:.2} ms vs in-cell median {:.2} ms; against the two cells' medians worst {:.2}×, mean {:.2}× (windows without a crossing: up to {:.2}×); {}",
         records.len(),
         mode.name(),
         c.crossings,
         c.max_after_crossing_ms,
         c.in_cell_median_ms,
+        c.local_ratio_max,
+        c.local_ratio_mean,
+        c.quiet_ratio_max,
         frames.join("frames.csv").display()
     );
     Ok(())
