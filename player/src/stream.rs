@@ -61,11 +61,18 @@ use std::sync::{Arc, Condvar, Mutex};
 use std::thread::JoinHandle;
 use std::time::Instant;
 
-/// The share of [`StreamConfig::upload_budget_bytes`] a frame spends on textures of
-/// packs not drawn yet (prefetched neighbours): 1/8, 512 KiB of the default 4 MiB,
-/// ≈ 30 MB/s at 60 Hz, which uploads a park-2m or city cell's textures (2–8 MB) in
-/// well under the second a viewer at 3× walking speed spends in a cell.
+/// Textures of packs not drawn yet (prefetched neighbours) are uploaded at the
+/// slowest rate that empties their queue within [`AHEAD_DRAIN_FRAMES`] display
+/// frames, and at least 1/`AHEAD_UPLOAD_SHARE` of
+/// [`StreamConfig::upload_budget_bytes`] a frame (512 KiB of the default 4 MiB),
+/// at most all of it. Uploading them a whole budget at a time made the frames
+/// after a crossing 25–50 ms slower on park-2m's walk (lavapipe); a fixed 512 KiB
+/// share left the city's larger cells (≈ 10–30 MB of textures) behind the walk.
 pub const AHEAD_UPLOAD_SHARE: u64 = 8;
+
+/// See [`AHEAD_UPLOAD_SHARE`]: 30 display frames, half a second at 60 Hz, less than
+/// a viewer at 3× walking speed spends in a park-2m or city cell.
+pub const AHEAD_DRAIN_FRAMES: u64 = 30;
 
 /// Streaming parameters.
 #[derive(Clone, Debug, PartialEq)]
@@ -124,7 +131,10 @@ impl Default for StreamConfig {
         StreamConfig {
             prefetch: true,
             upload_budget_bytes: 4 << 20,
-            memory_budget_bytes: 512 << 20,
+            // 1 GiB: the city walk's cell with its ring of neighbours holds more
+            // than 512 MiB (8 of 39 crossings into an evicted cell at walking
+            // speed); park-2m's and park-4m's fit either.
+            memory_budget_bytes: 1 << 30,
             step_distance: None,
             step_angle_deg: 15.0,
             pending: PendingDraw::StandIns,
@@ -216,6 +226,8 @@ struct Shared {
     wake: Condvar,
     timestamp: AtomicU64,
     stop: AtomicBool,
+    /// Cells resident, or prepared and on their way to the render thread: the
+    /// prefetch thread skips both.
     resident: Mutex<BTreeSet<u32>>,
     /// The renderer's tile size, for [`crate::bake::cluster_cell`] on the prefetch
     /// thread (0 until the first frame says it).
@@ -315,9 +327,11 @@ pub struct StreamStats {
     /// [`AHEAD_UPLOAD_SHARE`] rule has its twin for acceptance).
     pub accepted_ahead: usize,
     pub held_back: usize,
-    /// Texture bytes of packs not drawn now uploaded before this frame (at most
-    /// 1/[`AHEAD_UPLOAD_SHARE`] of the budget, unless one texture alone is larger).
+    /// Texture bytes of packs not drawn now uploaded before this frame, and what
+    /// the frame allowed them ([`AHEAD_UPLOAD_SHARE`]; one texture larger than that
+    /// goes alone).
     pub uploaded_ahead_bytes: u64,
+    pub ahead_budget_bytes: u64,
     /// The frame fell back to original geometry for the cell (its pack missing,
     /// corrupt or off the index), or for the far objects of a group of its chain
     /// whose pack could not be loaded (issue 32 item 3).
@@ -344,6 +358,11 @@ pub struct Streamer {
     /// Keys of the packs drawn before the last crossing (cell, group), kept as
     /// stand-ins until the current packs are ready.
     previous: Vec<u32>,
+    /// Keys of the current cell's neighbours and their groups: what the prefetch
+    /// fetched for the next crossing, evicted only when nothing else is left.
+    ring: BTreeSet<u32>,
+    /// The warning that the ring does not fit the memory budget was given.
+    ring_warned: bool,
     stats: StreamStats,
 }
 
@@ -357,6 +376,22 @@ fn cell_and_group(bake: &Bake, camera: &Camera) -> (Option<u32>, Vec<u32>) {
 
 /// The streaming keys of `cell`'s far-field groups: its group, then each parent
 /// (format version 5, issue 27; parents have larger ids, so the walk ends).
+/// The streaming keys of `cell`'s neighbours and of their far-field groups.
+fn ring_of(bake: &Bake, cell: Option<u32>) -> BTreeSet<u32> {
+    let (Some(id), Some(index)) = (cell, bake.index.as_ref()) else {
+        return BTreeSet::new();
+    };
+    let Some(entry) = index.cell(id) else {
+        return BTreeSet::new();
+    };
+    entry
+        .neighbours
+        .iter()
+        .filter(|&&n| n < bake.grid.cell_count())
+        .flat_map(|&n| std::iter::once(n).chain(group_keys_of(bake, n)))
+        .collect()
+}
+
 fn group_keys_of(bake: &Bake, cell: u32) -> Vec<u32> {
     let Some(index) = bake.index.as_ref() else {
         return Vec::new();
@@ -407,6 +442,8 @@ impl Streamer {
             current: None,
             current_groups: Vec::new(),
             previous: Vec::new(),
+            ring: BTreeSet::new(),
+            ring_warned: false,
             stats: StreamStats::default(),
         }
     }
@@ -450,6 +487,7 @@ impl Streamer {
         // 2. The current cell; timestamp and prefetch requests.
         let (cell, group) = cell_and_group(bake, camera);
         if cell != self.current {
+            self.ring = ring_of(bake, cell);
             // A crossing: the packs drawn so far become the stand-ins.
             self.previous = self
                 .current
@@ -807,24 +845,31 @@ impl Streamer {
     /// Serves the texture queue under the per-frame budget; returns the bytes
     /// uploaded. The textures of packs drawn now (the current cell and its groups,
     /// first in the queue: [`Self::prioritise`]) may take the whole budget; those of
-    /// packs prefetched for later, 1/[`AHEAD_UPLOAD_SHARE`] of it, so that the
-    /// frames after a crossing, when the new neighbours arrive, are not each one
-    /// budget slower (park-2m's walk at walking speed: 4 MiB in one frame, +25–50 ms
-    /// on lavapipe).
+    /// packs prefetched for later, the share [`AHEAD_UPLOAD_SHARE`] sets.
     fn upload_budgeted(&mut self, renderer: &Renderer) -> u64 {
         let budget = self.config.upload_budget_bytes;
         let mut left = budget;
-        let mut ahead_left = budget / AHEAD_UPLOAD_SHARE;
+        let size_of = |cells: &BTreeMap<u32, ResidentCell>, (id, pi, vi): (u32, usize, usize)| {
+            cells
+                .get(&id)
+                .and_then(|c| c.pending.get(&(pi, vi)))
+                .map(|(_, _, _, t)| t.len() as u64)
+        };
+        let is_now = |id: u32| self.current == Some(id) || self.current_groups.contains(&id);
+        let queued_ahead: u64 = self
+            .uploads
+            .iter()
+            .filter(|&&(id, _, _)| !is_now(id))
+            .filter_map(|&u| size_of(&self.cells, u))
+            .sum();
+        let mut ahead_left = (queued_ahead.div_ceil(AHEAD_DRAIN_FRAMES))
+            .clamp(budget / AHEAD_UPLOAD_SHARE, budget.max(1));
+        self.stats.ahead_budget_bytes = ahead_left;
         let mut uploaded = 0;
         self.stats.uploaded_ahead_bytes = 0;
         let mut first = true;
         while let Some((id, pi, vi)) = self.uploads.pop_front() {
-            let size = self
-                .cells
-                .get(&id)
-                .and_then(|c| c.pending.get(&(pi, vi)))
-                .map(|(_, _, _, t)| t.len() as u64);
-            let Some(size) = size else {
+            let Some(size) = size_of(&self.cells, (id, pi, vi)) else {
                 continue; // evicted or already uploaded
             };
             let now = self.current == Some(id) || self.current_groups.contains(&id);
@@ -848,6 +893,11 @@ impl Streamer {
         uploaded
     }
 
+    /// Least recently used first, the current cell's ring ([`ring_of`]) last: a
+    /// neighbour prefetched for the next crossing has not been used yet, and plain
+    /// LRU evicted it for the next one prefetched (the city walk at walking speed
+    /// under a 512 MiB budget: 8 of 39 crossings into an evicted cell). Evicting
+    /// one of the ring is said once: the budget is then too small for the scene.
     fn evict(&mut self) {
         let mut total = self.resident_bytes();
         while total > self.config.memory_budget_bytes {
@@ -859,11 +909,19 @@ impl Streamer {
                         && !self.current_groups.contains(&c.cell_id)
                         && !self.previous.contains(&c.cell_id)
                 })
-                .min_by_key(|c| (c.last_used, c.cell_id))
+                .min_by_key(|c| (self.ring.contains(&c.cell_id), c.last_used, c.cell_id))
                 .map(|c| c.cell_id);
             let Some(v) = victim else {
                 break;
             };
+            if self.ring.contains(&v) && !self.ring_warned {
+                self.ring_warned = true;
+                eprintln!(
+                    "player: warning: the memory budget ({} MiB) does not hold the current cell and its neighbours ({} MiB resident): cells prefetched for the next crossing are evicted before use; raise --memory-budget-mib",
+                    self.config.memory_budget_bytes >> 20,
+                    total >> 20
+                );
+            }
             if let Some(c) = self.cells.remove(&v) {
                 total -= c.bytes;
             }
@@ -925,6 +983,14 @@ fn prefetch_loop(
                 cell
             })
             .map_err(|e| e.to_string());
+        // On its way: not prepared again while it waits to be accepted (a frame
+        // accepts one pack it does not draw yet, `Streamer::accept_arrived`; the
+        // queue still holds older requests for it).
+        shared
+            .resident
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .insert(entry.cell);
         if tx.send((entry.cell, result)).is_err() {
             return;
         }

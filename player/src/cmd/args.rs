@@ -18,8 +18,9 @@ pub struct StreamArgs {
     /// names the new flag (issue 14, units in names).
     #[arg(long = "upload-budget", hide = true, value_parser = renamed_upload_budget)]
     pub upload_budget_renamed: Option<u64>,
-    /// Resident cell data kept before LRU eviction, in MiB.
-    #[arg(long, default_value_t = 512)]
+    /// Resident cell data kept before LRU eviction, in MiB (the current cell's
+    /// neighbours evicted last; a warning says when they do not fit).
+    #[arg(long, default_value_t = 1024)]
     pub memory_budget_mib: u64,
     /// How a proxy whose textures are still queued is drawn: `stand-ins` (the
     /// previous cell's ready proxy of the same objects, else `originals`),
