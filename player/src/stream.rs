@@ -376,6 +376,19 @@ fn cell_and_group(bake: &Bake, camera: &Camera) -> (Option<u32>, Vec<u32>) {
 
 /// The streaming keys of `cell`'s far-field groups: its group, then each parent
 /// (format version 5, issue 27; parents have larger ids, so the walk ends).
+/// The pack [`Streamer::evict`] drops first among `resident` (key, last used):
+/// never one `in_use`; the least recently used outside `ring`, else in it.
+fn eviction_victim(
+    resident: impl Iterator<Item = (u32, u64)>,
+    in_use: &[u32],
+    ring: &BTreeSet<u32>,
+) -> Option<u32> {
+    resident
+        .filter(|(k, _)| !in_use.contains(k))
+        .min_by_key(|&(k, used)| (ring.contains(&k), used, k))
+        .map(|(k, _)| k)
+}
+
 /// The streaming keys of `cell`'s neighbours and of their far-field groups.
 fn ring_of(bake: &Bake, cell: Option<u32>) -> BTreeSet<u32> {
     let (Some(id), Some(index)) = (cell, bake.index.as_ref()) else {
@@ -901,16 +914,18 @@ impl Streamer {
     fn evict(&mut self) {
         let mut total = self.resident_bytes();
         while total > self.config.memory_budget_bytes {
-            let victim = self
-                .cells
-                .values()
-                .filter(|c| {
-                    Some(c.cell_id) != self.current
-                        && !self.current_groups.contains(&c.cell_id)
-                        && !self.previous.contains(&c.cell_id)
-                })
-                .min_by_key(|c| (self.ring.contains(&c.cell_id), c.last_used, c.cell_id))
-                .map(|c| c.cell_id);
+            let in_use: Vec<u32> = self
+                .current
+                .iter()
+                .chain(&self.current_groups)
+                .chain(&self.previous)
+                .copied()
+                .collect();
+            let victim = eviction_victim(
+                self.cells.values().map(|c| (c.cell_id, c.last_used)),
+                &in_use,
+                &self.ring,
+            );
             let Some(v) = victim else {
                 break;
             };
@@ -1000,6 +1015,21 @@ fn prefetch_loop(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn eviction_spares_the_ring_and_what_is_drawn() {
+        let ring: BTreeSet<u32> = [5, 6].into();
+        // (key, last used): 5 and 6 prefetched early for the next crossing, 9
+        // prefetched later for a cell farther on, 1 drawn now.
+        let resident = || [(5, 10), (6, 11), (9, 20), (1, 3)].into_iter();
+        assert_eq!(eviction_victim(resident(), &[1], &ring), Some(9));
+        // Plain LRU would have taken 5: the case this rule is for.
+        assert_eq!(eviction_victim(resident(), &[1], &BTreeSet::new()), Some(5));
+        // Only the ring left: its least recently used.
+        let only_ring = [(5, 10), (6, 11), (1, 3)].into_iter();
+        assert_eq!(eviction_victim(only_ring, &[1], &ring), Some(5));
+        assert_eq!(eviction_victim([(1, 3)].into_iter(), &[1], &ring), None);
+    }
 
     #[test]
     fn queue_pops_highest_t_priority_and_drops_stale_entries() {
