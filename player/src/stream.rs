@@ -323,8 +323,7 @@ pub struct StreamStats {
     /// their textures are still queued.
     pub pending_proxies: usize,
     /// Prefetched packs not drawn now that this frame accepted (at most 1), and
-    /// those left waiting for later frames ([`StreamConfig`]'s
-    /// [`AHEAD_UPLOAD_SHARE`] rule has its twin for acceptance).
+    /// those left waiting for later frames ([`Streamer`]'s `accept_arrived`).
     pub accepted_ahead: usize,
     pub held_back: usize,
     /// Texture bytes of packs not drawn now uploaded before this frame, and what
@@ -374,8 +373,6 @@ fn cell_and_group(bake: &Bake, camera: &Camera) -> (Option<u32>, Vec<u32>) {
     (cell, cell.map_or(Vec::new(), |id| group_keys_of(bake, id)))
 }
 
-/// The streaming keys of `cell`'s far-field groups: its group, then each parent
-/// (format version 5, issue 27; parents have larger ids, so the walk ends).
 /// The pack [`Streamer::evict`] drops first among `resident` (key, last used):
 /// never one `in_use`; the least recently used outside `ring`, else in it.
 fn eviction_victim(
@@ -405,6 +402,8 @@ fn ring_of(bake: &Bake, cell: Option<u32>) -> BTreeSet<u32> {
         .collect()
 }
 
+/// The streaming keys of `cell`'s far-field groups: its group, then each parent
+/// (format version 5, issue 27; parents have larger ids, so the walk ends).
 fn group_keys_of(bake: &Bake, cell: u32) -> Vec<u32> {
     let Some(index) = bake.index.as_ref() else {
         return Vec::new();
@@ -626,11 +625,9 @@ impl Streamer {
         ))
     }
 
-    /// Loads `key`'s pack on the render thread (a demand load) unless it is
-    /// resident or known to fail.
     /// Accepts the prepared cells drawn now (the current cell, its groups) and at
     /// most one other: accepting creates a pack's GPU buffers and textures on the
-    /// render thread (15–30 ms a park-2m cell on lavapipe), and after a crossing
+    /// render thread (10–15 ms a park-2m cell on lavapipe), and after a crossing
     /// the prefetch thread delivers the new neighbours in a burst, which in one
     /// frame made it 2–5× its cell's median.
     fn accept_arrived(&mut self, renderer: &Renderer) {
@@ -650,6 +647,8 @@ impl Streamer {
         self.stats.held_back = self.arrived.len();
     }
 
+    /// Loads `key`'s pack on the render thread (a demand load) unless it is
+    /// resident or known to fail.
     fn load_now(&mut self, renderer: &Renderer, bake: &Bake, key: u32) {
         if !self.cells.contains_key(&key) && !self.failed.contains(&key) {
             let result = bake.load_cell(key).map_err(|e| e.to_string());
