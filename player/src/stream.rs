@@ -625,6 +625,11 @@ impl Streamer {
         ))
     }
 
+    /// Whether pack `id` is drawn now: the current cell or one of its groups.
+    fn drawn_now(&self, id: u32) -> bool {
+        self.current == Some(id) || self.current_groups.contains(&id)
+    }
+
     /// Accepts the prepared cells drawn now (the current cell, its groups) and at
     /// most one other: accepting creates a pack's GPU buffers and textures on the
     /// render thread (10–15 ms a park-2m cell on lavapipe), and after a crossing
@@ -634,7 +639,7 @@ impl Streamer {
         let mut other = false;
         let mut keep = VecDeque::with_capacity(self.arrived.len());
         while let Some((id, result)) = self.arrived.pop_front() {
-            let now = self.current == Some(id) || self.current_groups.contains(&id);
+            let now = self.drawn_now(id);
             if now || !other {
                 other |= !now;
                 self.accept(renderer, id, result);
@@ -867,11 +872,10 @@ impl Streamer {
                 .and_then(|c| c.pending.get(&(pi, vi)))
                 .map(|(_, _, _, t)| t.len() as u64)
         };
-        let is_now = |id: u32| self.current == Some(id) || self.current_groups.contains(&id);
         let queued_ahead: u64 = self
             .uploads
             .iter()
-            .filter(|&&(id, _, _)| !is_now(id))
+            .filter(|&&(id, _, _)| !self.drawn_now(id))
             .filter_map(|&u| size_of(&self.cells, u))
             .sum();
         let mut ahead_left = (queued_ahead.div_ceil(AHEAD_DRAIN_FRAMES))
@@ -884,7 +888,7 @@ impl Streamer {
             let Some(size) = size_of(&self.cells, (id, pi, vi)) else {
                 continue; // evicted or already uploaded
             };
-            let now = self.current == Some(id) || self.current_groups.contains(&id);
+            let now = self.drawn_now(id);
             let cap = if now { left } else { left.min(ahead_left) };
             if size > cap && !first {
                 self.uploads.push_front((id, pi, vi));

@@ -327,8 +327,7 @@ impl Renderer {
         for member in members {
             let (v, c) = member.clustered(tile);
             let first = vertices.len() as u32;
-            vertices.extend(v.iter().map(|&v| {
-                let mut v = v;
+            vertices.extend(v.iter().copied().map(|mut v| {
                 v.mask = mask_of(v.mask, base);
                 v
             }));
