@@ -271,6 +271,36 @@ pub struct Renderer {
     options: crate::DrawOptions,
 }
 
+/// What creating a pack's GPU proxies needs of a [`Renderer`] (its device, queue,
+/// proxy bind group layout, capture sampler, "nothing captured" texture and
+/// options), cloned so that the prefetch thread can create them
+/// ([`crate::stream`]): wgpu's device and queue may be used from any thread. A
+/// snapshot: [`Renderer::set_impostor_batches`] and the like after it do not reach it.
+#[derive(Clone, Debug)]
+pub struct ProxyMaker {
+    device: wgpu::Device,
+    queue: wgpu::Queue,
+    proxy_bgl: wgpu::BindGroupLayout,
+    sampler: wgpu::Sampler,
+    dummy_view: wgpu::TextureView,
+    impostor_batches: bool,
+    mesh_batches: bool,
+    options: crate::DrawOptions,
+}
+
+impl ProxyMaker {
+    /// Hands what was written since the last submit (atlases' clear texels) to the
+    /// GPU without waiting, so that a frame's submit does not carry it.
+    pub fn submit_writes(&self) {
+        self.queue.submit([]);
+    }
+
+    /// The tile size of proxies' normal clusters (`DrawOptions::tile_size`).
+    pub fn tile_size(&self) -> usize {
+        self.options.tile_size()
+    }
+}
+
 /// Opens an adapter: `WGPU_BACKEND` and the like from the environment,
 /// high-performance preference (a real GPU where there is one).
 pub fn open_device() -> Result<(wgpu::Device, wgpu::Queue, AdapterSummary), GpuError> {
@@ -439,6 +469,20 @@ impl Renderer {
         self.mesh_batches = on;
     }
 
+    /// What the prefetch thread needs to create GPU proxies like this renderer's.
+    pub fn proxy_maker(&self) -> ProxyMaker {
+        ProxyMaker {
+            device: self.device.clone(),
+            queue: self.queue.clone(),
+            proxy_bgl: self.proxy_bgl.clone(),
+            sampler: self.sampler.clone(),
+            dummy_view: self.dummy_view.clone(),
+            impostor_batches: self.impostor_batches,
+            mesh_batches: self.mesh_batches,
+            options: self.options,
+        }
+    }
+
     /// A second renderer on this one's device with a `width × height` target (e.g. a
     /// supersampled reference) and the same options: models uploaded by either can
     /// be drawn by both.
@@ -513,6 +557,19 @@ impl Renderer {
             timeout: None,
         });
         t0.elapsed().as_secs_f64() * 1e3
+    }
+
+    /// Submits the queue's pending writes (textures, buffers created with data) and
+    /// waits for them: what a display frame that draws nothing still costs the GPU.
+    /// Without it they would run in the next frame's submit, where a headless walk
+    /// (`StreamConfig::display_frames_per_step`) would time the uploads of six
+    /// display frames in one.
+    pub fn flush_uploads(&self) {
+        let idx = self.queue.submit([]);
+        let _ = self.device.poll(wgpu::PollType::Wait {
+            submission_index: Some(idx),
+            timeout: None,
+        });
     }
 
     /// Step 1 of [`Renderer::render`]: the globals of the frame seen by `camera`.

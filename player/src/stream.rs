@@ -8,8 +8,10 @@
 //!   closeness to the viewpoint ([`cell_priority`]).
 //! - A separate **prefetch thread** repeatedly removes the highest t-priority entry,
 //!   drops it if it is out of date (t-priority < timestamp − 2), and otherwise maps,
-//!   validates and prepares the cell pack.
-//! - The render thread takes prepared cells, creates their GPU buffers and queues their
+//!   validates and prepares the cell pack, then makes its GPU proxies (vertex and
+//!   view buffers, atlases; [`crate::gpu::ProxyMaker`]) with the renderer's device,
+//!   which wgpu lets any thread use.
+//! - The render thread takes the prepared cells and queues their
 //!   textures in a **FIFO texture queue** served before each frame under a per-frame
 //!   byte budget (§3.2: "an amount of texture constrained by a budget is loaded
 //!   before each frame"; a texture that is not the first of the frame and is larger
@@ -44,8 +46,11 @@
 //!   corrupt pack) the cell draws every object it has no proxy or original for as
 //!   original geometry — never a hole.
 //!
-//! The thread is "low priority" in the paper's sense: it only does I/O and decoding
-//! and never touches the GPU; the OS priority is left as is.
+//! The thread is "low priority" in the paper's sense: it does I/O, decoding and the
+//! creation of GPU objects, never a texture upload or a draw; the OS priority is
+//! left as is. (Until issue 31 it did not touch the GPU: making a pack's GPU objects
+//! on the render thread cost 10–33 ms a pack on lavapipe, the frames after each
+//! crossing.)
 
 use crate::bake::{load_cell, Bake, PreparedCell};
 use crate::camera::{Aabb, Camera};
@@ -232,6 +237,17 @@ struct Shared {
     /// The renderer's tile size, for [`crate::bake::cluster_cell`] on the prefetch
     /// thread (0 until the first frame says it).
     tile: std::sync::atomic::AtomicUsize,
+    /// What creating GPU proxies needs of the renderer (set by each frame): with
+    /// it the prefetch thread sends packs with their GPU objects made.
+    maker: Mutex<Option<crate::gpu::ProxyMaker>>,
+}
+
+/// A pack from the prefetch thread: decoded and grouped, and — once a frame has
+/// given it a [`crate::gpu::ProxyMaker`] — with its GPU proxies made
+/// ([`Streamer::build`]), so that accepting it costs the render thread no GPU work.
+pub enum Incoming {
+    Prepared(PreparedCell),
+    Built(Box<ResidentCell>),
 }
 
 /// A view texture waiting for upload: width, height, encoding, texel bytes.
@@ -322,10 +338,14 @@ pub struct StreamStats {
     /// Proxies of the current cell drawn as original geometry this frame because
     /// their textures are still queued.
     pub pending_proxies: usize,
-    /// Prefetched packs not drawn now that this frame accepted (at most 1), and
-    /// those left waiting for later frames ([`Streamer`]'s `accept_arrived`).
+    /// Prefetched packs not drawn now that this frame accepted, and those left
+    /// waiting for later frames ([`Streamer`]'s `accept_arrived`: any number whose
+    /// GPU objects the prefetch thread made, at most one it did not).
     pub accepted_ahead: usize,
     pub held_back: usize,
+    /// Packs whose GPU objects this frame made on the render thread: demand loads,
+    /// and packs prepared before the prefetch thread had a renderer to make them with.
+    pub built_here: usize,
     /// Texture bytes of packs not drawn now uploaded before this frame, and what
     /// the frame allowed them ([`AHEAD_UPLOAD_SHARE`]; one texture larger than that
     /// goes alone).
@@ -341,10 +361,10 @@ pub struct StreamStats {
 pub struct Streamer {
     config: StreamConfig,
     shared: Arc<Shared>,
-    rx: Receiver<(u32, Result<PreparedCell, String>)>,
+    rx: Receiver<(u32, Result<Incoming, String>)>,
     /// Cells the prefetch thread has prepared, not yet accepted: a frame accepts
     /// those drawn now and one other ([`Self::accept_arrived`]).
-    arrived: VecDeque<(u32, Result<PreparedCell, String>)>,
+    arrived: VecDeque<(u32, Result<Incoming, String>)>,
     thread: Option<JoinHandle<()>>,
     cells: BTreeMap<u32, ResidentCell>,
     failed: BTreeSet<u32>,
@@ -426,6 +446,7 @@ impl Streamer {
             stop: AtomicBool::new(false),
             resident: Mutex::new(BTreeSet::new()),
             tile: std::sync::atomic::AtomicUsize::new(0),
+            maker: Mutex::new(None),
         });
         let (tx, rx) = channel();
         let thread = if config.prefetch {
@@ -492,6 +513,11 @@ impl Streamer {
         self.shared
             .tile
             .store(renderer.tile_size(), AtomicOrdering::Relaxed);
+        self.stats.built_here = 0;
+        if self.thread.is_some() {
+            *self.shared.maker.lock().unwrap_or_else(|e| e.into_inner()) =
+                Some(renderer.proxy_maker());
+        }
         // 1. Cells the prefetch thread has prepared (accepted below).
         while let Ok(arrived) = self.rx.try_recv() {
             self.arrived.push_back(arrived);
@@ -630,25 +656,31 @@ impl Streamer {
         self.current == Some(id) || self.current_groups.contains(&id)
     }
 
-    /// Accepts the prepared cells drawn now (the current cell, its groups) and at
-    /// most one other: accepting creates a pack's GPU buffers and textures on the
-    /// render thread (10–15 ms a park-2m cell on lavapipe), and after a crossing
-    /// the prefetch thread delivers the new neighbours in a burst, which in one
-    /// frame made it 2–5× its cell's median.
+    /// Accepts the packs that arrived: every one whose GPU objects the prefetch
+    /// thread made ([`Incoming::Built`]: accepting it only files it), and of the
+    /// others those drawn now (the current cell, its groups) and at most one more.
+    /// Making a pack's GPU buffers and atlases costs 10–33 ms of the render thread
+    /// per park-2m/park-4m pack on lavapipe; after a crossing the prefetch thread
+    /// delivers the new neighbours in a burst, which made one frame 2–5× its
+    /// cell's median when all were made in it, and 1.5–3.5× the frames after a
+    /// crossing one pack a frame.
     fn accept_arrived(&mut self, renderer: &Renderer) {
-        let mut other = false;
+        let mut made_here = false;
+        let mut ahead = 0;
         let mut keep = VecDeque::with_capacity(self.arrived.len());
         while let Some((id, result)) = self.arrived.pop_front() {
             let now = self.drawn_now(id);
-            if now || !other {
-                other |= !now;
+            let built = matches!(result, Ok(Incoming::Built(_)) | Err(_));
+            if now || built || !made_here {
+                made_here |= !now && !built;
+                ahead += usize::from(!now);
                 self.accept(renderer, id, result);
             } else {
                 keep.push_back((id, result));
             }
         }
         self.arrived = keep;
-        self.stats.accepted_ahead = usize::from(other);
+        self.stats.accepted_ahead = ahead;
         self.stats.held_back = self.arrived.len();
     }
 
@@ -656,16 +688,22 @@ impl Streamer {
     /// resident or known to fail.
     fn load_now(&mut self, renderer: &Renderer, bake: &Bake, key: u32) {
         if !self.cells.contains_key(&key) && !self.failed.contains(&key) {
-            let result = bake.load_cell(key).map_err(|e| e.to_string());
+            let result = bake
+                .load_cell(key)
+                .map(Incoming::Prepared)
+                .map_err(|e| e.to_string());
             self.accept(renderer, key, result);
         }
     }
 
     /// The display frames after a drawn one ([`StreamConfig::display_frames_per_step`]):
-    /// streaming advances at `camera` without drawing.
+    /// streaming advances at `camera` without drawing. Each one's uploads and new
+    /// packs reach the GPU in that display frame ([`Renderer::flush_uploads`]), as
+    /// a player drawing it would submit them, not in the next drawn frame.
     pub fn undrawn_frames(&mut self, renderer: &Renderer, bake: &Bake, camera: &Camera) {
         for _ in 1..self.config.display_frames_per_step.max(1) {
             self.begin_frame(renderer, bake, camera);
+            renderer.flush_uploads();
         }
     }
 
@@ -726,92 +764,23 @@ impl Streamer {
         self.shared.wake.notify_one();
     }
 
-    fn accept(&mut self, renderer: &Renderer, id: u32, result: Result<PreparedCell, String>) {
+    fn accept(&mut self, renderer: &Renderer, id: u32, result: Result<Incoming, String>) {
         if self.cells.contains_key(&id) || self.failed.contains(&id) {
             return;
         }
         match result {
-            Ok(cell) => {
-                let bytes = cell.bytes();
-                let views: Vec<Vec<crate::gpu::ViewInfo>> = cell
-                    .proxies
-                    .iter()
-                    .map(|p| {
-                        p.views
-                            .iter()
-                            .map(|v| crate::gpu::ViewInfo {
-                                matrix: v.matrix,
-                                eye: v.eye,
-                                width: v.width,
-                                height: v.height,
-                                encoding: v.encoding,
-                            })
-                            .collect()
-                    })
-                    .collect();
-                let tile = renderer.tile_size();
-                let sources: Vec<crate::gpu::ProxySource> = cell
-                    .proxies
-                    .iter()
-                    .zip(&views)
-                    .map(|(p, v)| crate::gpu::ProxySource {
-                        vertices: &p.vertices,
-                        views: v,
-                        // Grouped on the prefetch thread for this tile size.
-                        clusters: p
-                            .clusters
-                            .as_ref()
-                            .filter(|(t, _)| *t == tile)
-                            .map(|(_, c)| c.as_slice()),
-                    })
-                    .collect();
-                // The GPU proxies, each drawing one pack proxy or a batch of layered
-                // impostors or of mesh proxies
-                // (`Renderer::create_pack_proxies`): a batch is one proxy here too,
-                // with its members' union of bounds and each member's objects.
-                let drawn = renderer.create_pack_proxies(&sources);
-                let mut packed: Vec<Option<crate::bake::PreparedProxy>> =
-                    cell.proxies.into_iter().map(Some).collect();
-                let mut proxies = Vec::with_capacity(drawn.len());
-                let mut bounds = Vec::with_capacity(drawn.len());
-                let mut member_objects = Vec::with_capacity(drawn.len());
-                let mut pending = BTreeMap::new();
-                for (pi, (gpu, from)) in drawn.into_iter().enumerate() {
-                    let mut b = Aabb::EMPTY;
-                    let mut per_member = Vec::with_capacity(from.len());
-                    // Slot `vi` of the drawn proxy: a lone proxy's view vi; in a
-                    // batch, the members' views in member order (each member's
-                    // from its base slot on).
-                    let mut slots = Vec::new();
-                    for &i in &from {
-                        let Some(p) = packed.get_mut(i).and_then(Option::take) else {
-                            continue;
-                        };
-                        b = b.union(&p.bounds);
-                        per_member.push(p.members);
-                        slots.extend(p.views);
+            Ok(incoming) => {
+                let mut cell = match incoming {
+                    Incoming::Built(cell) => *cell,
+                    Incoming::Prepared(cell) => {
+                        self.stats.built_here += 1;
+                        Self::build(&renderer.proxy_maker(), id, cell)
                     }
-                    proxies.push(gpu);
-                    bounds.push(b);
-                    member_objects.push(per_member);
-                    for (vi, v) in slots.into_iter().enumerate() {
-                        self.uploads.push_back((id, pi, vi));
-                        pending.insert((pi, vi), (v.width, v.height, v.encoding, v.data));
-                    }
-                }
-                self.cells.insert(
-                    id,
-                    ResidentCell {
-                        cell_id: id,
-                        originals: cell.originals,
-                        proxies,
-                        bounds,
-                        member_objects,
-                        pending,
-                        bytes,
-                        last_used: self.clock,
-                    },
-                );
+                };
+                cell.last_used = self.clock;
+                self.uploads
+                    .extend(cell.pending.keys().map(|&(pi, vi)| (id, pi, vi)));
+                self.cells.insert(id, cell);
                 self.shared
                     .resident
                     .lock()
@@ -822,6 +791,86 @@ impl Streamer {
                 eprintln!("player: error: {e}; drawing this cell as original geometry");
                 self.failed.insert(id);
             }
+        }
+    }
+
+    /// Pack `id`'s GPU proxies made with `maker` (on the prefetch thread, or on the
+    /// render thread for a demand load): each drawing one pack proxy or a batch of
+    /// layered impostors or of mesh proxies (`Renderer::create_pack_proxies`; a
+    /// batch is one proxy here too, with its members' union of bounds and each
+    /// member's objects), their textures pending in proxy and slot order.
+    fn build(maker: &crate::gpu::ProxyMaker, id: u32, cell: PreparedCell) -> ResidentCell {
+        let bytes = cell.bytes();
+        let views: Vec<Vec<crate::gpu::ViewInfo>> = cell
+            .proxies
+            .iter()
+            .map(|p| {
+                p.views
+                    .iter()
+                    .map(|v| crate::gpu::ViewInfo {
+                        matrix: v.matrix,
+                        eye: v.eye,
+                        width: v.width,
+                        height: v.height,
+                        encoding: v.encoding,
+                    })
+                    .collect()
+            })
+            .collect();
+        let tile = maker.tile_size();
+        let sources: Vec<crate::gpu::ProxySource> = cell
+            .proxies
+            .iter()
+            .zip(&views)
+            .map(|(p, v)| crate::gpu::ProxySource {
+                vertices: &p.vertices,
+                views: v,
+                // Grouped on the prefetch thread for this tile size.
+                clusters: p
+                    .clusters
+                    .as_ref()
+                    .filter(|(t, _)| *t == tile)
+                    .map(|(_, c)| c.as_slice()),
+            })
+            .collect();
+        let drawn = maker.create_pack_proxies(&sources);
+        let mut packed: Vec<Option<crate::bake::PreparedProxy>> =
+            cell.proxies.into_iter().map(Some).collect();
+        let mut proxies = Vec::with_capacity(drawn.len());
+        let mut bounds = Vec::with_capacity(drawn.len());
+        let mut member_objects = Vec::with_capacity(drawn.len());
+        let mut pending = BTreeMap::new();
+        for (pi, (gpu, from)) in drawn.into_iter().enumerate() {
+            let mut b = Aabb::EMPTY;
+            let mut per_member = Vec::with_capacity(from.len());
+            // Slot `vi` of the drawn proxy: a lone proxy's view vi; in a
+            // batch, the members' views in member order (each member's
+            // from its base slot on).
+            let mut slots = Vec::new();
+            for &i in &from {
+                let Some(p) = packed.get_mut(i).and_then(Option::take) else {
+                    continue;
+                };
+                b = b.union(&p.bounds);
+                per_member.push(p.members);
+                slots.extend(p.views);
+            }
+            proxies.push(gpu);
+            bounds.push(b);
+            member_objects.push(per_member);
+            for (vi, v) in slots.into_iter().enumerate() {
+                pending.insert((pi, vi), (v.width, v.height, v.encoding, v.data));
+            }
+        }
+        ResidentCell {
+            cell_id: id,
+            originals: cell.originals,
+            proxies,
+            bounds,
+            member_objects,
+            pending,
+            bytes,
+            last_used: 0,
         }
     }
 
@@ -968,7 +1017,7 @@ fn prefetch_loop(
     dir: PathBuf,
     base: Arc<BasePack>,
     index: Option<Arc<Index>>,
-    tx: Sender<(u32, Result<PreparedCell, String>)>,
+    tx: Sender<(u32, Result<Incoming, String>)>,
 ) {
     loop {
         let entry = {
@@ -993,12 +1042,26 @@ fn prefetch_loop(
             continue;
         }
         let tile = shared.tile.load(AtomicOrdering::Relaxed);
+        let maker = shared
+            .maker
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .clone();
         let result = load_cell(&dir, index.as_deref(), &base, entry.cell)
             .map(|mut cell| {
                 if tile > 0 {
                     crate::bake::cluster_cell(&mut cell, tile);
                 }
-                cell
+                // Its GPU objects made here, off the render thread, and its
+                // atlases' clear texels handed to the GPU now.
+                match &maker {
+                    Some(m) => {
+                        let built = Streamer::build(m, entry.cell, cell);
+                        m.submit_writes();
+                        Incoming::Built(Box::new(built))
+                    }
+                    None => Incoming::Prepared(cell),
+                }
             })
             .map_err(|e| e.to_string());
         // On its way: not prepared again while it waits to be accepted (a frame

@@ -1065,11 +1065,13 @@ fn a_cells_far_field_group_is_drawn_with_it() {
     assert_eq!(psnr_y(&hybrid, &frustum), f64::INFINITY);
 }
 
-/// Issue 31 item 3: prepared neighbours that arrive together (here: all of them,
-/// while the viewer stands still) are accepted one a frame, not in one frame; the
-/// cell drawn now never waits behind them.
+/// Issue 31 item 3: the neighbours the prefetch thread prepares (here: all of them,
+/// while the viewer stands still) arrive with their GPU objects made on that thread,
+/// so a frame accepts them all without making any (`built_here` 0), and they are
+/// resident afterwards. Fails when the render thread makes them (it did, one pack a
+/// frame at 10–33 ms each on lavapipe).
 #[test]
-fn prefetched_packs_are_accepted_one_a_frame() {
+fn prefetched_packs_arrive_with_their_gpu_objects_made() {
     let dir = tempfile::tempdir().unwrap();
     write_synthetic_bake(dir.path()).unwrap();
     let path = demo_walk();
@@ -1080,30 +1082,21 @@ fn prefetched_packs_are_accepted_one_a_frame() {
     let mut s = Streamer::new(&p.bake, StreamConfig::default());
     let (_, _, _, first) = p.draw(&cam, Mode::Hybrid, Some(&mut s));
     assert!(first.cell.is_some() && !first.fallback, "{first:?}");
+    // The current cell was a demand load: made on the render thread.
+    assert!(first.built_here >= 1, "{first:?}");
+    let before = s.resident_cells().len();
     // The prefetch thread prepares the whole ring meanwhile.
     let deadline = std::time::Instant::now() + std::time::Duration::from_secs(60);
     let mut accepted = 0;
-    let mut most_waiting = 0;
-    loop {
-        std::thread::sleep(std::time::Duration::from_millis(if accepted == 0 {
-            2000
-        } else {
-            0
-        }));
+    while accepted < 2 && std::time::Instant::now() < deadline {
+        std::thread::sleep(std::time::Duration::from_millis(500));
         let (_, _, _, st) = p.draw(&cam, Mode::Hybrid, Some(&mut s));
-        assert!(st.accepted_ahead <= 1, "{st:?}");
+        assert_eq!(st.built_here, 0, "{st:?}");
         assert!(!st.fallback && st.cell == first.cell, "{st:?}");
         accepted += st.accepted_ahead;
-        most_waiting = most_waiting.max(st.held_back);
-        if (accepted > 0 && st.held_back == 0) || std::time::Instant::now() > deadline {
-            break;
-        }
     }
     assert!(accepted >= 2, "{accepted} neighbours accepted");
-    assert!(
-        most_waiting >= 1,
-        "the ring arrived together, yet at most {most_waiting} waited"
-    );
+    assert_eq!(s.resident_cells().len(), before + accepted);
 }
 
 /// Issue 31 item 3: walking at the path's own speed (frames paced at `1 / frame_rate`
@@ -1136,11 +1129,13 @@ fn the_next_cell_is_resident_before_the_viewer_crosses_into_it() {
             let start = std::time::Instant::now();
             let cam = player::run::camera_for(f, &path, (96, 96), p.bake.extent);
             let (_, _, _, stats) = p.draw(&cam, Mode::Hybrid, Some(&mut s));
-            // What is not drawn yet is spread over frames: one pack accepted a
-            // frame, its textures under a share of the budget (the demo's
-            // textures are each smaller than that share, and its queue drains at
-            // less than the whole budget).
-            assert!(stats.accepted_ahead <= 1, "{stats:?}");
+            // What is not drawn yet costs this thread little: prefetched packs
+            // arrive with their GPU objects made, their textures go under a share
+            // of the budget (the demo's textures are each smaller than that
+            // share, and its queue drains at less than the whole budget).
+            if prefetch && stats.misses == misses && cell.is_some() {
+                assert_eq!(stats.built_here, 0, "no demand load, yet {stats:?}");
+            }
             assert!(
                 stats.uploaded_ahead_bytes <= stats.ahead_budget_bytes,
                 "{stats:?}"

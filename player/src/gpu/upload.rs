@@ -7,7 +7,8 @@
 
 use super::setup::{self, albedo_bind_group};
 use super::{
-    texture_2d, Atlas, GpuClusters, GpuLod, GpuModel, GpuModels, GpuProxy, Renderer, MAX_VIEWS,
+    texture_2d, Atlas, GpuClusters, GpuLod, GpuModel, GpuModels, GpuProxy, ProxyMaker, Renderer,
+    MAX_VIEWS,
 };
 use crate::vertex::{ModelVertex, ProxyUniform, ProxyVertex, PROXY_SLOTS};
 use bytemuck::Zeroable;
@@ -180,6 +181,228 @@ impl Renderer {
                 bytes: 4 * dag.indices.len() as u64,
             });
         }
+    }
+
+    /// [`ProxyMaker::create_pack_proxies`] on this renderer's device.
+    pub fn create_pack_proxies(&self, proxies: &[ProxySource]) -> Vec<(GpuProxy, Vec<usize>)> {
+        self.proxy_maker().create_pack_proxies(proxies)
+    }
+
+    /// [`ProxyMaker::create_proxy`] on this renderer's device.
+    pub fn create_proxy(&self, vertices: &[ProxyVertex], views: &[ViewInfo]) -> GpuProxy {
+        self.proxy_maker().create_proxy(vertices, views)
+    }
+
+    /// Uploads view `view`'s texels as a pack stores them: RGBA8, or BC1/BC3 blocks
+    /// (sides multiples of 4) — natively as `Bc1RgbaUnormSrgb` / `Bc3RgbaUnormSrgb`
+    /// where [`Renderer::native_bc`], else decoded to RGBA8 sRGB on the CPU.
+    pub fn upload_view_texels(
+        &self,
+        proxy: &mut GpuProxy,
+        view: usize,
+        width: u32,
+        height: u32,
+        encoding: TextureEncoding,
+        data: &[u8],
+    ) {
+        if proxy.atlas.is_some() {
+            return self.write_atlas(proxy, view, (width, height), encoding, data);
+        }
+        let format = match encoding {
+            TextureEncoding::Bc1 => wgpu::TextureFormat::Bc1RgbaUnormSrgb,
+            TextureEncoding::Bc3 => wgpu::TextureFormat::Bc3RgbaUnormSrgb,
+            _ => return self.upload_view_texture(proxy, view, width, height, data),
+        };
+        if view >= proxy.textures.len() {
+            return;
+        }
+        let texture = Texture {
+            width,
+            height,
+            encoding,
+            data: data.to_vec(),
+        };
+        let max = self.device.limits().max_texture_dimension_2d;
+        if let Err(what) = texture.validate() {
+            eprintln!("player: warning: capture texture not uploadable ({what}); drawing it lit");
+            proxy.textures[view] = Some(self.dummy_view.clone());
+            self.try_bind(proxy);
+            return;
+        }
+        if !self.options.bc_textures || width > max || height > max {
+            match texture.to_rgba8() {
+                Ok(rgba) => self.upload_view_texture(proxy, view, width, height, &rgba),
+                Err(what) => {
+                    eprintln!(
+                        "player: warning: capture texture not decodable ({what}); drawing it lit"
+                    );
+                    proxy.textures[view] = Some(self.dummy_view.clone());
+                    self.try_bind(proxy);
+                }
+            }
+            return;
+        }
+        self.set_view_texture(proxy, view, "capture (BC)", format, (width, height), data);
+    }
+
+    /// Uploads view `view`'s RGBA8 sRGB texels (row-major, row 0 = v 0).
+    pub fn upload_view_texture(
+        &self,
+        proxy: &mut GpuProxy,
+        view: usize,
+        width: u32,
+        height: u32,
+        rgba: &[u8],
+    ) {
+        if view >= proxy.textures.len() {
+            return;
+        }
+        let max = self.device.limits().max_texture_dimension_2d;
+        let expected = width as usize * height as usize * 4;
+        if width == 0 || height == 0 || width > max || height > max || rgba.len() != expected {
+            // Not uploadable here: the view samples as "no data" (alpha 0), so its
+            // triangles fall back to the other view or the lit vertex colour.
+            eprintln!(
+                "player: warning: capture texture {width}x{height} ({} bytes) not uploadable (max side {max}); drawing it lit",
+                rgba.len()
+            );
+            proxy.textures[view] = Some(self.dummy_view.clone());
+            self.try_bind(proxy);
+            return;
+        }
+        self.set_view_texture(
+            proxy,
+            view,
+            "capture",
+            wgpu::TextureFormat::Rgba8UnormSrgb,
+            (width, height),
+            rgba,
+        );
+    }
+
+    /// Creates view `view`'s texture from `data` in `format` (RGBA8 or BC blocks),
+    /// counts its bytes and binds the proxy once all its views are there.
+    fn set_view_texture(
+        &self,
+        proxy: &mut GpuProxy,
+        view: usize,
+        label: &str,
+        format: wgpu::TextureFormat,
+        (width, height): (u32, u32),
+        data: &[u8],
+    ) {
+        let tex = self.device.create_texture_with_data(
+            &self.queue,
+            &texture_2d(
+                label,
+                (width, height),
+                format,
+                wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+            ),
+            wgpu::util::TextureDataOrder::LayerMajor,
+            data,
+        );
+        proxy.texture_bytes += data.len() as u64;
+        proxy.textures[view] = Some(tex.create_view(&Default::default()));
+        self.try_bind(proxy);
+    }
+
+    /// Writes view `view`'s texels into the proxy's [`Atlas`] (decoding BC blocks to
+    /// RGBA8 where the atlas holds RGBA8) and binds the proxy once all its views are
+    /// there. Texels that do not match the view's rectangle or do not decode are
+    /// left transparent, with a warning: the view samples as missing.
+    fn write_atlas(
+        &self,
+        proxy: &mut GpuProxy,
+        view: usize,
+        (width, height): (u32, u32),
+        encoding: TextureEncoding,
+        data: &[u8],
+    ) {
+        let Some(atlas) = &proxy.atlas else {
+            return;
+        };
+        let Some(&[x, y, w, h]) = atlas.rects.get(view) else {
+            return;
+        };
+        // Only the BC paths need an owned `Texture` (to validate or decode it).
+        let blocks = || Texture {
+            width,
+            height,
+            encoding,
+            data: data.to_vec(),
+        };
+        let texels: Result<std::borrow::Cow<[u8]>, String> = if (width, height) != (w, h) {
+            Err(format!("{width}x{height}, the atlas holds {w}x{h}"))
+        } else if atlas.format == wgpu::TextureFormat::Rgba8UnormSrgb {
+            if encoding == TextureEncoding::Rgba8 {
+                (data.len() == w as usize * h as usize * 4)
+                    .then_some(std::borrow::Cow::Borrowed(data))
+                    .ok_or_else(|| format!("{} bytes for {w}x{h} RGBA8", data.len()))
+            } else {
+                let texture = blocks();
+                texture
+                    .validate()
+                    .map_err(|e| e.to_string())
+                    .and_then(|()| texture.to_rgba8().map_err(|e| e.to_string()))
+                    .map(std::borrow::Cow::Owned)
+            }
+        } else {
+            // BC blocks as they are: validated, then written from the pack's bytes.
+            blocks()
+                .validate()
+                .map_err(|e| e.to_string())
+                .map(|()| std::borrow::Cow::Borrowed(data))
+        };
+        match texels {
+            Ok(bytes) => {
+                let (bytes_per_row, rows) = match atlas.format {
+                    wgpu::TextureFormat::Bc1RgbaUnormSrgb => (w / 4 * 8, h / 4),
+                    wgpu::TextureFormat::Bc3RgbaUnormSrgb => (w / 4 * 16, h / 4),
+                    _ => (w * 4, h),
+                };
+                self.queue.write_texture(
+                    wgpu::TexelCopyTextureInfo {
+                        texture: &atlas.texture,
+                        mip_level: 0,
+                        origin: wgpu::Origin3d { x, y, z: 0 },
+                        aspect: wgpu::TextureAspect::All,
+                    },
+                    &bytes,
+                    wgpu::TexelCopyBufferLayout {
+                        offset: 0,
+                        bytes_per_row: Some(bytes_per_row),
+                        rows_per_image: Some(rows),
+                    },
+                    wgpu::Extent3d {
+                        width: w,
+                        height: h,
+                        depth_or_array_layers: 1,
+                    },
+                );
+            }
+            Err(what) => eprintln!(
+                "player: warning: capture texture not uploadable ({what}); that view is drawn as missing"
+            ),
+        }
+        proxy.textures[view] = Some(atlas.view.clone());
+        self.try_bind(proxy);
+    }
+
+    fn try_bind(&self, p: &mut GpuProxy) {
+        self.proxy_maker().try_bind(p);
+    }
+}
+
+impl ProxyMaker {
+    /// A buffer holding `contents`, named `label` in GPU debugging tools.
+    fn buffer_init(&self, label: &str, contents: &[u8], usage: wgpu::BufferUsages) -> wgpu::Buffer {
+        self.device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents,
+                usage,
+            })
     }
 
     /// The GPU proxies of one pack's `proxies` (each its vertices and views), in
@@ -422,120 +645,6 @@ impl Renderer {
         p
     }
 
-    /// Uploads view `view`'s texels as a pack stores them: RGBA8, or BC1/BC3 blocks
-    /// (sides multiples of 4) — natively as `Bc1RgbaUnormSrgb` / `Bc3RgbaUnormSrgb`
-    /// where [`Renderer::native_bc`], else decoded to RGBA8 sRGB on the CPU.
-    pub fn upload_view_texels(
-        &self,
-        proxy: &mut GpuProxy,
-        view: usize,
-        width: u32,
-        height: u32,
-        encoding: TextureEncoding,
-        data: &[u8],
-    ) {
-        if proxy.atlas.is_some() {
-            return self.write_atlas(proxy, view, (width, height), encoding, data);
-        }
-        let format = match encoding {
-            TextureEncoding::Bc1 => wgpu::TextureFormat::Bc1RgbaUnormSrgb,
-            TextureEncoding::Bc3 => wgpu::TextureFormat::Bc3RgbaUnormSrgb,
-            _ => return self.upload_view_texture(proxy, view, width, height, data),
-        };
-        if view >= proxy.textures.len() {
-            return;
-        }
-        let texture = Texture {
-            width,
-            height,
-            encoding,
-            data: data.to_vec(),
-        };
-        let max = self.device.limits().max_texture_dimension_2d;
-        if let Err(what) = texture.validate() {
-            eprintln!("player: warning: capture texture not uploadable ({what}); drawing it lit");
-            proxy.textures[view] = Some(self.dummy_view.clone());
-            self.try_bind(proxy);
-            return;
-        }
-        if !self.options.bc_textures || width > max || height > max {
-            match texture.to_rgba8() {
-                Ok(rgba) => self.upload_view_texture(proxy, view, width, height, &rgba),
-                Err(what) => {
-                    eprintln!(
-                        "player: warning: capture texture not decodable ({what}); drawing it lit"
-                    );
-                    proxy.textures[view] = Some(self.dummy_view.clone());
-                    self.try_bind(proxy);
-                }
-            }
-            return;
-        }
-        self.set_view_texture(proxy, view, "capture (BC)", format, (width, height), data);
-    }
-
-    /// Uploads view `view`'s RGBA8 sRGB texels (row-major, row 0 = v 0).
-    pub fn upload_view_texture(
-        &self,
-        proxy: &mut GpuProxy,
-        view: usize,
-        width: u32,
-        height: u32,
-        rgba: &[u8],
-    ) {
-        if view >= proxy.textures.len() {
-            return;
-        }
-        let max = self.device.limits().max_texture_dimension_2d;
-        let expected = width as usize * height as usize * 4;
-        if width == 0 || height == 0 || width > max || height > max || rgba.len() != expected {
-            // Not uploadable here: the view samples as "no data" (alpha 0), so its
-            // triangles fall back to the other view or the lit vertex colour.
-            eprintln!(
-                "player: warning: capture texture {width}x{height} ({} bytes) not uploadable (max side {max}); drawing it lit",
-                rgba.len()
-            );
-            proxy.textures[view] = Some(self.dummy_view.clone());
-            self.try_bind(proxy);
-            return;
-        }
-        self.set_view_texture(
-            proxy,
-            view,
-            "capture",
-            wgpu::TextureFormat::Rgba8UnormSrgb,
-            (width, height),
-            rgba,
-        );
-    }
-
-    /// Creates view `view`'s texture from `data` in `format` (RGBA8 or BC blocks),
-    /// counts its bytes and binds the proxy once all its views are there.
-    fn set_view_texture(
-        &self,
-        proxy: &mut GpuProxy,
-        view: usize,
-        label: &str,
-        format: wgpu::TextureFormat,
-        (width, height): (u32, u32),
-        data: &[u8],
-    ) {
-        let tex = self.device.create_texture_with_data(
-            &self.queue,
-            &texture_2d(
-                label,
-                (width, height),
-                format,
-                wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-            ),
-            wgpu::util::TextureDataOrder::LayerMajor,
-            data,
-        );
-        proxy.texture_bytes += data.len() as u64;
-        proxy.textures[view] = Some(tex.create_view(&Default::default()));
-        self.try_bind(proxy);
-    }
-
     /// The [`Atlas`] of a mesh proxy with `views`, where it gets one: two to
     /// [`PROXY_SLOTS`] views of one encoding with sides of at least 1 (multiples of 4
     /// for BC blocks), packed within the device's largest texture side. BC1/BC3 as
@@ -584,88 +693,6 @@ impl Renderer {
             format,
             rects,
         })
-    }
-
-    /// Writes view `view`'s texels into the proxy's [`Atlas`] (decoding BC blocks to
-    /// RGBA8 where the atlas holds RGBA8) and binds the proxy once all its views are
-    /// there. Texels that do not match the view's rectangle or do not decode are
-    /// left transparent, with a warning: the view samples as missing.
-    fn write_atlas(
-        &self,
-        proxy: &mut GpuProxy,
-        view: usize,
-        (width, height): (u32, u32),
-        encoding: TextureEncoding,
-        data: &[u8],
-    ) {
-        let Some(atlas) = &proxy.atlas else {
-            return;
-        };
-        let Some(&[x, y, w, h]) = atlas.rects.get(view) else {
-            return;
-        };
-        // Only the BC paths need an owned `Texture` (to validate or decode it).
-        let blocks = || Texture {
-            width,
-            height,
-            encoding,
-            data: data.to_vec(),
-        };
-        let texels: Result<std::borrow::Cow<[u8]>, String> = if (width, height) != (w, h) {
-            Err(format!("{width}x{height}, the atlas holds {w}x{h}"))
-        } else if atlas.format == wgpu::TextureFormat::Rgba8UnormSrgb {
-            if encoding == TextureEncoding::Rgba8 {
-                (data.len() == w as usize * h as usize * 4)
-                    .then_some(std::borrow::Cow::Borrowed(data))
-                    .ok_or_else(|| format!("{} bytes for {w}x{h} RGBA8", data.len()))
-            } else {
-                let texture = blocks();
-                texture
-                    .validate()
-                    .map_err(|e| e.to_string())
-                    .and_then(|()| texture.to_rgba8().map_err(|e| e.to_string()))
-                    .map(std::borrow::Cow::Owned)
-            }
-        } else {
-            // BC blocks as they are: validated, then written from the pack's bytes.
-            blocks()
-                .validate()
-                .map_err(|e| e.to_string())
-                .map(|()| std::borrow::Cow::Borrowed(data))
-        };
-        match texels {
-            Ok(bytes) => {
-                let (bytes_per_row, rows) = match atlas.format {
-                    wgpu::TextureFormat::Bc1RgbaUnormSrgb => (w / 4 * 8, h / 4),
-                    wgpu::TextureFormat::Bc3RgbaUnormSrgb => (w / 4 * 16, h / 4),
-                    _ => (w * 4, h),
-                };
-                self.queue.write_texture(
-                    wgpu::TexelCopyTextureInfo {
-                        texture: &atlas.texture,
-                        mip_level: 0,
-                        origin: wgpu::Origin3d { x, y, z: 0 },
-                        aspect: wgpu::TextureAspect::All,
-                    },
-                    &bytes,
-                    wgpu::TexelCopyBufferLayout {
-                        offset: 0,
-                        bytes_per_row: Some(bytes_per_row),
-                        rows_per_image: Some(rows),
-                    },
-                    wgpu::Extent3d {
-                        width: w,
-                        height: h,
-                        depth_or_array_layers: 1,
-                    },
-                );
-            }
-            Err(what) => eprintln!(
-                "player: warning: capture texture not uploadable ({what}); that view is drawn as missing"
-            ),
-        }
-        proxy.textures[view] = Some(atlas.view.clone());
-        self.try_bind(proxy);
     }
 
     fn try_bind(&self, p: &mut GpuProxy) {
