@@ -245,7 +245,7 @@ struct Shared {
 /// A pack from the prefetch thread: decoded and grouped, and — once a frame has
 /// given it a [`crate::gpu::ProxyMaker`] — with its GPU proxies made
 /// ([`Streamer::build`]), so that accepting it costs the render thread no GPU work.
-pub enum Incoming {
+enum Incoming {
     Prepared(PreparedCell),
     Built(Box<ResidentCell>),
 }
@@ -362,8 +362,7 @@ pub struct Streamer {
     config: StreamConfig,
     shared: Arc<Shared>,
     rx: Receiver<(u32, Result<Incoming, String>)>,
-    /// Cells the prefetch thread has prepared, not yet accepted: a frame accepts
-    /// those drawn now and one other ([`Self::accept_arrived`]).
+    /// Packs the prefetch thread has sent, not yet accepted ([`Self::accept_arrived`]).
     arrived: VecDeque<(u32, Result<Incoming, String>)>,
     thread: Option<JoinHandle<()>>,
     cells: BTreeMap<u32, ResidentCell>,
@@ -659,11 +658,11 @@ impl Streamer {
     /// Accepts the packs that arrived: every one whose GPU objects the prefetch
     /// thread made ([`Incoming::Built`]: accepting it only files it), and of the
     /// others those drawn now (the current cell, its groups) and at most one more.
-    /// Making a pack's GPU buffers and atlases costs 10–33 ms of the render thread
-    /// per park-2m/park-4m pack on lavapipe; after a crossing the prefetch thread
-    /// delivers the new neighbours in a burst, which made one frame 2–5× its
-    /// cell's median when all were made in it, and 1.5–3.5× the frames after a
-    /// crossing one pack a frame.
+    /// Making a pack's GPU buffers and atlases costs the render thread 10–33 ms per
+    /// park-2m or park-4m pack on lavapipe, and after a crossing the prefetch
+    /// thread delivers the new neighbours in a burst: made in one frame, they made
+    /// it 2–5× its cell's median; made one a frame, the frames after a crossing
+    /// still reached 1.5–3.5×.
     fn accept_arrived(&mut self, renderer: &Renderer) {
         let mut made_here = false;
         let mut ahead = 0;

@@ -16,15 +16,23 @@ use format::pack::{BasePack, Texture, TextureEncoding};
 use glam::Vec3;
 use wgpu::util::DeviceExt;
 
+/// A buffer of `device` holding `contents`, named `label` in GPU debugging tools.
+fn buffer_init(
+    device: &wgpu::Device,
+    label: &str,
+    contents: &[u8],
+    usage: wgpu::BufferUsages,
+) -> wgpu::Buffer {
+    device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some(label),
+        contents,
+        usage,
+    })
+}
+
 impl Renderer {
-    /// A buffer holding `contents`, named `label` in GPU debugging tools.
     fn buffer_init(&self, label: &str, contents: &[u8], usage: wgpu::BufferUsages) -> wgpu::Buffer {
-        self.device
-            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents,
-                usage,
-            })
+        buffer_init(&self.device, label, contents, usage)
     }
 
     /// One model: vertices, its albedo texture (issue 18; too large for the adapter:
@@ -395,14 +403,8 @@ impl Renderer {
 }
 
 impl ProxyMaker {
-    /// A buffer holding `contents`, named `label` in GPU debugging tools.
     fn buffer_init(&self, label: &str, contents: &[u8], usage: wgpu::BufferUsages) -> wgpu::Buffer {
-        self.device
-            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents,
-                usage,
-            })
+        buffer_init(&self.device, label, contents, usage)
     }
 
     /// The GPU proxies of one pack's `proxies` (each its vertices and views), in
