@@ -4,7 +4,7 @@
 //! one table; issue 31: the pop at each crossing).
 
 use crate::camera::Camera;
-use crate::frame::{hybrid_list, originals_list, Mode};
+use crate::frame::{blend_lists, hybrid_list, originals_list, Mode};
 use crate::gpu::{GpuError, GpuModels, Renderer};
 use crate::metrics::{
     diff_image, downsample_linear, measure_frame, opaque, summarize_objects, FrameQuality,
@@ -90,14 +90,75 @@ impl Default for CompareOptions {
 /// The crossing frame, its outgoing and its incoming frame (RGBA8) of the worst pop.
 type PopPair = (usize, Vec<u8>, Vec<u8>);
 
-/// Issue 31 item 1, the pop metric: at each frame whose cell differs from the
-/// previous frame's (`cells`, one per frame), the frame's pose is drawn with the
-/// outgoing cell's packs and with the incoming cell's, each settled
+/// A frame's representation: each cell it draws with its dither range (`None`:
+/// the one cell, whole), as [`crate::transition`] decides at the frame's eye from
+/// its cell with cross-fades `fade` (every neighbour in the band taken as ready).
+type Blend = Vec<(u32, Option<(u32, u32)>)>;
+
+fn blend_at(bake: &crate::bake::Bake, cell: u32, eye: glam::Vec3, fade: f32) -> Blend {
+    let band = crate::transition::band(&bake.grid, fade);
+    let p = glam::Vec2::new(eye.x, eye.z);
+    let ranges = crate::transition::ranges(&crate::transition::weights(&bake.grid, cell, p, band));
+    if ranges.len() < 2 {
+        return vec![(cell, None)];
+    }
+    ranges
+        .into_iter()
+        .map(|(id, lo, hi)| (id, Some((lo, hi))))
+        .collect()
+}
+
+/// `camera`'s frame drawn with `blend`'s cells, each settled
 /// ([`Streamer::settled`]: all textures uploaded, no stand-ins, so that streaming
-/// does not blur what the swap itself changes), and the two frames are compared
-/// over object pixels. Beside each, the full-geometry frame at the pose against the
-/// same pose turned by one pixel (the camera yawed by `fov_y / height`): a change
-/// a viewer does not notice. Returns the report and the worst pop's pair.
+/// does not blur what the representation itself changes); `None` when a cell's
+/// pack cannot be loaded.
+fn draw_blend(
+    player: &mut Player,
+    streamer: &mut Streamer,
+    camera: &Camera,
+    blend: &Blend,
+) -> Result<Option<Vec<u8>>, RunError> {
+    for &(cell, _) in blend {
+        if streamer
+            .settled(&player.renderer, &player.bake, cell)
+            .is_none()
+        {
+            return Ok(None);
+        }
+    }
+    let pending = crate::stream::PendingDraw::StandIns;
+    let mut lists = Vec::with_capacity(blend.len());
+    for &(cell, range) in blend {
+        let Some(current) = streamer.settled_cell(&player.bake, cell) else {
+            return Ok(None);
+        };
+        lists.push((hybrid_list(&player.bake, camera, &current, pending), range));
+    }
+    let lists = match lists.as_slice() {
+        [(_, None)] => lists.into_iter().map(|(l, _)| (l, None)).collect(),
+        _ => blend_lists(
+            lists
+                .into_iter()
+                .map(|(l, r)| (l, r.unwrap_or((0, crate::transition::LEVELS))))
+                .collect(),
+        ),
+    };
+    let refs: Vec<_> = lists.iter().map(|(l, r)| (l, *r)).collect();
+    player.renderer.render_blend(camera, &player.models, &refs);
+    Ok(Some(player.renderer.read_pixels()?))
+}
+
+/// Issue 31 item 1, the pop metric: at each frame whose representation differs
+/// from the previous frame's, the frame's pose is drawn with the previous frame's
+/// representation and with its own ([`draw_blend`]: each cell settled), and the
+/// two are compared over object pixels. Without cross-fades (`fade` 0) that is
+/// each crossing: the outgoing cell against the incoming. With them, the
+/// representation is a function of the eye's position ([`crate::transition`]), so
+/// it changes at every frame in a band; frames where the cell changes are the
+/// crossings, the others the fade's steps (summarised apart). Beside each
+/// crossing, the full-geometry frame at the pose against the same pose turned by
+/// one pixel (the camera yawed by `fov_y / height`): a change a viewer does not
+/// notice. Returns the report and the worst crossing's pair.
 fn measure_pops(
     player: &mut Player,
     path: &CameraPath,
@@ -107,6 +168,7 @@ fn measure_pops(
     opts: &CompareOptions,
 ) -> Result<(PopReport, Option<PopPair>), RunError> {
     let far = player.bake.extent;
+    let fade = opts.stream.fade;
     let (w, h) = (size.0 as usize, size.1 as usize);
     let mut streamer = Streamer::new(
         &player.bake,
@@ -116,37 +178,34 @@ fn measure_pops(
         },
     );
     let mut crossings = Vec::new();
+    let mut steps = Vec::new();
     let mut worst: Option<(f64, PopPair)> = None;
+    let blend_of = |player: &Player, i: usize| {
+        let cam = camera_for(&frames[i], path, size, far);
+        cells[i].map(|c| blend_at(&player.bake, c, cam.eye, fade))
+    };
     for i in 1..frames.len().min(cells.len()) {
-        let (Some(from), Some(to)) = (cells[i - 1], cells[i]) else {
+        let (Some(from), Some(to)) = (blend_of(player, i - 1), blend_of(player, i)) else {
             continue;
         };
         if from == to {
             continue;
         }
         let cam = camera_for(&frames[i], path, size, far);
-        let mut drawn = Vec::with_capacity(2);
-        for cell in [from, to] {
-            let Some(current) = streamer.settled(&player.renderer, &player.bake, cell) else {
-                break;
-            };
-            let list = hybrid_list(
-                &player.bake,
-                &cam,
-                &current,
-                crate::stream::PendingDraw::StandIns,
-            );
-            drawn.push(pixels_of(
-                &mut player.renderer,
-                &player.models,
-                &cam,
-                &list,
-            )?);
-        }
-        let [a, b] = &drawn[..] else {
+        let a = draw_blend(player, &mut streamer, &cam, &from)?;
+        let b = draw_blend(player, &mut streamer, &cam, &to)?;
+        let (Some(a), Some(b)) = (a, b) else {
             continue; // a pack that cannot be loaded: no pop to measure
         };
-        let pop = measure_frame(a, b, w, h);
+        let pop = measure_frame(&a, &b, w, h);
+        let pop_psnr = pop.object_psnr_y_db.unwrap_or(PSNR_CAP);
+        let (Some(from_cell), Some(to_cell)) = (cells[i - 1], cells[i]) else {
+            continue;
+        };
+        if from_cell == to_cell {
+            steps.push((i, pop_psnr));
+            continue;
+        }
         let turned = Camera {
             dir: glam::Quat::from_rotation_y(cam.fov_y_deg.to_radians() / size.1 as f32) * cam.dir,
             ..cam
@@ -156,24 +215,30 @@ fn measure_pops(
             pixels_of(&mut player.renderer, &player.models, &c, &full)
         });
         let shift = measure_frame(&r0?, &r1?, w, h);
-        let pop_psnr = pop.object_psnr_y_db.unwrap_or(PSNR_CAP);
         crossings.push(CrossingPop {
             frame: i,
-            from_cell: from,
-            to_cell: to,
+            from_cell,
+            to_cell,
             pop_object_psnr_y_db: pop_psnr,
             pop_object_ssim: pop.object_ssim.unwrap_or(1.0),
             shift_object_psnr_y_db: shift.object_psnr_y_db.unwrap_or(PSNR_CAP),
             shift_object_ssim: shift.object_ssim.unwrap_or(1.0),
         });
         if worst.as_ref().is_none_or(|(p, _)| pop_psnr < *p) {
-            worst = Some((pop_psnr, (i, a.clone(), b.clone())));
+            worst = Some((pop_psnr, (i, a, b)));
         }
     }
-    Ok((PopReport::of(crossings), worst.map(|(_, pair)| pair)))
+    let mut report = PopReport::of(crossings);
+    report.fade = fade;
+    report.fade_steps = steps.len();
+    if let Some(&(frame, psnr)) = steps.iter().min_by(|a, b| a.1.total_cmp(&b.1)) {
+        report.worst_step_psnr_y_db = psnr;
+        report.worst_step_frame = Some(frame);
+        report.mean_step_psnr_y_db = mean(steps.iter().map(|s| s.1));
+    }
+    Ok((report, worst.map(|(_, pair)| pair)))
 }
 
-/// `list` drawn from `camera` and read back (RGBA8).
 fn pixels_of(
     renderer: &mut Renderer,
     models: &GpuModels,

@@ -320,6 +320,19 @@ pub struct ListStats {
     pub clusters: u64,
 }
 
+impl std::ops::Add for ListStats {
+    type Output = ListStats;
+    /// What two lists drawn in one frame submit (a cross-fade's, issue 31).
+    fn add(self, o: ListStats) -> ListStats {
+        ListStats {
+            triangles: self.triangles + o.triangles,
+            texture_bytes: self.texture_bytes + o.texture_bytes,
+            draw_calls: self.draw_calls + o.draw_calls,
+            clusters: self.clusters + o.clusters,
+        }
+    }
+}
+
 /// Triangles, texture bytes and draw calls a draw list submits.
 pub fn list_stats(list: &DrawList<'_>, models: &GpuModels) -> ListStats {
     ListStats {
@@ -328,4 +341,144 @@ pub fn list_stats(list: &DrawList<'_>, models: &GpuModels) -> ListStats {
         draw_calls: list.draw_calls(models),
         clusters: list.cluster_count(),
     }
+}
+
+/// The lists of a cross-fade (issue 31 item 2, [`crate::transition`]): each cell's
+/// hybrid list with its dither range, rearranged so that what every list draws
+/// alike is drawn once and whole. Returns first that shared list (no range: the
+/// plain pipelines, early depth test), then each list without it (its range).
+///
+/// Shared: an instanced original drawn by every list (same model and instance
+/// data), a patched original drawn by every list (drawn with the union of their
+/// patch ranges) and a proxy drawn by every list (the same GPU proxy, a far-field
+/// group's pack both cells use; drawn with the union of their tile ranges). Drawing
+/// the union is exact: a tile or patch one list leaves out is back-facing, outside
+/// the frustum or hidden behind that list's originals (conservative tests), so it
+/// changes no pixel that list owns. Every pixel then shows the nearest surface of
+/// its owner's list, as [`crate::gpu::Renderer::render_blend`] promises.
+pub fn blend_lists<'a>(
+    lists: Vec<(DrawList<'a>, (u32, u32))>,
+) -> Vec<(DrawList<'a>, Option<(u32, u32)>)> {
+    use std::collections::BTreeMap;
+    if lists.len() < 2 {
+        return lists.into_iter().map(|(l, r)| (l, Some(r))).collect();
+    }
+    let n = lists.len();
+    let key = |i: &InstanceRaw| bytemuck::bytes_of(i).to_vec();
+    // Instanced originals: (model, instance bytes) → lists drawing it.
+    let mut seen: BTreeMap<(u32, Vec<u8>), usize> = BTreeMap::new();
+    for (l, _) in &lists {
+        for (m, v) in &l.originals {
+            let mut unique: Vec<Vec<u8>> = v.iter().map(key).collect();
+            unique.sort();
+            unique.dedup();
+            for k in unique {
+                *seen.entry((*m, k)).or_default() += 1;
+            }
+        }
+    }
+    // Patched originals: (model, instance bytes) → (count, union of ranges).
+    let mut patched: BTreeMap<(u32, Vec<u8>), (usize, Vec<(u32, u32)>)> = BTreeMap::new();
+    for (l, _) in &lists {
+        for p in &l.patched {
+            let e = patched.entry((p.model, key(&p.instance))).or_default();
+            e.0 += 1;
+            e.1 = union_ranges(&e.1, &p.ranges);
+        }
+    }
+    // Proxies (ready ones; lit ones stay in their list): pointer → (count, union).
+    let ptr = |p: &GpuProxy| p as *const GpuProxy as usize;
+    let mut proxies: BTreeMap<usize, (usize, Vec<(u32, u32)>, &'a GpuProxy)> = BTreeMap::new();
+    for (l, _) in &lists {
+        let ranges = l.proxy_ranges();
+        for (k, &p) in l.proxies.iter().enumerate() {
+            let e = proxies.entry(ptr(p)).or_insert((0, Vec::new(), p));
+            e.0 += 1;
+            e.1 = union_ranges(&e.1, &ranges[k]);
+        }
+    }
+    let mut common = DrawList::default();
+    let mut shared_originals: BTreeMap<u32, Vec<InstanceRaw>> = BTreeMap::new();
+    let mut out = Vec::with_capacity(n + 1);
+    for (k, (l, range)) in lists.into_iter().enumerate() {
+        let ranges = l.proxy_ranges().to_vec();
+        let mut own = DrawList {
+            cull: None,
+            occlusion: None,
+            ..Default::default()
+        };
+        for (m, v) in l.originals {
+            let (both, alone): (Vec<InstanceRaw>, Vec<InstanceRaw>) = v
+                .into_iter()
+                .partition(|i| seen.get(&(m, key(i))) == Some(&n));
+            if k == 0 && !both.is_empty() {
+                shared_originals.entry(m).or_default().extend(both);
+            }
+            if !alone.is_empty() {
+                own.originals.push((m, alone));
+            }
+        }
+        for p in l.patched {
+            let (count, union) = &patched[&(p.model, key(&p.instance))];
+            if *count == n {
+                if k == 0 {
+                    let triangles = union.iter().map(|r| u64::from(r.1 - r.0) / 3).sum();
+                    common.patched.push(crate::patches::PatchedDraw {
+                        ranges: union.clone(),
+                        triangles,
+                        ..p
+                    });
+                }
+            } else {
+                own.patched.push(p);
+            }
+        }
+        let mut own_ranges = Vec::new();
+        for (i, &p) in l.proxies.iter().enumerate() {
+            let (count, union, _) = &proxies[&ptr(p)];
+            if *count == n {
+                if k == 0 {
+                    common.proxies.push(p);
+                    common.proxy_only.push(None);
+                    common_ranges_push(&mut common, union.clone());
+                }
+            } else {
+                own.proxies.push(p);
+                own.proxy_only.push(None);
+                own_ranges.push(ranges[i].clone());
+            }
+        }
+        // Lit proxies keep their list's ranges (after the ready ones').
+        own_ranges.extend(ranges[l.proxies.len()..].iter().cloned());
+        own.lit_proxies = l.lit_proxies;
+        let _ = own.ranges.set(own_ranges);
+        out.push((own, Some(range)));
+    }
+    common.originals = shared_originals.into_iter().collect();
+    let common_ranges = common.ranges.take().unwrap_or_default();
+    let _ = common.ranges.set(common_ranges);
+    out.insert(0, (common, None));
+    out
+}
+
+/// Appends one proxy's ranges to a list being built (its `ranges` cell holds them
+/// until the list is complete).
+fn common_ranges_push(list: &mut DrawList<'_>, ranges: Vec<(u32, u32)>) {
+    let mut all = list.ranges.take().unwrap_or_default();
+    all.push(ranges);
+    let _ = list.ranges.set(all);
+}
+
+/// The union of two sorted, disjoint range lists, sorted, touching ranges merged.
+fn union_ranges(a: &[(u32, u32)], b: &[(u32, u32)]) -> Vec<(u32, u32)> {
+    let mut all: Vec<(u32, u32)> = a.iter().chain(b).copied().collect();
+    all.sort_unstable();
+    let mut out: Vec<(u32, u32)> = Vec::with_capacity(all.len());
+    for (s, e) in all {
+        match out.last_mut() {
+            Some(last) if s <= last.1 => last.1 = last.1.max(e),
+            _ => out.push((s, e)),
+        }
+    }
+    out
 }

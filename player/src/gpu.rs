@@ -28,7 +28,7 @@ pub use upload::{ProxySource, ViewInfo};
 
 use crate::camera::Camera;
 use crate::metrics::srgb_to_linear;
-use crate::vertex::Globals;
+use crate::vertex::{Globals, InstanceRaw};
 use std::time::Instant;
 
 /// Most views a proxy may have: the pack's limit ([`crate::vertex::MAX_VIEWS`]).
@@ -44,6 +44,15 @@ pub fn shader_source() -> String {
         format::shading::wgsl_constants(),
         include_str!("shader.wgsl")
     )
+}
+
+/// [`shader_source`] for the pipelines of blended frames
+/// ([`Renderer::render_blend`]): each fragment stage first discards fragments
+/// outside the draw's dither range (shader.wgsl `dithered_out`). A separate module,
+/// not a branch on a uniform, because llvmpipe turns early depth testing off for
+/// any shader that can discard.
+pub fn dithered_shader_source() -> String {
+    shader_source().replace("/*DITHER*/", "if dithered_out(i.clip) { discard; }")
 }
 
 const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
@@ -232,23 +241,25 @@ pub struct Renderer {
     depth_view: wgpu::TextureView,
     readback: wgpu::Buffer,
     padded_row: u32,
-    lit_pipeline: wgpu::RenderPipeline,
-    /// The ground: the lit pipeline's layout and vertices, alpha 0 under
-    /// [`Renderer::set_coverage_alpha`] (ground pixels are background to the metrics).
-    ground_pipeline: wgpu::RenderPipeline,
-    /// Proxies with impostor layers (`fs_proxy`, which may discard).
-    proxy_pipeline: wgpu::RenderPipeline,
-    /// Mesh proxies (`fs_proxy_mesh`, never discards: early depth test possible),
-    /// one per `setup::MESH_VIEW_SLOTS` entry (`GpuProxy::view_slots`).
-    proxy_mesh_pipelines: [wgpu::RenderPipeline; setup::MESH_VIEW_SLOTS.len()],
-    /// Mesh proxies with an atlas (`fs_proxy_atlas`, [`Atlas`]).
-    proxy_atlas_pipeline: wgpu::RenderPipeline,
+    /// The pipelines of ordinary draws: originals (`fs_lit`), the ground (alpha 0
+    /// under [`Renderer::set_coverage_alpha`]: ground pixels are background to the
+    /// metrics), proxies with impostor layers (`fs_proxy`, which may discard), mesh
+    /// proxies (`fs_proxy_mesh`, never discards: early depth test possible; one per
+    /// `setup::MESH_VIEW_SLOTS` entry, `GpuProxy::view_slots`) and mesh proxies with
+    /// an atlas (`fs_proxy_atlas`, [`Atlas`]).
+    plain: setup::Pipelines,
+    /// The same built from [`dithered_shader_source`]: each fragment outside its
+    /// draw's dither range is discarded ([`Renderer::render_blend`]).
+    dithered: setup::Pipelines,
     /// Layout of the lit pipeline's group 2 (albedo texture + sampler).
     albedo_bgl: wgpu::BindGroupLayout,
     /// Group 2 of untextured models and the ground: a white texel.
     white_albedo: wgpu::BindGroup,
-    globals: wgpu::Buffer,
-    globals_bg: wgpu::BindGroup,
+    /// The [`setup::GLOBAL_SLOTS`] globals buffers: slot 0 for plain draws, slot
+    /// k + 1 for the k-th list of a blended frame (its dither range).
+    globals: Vec<wgpu::Buffer>,
+    /// Group 0 of each.
+    globals_bgs: Vec<wgpu::BindGroup>,
     proxy_bgl: wgpu::BindGroupLayout,
     sampler: wgpu::Sampler,
     dummy_view: wgpu::TextureView,
@@ -373,7 +384,13 @@ impl Renderer {
         let proxy_bgl = setup::proxy_layout(&device);
         let albedo_bgl = setup::albedo_layout(&device);
         // Step 3: the shader and the lit, ground and proxy pipelines.
-        let pipelines = setup::pipelines(&device, &globals_bgl, &proxy_bgl, &albedo_bgl);
+        let pipelines = |source: String| {
+            setup::pipelines(&device, source, &globals_bgl, &proxy_bgl, &albedo_bgl)
+        };
+        let (plain, dithered) = (
+            pipelines(shader_source()),
+            pipelines(dithered_shader_source()),
+        );
         // Step 4: globals buffer and group, capture sampler, placeholder textures,
         // instance buffer.
         let shared = setup::shared(&device, &queue, &globals_bgl, &albedo_bgl);
@@ -398,15 +415,12 @@ impl Renderer {
             depth_view: targets.depth_view,
             readback: targets.readback,
             padded_row: targets.padded_row,
-            lit_pipeline: pipelines.lit,
-            ground_pipeline: pipelines.ground,
-            proxy_pipeline: pipelines.proxy,
-            proxy_mesh_pipelines: pipelines.proxy_mesh,
-            proxy_atlas_pipeline: pipelines.proxy_atlas,
+            plain,
+            dithered,
             albedo_bgl,
             white_albedo: shared.white_albedo,
             globals: shared.globals,
-            globals_bg: shared.globals_bg,
+            globals_bgs: shared.globals_bgs,
             proxy_bgl,
             sampler: shared.sampler,
             dummy_view: shared.dummy_view,
@@ -526,8 +540,19 @@ impl Renderer {
         models: &GpuModels,
         list: &DrawList<'_>,
     ) -> f64 {
+        self.render_blend_fastest(repeats, camera, models, &[(list, None)])
+    }
+
+    /// [`Renderer::render_fastest`] of a blended frame ([`Renderer::render_blend`]).
+    pub fn render_blend_fastest(
+        &mut self,
+        repeats: u32,
+        camera: &Camera,
+        models: &GpuModels,
+        lists: &[(&DrawList<'_>, Option<(u32, u32)>)],
+    ) -> f64 {
         (0..repeats.max(1))
-            .map(|_| self.render(camera, models, list))
+            .map(|_| self.render_blend(camera, models, lists))
             .fold(f64::INFINITY, f64::min)
     }
 
@@ -535,20 +560,49 @@ impl Renderer {
     /// milliseconds. Proxies of `list.proxies` that are not ready (textures missing)
     /// are skipped; `list.lit_proxies` are drawn without their textures.
     pub fn render<'a>(&mut self, camera: &Camera, models: &GpuModels, list: &DrawList<'a>) -> f64 {
-        // 1. The frame's globals: camera, eye, the debug switches and palette.
-        self.write_globals(camera);
-        // 2. The frame model (`frame_model.rs`): every instance's data, one span per
-        //    patched original and proxy (several ranges gathered into the frame's
-        //    index buffer), proxies nearest first with their bind groups.
-        let plan = FramePlan::new(list, models, camera.eye, self.representation_colours);
-        // 3. Its instance data and gathered indices to the GPU.
-        self.upload_plan(&plan);
-        // 4. One render pass: the ground, instanced originals and LOD levels,
-        //    patched originals, proxies.
+        self.render_blend(camera, models, &[(list, None)])
+    }
+
+    /// Draws one frame of several draw lists into one depth buffer (issue 31's
+    /// cross-fades, [`crate::transition`]): a list with a dither range `Some((lo,
+    /// hi))` keeps only the pixels whose 8 × 8 Bayer level (0..64,
+    /// [`crate::transition::bayer8`]) lies in `lo..hi`, with the [`dithered_shader_source`]
+    /// pipelines; `None` draws it whole. Lists whose ranges partition 0..64 each
+    /// own their pixels, so every pixel shows exactly one list's complete image:
+    /// no object drawn twice opaque, no gap. The ground is drawn once, first. At
+    /// most [`setup::GLOBAL_SLOTS`] − 1 lists are drawn. Returns the frame time as
+    /// [`Renderer::render`] does.
+    pub fn render_blend<'a>(
+        &mut self,
+        camera: &Camera,
+        models: &GpuModels,
+        lists: &[(&DrawList<'a>, Option<(u32, u32)>)],
+    ) -> f64 {
+        let lists = &lists[..lists.len().min(setup::GLOBAL_SLOTS - 1)];
+        // 1. The frame's globals (camera, eye, debug switches, palette), one copy
+        //    per list with its dither range.
+        self.write_globals(camera, lists.iter().map(|l| l.1));
+        // 2. The frame model (`frame_model.rs`) of each list: every instance's data,
+        //    one span per patched original and proxy (several ranges gathered into
+        //    the frame's index buffer), proxies nearest first with their bind
+        //    groups; each list's after the one before in the shared buffers.
+        let mut plans = Vec::with_capacity(lists.len());
+        let (mut instances, mut indices) = (0, 0);
+        for (list, _) in lists {
+            let plan = FramePlan::new(list, models, camera.eye, self.representation_colours)
+                .shifted(instances, indices);
+            instances += plan.instances.len() as u32;
+            indices += plan.indices.len() as u32;
+            plans.push(plan);
+        }
+        // 3. Their instance data and gathered indices to the GPU.
+        self.upload_plans(&plans);
+        // 4. One render pass: the ground, then per list its instanced originals
+        //    and LOD levels, patched originals, proxies.
         let mut enc = self
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
-        self.last_draw_calls = self.encode_frame(&mut enc, models, list, &plan);
+        self.last_draw_calls = self.encode_frame(&mut enc, models, lists, &plans);
         // 5. Submit and wait: the frame time.
         let t0 = Instant::now();
         let idx = self.queue.submit([enc.finish()]);
@@ -572,27 +626,42 @@ impl Renderer {
         });
     }
 
-    /// Step 1 of [`Renderer::render`]: the globals of the frame seen by `camera`.
-    fn write_globals(&self, camera: &Camera) {
-        let g = Globals {
+    /// Step 1 of [`Renderer::render_blend`]: the globals of the frame seen by
+    /// `camera` at slot 0 (no dither range), and at slot k + 1 those with the k-th
+    /// of `ranges` (`None`: every level).
+    fn write_globals(&self, camera: &Camera, ranges: impl Iterator<Item = Option<(u32, u32)>>) {
+        let mut g = Globals {
             clip_from_world: camera.clip_from_world_wgpu().to_cols_array(),
             eye: camera.eye.extend(1.0).to_array(),
             debug: [
                 u32::from(self.representation_colours),
                 u32::from(self.coverage_alpha),
                 0,
-                0,
+                crate::transition::LEVELS,
             ],
             palette: crate::representation::Representation::linear_palette(),
         };
-        self.queue
-            .write_buffer(&self.globals, 0, bytemuck::bytes_of(&g));
+        let slots = std::iter::once(None).chain(ranges);
+        for (buffer, range) in self.globals.iter().zip(slots) {
+            let (lo, hi) = range.unwrap_or((0, crate::transition::LEVELS));
+            g.debug[2] = lo;
+            g.debug[3] = hi;
+            self.queue.write_buffer(buffer, 0, bytemuck::bytes_of(&g));
+        }
     }
 
-    /// Step 3 of [`Renderer::render`]: the plan's instances into the instance buffer
-    /// and its gathered indices into the frame's index buffer, each grown as needed.
-    fn upload_plan(&mut self, plan: &FramePlan<'_>) {
-        let all = &plan.instances;
+    /// Step 3 of [`Renderer::render_blend`]: the plans' instances into the instance
+    /// buffer and their gathered indices into the frame's index buffer, one plan
+    /// after the other ([`FramePlan::shifted`]), each buffer grown as needed.
+    fn upload_plans(&mut self, plans: &[FramePlan<'_>]) {
+        let all: Vec<InstanceRaw> = plans
+            .iter()
+            .flat_map(|p| p.instances.iter().copied())
+            .collect();
+        let gathered: Vec<u32> = plans
+            .iter()
+            .flat_map(|p| p.indices.iter().copied())
+            .collect();
         let need = std::mem::size_of_val(all.as_slice()) as u64;
         if need > self.instances.size() {
             self.instances = self.device.create_buffer(&wgpu::BufferDescriptor {
@@ -604,9 +673,8 @@ impl Renderer {
         }
         if !all.is_empty() {
             self.queue
-                .write_buffer(&self.instances, 0, bytemuck::cast_slice(all));
+                .write_buffer(&self.instances, 0, bytemuck::cast_slice(&all));
         }
-        let gathered = &plan.indices;
         if !gathered.is_empty() {
             let need = std::mem::size_of_val(gathered.as_slice()) as u64;
             if self.frame_indices.as_ref().is_none_or(|b| b.size() < need) {
@@ -619,19 +687,21 @@ impl Renderer {
             }
             if let Some(b) = &self.frame_indices {
                 self.queue
-                    .write_buffer(b, 0, bytemuck::cast_slice(gathered));
+                    .write_buffer(b, 0, bytemuck::cast_slice(&gathered));
             }
         }
     }
 
-    /// Step 4 of [`Renderer::render`]: the frame's render pass, cleared to the sky
-    /// (alpha 0 with coverage alpha) and depth 1; returns the draw calls issued.
+    /// Step 4 of [`Renderer::render_blend`]: the frame's render pass, cleared to the
+    /// sky (alpha 0 with coverage alpha) and depth 1: the ground, then each list's
+    /// originals, then each list's proxies (with the dithered pipelines and the
+    /// list's globals slot where it has a range); returns the draw calls issued.
     fn encode_frame(
         &self,
         enc: &mut wgpu::CommandEncoder,
         models: &GpuModels,
-        list: &DrawList<'_>,
-        plan: &FramePlan<'_>,
+        lists: &[(&DrawList<'_>, Option<(u32, u32)>)],
+        plans: &[FramePlan<'_>],
     ) -> u64 {
         let sky = |c: u8| srgb_to_linear(c);
         let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
@@ -662,15 +732,41 @@ impl Renderer {
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        pass.set_bind_group(0, Some(&self.globals_bg), &[]);
-        // The ground first (issue 18): lit, white albedo texture.
-        pass.set_pipeline(&self.ground_pipeline);
+        pass.set_bind_group(0, Some(&self.globals_bgs[0]), &[]);
+        // The ground first (issue 18): lit, white albedo texture; every list's.
+        pass.set_pipeline(&self.plain.ground);
         pass.set_bind_group(2, Some(&self.white_albedo), &[]);
         pass.set_vertex_buffer(0, models.ground.slice(..));
         pass.set_vertex_buffer(1, self.instances.slice(..));
-        let g = plan.ground_instance;
-        pass.draw(0..6, g..g + 1);
-        1 + self.draw_originals(&mut pass, models, list, plan) + self.draw_proxies(&mut pass, plan)
+        let mut draws = 0;
+        if let Some(plan) = plans.first() {
+            let g = plan.ground_instance;
+            pass.draw(0..6, g..g + 1);
+            draws += 1;
+        }
+        // Every list's originals, then every list's proxies: as within one list,
+        // an original is drawn before any proxy, so where two surfaces tie in
+        // depth the same one wins as in each list drawn alone.
+        for originals in [true, false] {
+            for (k, ((list, range), plan)) in lists.iter().zip(plans).enumerate() {
+                let pipes = match range {
+                    Some(_) => {
+                        pass.set_bind_group(0, Some(&self.globals_bgs[k + 1]), &[]);
+                        &self.dithered
+                    }
+                    None => {
+                        pass.set_bind_group(0, Some(&self.globals_bgs[0]), &[]);
+                        &self.plain
+                    }
+                };
+                draws += if originals {
+                    self.draw_originals(&mut pass, pipes, models, list, plan)
+                } else {
+                    self.draw_proxies(&mut pass, pipes, plan)
+                };
+            }
+        }
+        draws
     }
 
     /// Instanced originals, then LOD levels, then patched originals and cluster-LOD
@@ -679,13 +775,14 @@ impl Renderer {
     fn draw_originals(
         &self,
         pass: &mut wgpu::RenderPass<'_>,
+        pipes: &setup::Pipelines,
         models: &GpuModels,
         list: &DrawList<'_>,
         plan: &FramePlan<'_>,
     ) -> u64 {
         let mut draws = 0u64;
-        pass.set_pipeline(&self.lit_pipeline);
-        let mut first = 0u32;
+        pass.set_pipeline(&pipes.lit);
+        let mut first = plan.first_instance;
         for (m, inst) in &list.originals {
             let model = &models.models[*m as usize];
             let n = inst.len() as u32;
@@ -761,7 +858,12 @@ impl Renderer {
     /// with a discard-free pipeline (the atlas one for proxies with an [`Atlas`],
     /// else the one for their number of views), impostor layers with the other, a
     /// pipeline switch only where that changes. Returns the draw calls.
-    fn draw_proxies(&self, pass: &mut wgpu::RenderPass<'_>, plan: &FramePlan<'_>) -> u64 {
+    fn draw_proxies(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        pipes: &setup::Pipelines,
+        plan: &FramePlan<'_>,
+    ) -> u64 {
         let mut draws = 0u64;
         let frame_indices = self.frame_indices.as_ref();
         let mut bound = None;
@@ -771,11 +873,11 @@ impl Renderer {
             if bound != Some(key) {
                 bound = Some(key);
                 pass.set_pipeline(if p.layered {
-                    &self.proxy_pipeline
+                    &pipes.proxy
                 } else if p.atlas.is_some() {
-                    &self.proxy_atlas_pipeline
+                    &pipes.proxy_atlas
                 } else {
-                    &self.proxy_mesh_pipelines[p.view_slots]
+                    &pipes.proxy_mesh[p.view_slots]
                 });
             }
             pass.set_bind_group(1, Some(d.bind_group), &[]);

@@ -69,6 +69,7 @@ pub mod run;
 pub mod stream;
 pub mod table;
 pub mod testdata;
+pub mod transition;
 pub mod vertex;
 #[cfg(feature = "view")]
 pub mod view;

@@ -5,9 +5,9 @@ use crate::bake::Bake;
 use crate::camera::Camera;
 use crate::clusterlod::ClusterSet;
 use crate::frame::{
-    cluster_list, hybrid_list, list_stats, lod_list, originals_list, ListStats, Mode,
+    blend_lists, cluster_list, hybrid_list, list_stats, lod_list, originals_list, ListStats, Mode,
 };
-use crate::gpu::{GpuError, GpuModels, Renderer};
+use crate::gpu::{DrawList, GpuError, GpuModels, Renderer};
 use crate::lod::LodSet;
 use crate::stream::{StreamConfig, Streamer};
 use format::path::{CameraPath, PathFrame};
@@ -232,14 +232,42 @@ impl Player {
         match (mode, streamer) {
             (Mode::Hybrid, Some(s)) => {
                 let pending = s.config().pending;
-                let (current, stats) = s.begin_frame(&self.renderer, &self.bake, camera);
+                let stats = s.advance(&self.renderer, &self.bake, camera);
                 let t0 = std::time::Instant::now();
-                let list = hybrid_list(&self.bake, camera, &current, pending);
-                let stats_of_list = list_stats(&list, &self.models);
+                // Near a border, the cells of the cross-fade (issue 31 item 2):
+                // the current one as streamed, the others settled.
+                let blend = s.blend(&self.bake);
+                let lists: Vec<(DrawList<'_>, Option<(u32, u32)>)> = if blend.is_empty() {
+                    vec![(hybrid_list(&self.bake, camera, &s.current(), pending), None)]
+                } else {
+                    blend_lists(
+                        blend
+                            .iter()
+                            .filter_map(|&(id, range)| {
+                                let cell = if Some(id) == stats.cell {
+                                    s.current()
+                                } else {
+                                    s.settled_cell(&self.bake, id)?
+                                };
+                                Some((hybrid_list(&self.bake, camera, &cell, pending), range))
+                            })
+                            .collect(),
+                    )
+                };
+                let stats_of_list = lists
+                    .iter()
+                    .map(|(l, _)| list_stats(l, &self.models))
+                    .fold(ListStats::default(), |a, b| a + b);
                 self.last_list_ms = t0.elapsed().as_secs_f64() * 1e3;
-                let ms =
-                    self.renderer
-                        .render_fastest(self.timing_repeats, camera, &self.models, &list);
+                let refs: Vec<(&DrawList<'_>, Option<(u32, u32)>)> =
+                    lists.iter().map(|(l, r)| (l, *r)).collect();
+                let ms = self.renderer.render_blend_fastest(
+                    self.timing_repeats,
+                    camera,
+                    &self.models,
+                    &refs,
+                );
+                drop(lists);
                 s.undrawn_frames(&self.renderer, &self.bake, camera);
                 (ms, stats_of_list, stats)
             }
@@ -309,6 +337,18 @@ impl Player {
         );
         self.draw(camera, Mode::Full, None);
         self.draw(camera, Mode::Hybrid, Some(&mut s));
+        // The cross-fade's dithered pipelines (issue 31): the hybrid list as two
+        // halves of the dither levels.
+        let half = crate::transition::LEVELS / 2;
+        let list = hybrid_list(&self.bake, camera, &s.current(), s.config().pending);
+        self.renderer.render_blend(
+            camera,
+            &self.models,
+            &[
+                (&list, Some((0, half))),
+                (&list, Some((half, crate::transition::LEVELS))),
+            ],
+        );
         if self.lod.is_some() {
             self.draw(camera, Mode::Lod, None);
         }

@@ -33,10 +33,32 @@ struct Globals {
     eye: vec4<f32>,
     // x: 1 = debug colouring by representation (player view's C key): albedo =
     // palette[representation], lit, no textures (overlay.rs, Representation).
+    // y: 1 = coverage alpha. z, w: the dither range [z, w) of Bayer levels (0..64)
+    // whose pixels the pipelines built with DITHER keep (issue 31 cross-fades).
     debug: vec4<u32>,
     palette: array<vec4<f32>, 8>,
 };
 @group(0) @binding(0) var<uniform> g: Globals;
+
+// ---- cross-fades at cell borders (issue 31 item 2, player transition.rs) ----
+
+// The pixel's level in the 8 × 8 Bayer matrix (0..64): the bit-reversed interleave
+// of x ^ y and y (transition::bayer8 on the CPU).
+fn bayer8(p: vec2<u32>) -> u32 {
+    let y = p.y & 7u;
+    let z = (p.x & 7u) ^ y;
+    return ((z & 1u) << 5u) | ((y & 1u) << 4u) | ((z & 2u) << 2u) | ((y & 2u) << 1u)
+        | ((z & 4u) >> 1u) | ((y & 4u) >> 2u);
+}
+
+// Whether a fragment at window position `clip` is outside this draw's dither
+// range: another cell's representation owns the pixel. Only the DITHER pipelines
+// call it (the renderer's module with the marker below replaced), so the others
+// never discard and keep early depth testing.
+fn dithered_out(clip: vec4<f32>) -> bool {
+    let level = bayer8(vec2<u32>(clip.xy));
+    return level < g.debug.z || level >= g.debug.w;
+}
 
 fn srgb_to_linear(c: vec3<f32>) -> vec3<f32> {
     let lo = c / SRGB_LINEAR_SLOPE;
@@ -94,6 +116,7 @@ fn vs_lit(v: LitIn) -> LitOut {
 
 @fragment
 fn fs_lit(i: LitOut) -> @location(0) vec4<f32> {
+    /*DITHER*/
     var albedo = i.albedo;
     if g.debug.x == 0u {
         albedo = albedo * textureSampleLevel(albedo_tex, albedo_samp, i.uv, 0.0).rgb;
@@ -105,6 +128,7 @@ fn fs_lit(i: LitOut) -> @location(0) vec4<f32> {
 // g.debug.y is set (player compare's object pixels exclude it, as they do the sky).
 @fragment
 fn fs_ground(i: LitOut) -> @location(0) vec4<f32> {
+    /*DITHER*/
     var a = 1.0;
     if g.debug.y != 0u {
         a = 0.0;
@@ -389,6 +413,7 @@ fn impostor_layer(i: ProxyOut) -> vec4<f32> {
 // impostor layers (GpuProxy::layered); both shade a mesh fragment alike.
 @fragment
 fn fs_proxy(i: ProxyOut) -> @location(0) vec4<f32> {
+    /*DITHER*/
     if i.kind == 4u {
         return impostor_layer(i);
     }
@@ -397,6 +422,7 @@ fn fs_proxy(i: ProxyOut) -> @location(0) vec4<f32> {
 
 @fragment
 fn fs_proxy_mesh(i: ProxyOut) -> @location(0) vec4<f32> {
+    /*DITHER*/
     return mesh_colour(i);
 }
 
@@ -484,6 +510,7 @@ fn atlas_texel(i: u32, uv: vec2<f32>) -> vec4<f32> {
 // view 0.
 @fragment
 fn fs_proxy_atlas(i: ProxyOut) -> @location(0) vec4<f32> {
+    /*DITHER*/
     let best0 = i.views & 0xffu;
     let best1 = i.views >> 8u;
     if g.debug.x != 0u || best0 == NO_VIEW {

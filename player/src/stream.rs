@@ -101,6 +101,11 @@ pub struct StreamConfig {
     /// pose without drawing; their time is not counted, as each costs what the drawn
     /// frame, its sample, costs. 1: every frame is drawn (`player view`).
     pub display_frames_per_step: u32,
+    /// The cross-fade band at cell borders as a share of the hexagon's apothem
+    /// (issue 31 item 2, [`crate::transition`]; `--fade`): within it a frame blends
+    /// the current cell's representation with each neighbour's whose packs are
+    /// resident and ready ([`Streamer::blend`]). 0: the current cell only.
+    pub fade: f32,
 }
 
 /// How the hybrid draws a proxy whose textures are not resident yet (never a hole).
@@ -131,6 +136,9 @@ impl std::str::FromStr for PendingDraw {
     }
 }
 
+/// [`StreamConfig::fade`]'s default (player README "Cross-fades at cell borders").
+pub const DEFAULT_FADE: f32 = 0.0;
+
 impl Default for StreamConfig {
     fn default() -> Self {
         StreamConfig {
@@ -144,6 +152,7 @@ impl Default for StreamConfig {
             step_angle_deg: 15.0,
             pending: PendingDraw::StandIns,
             display_frames_per_step: 1,
+            fade: DEFAULT_FADE,
         }
     }
 }
@@ -371,6 +380,8 @@ pub struct Streamer {
     clock: u64,
     last_step: Option<(Vec3, Vec3)>,
     current: Option<u32>,
+    /// The eye (x, z) of the last [`Streamer::advance`] ([`Streamer::blend`]).
+    eye: Option<Vec2>,
     /// Streaming keys of the current cell's far-field groups (level 1 first).
     current_groups: Vec<u32>,
     /// Keys of the packs drawn before the last crossing (cell, group), kept as
@@ -472,6 +483,7 @@ impl Streamer {
             clock: 0,
             last_step: None,
             current: None,
+            eye: None,
             current_groups: Vec::new(),
             previous: Vec::new(),
             ring: BTreeSet::new(),
@@ -500,13 +512,23 @@ impl Streamer {
         self.shared.timestamp.load(AtomicOrdering::SeqCst)
     }
 
-    /// Advances streaming for a frame seen by `camera`; returns what to draw.
+    /// Advances streaming for a frame seen by `camera`; returns what to draw
+    /// ([`Streamer::advance`], then [`Streamer::current`]).
     pub fn begin_frame(
         &mut self,
         renderer: &Renderer,
         bake: &Bake,
         camera: &Camera,
     ) -> (CurrentCell<'_>, StreamStats) {
+        let stats = self.advance(renderer, bake, camera);
+        (self.current(), stats)
+    }
+
+    /// Advances streaming for a frame seen by `camera` (arrivals, the current cell
+    /// and its groups made resident, uploads under the budget, eviction) and
+    /// returns the frame's statistics; [`Streamer::current`] and
+    /// [`Streamer::blend`] then say what it draws.
+    pub fn advance(&mut self, renderer: &Renderer, bake: &Bake, camera: &Camera) -> StreamStats {
         let t0 = Instant::now();
         self.clock += 1;
         self.shared
@@ -573,10 +595,28 @@ impl Streamer {
         if self.stats.pending_proxies == 0 {
             self.previous.clear();
         }
-        let current = match cell.and_then(|id| self.cells.get(&id)) {
+        match cell.map(|id| self.cells.contains_key(&id)) {
+            Some(true) => {
+                self.stats.fallback = matches!(
+                    Self::far_of(&self.cells, &self.current_groups),
+                    Far::Unavailable
+                );
+            }
+            _ => {
+                self.stats.pending_proxies = 0;
+                self.stats.fallback = cell.is_some();
+            }
+        }
+        self.eye = Some(Vec2::new(camera.eye.x, camera.eye.z));
+        self.stats
+    }
+
+    /// What the frame [`Streamer::advance`] prepared draws: the current cell's pack
+    /// with its far field and stand-ins, or originals.
+    pub fn current(&self) -> CurrentCell<'_> {
+        match self.current.and_then(|id| self.cells.get(&id)) {
             Some(c) => {
                 let far = Self::far_of(&self.cells, &self.current_groups);
-                self.stats.fallback = matches!(far, Far::Unavailable);
                 let stand_ins = self
                     .previous
                     .iter()
@@ -584,13 +624,55 @@ impl Streamer {
                     .collect();
                 CurrentCell::Pack(c, far, stand_ins)
             }
-            None => {
-                self.stats.pending_proxies = 0;
-                self.stats.fallback = cell.is_some();
-                CurrentCell::Originals
-            }
+            None => CurrentCell::Originals,
+        }
+    }
+
+    /// The cells the frame [`Streamer::advance`] prepared blends (issue 31 item 2,
+    /// [`crate::transition`]): with [`StreamConfig::fade`] > 0, the current cell
+    /// and each neighbour within the band whose pack and far-field groups are
+    /// resident with every texture uploaded (one still streaming is left out
+    /// rather than drawn incomplete), each with its dither range; what each draws
+    /// is [`Streamer::current`] for the current cell and [`Streamer::settled_cell`]
+    /// for the others. Empty when the frame draws the current cell alone (no fade,
+    /// no pack, or no neighbour in the band).
+    pub fn blend(&self, bake: &Bake) -> Vec<(u32, (u32, u32))> {
+        let (Some(cell), Some(eye)) = (self.current, self.eye) else {
+            return Vec::new();
         };
-        (current, self.stats)
+        let band = crate::transition::band(&bake.grid, self.config.fade);
+        if band <= 0.0 || !self.cells.contains_key(&cell) {
+            return Vec::new();
+        }
+        let ready = |id: u32| {
+            std::iter::once(id)
+                .chain(group_keys_of(bake, id))
+                .all(|k| self.cells.get(&k).is_some_and(|c| c.pending_proxies() == 0))
+        };
+        let weights: Vec<(u32, f32)> = crate::transition::weights(&bake.grid, cell, eye, band)
+            .into_iter()
+            .filter(|&(id, _)| id == cell || ready(id))
+            .collect();
+        let ranges = crate::transition::ranges(&weights);
+        if ranges.len() < 2 {
+            return Vec::new();
+        }
+        ranges
+            .into_iter()
+            .map(|(id, lo, hi)| (id, (lo, hi)))
+            .collect()
+    }
+
+    /// `cell`'s packs as resident now, drawn as a viewer settled in it would
+    /// (no stand-ins); `None` unless the cell's pack is resident.
+    pub fn settled_cell(&self, bake: &Bake, cell: u32) -> Option<CurrentCell<'_>> {
+        let c = self.cells.get(&cell)?;
+        let groups = group_keys_of(bake, cell);
+        Some(CurrentCell::Pack(
+            c,
+            Self::far_of(&self.cells, &groups),
+            Vec::new(),
+        ))
     }
 
     /// The loading screen before a walk's first frame: the cell at `camera` and its
@@ -639,15 +721,10 @@ impl Streamer {
         cell: u32,
     ) -> Option<CurrentCell<'_>> {
         let groups = group_keys_of(bake, cell);
-        for key in std::iter::once(cell).chain(groups.iter().copied()) {
+        for key in std::iter::once(cell).chain(groups) {
             self.load_fully(renderer, bake, key);
         }
-        let c = self.cells.get(&cell)?;
-        Some(CurrentCell::Pack(
-            c,
-            Self::far_of(&self.cells, &groups),
-            Vec::new(),
-        ))
+        self.settled_cell(bake, cell)
     }
 
     /// Whether pack `id` is drawn now: the current cell or one of its groups.

@@ -114,6 +114,28 @@ fn disc_of(rgb: [u8; 3]) -> Vec<u8> {
 /// setting the frame's pixels, its draw calls (submitted, and as the list predicts)
 /// and triangles; `None` without an adapter.
 fn draw_ten(batches: bool) -> Option<(Vec<u8>, u64, u64, u64)> {
+    let (_dir, p, _) = ten_impostors(batches)?;
+    let list = p.1;
+    let p = p.0;
+    let px = p.renderer.read_pixels().unwrap();
+    Some((
+        px,
+        list.draw_calls,
+        p.renderer.last_draw_calls,
+        list.triangles,
+    ))
+}
+
+/// The bake of [`draw_ten`] opened at 96², drawn three times from the viewer that
+/// sees all ten: the player, the last frame's list figures, and the camera.
+#[allow(clippy::type_complexity)]
+fn ten_impostors(
+    batches: bool,
+) -> Option<(
+    tempfile::TempDir,
+    (player::run::Player, player::frame::ListStats, Streamer),
+    Camera,
+)> {
     let dir = tempfile::tempdir().unwrap();
     let impostors: Vec<_> = (0..10u8)
         .map(|k| {
@@ -146,13 +168,39 @@ fn draw_ten(batches: bool) -> Option<(Vec<u8>, u64, u64, u64)> {
         list.draw_calls, p.renderer.last_draw_calls,
         "batches {batches}"
     );
-    let px = p.renderer.read_pixels().unwrap();
-    Some((
-        px,
-        list.draw_calls,
-        p.renderer.last_draw_calls,
-        list.triangles,
-    ))
+    Some((dir, (p, list, s), cam))
+}
+
+/// Issue 31's cross-fade draws impostor layers (the alpha-tested pipeline) with
+/// every dither slot: split into two dither ranges after a shared list, batched or
+/// not, the frame is the plain one pixel for pixel.
+#[test]
+fn impostors_blended_with_themselves_give_the_plain_frame() {
+    use player::frame::hybrid_list;
+    use player::gpu::DrawList;
+    for batches in [true, false] {
+        let Some((_dir, (mut p, _, mut s), cam)) = ten_impostors(batches) else {
+            return;
+        };
+        let plain = p.renderer.read_pixels().unwrap();
+        s.advance(&p.renderer, &p.bake, &cam);
+        let list = hybrid_list(&p.bake, &cam, &s.current(), s.config().pending);
+        assert!(!list.proxies.is_empty());
+        let empty = DrawList::default();
+        for split in [0, 20, 64] {
+            p.renderer.render_blend(
+                &cam,
+                &p.models,
+                &[
+                    (&empty, None),
+                    (&list, Some((0, split))),
+                    (&list, Some((split, 64))),
+                ],
+            );
+            let blended = p.renderer.read_pixels().unwrap();
+            assert!(blended == plain, "batches {batches}, split {split}");
+        }
+    }
 }
 
 /// A pack's layered impostors drawn in batches (one atlas, one uniform, one draw

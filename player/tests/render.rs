@@ -1167,3 +1167,187 @@ fn the_next_cell_is_resident_before_the_viewer_crosses_into_it() {
         "without prefetch: {missed} of {crossings}"
     );
 }
+
+/// Issue 31 item 2, the cross-fade's renderer: lists drawn in one frame with
+/// dither ranges that partition the 64 Bayer levels each own their pixels. Every
+/// pixel of the blend is exactly the pixel of the list whose range holds its level
+/// (so nothing is drawn twice opaque and nothing is missing), a list blended with
+/// itself is the plain frame, and a shared list drawn first without a range
+/// (`frame::blend_lists`) changes nothing.
+#[test]
+fn a_blended_frame_shows_each_pixel_from_the_list_owning_its_level() {
+    use player::frame::{hybrid_list, originals_list};
+    use player::gpu::DrawList;
+    use player::transition::bayer8;
+    let Some((_dir, mut p, cam, _)) = synthetic_at_instance_0() else {
+        return;
+    };
+    let mut s = Streamer::new(
+        &p.bake,
+        StreamConfig {
+            prefetch: false,
+            ..Default::default()
+        },
+    );
+    p.prime(&mut s, &cam);
+    s.advance(&p.renderer, &p.bake, &cam);
+    let hybrid = hybrid_list(&p.bake, &cam, &s.current(), s.config().pending);
+    let full = originals_list(&p.bake, &cam, false);
+    let mut draw = |lists: &[(&DrawList<'_>, Option<(u32, u32)>)]| {
+        p.renderer.render_blend(&cam, &p.models, lists);
+        p.renderer.read_pixels().unwrap()
+    };
+    let a = draw(&[(&hybrid, None)]);
+    let b = draw(&[(&full, None)]);
+    assert_ne!(
+        a, b,
+        "the two lists must differ for the test to mean anything"
+    );
+    assert_eq!(
+        draw(&[(&hybrid, Some((0, 23))), (&hybrid, Some((23, 64)))]),
+        a
+    );
+    let empty = DrawList::default();
+    // The shared list, then three cells' (a hexagon corner: every list the
+    // renderer must keep), the third with the first one's list again.
+    for (s1, s2) in [(0, 0), (23, 40), (40, 64), (64, 64), (10, 11)] {
+        let blended = draw(&[
+            (&empty, None),
+            (&hybrid, Some((0, s1))),
+            (&full, Some((s1, s2))),
+            (&hybrid, Some((s2, 64))),
+        ]);
+        let mut from_a = 0;
+        for (k, px) in blended.chunks_exact(4).enumerate() {
+            let (x, y) = ((k % 64) as u32, (k / 64) as u32);
+            let level = bayer8(x, y);
+            let owner = if (s1..s2).contains(&level) { &b } else { &a };
+            assert_eq!(
+                px,
+                &owner[4 * k..4 * k + 4],
+                "pixel ({x}, {y}), split {s1}..{s2}"
+            );
+            from_a += usize::from(!(s1..s2).contains(&level));
+        }
+        assert_eq!(
+            from_a,
+            64 * (64 - (s2 - s1)) as usize,
+            "each level is one pixel per 8 x 8 tile"
+        );
+    }
+}
+
+/// Issue 31 item 2 end to end: a viewer a little inside its cell near an edge,
+/// with cross-fades on and both cells ready, sees a frame whose every pixel is the
+/// pixel of one of the two cells' own frames (each drawn alone, settled): the one
+/// whose dither range holds the pixel's Bayer level (`Streamer::blend`). What the
+/// two cells draw alike is drawn once (`frame::blend_lists`), so this also shows
+/// that sharing changes no pixel. Both cells' ranges are used (each owns pixels),
+/// and the frame differs from the current cell's alone.
+#[test]
+fn a_frame_near_a_border_shows_each_pixel_from_one_of_the_two_cells() {
+    use player::frame::hybrid_list;
+    use player::stream::PendingDraw;
+    use player::transition::bayer8;
+    let Some((dir, p, cam0, _)) = synthetic_at_instance_0() else {
+        return;
+    };
+    let grid = p.bake.grid.clone();
+    // The edge of instance 0's cell nearest to the camera, and the cell across it.
+    let eye0 = Vec2::new(cam0.eye.x, cam0.eye.z);
+    let cell = grid.nearest_cell(eye0).unwrap();
+    let c = grid.centre(cell);
+    let (other, mid) = grid
+        .neighbours(cell)
+        .into_iter()
+        .map(|n| (n, (c + grid.centre(n)) * 0.5))
+        .min_by(|a, b| a.1.distance(eye0).total_cmp(&b.1.distance(eye0)))
+        .unwrap();
+    // 0.1 units inside the cell from the edge's midpoint, looking at instance 0.
+    let at = mid + (c - mid).normalize() * 0.1;
+    let target = p.bake.instance_bounds[0].centre();
+    let eye = Vec3::new(at.x, cam0.eye.y, at.y);
+    let cam = Camera {
+        eye,
+        dir: (target - eye).normalize(),
+        ..cam0
+    };
+    // Both cells share far-field group 0, which holds `cell`'s proxies: what the
+    // two draw alike (`blend_lists` draws it once). `other` then draws some
+    // objects twice, as original and as the group's proxy: where the two tie in
+    // depth the original must win in the blend as it does alone (originals first).
+    share_a_group(dir.path(), &[cell, other]);
+    let mut p = open(dir.path(), (64, 64), &DrawOptions::default()).unwrap();
+    let config = StreamConfig {
+        prefetch: false,
+        fade: 0.5,
+        ..Default::default()
+    };
+    let mut s = Streamer::new(&p.bake, config);
+    for id in [cell, other] {
+        assert!(s.settled(&p.renderer, &p.bake, id).is_some());
+    }
+    p.draw_listed(&cam, Mode::Hybrid, Some(&mut s));
+    let blended = p.renderer.read_pixels().unwrap();
+    let blend = s.blend(&p.bake);
+    assert_eq!(blend.len(), 2, "{blend:?}");
+    let mut alone = Vec::new();
+    for &(id, _) in &blend {
+        let current = s.settled_cell(&p.bake, id).unwrap();
+        let list = hybrid_list(&p.bake, &cam, &current, PendingDraw::StandIns);
+        p.renderer.render(&cam, &p.models, &list);
+        alone.push(p.renderer.read_pixels().unwrap());
+    }
+    let mut owned = [0usize; 2];
+    for (k, px) in blended.chunks_exact(4).enumerate() {
+        let (x, y) = ((k % 64) as u32, (k / 64) as u32);
+        let level = bayer8(x, y);
+        let owner = blend
+            .iter()
+            .position(|&(_, (lo, hi))| (lo..hi).contains(&level))
+            .unwrap();
+        owned[owner] += 1;
+        assert_eq!(px, &alone[owner][4 * k..4 * k + 4], "pixel ({x}, {y})");
+    }
+    assert!(owned.iter().all(|&n| n > 0), "{owned:?}");
+    let here = blend.iter().position(|b| b.0 == cell).unwrap();
+    assert_ne!(blended, alone[here], "the neighbour's share must show");
+}
+
+/// Moves the first of `cells`' proxies into far-field group 0 and makes it the
+/// group of every one of `cells` (a bake where cells draw the same group pack).
+fn share_a_group(dir: &std::path::Path, cells: &[u32]) {
+    use format::pack::{CellPack, Index, IndexEntry};
+    let path = dir.join(format!("cells/{}.pack", cells[0]));
+    let mut pack = CellPack::read(&path).unwrap();
+    assert!(!pack.proxies.is_empty());
+    let group = CellPack {
+        cell_id: 0,
+        fingerprint: pack.fingerprint,
+        far_group: None,
+        originals: Vec::new(),
+        proxies: std::mem::take(&mut pack.proxies),
+    };
+    pack.write(&path).unwrap();
+    for &c in cells {
+        let path = dir.join(format!("cells/{c}.pack"));
+        let mut pack = CellPack::read(&path).unwrap();
+        pack.far_group = Some(0);
+        pack.write(&path).unwrap();
+    }
+    std::fs::create_dir_all(dir.join("groups")).unwrap();
+    format::pack::write_atomic(&dir.join("groups/0.pack"), &group.encode_group().unwrap()).unwrap();
+    let index_path = dir.join("index.pack");
+    let mut index = Index::read(&index_path).unwrap();
+    let fp = index.cells[0].fingerprint;
+    for e in &mut index.cells {
+        if cells.contains(&e.cell_id) {
+            let mut fresh =
+                IndexEntry::for_file(dir, &e.file, e.cell_id, e.neighbours.clone(), fp).unwrap();
+            fresh.group = Some(0);
+            *e = fresh;
+        }
+    }
+    index.groups = vec![IndexEntry::for_file(dir, "groups/0.pack", 0, Vec::new(), fp).unwrap()];
+    index.write(&index_path).unwrap();
+}

@@ -380,6 +380,29 @@ pub struct PopReport {
     /// Crossings whose pop is no larger than the one-pixel turn (pop PSNR ≥ shift
     /// PSNR).
     pub below_shift: usize,
+    /// The cross-fade band the walk was drawn with, as a share of the hexagon's
+    /// apothem (`--fade`; 0: none). With a fade, a crossing's outgoing and
+    /// incoming representations are those of the frames before and after it (both
+    /// blends), and every other frame in a band changes the blend a little: a step.
+    #[serde(default)]
+    pub fade: f32,
+    /// Frames in a band whose blend differs from the previous frame's, crossings
+    /// left out; each is measured like a crossing (the previous frame's blend
+    /// against its own at its pose).
+    #[serde(default)]
+    pub fade_steps: usize,
+    /// The largest step (lowest PSNR), its frame, and the mean over steps; NaN and
+    /// `None` without steps.
+    #[serde(default = "nan", deserialize_with = "nan_if_null")]
+    pub worst_step_psnr_y_db: f64,
+    #[serde(default)]
+    pub worst_step_frame: Option<usize>,
+    #[serde(default = "nan", deserialize_with = "nan_if_null")]
+    pub mean_step_psnr_y_db: f64,
+}
+
+fn nan() -> f64 {
+    f64::NAN
 }
 
 impl PopReport {
@@ -405,6 +428,11 @@ impl PopReport {
                 .filter(|c| c.pop_object_psnr_y_db >= c.shift_object_psnr_y_db)
                 .count(),
             crossings,
+            fade: 0.0,
+            fade_steps: 0,
+            worst_step_psnr_y_db: f64::NAN,
+            worst_step_frame: None,
+            mean_step_psnr_y_db: f64::NAN,
         }
     }
 }

@@ -28,6 +28,11 @@ pub struct StreamArgs {
     /// colours).
     #[arg(long, default_value = "stand-ins")]
     pub pending: PendingDraw,
+    /// The cross-fade band at cell borders, as a share (0..=1) of the hexagon's
+    /// apothem: within it a frame blends the current cell's representation with
+    /// each neighbour's (dithered, issue 31). 0 turns it off.
+    #[arg(long, default_value_t = crate::stream::DEFAULT_FADE, value_parser = parse_fade)]
+    pub fade: f32,
     /// Override the path's resolution, e.g. 256x256.
     #[arg(long, value_parser = parse_size)]
     pub size: Option<(u32, u32)>,
@@ -40,6 +45,14 @@ pub struct StreamArgs {
     /// > τ); 0 draws exactly the original triangles.
     #[arg(long, default_value_t = crate::clusterlod::DEFAULT_TAU_PX, value_parser = parse_tau)]
     pub cluster_tau: f32,
+}
+
+/// `--fade`: a share of the apothem in [0, 1].
+pub(crate) fn parse_fade(s: &str) -> Result<f32, String> {
+    match s.parse::<f32>() {
+        Ok(x) if (0.0..=1.0).contains(&x) => Ok(x),
+        _ => Err(format!("{s:?} is not a share of the apothem in [0, 1]")),
+    }
 }
 
 /// `--cluster-tau`: a finite number of pixels ≥ 0.
@@ -125,6 +138,7 @@ impl StreamArgs {
             upload_budget_bytes: mib_to_bytes(self.upload_budget_mib),
             memory_budget_bytes: self.memory_budget_mib << 20,
             pending: self.pending,
+            fade: self.fade,
             ..Default::default()
         }
     }

@@ -216,8 +216,12 @@ pub(super) struct FramePlan<'a> {
     /// (identity, white tint). With representation colours an original's tint is
     /// its representation's colour (the shader takes its albedo from it).
     pub instances: Vec<InstanceRaw>,
-    /// The ground's instance in [`FramePlan::instances`].
+    /// The ground's instance in [`FramePlan::instances`] (shifted: in the frame's
+    /// instance buffer).
     pub ground_instance: u32,
+    /// Where [`FramePlan::instances`] start in the frame's instance buffer (0 but
+    /// for the later lists of a blended frame, [`FramePlan::shifted`]).
+    pub first_instance: u32,
     /// The frame's gathered indices ([`FrameIndices`]).
     pub indices: Vec<u32>,
     /// Per patched original of the list, in list order: how it is drawn (`None`:
@@ -304,11 +308,31 @@ impl<'a> FramePlan<'a> {
         FramePlan {
             instances,
             ground_instance,
+            first_instance: 0,
             indices: gathered.indices,
             patched,
             clusters,
             proxies,
         }
+    }
+}
+
+impl FramePlan<'_> {
+    /// The plan as drawn from buffers where its instances start at `instances`
+    /// and its gathered indices at `indices` (the later lists of a blended frame,
+    /// `Renderer::render_blend`).
+    pub fn shifted(mut self, instances: u32, indices: u32) -> Self {
+        self.first_instance += instances;
+        self.ground_instance += instances;
+        let shift = |s: &mut Span| {
+            if let Span::Gathered(r) = s {
+                *r = r.start + indices..r.end + indices;
+            }
+        };
+        self.patched.iter_mut().flatten().for_each(shift);
+        self.clusters.iter_mut().flatten().for_each(shift);
+        self.proxies.iter_mut().for_each(|d| shift(&mut d.span));
+        self
     }
 }
 

@@ -3,7 +3,7 @@
 //! pipelines, and the shared buffers, sampler and placeholder textures. One
 //! function per object or family, in the order `with_device` calls them.
 
-use super::{shader_source, texture_2d, COLOR_FORMAT, DEPTH_FORMAT};
+use super::{texture_2d, COLOR_FORMAT, DEPTH_FORMAT};
 use crate::vertex::{Globals, InstanceRaw, ModelVertex, ProxyVertex, MAX_VIEWS};
 use wgpu::util::DeviceExt;
 
@@ -164,13 +164,14 @@ pub(super) struct Pipelines {
 /// groups 0 and 2.
 pub(super) fn pipelines(
     device: &wgpu::Device,
+    source: String,
     globals: &wgpu::BindGroupLayout,
     proxy: &wgpu::BindGroupLayout,
     albedo: &wgpu::BindGroupLayout,
 ) -> Pipelines {
     let shader = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some("player shaders"),
-        source: wgpu::ShaderSource::Wgsl(shader_source().into()),
+        source: wgpu::ShaderSource::Wgsl(source.into()),
     });
     let lit_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
         label: Some("lit"),
@@ -262,11 +263,18 @@ pub(super) fn pipelines(
     }
 }
 
+/// [`Globals`] buffers: one for plain draws and one per list of a blended frame
+/// (`Renderer::render_blend`: the lists `frame::blend_lists` makes, the shared one
+/// and one per cell of a hexagon corner, `crate::transition::MAX_CELLS`; a list
+/// beyond them would be dropped, and its pixels left without the scene). Each is
+/// its own small buffer bound whole.
+pub const GLOBAL_SLOTS: usize = 1 + 1 + crate::transition::MAX_CELLS;
+
 /// What the pipelines bind besides per-model and per-proxy data.
 pub(super) struct Shared {
-    /// The [`Globals`] buffer and its group 0.
-    pub globals: wgpu::Buffer,
-    pub globals_bg: wgpu::BindGroup,
+    /// [`GLOBAL_SLOTS`] [`Globals`] buffers and group 0 of each.
+    pub globals: Vec<wgpu::Buffer>,
+    pub globals_bgs: Vec<wgpu::BindGroup>,
     /// The capture textures' sampler: clamped, bilinear, no mipmaps.
     pub sampler: wgpu::Sampler,
     /// A transparent 1 × 1 texture bound where a proxy has no view.
@@ -285,20 +293,29 @@ pub(super) fn shared(
     globals_layout: &wgpu::BindGroupLayout,
     albedo_layout: &wgpu::BindGroupLayout,
 ) -> Shared {
-    let globals = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("globals"),
-        size: std::mem::size_of::<Globals>() as u64,
-        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
-    let globals_bg = device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("globals"),
-        layout: globals_layout,
-        entries: &[wgpu::BindGroupEntry {
-            binding: 0,
-            resource: globals.as_entire_binding(),
-        }],
-    });
+    let globals: Vec<wgpu::Buffer> = (0..GLOBAL_SLOTS)
+        .map(|_| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("globals"),
+                size: std::mem::size_of::<Globals>() as u64,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        })
+        .collect();
+    let globals_bgs = globals
+        .iter()
+        .map(|buffer| {
+            device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("globals"),
+                layout: globals_layout,
+                entries: &[wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: buffer.as_entire_binding(),
+                }],
+            })
+        })
+        .collect();
     let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
         label: Some("capture"),
         address_mode_u: wgpu::AddressMode::ClampToEdge,
@@ -336,7 +353,7 @@ pub(super) fn shared(
     );
     Shared {
         globals,
-        globals_bg,
+        globals_bgs,
         sampler,
         dummy_view,
         instances,
