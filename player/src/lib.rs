@@ -7,7 +7,8 @@
 //! 1. Plain data, no GPU type: [`vertex`] (GPU records), [`camera`] (camera, frustum,
 //!    boxes), [`grid`] (the current cell on `format::grid::HexGrid`: the player never
 //!    links the worker), [`metrics`] (PSNR/SSIM), [`mode`] (configurations A/B/C and
-//!    `lod`, `cluster-lod`), [`representation`] (the debug colours), [`DrawOptions`] (the culling
+//!    `lod`, `cluster-lod`), [`representation`] (the debug colours), [`transition`]
+//!    (the cross-fade weights at cell borders, issue 31), [`DrawOptions`] (the culling
 //!    switches, from `format`).
 //! 2. CPU algorithms: [`patches`] (per-tile patch and cluster culling, issue 17),
 //!    [`occlusion`] (the run-time occlusion map, 000 §3.2 step 3).
