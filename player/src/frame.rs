@@ -366,7 +366,7 @@ pub fn blend_lists<'a>(
     let n = lists.len();
     let key = |i: &InstanceRaw| bytemuck::bytes_of(i).to_vec();
     // Instanced originals: (model, instance bytes) → lists drawing it.
-    let mut seen: BTreeMap<(u32, Vec<u8>), usize> = BTreeMap::new();
+    let mut seen: BTreeMap<DrawKey, usize> = BTreeMap::new();
     for (l, _) in &lists {
         for (m, v) in &l.originals {
             let mut unique: Vec<Vec<u8>> = v.iter().map(key).collect();
@@ -378,7 +378,7 @@ pub fn blend_lists<'a>(
         }
     }
     // Patched originals: (model, instance bytes) → (count, union of ranges).
-    let mut patched: BTreeMap<(u32, Vec<u8>), (usize, Vec<(u32, u32)>)> = BTreeMap::new();
+    let mut patched: BTreeMap<DrawKey, (usize, Ranges)> = BTreeMap::new();
     for (l, _) in &lists {
         for p in &l.patched {
             let e = patched.entry((p.model, key(&p.instance))).or_default();
@@ -388,11 +388,11 @@ pub fn blend_lists<'a>(
     }
     // Proxies (ready ones; lit ones stay in their list): pointer → (count, union).
     let ptr = |p: &GpuProxy| p as *const GpuProxy as usize;
-    let mut proxies: BTreeMap<usize, (usize, Vec<(u32, u32)>, &'a GpuProxy)> = BTreeMap::new();
+    let mut proxies: BTreeMap<usize, (usize, Ranges)> = BTreeMap::new();
     for (l, _) in &lists {
         let ranges = l.proxy_ranges();
         for (k, &p) in l.proxies.iter().enumerate() {
-            let e = proxies.entry(ptr(p)).or_insert((0, Vec::new(), p));
+            let e = proxies.entry(ptr(p)).or_default();
             e.0 += 1;
             e.1 = union_ranges(&e.1, &ranges[k]);
         }
@@ -435,7 +435,7 @@ pub fn blend_lists<'a>(
         }
         let mut own_ranges = Vec::new();
         for (i, &p) in l.proxies.iter().enumerate() {
-            let (count, union, _) = &proxies[&ptr(p)];
+            let (count, union) = &proxies[&ptr(p)];
             if *count == n {
                 if k == 0 {
                     common.proxies.push(p);
@@ -460,6 +460,11 @@ pub fn blend_lists<'a>(
     out.insert(0, (common, None));
     out
 }
+
+/// Sorted, disjoint [start, end) ranges of an index or vertex buffer.
+type Ranges = Vec<(u32, u32)>;
+/// An original in a draw list: its model and its instance data's bytes.
+type DrawKey = (u32, Vec<u8>);
 
 /// Appends one proxy's ranges to a list being built (its `ranges` cell holds them
 /// until the list is complete).
