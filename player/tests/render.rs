@@ -1011,7 +1011,6 @@ fn a_primed_walk_starts_with_its_cell_ready() {
 /// hole).
 #[test]
 fn a_cells_far_field_group_is_drawn_with_it() {
-    use format::pack::{CellPack, Index, IndexEntry};
     let Some((dir, mut p, cam, cell)) = synthetic_at_instance_0() else {
         return;
     };
@@ -1024,35 +1023,8 @@ fn a_cells_far_field_group_is_drawn_with_it() {
     let before = p.renderer.read_pixels().unwrap();
     drop(s);
     // Move the cell's proxies into far-field group 0.
-    let path = dir.path().join(format!("cells/{cell}.pack"));
-    let mut pack = CellPack::read(&path).unwrap();
-    assert!(!pack.proxies.is_empty());
-    let group = CellPack {
-        cell_id: 0,
-        fingerprint: pack.fingerprint,
-        far_group: None,
-        originals: Vec::new(),
-        proxies: std::mem::take(&mut pack.proxies),
-    };
-    pack.far_group = Some(0);
-    pack.write(&path).unwrap();
-    std::fs::create_dir_all(dir.path().join("groups")).unwrap();
+    share_a_group(dir.path(), &[cell]);
     let group_path = dir.path().join("groups/0.pack");
-    format::pack::write_atomic(&group_path, &group.encode_group().unwrap()).unwrap();
-    let index_path = dir.path().join("index.pack");
-    let mut index = Index::read(&index_path).unwrap();
-    let fp = index.cells[0].fingerprint;
-    for e in &mut index.cells {
-        if e.cell_id == cell {
-            let mut fresh =
-                IndexEntry::for_file(dir.path(), &e.file, cell, e.neighbours.clone(), fp).unwrap();
-            fresh.group = Some(0);
-            *e = fresh;
-        }
-    }
-    index.groups =
-        vec![IndexEntry::for_file(dir.path(), "groups/0.pack", 0, Vec::new(), fp).unwrap()];
-    index.write(&index_path).unwrap();
     let mut p = open(dir.path(), (64, 64), &DrawOptions::default()).unwrap();
     let mut s = Streamer::new(&p.bake, no_prefetch());
     let (_, tris_far, _, _) = p.draw(&cam, Mode::Hybrid, Some(&mut s));
