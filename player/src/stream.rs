@@ -139,9 +139,9 @@ impl std::str::FromStr for PendingDraw {
 /// [`StreamConfig::fade`]'s default: a band of 0.15 apothem on each side of an
 /// edge (player README "Cross-fades at cell borders"). Chosen on four scene
 /// families (the demo's primitives, the textured plaza, park-2m's statues, the
-/// city's blocks): there it left object PSNR(Y) within 0.21 dB of no fade and
-/// raised every walk's mean crossing pop above the one-pixel turn; 0.3 cost the
-/// plaza 1.1 dB. A frame in the band draws both cells' lists (≈ 1.7× the frame
+/// city's blocks; park-4m and the terrain checked after): there it left object
+/// PSNR(Y) within 0.21 dB of no fade and raised every walk's mean crossing pop
+/// above the one-pixel turn; 0.3 cost the plaza 1.1 dB. A frame in the band draws both cells' lists (≈ 1.7× the frame
 /// time on lavapipe, park-2m).
 pub const DEFAULT_FADE: f32 = 0.15;
 
