@@ -1216,6 +1216,20 @@ fn player_compare_on_the_demo_bake() {
         f(&pops["worst_pop_psnr_y_db"]) <= f(&pops["mean_pop_psnr_y_db"]),
         "{pops}"
     );
+    // Issue 31 item 2: the walk was drawn with the default cross-fade, and the
+    // frames in a band whose blend changed without a crossing are its steps.
+    assert_eq!(
+        f(&pops["fade"]) as f32,
+        player::stream::DEFAULT_FADE,
+        "{pops}"
+    );
+    assert!(pops["fade_steps"].as_u64().unwrap() >= 1, "{pops}");
+    let (worst_step, mean_step) = (
+        f(&pops["worst_step_psnr_y_db"]),
+        f(&pops["mean_step_psnr_y_db"]),
+    );
+    assert!(worst_step <= mean_step && mean_step < 100.0, "{pops}");
+    assert!(pops["worst_step_frame"].as_u64().is_some(), "{pops}");
     let worst_frame = pops["worst_frame"].as_u64().unwrap();
     for part in ["from", "to", "diff"] {
         let png = worst.join(format!("{worst_frame:05}-pop-{part}.png"));

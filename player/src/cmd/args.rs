@@ -218,3 +218,24 @@ pub fn parse_xz(s: &str) -> Result<(f32, f32), String> {
     };
     Ok((p(x)?, p(z)?))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::parse_fade;
+
+    /// `--fade` takes a share of the apothem in [0, 1] and names what it expects
+    /// otherwise.
+    #[test]
+    fn fade_is_a_share_of_the_apothem() {
+        assert_eq!(parse_fade("0.15"), Ok(0.15));
+        assert_eq!(parse_fade("0"), Ok(0.0));
+        assert_eq!(parse_fade("1"), Ok(1.0));
+        for bad in ["-0.1", "1.5", "NaN", "inf", "wide"] {
+            let e = parse_fade(bad).unwrap_err();
+            assert!(
+                e.contains("share of the apothem in [0, 1]") && e.contains(bad),
+                "{e}"
+            );
+        }
+    }
+}
