@@ -351,11 +351,14 @@ pub fn list_stats(list: &DrawList<'_>, models: &GpuModels) -> ListStats {
 /// Shared: an instanced original drawn by every list (same model and instance
 /// data), a patched original drawn by every list (drawn with the union of their
 /// patch ranges) and a proxy drawn by every list (the same GPU proxy, a far-field
-/// group's pack both cells use; drawn with the union of their tile ranges). Drawing
-/// the union is exact: a tile or patch one list leaves out is back-facing, outside
-/// the frustum or hidden behind that list's originals (conservative tests), so it
-/// changes no pixel that list owns. Every pixel then shows the nearest surface of
-/// its owner's list, as [`crate::gpu::Renderer::render_blend`] promises.
+/// group's pack both cells use; drawn with the union of their tile ranges). A tile
+/// or patch one list leaves out is one its tests found back-facing, outside the
+/// frustum or hidden behind nearer surfaces (run-time occlusion), or a patch its
+/// cell's visibility bitfield drops: where those tests are conservative, drawing it
+/// changes no pixel that list owns, so every pixel shows the nearest surface of its
+/// owner's list, as [`crate::gpu::Renderer::render_blend`] promises (the bitfields
+/// come from sampling, paper 002: a patch one cell's sampling missed is drawn if the
+/// other cell's found it).
 pub fn blend_lists<'a>(
     lists: Vec<(DrawList<'a>, (u32, u32))>,
 ) -> Vec<(DrawList<'a>, Option<(u32, u32)>)> {
@@ -398,6 +401,7 @@ pub fn blend_lists<'a>(
         }
     }
     let mut common = DrawList::default();
+    let mut common_ranges: Vec<Ranges> = Vec::new();
     let mut shared_originals: BTreeMap<u32, Vec<InstanceRaw>> = BTreeMap::new();
     let mut out = Vec::with_capacity(n + 1);
     for (k, (l, range)) in lists.into_iter().enumerate() {
@@ -440,7 +444,7 @@ pub fn blend_lists<'a>(
                 if k == 0 {
                     common.proxies.push(p);
                     common.proxy_only.push(None);
-                    common_ranges_push(&mut common, union.clone());
+                    common_ranges.push(union.clone());
                 }
             } else {
                 own.proxies.push(p);
@@ -455,7 +459,6 @@ pub fn blend_lists<'a>(
         out.push((own, Some(range)));
     }
     common.originals = shared_originals.into_iter().collect();
-    let common_ranges = common.ranges.take().unwrap_or_default();
     let _ = common.ranges.set(common_ranges);
     out.insert(0, (common, None));
     out
@@ -465,14 +468,6 @@ pub fn blend_lists<'a>(
 type Ranges = Vec<(u32, u32)>;
 /// An original in a draw list: its model and its instance data's bytes.
 type DrawKey = (u32, Vec<u8>);
-
-/// Appends one proxy's ranges to a list being built (its `ranges` cell holds them
-/// until the list is complete).
-fn common_ranges_push(list: &mut DrawList<'_>, ranges: Vec<(u32, u32)>) {
-    let mut all = list.ranges.take().unwrap_or_default();
-    all.push(ranges);
-    let _ = list.ranges.set(all);
-}
 
 /// The union of two sorted, disjoint range lists, sorted, touching ranges merged.
 fn union_ranges(a: &[(u32, u32)], b: &[(u32, u32)]) -> Vec<(u32, u32)> {
