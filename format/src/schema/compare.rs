@@ -474,6 +474,41 @@ mod tests {
         assert_eq!(back.in_cell_median_ms, 1.0);
     }
 
+    /// A pop report written before the cross-fade (issue 31 item 2) reads with no
+    /// fade and no steps; one with steps writes them and reads them back.
+    #[test]
+    fn pop_reports_before_and_with_the_fade_read() {
+        let old = r#"{"crossings":[],"mean_pop_psnr_y_db":null,"worst_pop_psnr_y_db":null,
+            "worst_frame":null,"mean_shift_psnr_y_db":null,"below_shift":0}"#;
+        let r: PopReport = serde_json::from_str(old).unwrap();
+        assert_eq!((r.fade, r.fade_steps, r.worst_step_frame), (0.0, 0, None));
+        assert!(r.worst_step_psnr_y_db.is_nan() && r.mean_step_psnr_y_db.is_nan());
+        let with = PopReport {
+            fade: 0.15,
+            fade_steps: 7,
+            worst_step_psnr_y_db: 21.5,
+            worst_step_frame: Some(40),
+            mean_step_psnr_y_db: 33.25,
+            ..r
+        };
+        let json = serde_json::to_string(&with).unwrap();
+        assert!(
+            json.contains("\"fade\":0.15") && json.contains("\"fade_steps\":7"),
+            "{json}"
+        );
+        let back: PopReport = serde_json::from_str(&json).unwrap();
+        assert_eq!(
+            (
+                back.fade,
+                back.fade_steps,
+                back.worst_step_frame,
+                back.worst_step_psnr_y_db
+            ),
+            (0.15, 7, Some(40), 21.5)
+        );
+        assert_eq!(back.mean_step_psnr_y_db, 33.25);
+    }
+
     #[test]
     fn pop_report_summarises_its_crossings() {
         let pop = |frame, p, s| CrossingPop {
