@@ -53,9 +53,10 @@ pub struct CompareArgs {
     #[arg(long)]
     pub no_crossings: bool,
     /// Measure the pop at each cell crossing: the crossing pose drawn with the
-    /// outgoing and with the incoming cell, compared over object pixels, beside
-    /// the change a one-pixel camera turn makes (issue 31); with --worst, the
-    /// worst crossing's pair as PNGs.
+    /// outgoing and with the incoming representation (with --fade: the previous
+    /// frame's blend and its own), compared over object pixels, beside the change
+    /// a one-pixel camera turn makes (issue 31); with --worst, the worst
+    /// crossing's pair as PNGs.
     #[arg(long)]
     pub pops: bool,
     /// Supersampling per axis of the anti-aliased reference (full geometry
@@ -308,7 +309,7 @@ fn print_report(r: &CompareReport) {
     }
     if let Some(p) = &r.pops {
         println!(
-                "pops at {} crossings: object-pixel PSNR(Y) of outgoing vs incoming cell mean {:.2} dB, worst {:.2} dB (frame {}); a one-pixel turn: mean {:.2} dB; {} crossings no larger than the turn",
+                "pops at {} crossings: object-pixel PSNR(Y) of outgoing vs incoming representation mean {:.2} dB, worst {:.2} dB (frame {}); a one-pixel turn: mean {:.2} dB; {} crossings no larger than the turn",
                 p.crossings.len(),
                 p.mean_pop_psnr_y_db,
                 p.worst_pop_psnr_y_db,
@@ -316,6 +317,16 @@ fn print_report(r: &CompareReport) {
                 p.mean_shift_psnr_y_db,
                 p.below_shift
             );
+        if p.fade > 0.0 {
+            println!(
+                "cross-fade {:.2} of the apothem: {} steps in bands without a crossing, object-pixel PSNR(Y) of each step mean {:.2} dB, worst {:.2} dB (frame {})",
+                p.fade,
+                p.fade_steps,
+                p.mean_step_psnr_y_db,
+                p.worst_step_psnr_y_db,
+                p.worst_step_frame.map_or("-".to_string(), |f| f.to_string()),
+            );
+        }
     }
     for (name, c) in [
         ("prefetch on", &r.crossing_prefetch),
