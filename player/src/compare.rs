@@ -4,7 +4,7 @@
 //! one table; issue 31: the pop at each crossing).
 
 use crate::camera::Camera;
-use crate::frame::{blend_lists, hybrid_list, originals_list, Mode};
+use crate::frame::{blend_frame, originals_list, Mode};
 use crate::gpu::{GpuError, GpuModels, Renderer};
 use crate::metrics::{
     diff_image, downsample_linear, measure_frame, opaque, summarize_objects, FrameQuality,
@@ -126,23 +126,15 @@ fn draw_blend(
             return Ok(None);
         }
     }
-    let pending = crate::stream::PendingDraw::StandIns;
-    let mut lists = Vec::with_capacity(blend.len());
+    let mut cells = Vec::with_capacity(blend.len());
     for &(cell, range) in blend {
         let Some(current) = streamer.settled_cell(&player.bake, cell) else {
             return Ok(None);
         };
-        lists.push((hybrid_list(&player.bake, camera, &current, pending), range));
+        cells.push((current, range));
     }
-    let lists = match lists.as_slice() {
-        [(_, None)] => lists.into_iter().map(|(l, _)| (l, None)).collect(),
-        _ => blend_lists(
-            lists
-                .into_iter()
-                .map(|(l, r)| (l, r.unwrap_or((0, crate::transition::LEVELS))))
-                .collect(),
-        ),
-    };
+    let pending = crate::stream::PendingDraw::StandIns;
+    let lists = blend_frame(&player.bake, camera, cells, pending);
     let refs: Vec<_> = lists.iter().map(|(l, r)| (l, *r)).collect();
     player.renderer.render_blend(camera, &player.models, &refs);
     Ok(Some(player.renderer.read_pixels()?))

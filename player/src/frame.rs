@@ -343,6 +343,29 @@ pub fn list_stats(list: &DrawList<'_>, models: &GpuModels) -> ListStats {
     }
 }
 
+/// What a hybrid frame draws for `cells`, each with its dither range (`None`: one
+/// cell drawn whole): each cell's [`hybrid_list`], and for a cross-fade
+/// ([`crate::transition`]) those lists as [`blend_lists`] rearranges them; for
+/// `Renderer::render_blend`.
+pub fn blend_frame<'a>(
+    bake: &Bake,
+    camera: &Camera,
+    cells: Vec<(CurrentCell<'a>, Option<(u32, u32)>)>,
+    pending: PendingDraw,
+) -> Vec<(DrawList<'a>, Option<(u32, u32)>)> {
+    let lists = cells
+        .into_iter()
+        .map(|(cell, range)| (hybrid_list(bake, camera, &cell, pending), range));
+    match lists.len() {
+        1 => lists.map(|(l, _)| (l, None)).collect(),
+        _ => blend_lists(
+            lists
+                .map(|(l, r)| (l, r.unwrap_or((0, crate::transition::LEVELS))))
+                .collect(),
+        ),
+    }
+}
+
 /// The lists of a cross-fade (issue 31 item 2, [`crate::transition`]): each cell's
 /// hybrid list with its dither range, rearranged so that what every list draws
 /// alike is drawn once and whole. Returns first that shared list (no range: the
@@ -367,12 +390,16 @@ pub fn blend_lists<'a>(
         return lists.into_iter().map(|(l, r)| (l, Some(r))).collect();
     }
     let n = lists.len();
-    let key = |i: &InstanceRaw| bytemuck::bytes_of(i).to_vec();
+    let key = |i: &InstanceRaw| {
+        let mut k = [0u8; std::mem::size_of::<InstanceRaw>()];
+        k.copy_from_slice(bytemuck::bytes_of(i));
+        k
+    };
     // Instanced originals: (model, instance bytes) → lists drawing it.
     let mut seen: BTreeMap<DrawKey, usize> = BTreeMap::new();
     for (l, _) in &lists {
         for (m, v) in &l.originals {
-            let mut unique: Vec<Vec<u8>> = v.iter().map(key).collect();
+            let mut unique: Vec<_> = v.iter().map(key).collect();
             unique.sort();
             unique.dedup();
             for k in unique {
@@ -467,7 +494,7 @@ pub fn blend_lists<'a>(
 /// Sorted, disjoint [start, end) ranges of an index or vertex buffer.
 type Ranges = Vec<(u32, u32)>;
 /// An original in a draw list: its model and its instance data's bytes.
-type DrawKey = (u32, Vec<u8>);
+type DrawKey = (u32, [u8; std::mem::size_of::<InstanceRaw>()]);
 
 /// The union of two sorted, disjoint range lists, sorted, touching ranges merged.
 fn union_ranges(a: &[(u32, u32)], b: &[(u32, u32)]) -> Vec<(u32, u32)> {

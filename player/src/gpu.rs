@@ -28,7 +28,7 @@ pub use upload::{ProxySource, ViewInfo};
 
 use crate::camera::Camera;
 use crate::metrics::srgb_to_linear;
-use crate::vertex::{Globals, InstanceRaw};
+use crate::vertex::Globals;
 use std::time::Instant;
 
 /// Most views a proxy may have: the pack's limit ([`crate::vertex::MAX_VIEWS`]).
@@ -654,40 +654,50 @@ impl Renderer {
     /// buffer and their gathered indices into the frame's index buffer, one plan
     /// after the other ([`FramePlan::shifted`]), each buffer grown as needed.
     fn upload_plans(&mut self, plans: &[FramePlan<'_>]) {
-        let all: Vec<InstanceRaw> = plans
+        let instance_bytes: u64 = plans
             .iter()
-            .flat_map(|p| p.instances.iter().copied())
-            .collect();
-        let gathered: Vec<u32> = plans
-            .iter()
-            .flat_map(|p| p.indices.iter().copied())
-            .collect();
-        let need = std::mem::size_of_val(all.as_slice()) as u64;
-        if need > self.instances.size() {
+            .map(|p| std::mem::size_of_val(p.instances.as_slice()) as u64)
+            .sum();
+        if instance_bytes > self.instances.size() {
             self.instances = self.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("instances"),
-                size: need.next_power_of_two(),
+                size: instance_bytes.next_power_of_two(),
                 usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             });
         }
-        if !all.is_empty() {
-            self.queue
-                .write_buffer(&self.instances, 0, bytemuck::cast_slice(&all));
+        let index_bytes: u64 = plans
+            .iter()
+            .map(|p| std::mem::size_of_val(p.indices.as_slice()) as u64)
+            .sum();
+        if index_bytes > 0
+            && self
+                .frame_indices
+                .as_ref()
+                .is_none_or(|b| b.size() < index_bytes)
+        {
+            self.frame_indices = Some(self.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("frame indices"),
+                size: index_bytes.next_power_of_two(),
+                usage: wgpu::BufferUsages::INDEX | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }));
         }
-        if !gathered.is_empty() {
-            let need = std::mem::size_of_val(gathered.as_slice()) as u64;
-            if self.frame_indices.as_ref().is_none_or(|b| b.size() < need) {
-                self.frame_indices = Some(self.device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some("frame indices"),
-                    size: need.next_power_of_two(),
-                    usage: wgpu::BufferUsages::INDEX | wgpu::BufferUsages::COPY_DST,
-                    mapped_at_creation: false,
-                }));
+        // Each plan where its shifted instances and indices start.
+        let (mut at_instance, mut at_index) = (0u64, 0u64);
+        for p in plans {
+            if !p.instances.is_empty() {
+                self.queue.write_buffer(
+                    &self.instances,
+                    at_instance,
+                    bytemuck::cast_slice(&p.instances),
+                );
+                at_instance += std::mem::size_of_val(p.instances.as_slice()) as u64;
             }
-            if let Some(b) = &self.frame_indices {
+            if let (false, Some(b)) = (p.indices.is_empty(), &self.frame_indices) {
                 self.queue
-                    .write_buffer(b, 0, bytemuck::cast_slice(&gathered));
+                    .write_buffer(b, at_index, bytemuck::cast_slice(&p.indices));
+                at_index += std::mem::size_of_val(p.indices.as_slice()) as u64;
             }
         }
     }

@@ -5,7 +5,7 @@ use crate::bake::Bake;
 use crate::camera::Camera;
 use crate::clusterlod::ClusterSet;
 use crate::frame::{
-    blend_lists, cluster_list, hybrid_list, list_stats, lod_list, originals_list, ListStats, Mode,
+    blend_frame, cluster_list, hybrid_list, list_stats, lod_list, originals_list, ListStats, Mode,
 };
 use crate::gpu::{DrawList, GpuError, GpuModels, Renderer};
 use crate::lod::LodSet;
@@ -237,23 +237,22 @@ impl Player {
                 // Near a border, the cells of the cross-fade (issue 31 item 2):
                 // the current one as streamed, the others settled.
                 let blend = s.blend(&self.bake);
-                let lists: Vec<(DrawList<'_>, Option<(u32, u32)>)> = if blend.is_empty() {
-                    vec![(hybrid_list(&self.bake, camera, &s.current(), pending), None)]
+                let cells = if blend.is_empty() {
+                    vec![(s.current(), None)]
                 } else {
-                    blend_lists(
-                        blend
-                            .iter()
-                            .filter_map(|&(id, range)| {
-                                let cell = if Some(id) == stats.cell {
-                                    s.current()
-                                } else {
-                                    s.settled_cell(&self.bake, id)?
-                                };
-                                Some((hybrid_list(&self.bake, camera, &cell, pending), range))
-                            })
-                            .collect(),
-                    )
+                    blend
+                        .iter()
+                        .filter_map(|&(id, range)| {
+                            let cell = if Some(id) == stats.cell {
+                                s.current()
+                            } else {
+                                s.settled_cell(&self.bake, id)?
+                            };
+                            Some((cell, Some(range)))
+                        })
+                        .collect()
                 };
+                let lists = blend_frame(&self.bake, camera, cells, pending);
                 let stats_of_list = lists
                     .iter()
                     .map(|(l, _)| list_stats(l, &self.models))
